@@ -1,0 +1,1 @@
+//! Constitutive models: Pipkin–Rogers single-integral NLV (QLV as special case) and finite-strain Prony viscoelasticity with a Mooney–Rivlin / neo-Hookean elastic part; 3D and membrane point updates with consistent tangents (thesis §2.2, §2.5, §4.3, App. D).
