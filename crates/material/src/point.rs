@@ -1,0 +1,88 @@
+//! The material-point contract shared by every forward model.
+//!
+//! Conventions (SI units throughout):
+//! - [`Mat3`] is a 3×3 tensor; `F` is the deformation gradient at t_{n+1}.
+//! - [`Tangent3`] is the consistent tangent `A[3i+J][3k+L] = ∂P_iJ/∂F_kL` of
+//!   the *algorithmic* first Piola–Kirchhoff stress `P` at t_{n+1}, history
+//!   at t_n held fixed. Total-Lagrangian finite elements use `P` and `A`
+//!   directly; other tangents (material `∂S/∂E`, the spatial/Jaumann form of
+//!   App. D eqs. D.8–D.12) are push-forwards of it.
+//! - A membrane point is plane stress with `λ3 = 1/(λ1 λ2)`; it returns the
+//!   principal Cauchy stresses σ1, σ2 and `∂σ_α/∂λ_β`.
+
+use crate::Result;
+
+/// A 3×3 tensor.
+pub type Mat3 = nalgebra::Matrix3<f64>;
+
+/// Consistent tangent `∂P_iJ/∂F_kL`, row `3i+J`, column `3k+L`.
+pub type Tangent3 = nalgebra::SMatrix<f64, 9, 9>;
+
+/// Stress and consistent tangent at one 3D material point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointResponse3 {
+    /// Cauchy stress σ at t_{n+1}.
+    pub cauchy: Mat3,
+    /// First Piola–Kirchhoff stress P = J σ F⁻ᵀ at t_{n+1}.
+    pub first_piola: Mat3,
+    /// Consistent tangent ∂P/∂F of the algorithmic update.
+    pub tangent: Tangent3,
+}
+
+/// A history-dependent 3D material (incompressibility by a volumetric
+/// penalty, or nearly incompressible: see the implementing type).
+pub trait Material3: Send + Sync {
+    /// History at one material point (O(number of Prony terms) in size).
+    type State: Clone + Send + Sync + std::fmt::Debug;
+
+    /// History of a point that has never been deformed (F = I for t < 0).
+    fn initial_state(&self) -> Self::State;
+
+    /// Stress and consistent tangent at `t_{n+1} = t_n + dt` for the
+    /// deformation gradient `f`, given the converged history `state_n` at
+    /// `t_n`. The updated history is written to `trial`; the caller commits
+    /// it (copies it over `state_n`) once the global step converges.
+    ///
+    /// # Errors
+    /// [`crate::MaterialError::Deformation`] when `det f ≤ 0` or the update
+    /// cannot be evaluated.
+    fn update(
+        &self,
+        state_n: &Self::State,
+        f: &Mat3,
+        dt: f64,
+        trial: &mut Self::State,
+    ) -> Result<PointResponse3>;
+}
+
+/// Principal stresses and tangent at one membrane (plane-stress) point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MembraneResponse {
+    /// Principal Cauchy stresses σ1, σ2 (σ3 = 0).
+    pub cauchy: [f64; 2],
+    /// `∂σ_α/∂λ_β` of the algorithmic update, history held fixed.
+    pub tangent: [[f64; 2]; 2],
+}
+
+/// A history-dependent incompressible membrane in principal stretches.
+pub trait MembraneMaterial: Send + Sync {
+    /// History at one material point (O(number of Prony terms) in size).
+    type State: Clone + Send + Sync + std::fmt::Debug;
+
+    /// History of an undeformed point.
+    fn initial_state(&self) -> Self::State;
+
+    /// Principal Cauchy stresses and tangent at `t_{n+1} = t_n + dt` for the
+    /// principal stretches `[λ1, λ2]` (λ3 = 1/(λ1 λ2)), given the converged
+    /// history `state_n`; the updated history goes to `trial`.
+    ///
+    /// # Errors
+    /// [`crate::MaterialError::Deformation`] when a stretch is not positive.
+    fn update(
+        &self,
+        state_n: &Self::State,
+        stretches: [f64; 2],
+        dt: f64,
+        trial: &mut Self::State,
+    ) -> Result<MembraneResponse>;
+}
