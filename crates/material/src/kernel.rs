@@ -140,3 +140,15 @@ impl IsoStress {
         t
     }
 }
+
+impl IsoStress {
+    /// Adds `scale ·` another stress that does not use the `H` basis tensor.
+    pub fn add_scaled(&mut self, other: &IsoStress, scale: f64) {
+        for a in 0..4 {
+            self.s[a] += scale * other.s[a];
+            for b in 0..4 {
+                self.m[a][b] += scale * other.m[a][b];
+            }
+        }
+    }
+}

@@ -28,14 +28,20 @@
 #![warn(missing_docs)]
 
 mod error;
+mod history;
 mod hyperelastic;
 mod kernel;
 pub(crate) mod model;
+mod pipkin_rogers;
 pub mod point;
 mod prony;
+mod prony_visco;
 
 pub use error::{MaterialError, Result};
+pub use history::HistoryRule;
 pub use hyperelastic::MooneyRivlin;
 pub use model::Incompressible;
+pub use pipkin_rogers::{Eq256, PipkinRogers, PipkinRogersState};
 pub use point::{Mat3, Material3, MembraneMaterial, MembraneResponse, PointResponse3, Tangent3};
 pub use prony::{Prony, PronyTerm, Relaxation, ThreeParameterSolid};
+pub use prony_visco::{PronyViscoelastic, PronyViscoelasticState};
