@@ -10,6 +10,7 @@
 //! `H_k(t) = ∫_0^t (1/τ_k) e^{−(t−s)/τ_k} S̄0(s) ds`, updated recursively.
 //! The bulk response does not relax (`K(s) = K`): `τᴴ = K J (J − 1) I`.
 
+use crate::history::advance;
 use crate::hyperelastic::add_volumetric;
 use crate::kernel::{IsoStress, Kin, XCI, XH};
 use crate::model::{Kernel, impl_point_traits};
@@ -105,16 +106,14 @@ impl Kernel for PronyViscoelastic {
         self.elastic.add_isochoric(k, 1.0, &mut iso);
         let j23 = k.j.powf(-2.0 / 3.0);
         let sbar = iso.pk2(k) / j23;
-        trial.h.resize(self.prony.len(), Mat3::zeros());
-        let mut frozen = Mat3::zeros();
-        let mut sum_b1 = 0.0;
-        for ((term, hn), ho) in self.prony.terms().iter().zip(&st.h).zip(trial.h.iter_mut()) {
-            let w = self.rule.weights(dt, term.tau);
-            let old = hn * w.decay + st.sbar * w.beta0;
-            frozen -= old * term.weight;
-            *ho = old + sbar * w.beta1;
-            sum_b1 += term.weight * w.beta1;
-        }
+        let (frozen, sum_b1) = advance(
+            self.rule,
+            &self.prony,
+            dt,
+            (&st.h, &st.sbar),
+            &sbar,
+            &mut trial.h,
+        );
         trial.sbar = sbar;
         let mut out = IsoStress::default();
         out.add_scaled(&iso, 1.0 - sum_b1);
