@@ -44,6 +44,36 @@ impl PronyViscoelastic {
         }
     }
 
+    /// The 5-parameter cell model of eq. 5.1: neo-Hookean `C1` (the thesis's
+    /// `G0`), two Prony terms `(g1, τ1)`, `(g2, τ2)` with `g1 + g2 < 1`.
+    ///
+    /// # Errors
+    /// [`crate::MaterialError`] naming the parameter or Prony term.
+    pub fn cell(c1: f64, g1: f64, tau1: f64, g2: f64, tau2: f64, bulk: f64) -> crate::Result<Self> {
+        Ok(Self::new(
+            MooneyRivlin::neo_hookean(c1, bulk)?,
+            Prony::new("G", &[(g1, tau1), (g2, tau2)])?,
+        ))
+    }
+
+    /// The 6-parameter capsule model of §4.3: Mooney–Rivlin `C1`,
+    /// `C2 = α C1` (eq. 4.1) and two Prony terms (eqs. 4.2–4.3).
+    ///
+    /// # Errors
+    /// [`crate::MaterialError`] naming the parameter or Prony term.
+    pub fn capsule(
+        c1: f64,
+        alpha: f64,
+        (g1, tau1): (f64, f64),
+        (g2, tau2): (f64, f64),
+        bulk: f64,
+    ) -> crate::Result<Self> {
+        Ok(Self::new(
+            MooneyRivlin::with_ratio(c1, alpha, bulk)?,
+            Prony::new("G", &[(g1, tau1), (g2, tau2)])?,
+        ))
+    }
+
     /// Chooses the one-step quadrature of the hereditary integral.
     pub fn with_rule(mut self, rule: HistoryRule) -> Self {
         self.rule = rule;
