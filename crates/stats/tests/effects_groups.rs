@@ -53,7 +53,7 @@ fn thesis_cell(g0: f64, g1: f64, g2: f64) -> Prony {
             PronyTerm { g: g2, tau: 10.0 },
         ],
     )
-    .unwrap()
+    .unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]
@@ -102,10 +102,10 @@ fn group_curves_average_cells_and_scale_e_by_three() {
     assert!((g.shear[0].sd - 500.0).abs() < 1e-12);
     assert_eq!(g.normalised[0].mean, 1.0);
     assert_eq!(g.normalised[0].sd, 0.0);
-    for i in 0..times.len() {
+    for (i, &t) in times.iter().enumerate() {
         assert!((g.young[i].mean - 3.0 * g.shear[i].mean).abs() < 1e-9);
         assert!((g.young[i].sd - 3.0 * g.shear[i].sd).abs() < 1e-9);
-        let direct: f64 = cells.iter().map(|c| c.shear(times[i])).sum::<f64>() / 3.0;
+        let direct: f64 = cells.iter().map(|c| c.shear(t)).sum::<f64>() / 3.0;
         assert!((g.shear[i].mean - direct).abs() < 1e-9);
     }
     assert!(group_curves("B", &cells[..1], &times).is_err());
