@@ -1,9 +1,9 @@
 //! Unit-suffixed CSV headers: `time_s`, `piezo_um`, `force [nN]`, `Z (µm)`.
 //!
 //! A header is split into a name and a unit; the unit gives the SI factor
-//! and the dimension. Recognised units are the ones force–time files use:
-//! time (s, ms, us/µs, min), length (m, mm, um/µm, nm, pm) and force
-//! (N, mN, uN/µN, nN, pN). A header without a recognised unit is
+//! and the dimension. Units are parsed by the study crate
+//! ([`nlvid_study::parse_unit`]); a column counts as time, length or force
+//! when its unit has that dimension. A header without a recognised unit is
 //! dimensionless.
 
 /// Physical dimension of a column.
@@ -32,26 +32,25 @@ pub struct Header {
     pub to_si: f64,
 }
 
-/// Dimension and SI factor of a unit symbol, if recognised.
+/// Dimension and SI factor of a unit symbol, if it is a time, length or
+/// force unit the study crate's unit parser knows (so CSV headers and study
+/// files accept the same spellings: `um`, `µm`, `nN`, `ms`, ...).
 pub fn unit(symbol: &str) -> Option<(Dim, f64)> {
-    let u = match symbol {
-        "s" => (Dim::Time, 1.0),
-        "ms" => (Dim::Time, 1e-3),
-        "us" | "µs" | "μs" => (Dim::Time, 1e-6),
-        "min" => (Dim::Time, 60.0),
-        "m" => (Dim::Length, 1.0),
-        "mm" => (Dim::Length, 1e-3),
-        "um" | "µm" | "μm" => (Dim::Length, 1e-6),
-        "nm" => (Dim::Length, 1e-9),
-        "pm" => (Dim::Length, 1e-12),
-        "N" => (Dim::Force, 1.0),
-        "mN" => (Dim::Force, 1e-3),
-        "uN" | "µN" | "μN" => (Dim::Force, 1e-6),
-        "nN" => (Dim::Force, 1e-9),
-        "pN" => (Dim::Force, 1e-12),
-        _ => return None,
+    use nlvid_study::Dimension;
+    if symbol.trim().is_empty() {
+        return None;
+    }
+    let (f, d) = nlvid_study::parse_unit(symbol).ok()?;
+    let dim = if d == Dimension::TIME {
+        Dim::Time
+    } else if d == Dimension::LENGTH {
+        Dim::Length
+    } else if d == Dimension::FORCE {
+        Dim::Force
+    } else {
+        return None;
     };
-    Some(u)
+    Some((dim, f))
 }
 
 /// Split a header into name and unit (see the module doc for the forms).

@@ -4,9 +4,9 @@
 //! Input columns (header row, any order, other columns ignored):
 //! - `group` (required): group name;
 //! - `cell` or `file` (optional): cell identifier (default: `line N`);
-//! - `G0_<unit>` (required), unit Pa, kPa, MPa or GPa: G(0);
+//! - `G0_<unit>` (required), a pressure unit (Pa, kPa, MPa): G(0);
 //! - `g1`, `tau1_<unit>`, `g2`, `tau2_<unit>`, … : Prony weights (no unit)
-//!   and times (s, ms or min), numbered from 1 without gaps;
+//!   and times (any time unit: s, ms, min), numbered from 1 without gaps;
 //! - `status` (optional): empty or `ok` uses the row; any other value
 //!   excludes it, and the exclusion is reported with the `reason` column
 //!   (optional) — rows are never dropped silently.
@@ -97,23 +97,23 @@ fn split_header(raw: &str) -> (String, String) {
     }
 }
 
+/// SI factor of `unit` if it has dimension `dim` (study crate's parser).
+fn unit_factor(unit: &str, dim: nlvid_study::Dimension) -> Option<f64> {
+    if unit.trim().is_empty() {
+        return None;
+    }
+    match nlvid_study::parse_unit(unit) {
+        Ok((f, d)) if d == dim => Some(f),
+        _ => None,
+    }
+}
+
 fn modulus_unit(u: &str) -> Option<f64> {
-    Some(match u {
-        "Pa" => 1.0,
-        "kPa" => 1e3,
-        "MPa" => 1e6,
-        "GPa" => 1e9,
-        _ => return None,
-    })
+    unit_factor(u, nlvid_study::Dimension::PRESSURE)
 }
 
 fn time_unit(u: &str) -> Option<f64> {
-    Some(match u {
-        "s" => 1.0,
-        "ms" => 1e-3,
-        "min" => 60.0,
-        _ => return None,
-    })
+    unit_factor(u, nlvid_study::Dimension::TIME)
 }
 
 /// Read a results table from a file.
@@ -190,7 +190,7 @@ pub fn parse_results<R: std::io::Read>(reader: R, source: &Path) -> Result<Resul
         err(
             1,
             Some(&raw[g0_col]),
-            "G0 needs a modulus unit: Pa, kPa, MPa or GPa (e.g. `G0_kPa`)".into(),
+            "G0 needs a modulus (pressure) unit such as Pa or kPa (e.g. `G0_kPa`)".into(),
         )
     })?;
     let mut term_cols: Vec<(usize, usize, f64)> = Vec::new();
@@ -217,7 +217,7 @@ pub fn parse_results<R: std::io::Read>(reader: R, source: &Path) -> Result<Resul
                     err(
                         1,
                         Some(&raw[ti]),
-                        format!("{tname} needs a time unit: s, ms or min (e.g. `{tname}_s`)"),
+                        format!("{tname} needs a time unit such as s or ms (e.g. `{tname}_s`)"),
                     )
                 })?;
                 term_cols.push((gi, ti, scale));

@@ -64,7 +64,10 @@ fn errors_name_file_line_and_column() {
     let e = parse("group,G0,g1,tau1_s\nA,1,0.3,1\n")
         .unwrap_err()
         .to_string();
-    assert!(e.contains("line 1") && e.contains("modulus unit"), "{e}");
+    assert!(
+        e.contains("line 1") && e.contains("modulus (pressure) unit"),
+        "{e}"
+    );
     let e = parse("group,G0_kPa,g1,tau1\nA,1,0.3,1\n")
         .unwrap_err()
         .to_string();
