@@ -17,6 +17,7 @@
 //!   [`Cantilever`] for F = k·d and [`indentation`] δ = Z − d;
 //! - [`read_table`]: measured Z(t) (or F(t)) histories from CSV with
 //!   unit-suffixed headers;
+//! - [`ProtocolSettings`]: the study file's `[protocol]` section;
 //! - grids: [`grid::uniform`] (e.g. the thesis's m = 5095 points),
 //!   [`Program::stepper_grid`], [`Program::refined_grid`].
 //!
@@ -43,10 +44,12 @@ mod error;
 pub mod grid;
 mod program;
 pub mod programs;
+mod section;
 mod table;
 pub mod units;
 
 pub use afm::{AfmScript, Cantilever, Engage, indentation};
 pub use error::{ProtocolError, Result};
 pub use program::{Label, Leg, Program, ProgramBuilder, Quantity, Segment};
+pub use section::{Loading, ProtocolSettings};
 pub use table::{parse_table, read_table};
