@@ -70,14 +70,14 @@ fn non_finite_values_fail_with_their_key() {
     assert_eq!(
         text(&out.stderr).trim_end(),
         format!(
-            "error: {}:3: key `g.bad`: `nan um` is not a finite number",
+            "error: {}:3:7: key `g.bad`: `nan um` is not a finite number",
             p.display()
         )
     );
     let p = write("inf.toml", "x = inf\n");
     let out = nlvid(&["check", p.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));
-    assert!(text(&out.stderr).contains(":1: key `x`: `inf` is not a finite number"));
+    assert!(text(&out.stderr).contains(":1:5: key `x`: `inf` is not a finite number"));
 }
 
 #[test]
@@ -90,7 +90,7 @@ fn unreadable_quantities_warn_and_fail_only_with_strict() {
     assert!(out.status.success());
     let e = text(&out.stderr);
     assert!(
-        e.contains(":2: key `p.speed`: `5 mm/sec` looks like a quantity but cannot be read: unknown unit `sec`"),
+        e.contains(":2:9: key `p.speed`: `5 mm/sec` looks like a quantity but cannot be read: unknown unit `sec`"),
         "{e}"
     );
     assert!(!e.contains("p.name"), "{e}");

@@ -65,17 +65,19 @@ impl Run for Args {
             match &leaf.value {
                 LeafValue::Number(x) if !x.is_finite() => {
                     anyhow::bail!(
-                        "{}:{}: key `{}`: `{x}` is not a finite number",
+                        "{}:{}:{}: key `{}`: `{x}` is not a finite number",
                         study.name(),
                         leaf.line,
+                        leaf.column,
                         leaf.key
                     );
                 }
                 LeafValue::Text(t) => match Quantity::parse(t) {
                     Err(UnitError::NotFinite) => anyhow::bail!(
-                        "{}:{}: key `{}`: `{t}` is not a finite number",
+                        "{}:{}:{}: key `{}`: `{t}` is not a finite number",
                         study.name(),
                         leaf.line,
+                        leaf.column,
                         leaf.key
                     ),
                     Err(
@@ -83,9 +85,10 @@ impl Run for Args {
                         | UnitError::BadExponent(_)
                         | UnitError::Syntax(..)),
                     ) => warnings.push(format!(
-                        "{}:{}: key `{}`: `{t}` looks like a quantity but cannot be read: {e}",
+                        "{}:{}:{}: key `{}`: `{t}` looks like a quantity but cannot be read: {e}",
                         study.name(),
                         leaf.line,
+                        leaf.column,
                         leaf.key
                     )),
                     _ => {}
