@@ -29,6 +29,7 @@
 
 mod error;
 mod history;
+pub mod homogeneous;
 mod hyperelastic;
 mod kernel;
 pub(crate) mod model;
@@ -36,6 +37,7 @@ mod pipkin_rogers;
 pub mod point;
 mod prony;
 mod prony_visco;
+pub mod reference;
 
 pub use error::{MaterialError, Result};
 pub use history::HistoryRule;
