@@ -75,9 +75,43 @@ impl fmt::Display for Shard {
     }
 }
 
+/// Parses a command-line quantity such as `--dt 1ms` or `--speed "5 um/s"`
+/// into SI, checking its dimension; for clap's `value_parser`:
+/// `#[arg(long, value_parser = |s: &str| quantity(s, Dimension::TIME))]`.
+///
+/// # Errors
+/// A message naming the text, the unit problem or the wrong dimension.
+pub fn quantity(text: &str, dim: nlvid_study::Dimension) -> Result<f64, String> {
+    let q = nlvid_study::Quantity::parse(text).map_err(|e| format!("`{text}`: {e}"))?;
+    if q.dim == dim {
+        Ok(q.value)
+    } else if q.dim == nlvid_study::Dimension::NONE {
+        Err(format!(
+            "`{text}` has no unit; expected a {dim}, e.g. \"{text} {}\"",
+            dim.example_unit()
+        ))
+    } else {
+        Err(format!("`{text}` is a {}, expected a {dim}", q.dim))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn command_line_quantities_are_checked_and_converted() {
+        use nlvid_study::Dimension;
+        assert_eq!(quantity("1ms", Dimension::TIME), Ok(1e-3));
+        assert_eq!(
+            quantity("2", Dimension::TIME).unwrap_err(),
+            "`2` has no unit; expected a time (s), e.g. \"2 s\""
+        );
+        assert_eq!(
+            quantity("2 um", Dimension::TIME).unwrap_err(),
+            "`2 um` is a length (m), expected a time (s)"
+        );
+    }
 
     #[test]
     fn shards_partition_every_batch_exactly() {
