@@ -7,7 +7,9 @@
 //! - curves as CSV with unit-suffixed headers, written atomically
 //!   ([`output::Table`], [`output::write_atomic`]);
 //! - progress bars on stderr, hidden off-terminal and in CI ([`progress::bar`]);
-//! - logs on stderr via `tracing` (`-v`, `NLVID_LOG`).
+//! - logs on stderr via `tracing` (`-v`, `NLVID_LOG`);
+//! - `--shard i/n` for batches split over a cluster ([`args::Shard`]);
+//! - outputs record the study hash ([`output::provenance`]).
 //!
 //! Cost: negligible; the work is in the pipeline crates.
 //!
@@ -24,6 +26,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 
+pub mod args;
 pub mod cmd;
 pub mod output;
 pub mod progress;

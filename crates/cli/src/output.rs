@@ -179,6 +179,16 @@ pub fn fmt_exact(x: f64) -> String {
     }
 }
 
+/// Provenance to embed in every JSON result: the study file, its SHA-256
+/// hash (see `nlvid_study::StudyHash`) and the program version.
+pub fn provenance(study: &nlvid_study::Study) -> Value {
+    serde_json::json!({
+        "study": study.name(),
+        "study_sha256": study.hash().to_string(),
+        "nlvid_version": env!("CARGO_PKG_VERSION"),
+    })
+}
+
 /// Prints one JSON document on stdout (the `--json` convention).
 ///
 /// # Errors

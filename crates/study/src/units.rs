@@ -634,3 +634,54 @@ mod tests {
         );
     }
 }
+
+#[cfg(test)]
+mod robustness {
+    use super::*;
+
+    #[test]
+    fn odd_numbers_parse_like_rusts_decimal_parser() {
+        for (t, v) in [
+            ("1. m", 1.0),
+            ("1.e3 m", 1000.0),
+            ("+2 m", 2.0),
+            ("1E-3 m", 1e-3),
+        ] {
+            assert_eq!(Quantity::parse(t).map(|q| q.value), Ok(v), "{t}");
+        }
+        assert!(Quantity::parse("1e m").is_err());
+        assert!(Quantity::parse(".").is_err());
+        assert!(Quantity::parse("-").is_err());
+        assert_eq!(
+            Quantity::parse("1e99999999999 m"),
+            Err(UnitError::NotFinite)
+        );
+    }
+
+    #[test]
+    fn arbitrary_text_never_panics() {
+        // Deterministic pseudo-random strings over an alphabet of the characters
+        // the parser treats specially (seeded LCG, no dependency).
+        let alphabet: Vec<char> = "0123456789.eE+-^/*· umkMGnpcµμsNPaVHz%°_x"
+            .chars()
+            .collect();
+        let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+        for _ in 0..20_000 {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            let len = (state >> 60) as usize;
+            let s: String = (0..len)
+                .map(|_| {
+                    state = state
+                        .wrapping_mul(6_364_136_223_846_793_005)
+                        .wrapping_add(1_442_695_040_888_963_407);
+                    alphabet[(state >> 33) as usize % alphabet.len()]
+                })
+                .collect();
+            if let Ok(q) = Quantity::parse(&s) {
+                assert!(q.value.is_finite(), "{s:?}");
+            }
+        }
+    }
+}
