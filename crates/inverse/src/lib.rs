@@ -1,1 +1,15 @@
 //! Inverse analysis: misfit (eq. 5.3), multistart constrained fits of one or several experiments, identifiability (thesis §3.1, §4.4, §5.4).
+
+#![warn(missing_docs)]
+
+mod domain;
+mod error;
+mod hertz;
+mod misfit;
+mod model;
+
+pub use domain::{BoundHit, BoundSide, Domain, LinearConstraint, Parameter, Scale};
+pub use error::{InverseError, Result};
+pub use hertz::{LeeRadokHertz, ramp_hold_grid, ramp_hold_indentation};
+pub use misfit::{Experiment, Misfit, Segment, range_normalised_rmse, segment_weights};
+pub use model::{FD_STEP_UNIT, Model, check_finite, check_len, fd_jacobian};
