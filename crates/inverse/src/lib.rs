@@ -7,9 +7,13 @@ mod error;
 mod hertz;
 mod misfit;
 mod model;
+mod optimise;
+mod starts;
 
 pub use domain::{BoundHit, BoundSide, Domain, LinearConstraint, Parameter, Scale};
 pub use error::{InverseError, Result};
 pub use hertz::{LeeRadokHertz, ramp_hold_grid, ramp_hold_indentation};
 pub use misfit::{Experiment, Misfit, Segment, range_normalised_rmse, segment_weights};
 pub use model::{FD_STEP_UNIT, Model, check_finite, check_len, fd_jacobian};
+pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
+pub use starts::{feasible_starts, latin_hypercube};
