@@ -8,6 +8,7 @@ mod hertz;
 mod misfit;
 mod model;
 mod optimise;
+mod prony;
 mod starts;
 
 pub use domain::{BoundHit, BoundSide, Domain, LinearConstraint, Parameter, Scale};
@@ -17,3 +18,4 @@ pub use misfit::{Experiment, Misfit, Segment, range_normalised_rmse, segment_wei
 pub use model::{FD_STEP_UNIT, Model, check_finite, check_len, fd_jacobian};
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
 pub use starts::{feasible_starts, latin_hypercube};
+pub use prony::{ModulusPoint, ParameterTable, PronyShear, PronyTerm};
