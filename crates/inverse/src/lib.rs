@@ -5,6 +5,7 @@
 mod domain;
 mod error;
 mod hertz;
+mod identifiability;
 mod misfit;
 mod model;
 mod optimise;
@@ -19,3 +20,4 @@ pub use model::{FD_STEP_UNIT, Model, check_finite, check_len, fd_jacobian};
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
 pub use starts::{feasible_starts, latin_hypercube};
 pub use prony::{ModulusPoint, ParameterTable, PronyShear, PronyTerm};
+pub use identifiability::{Identifiability, SensitivityScaling, Z95, identifiability};

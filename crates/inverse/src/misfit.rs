@@ -153,6 +153,11 @@ impl<M: Model> Experiment<M> {
         })
     }
 
+    /// Range of the data (max − min), the eq. 5.3 normaliser.
+    pub fn data_range(&self) -> f64 {
+        self.range
+    }
+
     fn weight(&self, j: usize) -> f64 {
         self.weights.as_ref().map_or(1.0, |w| w[j])
     }
