@@ -222,7 +222,11 @@ impl Domain {
 
     /// Physical → scaled coordinates.
     pub fn to_unit(&self, x: &[f64]) -> Vec<f64> {
-        self.params.iter().zip(x).map(|(p, &v)| p.to_unit(v)).collect()
+        self.params
+            .iter()
+            .zip(x)
+            .map(|(p, &v)| p.to_unit(v))
+            .collect()
     }
 
     /// Scaled → physical coordinates.
@@ -347,8 +351,10 @@ mod tests {
         let e = Domain::new(vec![Parameter::new("a", "", 2.0, 1.0, Scale::Linear)])
             .expect_err("inverted");
         assert!(e.to_string().contains("'a'"));
-        assert!(Domain::prony2_table_5_3(0.01)
-            .and_then(|d| d.with_sum_constraint(&["g3"], 1.0))
-            .is_err());
+        assert!(
+            Domain::prony2_table_5_3(0.01)
+                .and_then(|d| d.with_sum_constraint(&["g3"], 1.0))
+                .is_err()
+        );
     }
 }

@@ -53,7 +53,9 @@ pub enum InverseError {
     },
 
     /// The reference curve has zero range, so eq. 5.3 is undefined.
-    #[error("reference curve '{what}' has zero range: the range-normalised RMSE (eq. 5.3) is undefined")]
+    #[error(
+        "reference curve '{what}' has zero range: the range-normalised RMSE (eq. 5.3) is undefined"
+    )]
     ZeroRange {
         /// Which curve.
         what: String,

@@ -235,9 +235,13 @@ mod tests {
         let a = 8.0 * (2.5e-6f64).sqrt() / (3.0 * 0.7);
         for (j, &tj) in t.iter().enumerate() {
             let tm = tj.min(tr);
-            let term = |g: f64, tau: f64| g * tau * c * ((-(tj - tm) / tau).exp() - (-tj / tau).exp());
+            let term =
+                |g: f64, tau: f64| g * tau * c * ((-(tj - tm) / tau).exp() - (-tj / tau).exp());
             let exact = a * x[0] * (0.2 * c * tm + term(x[1], x[2]) + term(x[3], x[4]));
-            assert!((y[j] - exact).abs() <= 1e-9 * exact.abs() + 1e-24, "t = {tj}");
+            assert!(
+                (y[j] - exact).abs() <= 1e-9 * exact.abs() + 1e-24,
+                "t = {tj}"
+            );
         }
     }
 

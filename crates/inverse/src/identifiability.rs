@@ -137,7 +137,11 @@ pub fn identifiability<M: Model>(
         .collect();
     let s_max = singular_values[0];
     let s_min = singular_values[n - 1];
-    let condition_number = if s_min > 0.0 { s_max / s_min } else { f64::INFINITY };
+    let condition_number = if s_min > 0.0 {
+        s_max / s_min
+    } else {
+        f64::INFINITY
+    };
     let residual_variance = r.norm_squared() / (total - n) as f64;
     let cutoff = total as f64 * f64::EPSILON * s_max;
     // C_x = σ̂² D V Σ⁻² Vᵀ D, diagonal only.

@@ -178,7 +178,11 @@ impl<M: Model> Experiment<M> {
     }
 
     fn misfit_of_curve(&self, y: &[f64], x: &[f64]) -> Result<f64> {
-        check_len(&format!("model curve of '{}'", self.label), self.data.len(), y.len())?;
+        check_len(
+            &format!("model curve of '{}'", self.label),
+            self.data.len(),
+            y.len(),
+        )?;
         check_finite(y, self.model.times(), x)?;
         let s: f64 = (0..y.len())
             .map(|j| self.weight(j) * (y[j] - self.data[j]).powi(2))
@@ -316,8 +320,12 @@ mod tests {
         // weights (1, 0, 0, 0) keep only the first residual, still /range.
         let e = range_normalised_rmse(&model, &reference, Some(&[1.0, 0.0, 0.0, 0.0])).expect("e");
         assert!((e - 0.1).abs() < 1e-15);
-        let e = range_normalised_rmse(&[0.0, 10.0, 5.0, 5.0], &reference, Some(&[0.0, 0.0, 1.0, 3.0]))
-            .expect("e");
+        let e = range_normalised_rmse(
+            &[0.0, 10.0, 5.0, 5.0],
+            &reference,
+            Some(&[0.0, 0.0, 1.0, 3.0]),
+        )
+        .expect("e");
         assert!((e - (27.0f64 / 4.0).sqrt() / 10.0).abs() < 1e-15);
     }
 
@@ -337,8 +345,16 @@ mod tests {
         let w = segment_weights(
             &[0.0, 0.5, 1.0, 2.0, 9.0],
             &[
-                Segment { start: 0.0, end: 1.0, weight: 3.0 },
-                Segment { start: 1.5, end: f64::INFINITY, weight: 0.5 },
+                Segment {
+                    start: 0.0,
+                    end: 1.0,
+                    weight: 3.0,
+                },
+                Segment {
+                    start: 1.5,
+                    end: f64::INFINITY,
+                    weight: 0.5,
+                },
             ],
             1.0,
         );
@@ -355,7 +371,15 @@ mod tests {
         for (j, v) in data.iter_mut().enumerate() {
             *v *= 1.0 + 0.03 * ((j as f64) * 0.7).sin();
         }
-        let w = segment_weights(&t, &[Segment { start: 0.0, end: 0.25, weight: 2.0 }], 1.0);
+        let w = segment_weights(
+            &t,
+            &[Segment {
+                start: 0.0,
+                end: 0.25,
+                weight: 2.0,
+            }],
+            1.0,
+        );
         Experiment::new(label, m, data, Some(w)).expect("experiment")
     }
 
@@ -377,7 +401,11 @@ mod tests {
             xp[k] += h;
             xm[k] -= h;
             let fd = (misfit.value(&xp).expect("v") - misfit.value(&xm).expect("v")) / (2.0 * h);
-            assert!((fd - g[k]).abs() <= 1e-6 * fd.abs().max(1e-12), "k = {k}: {fd} vs {}", g[k]);
+            assert!(
+                (fd - g[k]).abs() <= 1e-6 * fd.abs().max(1e-12),
+                "k = {k}: {fd} vs {}",
+                g[k]
+            );
         }
     }
 

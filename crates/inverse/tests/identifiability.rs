@@ -76,9 +76,15 @@ fn product_only_model_shows_a_tiny_singular_value_and_unbounded_intervals() {
     assert!(id.condition_number > 1e10);
     // the null direction is d ln a = -d ln b (scaled by value): (1, -1, 0)/√2
     let null = &id.directions[2];
-    assert!((null[0] + null[1]).abs() < 1e-6 && null[2].abs() < 1e-6, "{null:?}");
+    assert!(
+        (null[0] + null[1]).abs() < 1e-6 && null[2].abs() < 1e-6,
+        "{null:?}"
+    );
     let w = id.relative_half_widths();
-    assert!(w[0] > 1e3 && w[1] > 1e3, "a, b intervals must be huge: {w:?}");
+    assert!(
+        w[0] > 1e3 && w[1] > 1e3,
+        "a, b intervals must be huge: {w:?}"
+    );
     assert!(w[2] < 0.2, "c stays identifiable: {w:?}");
 }
 
@@ -121,7 +127,11 @@ fn intervals_match_the_gauss_newton_formula_computed_independently() {
     assert!((id.residual_variance - s2).abs() < 1e-12 * s2);
     for k in 0..3 {
         let se = (s2 * inv_diag[k]).sqrt();
-        assert!((id.std_errors[k] - se).abs() < 1e-6 * se, "k = {k}: {} vs {se}", id.std_errors[k]);
+        assert!(
+            (id.std_errors[k] - se).abs() < 1e-6 * se,
+            "k = {k}: {} vs {se}",
+            id.std_errors[k]
+        );
         assert!((id.intervals[k].1 - (x[k] + Z95 * se)).abs() < 1e-6 * se);
     }
     assert!(id.condition_number.is_finite());

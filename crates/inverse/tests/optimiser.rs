@@ -96,7 +96,10 @@ fn constrained_least_squares_optimum_matches_closed_form() {
     assert_eq!(fit.best.active_constraints, vec!["a + b <= 1".to_string()]);
     assert!(!fit.on_bound());
     assert!(fit.alternatives.is_empty());
-    assert_eq!(fit.best.starts, 4, "all starts reach the one convex optimum");
+    assert_eq!(
+        fit.best.starts, 4,
+        "all starts reach the one convex optimum"
+    );
 }
 
 #[test]
@@ -104,7 +107,11 @@ fn optimum_outside_the_domain_is_flagged_on_its_bound() {
     let m = Linear2::new(1.0, None);
     let d = m.response(&[1.4, 0.3]).expect("d");
     let misfit = Misfit::new(vec![Experiment::new("lin", m, d, None).expect("e")]).expect("m");
-    let fit = MultiStart::new().with_starts(3).expect("s").fit(&misfit).expect("fit");
+    let fit = MultiStart::new()
+        .with_starts(3)
+        .expect("s")
+        .fit(&misfit)
+        .expect("fit");
     assert!(fit.on_bound());
     assert_eq!(fit.best.on_bounds.len(), 1);
     assert_eq!(fit.best.on_bounds[0].name, "a");
@@ -167,16 +174,27 @@ fn model_failures_are_reported_per_start_and_as_no_convergence_when_all_fail() {
     let mut m = Linear2::new(2.0, None);
     let d = data_with_wiggle(&m, &[0.9, 0.6]);
     m.fail_above = Some(-1.0); // fails everywhere
-    let misfit = Misfit::new(vec![Experiment::new("lin", m, d.clone(), None).expect("e")])
-        .expect("m");
-    let e = MultiStart::new().with_starts(2).expect("s").fit(&misfit).expect_err("fails");
-    assert!(matches!(e, InverseError::NoConvergence { starts: 2, .. }), "{e}");
+    let misfit =
+        Misfit::new(vec![Experiment::new("lin", m, d.clone(), None).expect("e")]).expect("m");
+    let e = MultiStart::new()
+        .with_starts(2)
+        .expect("s")
+        .fit(&misfit)
+        .expect_err("fails");
+    assert!(
+        matches!(e, InverseError::NoConvergence { starts: 2, .. }),
+        "{e}"
+    );
     assert!(e.to_string().contains("synthetic failure"));
 
     let mut m = Linear2::new(2.0, None);
     m.fail_above = Some(1.5); // only starts wandering above a = 1.5 fail
     let misfit = Misfit::new(vec![Experiment::new("lin", m, d, None).expect("e")]).expect("m");
-    let fit = MultiStart::new().with_starts(6).expect("s").fit(&misfit).expect("fit");
+    let fit = MultiStart::new()
+        .with_starts(6)
+        .expect("s")
+        .fit(&misfit)
+        .expect("fit");
     assert!(fit.best.misfit.is_finite());
     assert_eq!(fit.starts, 6);
 }

@@ -62,7 +62,10 @@ fn recovers_g0_long_term_weight_and_g52_from_noisy_ramp_hold_curves() {
         let clean = m.response(&x_true).expect("clean");
         let peak = clean.iter().cloned().fold(0.0, f64::max);
         // 2 % Gaussian noise: sigma = 0.02 * peak force, additive.
-        let data: Vec<f64> = clean.iter().map(|y| y + 0.02 * peak * normal(&mut noise_rng)).collect();
+        let data: Vec<f64> = clean
+            .iter()
+            .map(|y| y + 0.02 * peak * normal(&mut noise_rng))
+            .collect();
         let misfit =
             Misfit::new(vec![Experiment::new("RH", m, data, None).expect("e")]).expect("m");
         let at_truth = misfit.value(&x_true).expect("truth");
@@ -95,5 +98,9 @@ fn recovers_g0_long_term_weight_and_g52_from_noisy_ramp_hold_curves() {
     }
     println!("{}", lines.join("\n"));
     assert_eq!(optimiser_reached_truth_level, 10, "{}", lines.join("\n"));
-    assert!(passed >= 9, "only {passed}/10 recovered:\n{}", lines.join("\n"));
+    assert!(
+        passed >= 9,
+        "only {passed}/10 recovered:\n{}",
+        lines.join("\n")
+    );
 }
