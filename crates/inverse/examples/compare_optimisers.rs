@@ -10,13 +10,16 @@ use nlvid_inverse::{
     ramp_hold_indentation,
 };
 
+/// f(u, ∇f) or c(u, ∇c) in scaled coordinates.
+type ScaledFn<'a> = Box<dyn Fn(&[f64], Option<&mut [f64]>) -> f64 + 'a>;
+
 /// A problem in scaled coordinates u ∈ [0, 1]ⁿ with a constraint c(u) ≤ 0.
 struct Problem<'a> {
     name: &'static str,
     n: usize,
-    f: Box<dyn Fn(&[f64], Option<&mut [f64]>) -> f64 + 'a>,
+    f: ScaledFn<'a>,
     /// (c(u), ∇c) with c ≤ 0 feasible.
-    c: Box<dyn Fn(&[f64], Option<&mut [f64]>) -> f64 + 'a>,
+    c: ScaledFn<'a>,
     u_star: Vec<f64>,
     f_star: f64,
     starts: Vec<Vec<f64>>,

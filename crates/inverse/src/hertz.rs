@@ -56,7 +56,10 @@ impl LeeRadokHertz {
                 indentation.len()
             )));
         }
-        if let Some(j) = times.windows(2).position(|w| !(w[1] > w[0])) {
+        if let Some(j) = times
+            .windows(2)
+            .position(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+        {
             return Err(InverseError::InvalidSetting(format!(
                 "time grid must be strictly increasing (index {})",
                 j + 1

@@ -118,8 +118,8 @@ pub fn identifiability<M: Model>(
         })
         .collect();
     let mut s = jt.clone();
-    for k in 0..n {
-        s.column_mut(k).scale_mut(scale[k]);
+    for (k, &sk) in scale.iter().enumerate() {
+        s.column_mut(k).scale_mut(sk);
     }
     let svd = s
         .try_svd(false, true, f64::EPSILON, 10_000)

@@ -35,7 +35,7 @@ pub enum Dimension {
 /// SI factor of a unit string for a dimension; None if the unit does not
 /// belong to it.
 fn unit_factor(unit: &str, dim: Dimension) -> Option<f64> {
-    let u = unit.trim().replace('µ', "u").replace('μ', "u");
+    let u = unit.trim().replace(['µ', 'μ'], "u");
     let f = match dim {
         Dimension::Time => match u.as_str() {
             "s" => 1.0,
