@@ -2,9 +2,10 @@
 //! converted to SI, checked against the expected loading protocol and
 //! resampled onto a model's time grid.
 //!
-//! Headers carry units: `name [unit]` or `name (unit)`, e.g.
-//! `time [s]`, `height (um)`, `vDeflection [V]`. Columns are chosen by
-//! `name` (case-sensitive, surrounding spaces ignored).
+//! Headers carry units: `name [unit]`, `name (unit)` or nlvid's own output
+//! form `name_unit` (e.g. `time_s`), e.g. `time [s]`, `height (um)`,
+//! `vDeflection [V]`. Columns are chosen by `name` (case-sensitive,
+//! surrounding spaces ignored).
 //!
 //! AFM (§5.2.2): the deflection column may be in volts (× deflection
 //! sensitivity → metres), in metres, or already a force; then F = k·d and
@@ -145,10 +146,20 @@ impl Table {
     /// Column `name` converted to SI; returns the values and the matched
     /// dimension (first of `dims` the header's unit belongs to).
     fn column(&self, name: &str, dims: &[Dimension]) -> Result<(Vec<f64>, Dimension)> {
+        let suffixed = |h: &(String, Option<String>)| {
+            h.1.is_none()
+                && h.0
+                    .strip_prefix(name)
+                    .and_then(|r| r.strip_prefix('_'))
+                    .is_some_and(|u| {
+                        let u = u.replace("_per_", "/");
+                        dims.iter().any(|&d| unit_factor(&u, d).is_some())
+                    })
+        };
         let i = self
             .headers
             .iter()
-            .position(|(n, _)| n == name)
+            .position(|h| h.0 == name || suffixed(h))
             .ok_or_else(|| {
                 let available: Vec<String> = self.headers.iter().map(|(n, _)| n.clone()).collect();
                 self.err(
@@ -157,13 +168,21 @@ impl Table {
                     format!("column not found; the header has {available:?}"),
                 )
             })?;
-        let unit = self.headers[i].1.as_deref().ok_or_else(|| {
-            self.err(
-                1,
-                name,
-                format!("header has no unit; write it as '{name} [unit]' (expected {dims:?})"),
-            )
-        })?;
+        let from_suffix = self.headers[i]
+            .0
+            .strip_prefix(name)
+            .and_then(|r| r.strip_prefix('_'));
+        let unit = self.headers[i]
+            .1
+            .as_deref()
+            .or(from_suffix)
+            .ok_or_else(|| {
+                self.err(
+                    1,
+                    name,
+                    format!("header has no unit; write it as '{name} [unit]' (expected {dims:?})"),
+                )
+            })?;
         let (factor, dim) = dims
             .iter()
             .find_map(|&d| unit_factor(unit, d).map(|f| (f, d)))

@@ -83,6 +83,17 @@ fn data_error(e: InverseError) -> (usize, String, String) {
 }
 
 #[test]
+fn nlvid_output_headers_with_unit_suffixes_are_accepted() {
+    let p = write(
+        "suffix.csv",
+        "time_s,height_um,vDeflection_nN\n0,0,0\n1,2,106.77\n",
+    );
+    let c = read_afm_csv(&p, &afm_cols(), &cal()).expect("read");
+    assert!((c.force[1] - 106.77e-9).abs() < 1e-18);
+    assert!((c.displacement[1] - 2e-6).abs() < 1e-18);
+}
+
+#[test]
 fn malformed_files_name_the_row_and_column() {
     // missing column
     let p = write("missing.csv", "time [s],height [um]\n0,0\n");
