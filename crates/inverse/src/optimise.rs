@@ -13,13 +13,15 @@
 //! Why SLSQP and not COBYLA: see docs/theory/inverse.md (comparison).
 
 use std::cell::{Cell, RefCell};
+use std::fmt;
 
 use serde::Serialize;
 
-use crate::domain::{BoundHit, Domain};
+use crate::domain::{BoundHit, BoundSide, Domain};
 use crate::error::{InverseError, Result};
 use crate::misfit::Misfit;
 use crate::model::Model;
+use crate::prony::{ModulusPoint, ParameterTable, PronyShear};
 use crate::starts::feasible_starts;
 
 /// Settings of [`MultiStart`]; build with [`MultiStart::new`] and `with_*`.
@@ -352,6 +354,87 @@ impl FitResult {
     /// True when the best optimum has a parameter on a bound.
     pub fn on_bound(&self) -> bool {
         !self.best.on_bounds.is_empty()
+    }
+
+    /// The best parameters with names and units.
+    ///
+    /// # Errors
+    /// Never for a result of [`MultiStart::fit`]; length mismatch otherwise.
+    pub fn parameters(&self) -> Result<ParameterTable> {
+        ParameterTable::new(&self.domain, &self.best.x)
+    }
+
+    /// G(t) (eq. 5.1) and E(t) = 3G(t) of the best parameters on `times`.
+    ///
+    /// # Errors
+    /// [`InverseError::InvalidSetting`] if the domain is not a Prony family
+    /// (no G0/C1, g_k, tau_k).
+    pub fn modulus(&self, times: &[f64]) -> Result<Vec<ModulusPoint>> {
+        Ok(PronyShear::from_parameters(&self.domain, &self.best.x)?.curve(times))
+    }
+}
+
+impl fmt::Display for FitResult {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match ParameterTable::new(&self.domain, &self.best.x) {
+            Ok(t) => write!(f, "{t}")?,
+            Err(e) => writeln!(f, "{e}")?,
+        }
+        let per: Vec<String> = self
+            .best
+            .per_experiment
+            .iter()
+            .map(|e| format!("{:.4} %", 100.0 * e))
+            .collect();
+        writeln!(
+            f,
+            "misfit (eq. 5.3) = {:.4} % [{}]; {} of {} starts reached it; {} evaluations",
+            100.0 * self.best.misfit,
+            per.join(", "),
+            self.best.starts,
+            self.starts,
+            self.evaluations
+        )?;
+        for hit in &self.best.on_bounds {
+            let side = match hit.side {
+                BoundSide::Lower => "lower",
+                BoundSide::Upper => "upper",
+            };
+            writeln!(
+                f,
+                "WARNING: {} is on its {side} bound: widen the domain",
+                hit.name
+            )?;
+        }
+        for c in &self.best.active_constraints {
+            writeln!(f, "note: constraint {c} is active")?;
+        }
+        if !self.alternatives.is_empty() {
+            writeln!(
+                f,
+                "WARNING: {} other distinct optima fit almost as well:",
+                self.alternatives.len()
+            )?;
+            for a in &self.alternatives {
+                let xs: Vec<String> = self
+                    .domain
+                    .params()
+                    .iter()
+                    .zip(&a.x)
+                    .map(|(p, v)| format!("{}={v:.4e}", p.name))
+                    .collect();
+                writeln!(f, "  misfit {:.4} %: {}", 100.0 * a.misfit, xs.join(" "))?;
+            }
+        }
+        if !self.failed_starts.is_empty() {
+            writeln!(
+                f,
+                "{} starts failed; first: {}",
+                self.failed_starts.len(),
+                self.failed_starts[0]
+            )?;
+        }
+        Ok(())
     }
 }
 

@@ -136,3 +136,30 @@ fn intervals_match_the_gauss_newton_formula_computed_independently() {
     }
     assert!(id.condition_number.is_finite());
 }
+
+#[test]
+fn ninety_five_percent_intervals_cover_the_truth_about_95_percent_of_the_time() {
+    // 200 noise realisations, each fitted by the multistart optimiser; the
+    // binomial sd of the coverage at p = 0.95 is 1.5 %, accept 0.90 ... 0.99.
+    use nlvid_inverse::MultiStart;
+    let x_true = [2.0, 1.5, 0.7];
+    let ms = MultiStart::new().with_starts(2).expect("s");
+    let mut covered = [0usize; 3];
+    let n = 200;
+    for seed in 0..n {
+        let m = Toy::new(false);
+        let d = noisy(&m, &x_true, 0.05, 100 + seed);
+        let misfit = Misfit::new(vec![Experiment::new("toy", m, d, None).expect("e")]).expect("m");
+        let fit = ms.fit(&misfit).expect("fit");
+        let id = identifiability(&misfit, &fit.best.x, SensitivityScaling::Value).expect("id");
+        for k in 0..3 {
+            let (lo, hi) = id.intervals[k];
+            covered[k] += usize::from(lo <= x_true[k] && x_true[k] <= hi);
+        }
+    }
+    for (k, c) in covered.iter().enumerate() {
+        let p = *c as f64 / n as f64;
+        println!("parameter {k}: coverage {p}");
+        assert!((0.90..=0.99).contains(&p), "parameter {k}: coverage {p}");
+    }
+}

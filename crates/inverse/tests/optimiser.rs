@@ -93,6 +93,7 @@ fn constrained_least_squares_optimum_matches_closed_form() {
     let x = &fit.best.x;
     assert!((x[0] - a_star).abs() < 1e-5, "{x:?} vs a* = {a_star}");
     assert!((x[0] + x[1] - 1.0).abs() < 1e-8);
+    assert!(fit.to_string().contains("constraint a + b <= 1 is active"));
     assert_eq!(fit.best.active_constraints, vec!["a + b <= 1".to_string()]);
     assert!(!fit.on_bound());
     assert!(fit.alternatives.is_empty());
@@ -113,6 +114,9 @@ fn optimum_outside_the_domain_is_flagged_on_its_bound() {
         .fit(&misfit)
         .expect("fit");
     assert!(fit.on_bound());
+    let printed = fit.to_string();
+    assert!(printed.contains("a is on its upper bound"), "{printed}");
+    assert!(printed.contains("a = 1.000000e0 N"), "{printed}");
     assert_eq!(fit.best.on_bounds.len(), 1);
     assert_eq!(fit.best.on_bounds[0].name, "a");
     assert_eq!(fit.best.on_bounds[0].side, BoundSide::Upper);
@@ -167,6 +171,10 @@ fn mirror_optima_with_equal_misfit_are_both_reported() {
             .any(|x| (x[0] - a).abs() < 1e-3 * a && (x[1] - b).abs() < 1e-3 * b)
     };
     assert!(has(0.5, 4.0) && has(4.0, 0.5), "{pts:?}");
+    assert!(
+        fit.to_string()
+            .contains("other distinct optima fit almost as well")
+    );
 }
 
 #[test]
