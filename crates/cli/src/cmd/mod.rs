@@ -14,6 +14,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod check;
+mod compare;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
@@ -74,6 +75,8 @@ pub enum Command {
     Version,
     /// Validate a study file and print every value as the program reads it, in SI.
     Check(check::Args),
+    /// Group G(t) (mean ± sd) and rank-sum p(t) between two groups of cells.
+    Compare(compare::Args),
 }
 
 impl Command {
@@ -92,6 +95,10 @@ impl Command {
                 Ok(ExitCode::SUCCESS)
             }
             Command::Check(a) => a.run(ctx),
+            Command::Compare(mut a) => {
+                a.json = ctx.json;
+                a.run()
+            }
         }
     }
 }
