@@ -514,12 +514,7 @@ impl<'a> ChannelSpec<'a> {
                 props,
             };
             let p = format!("lcd-info.{}.", idx.trim());
-            (
-                hdr,
-                p.clone(),
-                format!("{p}type"),
-                format!("{p}encoder."),
-            )
+            (hdr, p.clone(), format!("{p}type"), format!("{p}encoder."))
         } else {
             let p = format!("channel.{ch}.");
             (

@@ -26,10 +26,18 @@
 
 mod curve;
 mod error;
+mod hertz;
 mod jpk;
+mod prepare;
 
 pub use curve::{Calibration, CalibrationSource, Channel, ForceCurve, Segment, SegmentKind};
 pub use error::{AfmError, Result};
+pub use hertz::{
+    Approach, HertzFit, HertzSettings, fit_hertz, hertz_baseline, hertz_force, prepare_approach,
+};
 pub use jpk::{
     ReadOptions, read_force_curve, read_force_curve_with, read_force_map, read_jpk_bytes,
+};
+pub use prepare::{
+    Baseline, ContactMethod, ContactPoint, contact_point, indentation, tip_sample_separation,
 };
