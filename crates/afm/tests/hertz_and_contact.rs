@@ -120,7 +120,7 @@ fn baseline_with_slope_removes_a_tilt_exactly() {
     let b = Baseline::fit(&x, &f, 0..50, true).expect("fit");
     assert!(rel(b.slope, 2e-3) < 1e-9 && rel(b.offset, 3e-10) < 1e-9);
     assert!(b.subtract(&x, &f).iter().all(|r| r.abs() < 1e-20));
-    assert!(Baseline::fit(&x, &f, 10..5, false).is_err());
+    assert!(Baseline::fit(&x, &f, 40..60, false).is_err());
 }
 
 #[test]
