@@ -28,6 +28,8 @@ mod curve;
 mod error;
 mod hertz;
 mod jpk;
+mod lee_radok;
+pub mod plot;
 mod prepare;
 
 pub use curve::{Calibration, CalibrationSource, Channel, ForceCurve, Segment, SegmentKind};
@@ -38,6 +40,11 @@ pub use hertz::{
 pub use jpk::{
     ReadOptions, read_force_curve, read_force_curve_with, read_force_map, read_jpk_bytes,
 };
+pub use lee_radok::{
+    LeeRadokFit, LeeRadokSettings, Prony, RampHold, fit_lee_radok, lee_radok_force,
+    prepare_ramp_hold,
+};
 pub use prepare::{
-    Baseline, ContactMethod, ContactPoint, contact_point, indentation, tip_sample_separation,
+    Baseline, ContactMethod, ContactPoint, contact_point, contact_point_from_baseline, indentation,
+    tip_sample_separation,
 };

@@ -215,6 +215,44 @@ pub fn contact_point(
     }
 }
 
+/// Deviation-from-baseline contact point with a baseline measured elsewhere (e.g. the
+/// pause before the approach): the last sample before the force maximum whose force
+/// lies within `n_sigma`·noise of `baseline` (evaluated at the sample's separation).
+///
+/// # Errors
+/// [`AfmError::InvalidInput`] for mismatched input or n_sigma ≤ 0; [`AfmError::NoContact`]
+/// if the maximum does not exceed the threshold.
+pub fn contact_point_from_baseline(
+    separation: &[f64],
+    force: &[f64],
+    baseline: &Baseline,
+    n_sigma: f64,
+) -> Result<ContactPoint> {
+    let n = force.len();
+    if separation.len() != n || n < 2 || n_sigma.is_nan() || n_sigma <= 0.0 {
+        return Err(AfmError::InvalidInput(format!(
+            "contact point needs equal-length input and n_sigma > 0 (separation {}, force {n}, n_sigma {n_sigma})",
+            separation.len()
+        )));
+    }
+    let thr = n_sigma * baseline.noise;
+    let imax = argmax(force);
+    let above = |i: usize| force[i] - baseline.at(separation[i]) > thr;
+    if !above(imax) {
+        return Err(AfmError::NoContact(format!(
+            "force maximum is within {n_sigma} σ ({thr:.3e} N) of the baseline"
+        )));
+    }
+    let mut i = imax;
+    while i > 0 && above(i) {
+        i -= 1;
+    }
+    Ok(ContactPoint {
+        index: i,
+        separation: separation[i],
+    })
+}
+
 fn argmax(x: &[f64]) -> usize {
     let mut best = 0;
     for (i, v) in x.iter().enumerate() {
