@@ -26,6 +26,7 @@
 
 mod curve;
 mod error;
+pub mod geometry;
 mod hertz;
 mod jpk;
 mod lee_radok;
