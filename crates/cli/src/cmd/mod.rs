@@ -4,6 +4,10 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+pub mod build;
+pub mod sample;
+pub mod surrogate;
+
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
 #[derive(Debug, Parser)]
@@ -22,6 +26,15 @@ pub struct Cli {
 pub enum Command {
     /// Print the version and the crates that make up this build.
     Version,
+    /// Latin-hypercube training and checking designs in a parameter domain.
+    Sample(sample::SampleArgs),
+    /// Run a forward model over a design: parallel, resumable, shardable.
+    Build(build::BuildArgs),
+    /// Merge shard stores of one build.
+    Merge(build::MergeArgs),
+    /// Kriging surrogates: fit, predict, check.
+    #[command(subcommand)]
+    Surrogate(surrogate::SurrogateCmd),
 }
 
 impl Command {
@@ -32,6 +45,10 @@ impl Command {
                 println!("nlvid {}", env!("CARGO_PKG_VERSION"));
                 Ok(ExitCode::SUCCESS)
             }
+            Command::Sample(a) => a.run(),
+            Command::Build(a) => a.run(),
+            Command::Merge(a) => a.run(),
+            Command::Surrogate(c) => c.run(),
         }
     }
 }
