@@ -15,6 +15,9 @@ use clap::{Parser, Subcommand};
 
 mod check;
 mod compare;
+pub mod build;
+pub mod sample;
+pub mod surrogate;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
@@ -77,6 +80,15 @@ pub enum Command {
     Check(check::Args),
     /// Group G(t) (mean ± sd) and rank-sum p(t) between two groups of cells.
     Compare(compare::Args),
+    /// Latin-hypercube training and checking designs in a parameter domain.
+    Sample(sample::SampleArgs),
+    /// Run a forward model over a design: parallel, resumable, shardable.
+    Build(build::BuildArgs),
+    /// Merge shard stores of one build.
+    Merge(build::MergeArgs),
+    /// Kriging surrogates: fit, predict, check.
+    #[command(subcommand)]
+    Surrogate(surrogate::SurrogateCmd),
 }
 
 impl Command {
@@ -99,6 +111,10 @@ impl Command {
                 a.json = ctx.json;
                 a.run()
             }
+            Command::Sample(a) => a.run(),
+            Command::Build(a) => a.run(),
+            Command::Merge(a) => a.run(),
+            Command::Surrogate(c) => c.run(ctx.json),
         }
     }
 }
