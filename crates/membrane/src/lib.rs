@@ -1,1 +1,13 @@
 //! Semi-analytical solver for a fluid-filled NLV membrane squeezed between rigid plates (thesis ch. II §2.3, App. C).
+
+#![warn(missing_docs)]
+
+mod error;
+pub mod models;
+mod shooting;
+mod solver;
+
+pub use error::{MembraneError, Result};
+pub use models::{MooneyRivlinMembrane, PipkinRogersMembrane, PipkinRogersParams, PipkinRogersState};
+pub use shooting::NodeValue;
+pub use solver::{Control, Geometry, MembraneSolver, NewtonSettings, Solution};
