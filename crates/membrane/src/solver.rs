@@ -181,6 +181,9 @@ pub struct MembraneSolver<M: MembraneMaterial> {
     uniform: bool,
     time: Option<f64>,
     x: [f64; 3],
+    /// Previous committed unknowns and the time step that led to `x`.
+    x_prev: Option<([f64; 3], f64)>,
+    predicted: Option<[f64; 3]>,
     last_control: Control,
     jac: Option<[[f64; 3]; 3]>,
     /// Newton settings (public to tune).
@@ -248,6 +251,8 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
             uniform: true,
             time: None,
             x: [geometry.rs, 0.0, 0.0],
+            x_prev: None,
+            predicted: None,
             last_control: Control::Displacement(0.0),
             jac: None,
             newton: NewtonSettings::default(),
@@ -339,9 +344,7 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                 eprintln!("it {it} x {x:?} r {r:?} ctl {control}");
             }
             if norm(&r) <= self.newton.tol {
-                if fresh {
-                    self.jac = jac;
-                }
+                self.jac = jac;
                 return Ok((x, it));
             }
             if jac.is_none() {
@@ -395,9 +398,22 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                 let xt = clamp([x[0] + alpha * dx[0], x[1] + alpha * dx[1], x[2] + alpha * dx[2]]);
                 match self.residual(&mut sh, xt, control) {
                     Ok((rt, _)) if norm(&rt) < (1.0 - 1e-4 * alpha) * norm(&r) => {
-                        // A reused Jacobian that contracts slowly is refreshed next time.
+                        // A reused Jacobian that contracts slowly is refreshed next time;
+                        // otherwise it gets Broyden's rank-one update.
                         if !fresh && norm(&rt) > 0.3 * norm(&r) {
                             jac = None;
+                        } else if let Some(jm) = jac.as_mut() {
+                            let d = [xt[0] - x[0], xt[1] - x[1], xt[2] - x[2]];
+                            let dd: f64 = d.iter().map(|v| v * v).sum();
+                            if dd > 0.0 {
+                                for i in 0..3 {
+                                    let jd: f64 = (0..3).map(|k| jm[i][k] * d[k]).sum();
+                                    let u = (rt[i] - r[i] - jd) / dd;
+                                    for k in 0..3 {
+                                        jm[i][k] += u * d[k];
+                                    }
+                                }
+                            }
                         }
                         x = xt;
                         r = rt;
@@ -430,6 +446,11 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
 
     fn guess_for(&self, control: Control) -> [f64; 3] {
         let mut x = self.x;
+        if let Some(p) = self.predicted {
+            if p[1] > 0.0 && x[1] > 0.0 && control.touches() {
+                x = p;
+            }
+        }
         if let Control::ContactAngle(v) = control {
             x[1] = v;
         } else if control.touches() && x[1] <= 0.0 {
@@ -713,7 +734,17 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
     /// `t` does not increase.
     pub fn advance(&mut self, t: f64, control: Control) -> Result<Solution> {
         let dt = self.dt_to(t)?;
-        let (x, it, c) = self.solve_with_continuation(t, dt, control)?;
+        // Secant predictor in time (§2.3.3 uses the last solution as the guess).
+        self.predicted = match self.x_prev {
+            Some((xp, dtp)) if dtp > 0.0 && dt > 0.0 && std::mem::discriminant(&control) == std::mem::discriminant(&self.last_control) => {
+                let f = (dt / dtp).min(2.0);
+                Some([0, 1, 2].map(|k| self.x[k] + f * (self.x[k] - xp[k])))
+            }
+            _ => None,
+        };
+        let solved = self.solve_with_continuation(t, dt, control);
+        self.predicted = None;
+        let (x, it, c) = solved?;
         let sol = self.build_solution(t, dt, x, c, it)?;
         for (j, v) in sol.profile.iter().enumerate() {
             self.material
@@ -732,6 +763,7 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                     && (v.lambda2 - p0.lambda2).abs() <= 1e-13 * p0.lambda2
             });
         self.time = Some(t);
+        self.x_prev = Some((self.x, dt));
         self.x = x;
         self.last_control = c;
         Ok(sol)
