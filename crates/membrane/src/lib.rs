@@ -5,9 +5,11 @@
 mod error;
 pub mod models;
 mod shooting;
+mod simulate;
 mod solver;
 
 pub use error::{MembraneError, Result};
 pub use models::{MooneyRivlinMembrane, PipkinRogersMembrane, PipkinRogersParams, PipkinRogersState};
 pub use shooting::NodeValue;
 pub use solver::{Control, Geometry, MembraneSolver, NewtonSettings, Solution};
+pub use simulate::{ControlKind, Loading, MembraneRun, StepRecord, simulate, simulate_with};

@@ -72,13 +72,6 @@ impl Control {
             Control::Displacement(v) | Control::Force(v) | Control::ContactAngle(v) => v,
         }
     }
-    fn with_value(&self, v: f64) -> Self {
-        match self {
-            Control::Displacement(_) => Control::Displacement(v),
-            Control::Force(_) => Control::Force(v),
-            Control::ContactAngle(_) => Control::ContactAngle(v),
-        }
-    }
     fn touches(&self) -> bool {
         self.value() > 0.0
     }
@@ -624,6 +617,41 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
             cur[1] = 0.0;
             prev[1] = 0.0;
         }
+        // Start from the equilibrium at this dt and the current contact angle:
+        // the shot is too sensitive to start from the previous step's state.
+        // At dt = 0 the committed state solves the problem exactly, so the
+        // equilibrium at dt is reached by continuation in the time increment.
+        let start = if cur[1] > 0.0 { Control::ContactAngle(cur[1]) } else { Control::Displacement(0.0) };
+        let (mut s, mut ds) = (0.0_f64, 1.0_f64);
+        let (mut xs, mut xs_prev, mut ds_prev) = (cur, cur, 0.0_f64);
+        while s < 1.0 {
+            let st = (s + ds).min(1.0);
+            let mut guess = xs;
+            if ds_prev > 0.0 {
+                let f = (st - s) / ds_prev;
+                for k in 0..3 {
+                    guess[k] = xs[k] + f * (xs[k] - xs_prev[k]);
+                }
+            }
+            self.jac = None;
+            match self.newton(dt * st, start, guess) {
+                Ok((x, _)) => {
+                    xs_prev = xs;
+                    xs = x;
+                    ds_prev = st - s;
+                    s = st;
+                    ds *= 2.0;
+                }
+                Err(e) => {
+                    ds *= 0.25;
+                    if ds < 1e-5 {
+                        return Err(e);
+                    }
+                }
+            }
+        }
+        cur = xs;
+        prev = xs;
         let dir = if psi_end >= cur[1] { 1.0 } else { -1.0 };
         let mut h: f64 = 2e-3;
         let mut last_step = 0.0_f64;
@@ -767,18 +795,6 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         self.x = x;
         self.last_control = c;
         Ok(sol)
-    }
-}
-
-#[cold]
-fn unreachable_err() -> MembraneError {
-    MembraneError::NoConvergence {
-        time: f64::NAN,
-        control: String::new(),
-        quantity: "internal",
-        residual: f64::NAN,
-        iterations: 0,
-        advice: "internal error".into(),
     }
 }
 
