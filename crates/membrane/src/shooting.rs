@@ -154,6 +154,10 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
         for _ in 0..60 {
             let (s, ds1) = self.stress(psi, [l1, l2])?;
             let f = s[0] / (l1 * l2) - t1;
+            if f.abs() <= 1e-13 * t1 {
+                self.lam1_guess = l1;
+                return Ok((l1, s));
+            }
             let fp = (ds1 - s[0] / l1) / (l1 * l2);
             if !(fp > 0.0) || !f.is_finite() {
                 return Err(ShotFail::Breakdown {
@@ -161,15 +165,7 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
                     what: "meridional tension is not increasing with λ1 (cannot recover λ1 from T1)",
                 });
             }
-            let step = f / fp;
-            let next = (l1 - step).max(0.5 * l1).min(2.0 * l1);
-            let done = (next - l1).abs() <= 1e-13 * l1;
-            l1 = next;
-            if done || f.abs() <= 1e-14 * t1.max(1e-300) {
-                let (s, _) = self.stress(psi, [l1, l2])?;
-                self.lam1_guess = l1;
-                return Ok((l1, s));
-            }
+            l1 = (l1 - f / fp).max(0.5 * l1).min(2.0 * l1);
         }
         Err(ShotFail::Breakdown {
             psi,

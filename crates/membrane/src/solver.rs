@@ -21,7 +21,7 @@ pub struct Geometry {
 
 impl Default for Geometry {
     fn default() -> Self {
-        Self { rs: 1.03, nodes: 96 }
+        Self { rs: 1.03, nodes: 64 }
     }
 }
 
@@ -544,9 +544,16 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         control: Control,
     ) -> Result<([f64; 3], usize, Control)> {
         let saved = self.x;
-        let first = match self.newton(dt, control, self.guess_for(control)) {
-            Ok((x, it)) => return Ok((x, it, control)),
-            Err(e) => e,
+        // From no contact to contact the direct Newton has no usable guess for
+        // ψc (and the shot is very sensitive): go straight to the ψc sweep.
+        let first_contact = self.x[1] <= 0.0 && control.touches();
+        let first = if first_contact && !matches!(control, Control::ContactAngle(_)) {
+            NewtonFail::Stalled { residual: [f64::NAN; 3], iterations: 0, last_shot: None }
+        } else {
+            match self.newton(dt, control, self.guess_for(control)) {
+                Ok((x, it)) => return Ok((x, it, control)),
+                Err(e) => e,
+            }
         };
         self.jac = None;
         let target = control.value();
@@ -671,14 +678,15 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                 }
             }
             guess[1] = target;
-            self.jac = None;
             match self.newton(dt, Control::ContactAngle(target), guess) {
                 Ok((x, it)) => {
                     prev = cur;
                     cur = x;
                     last_step = step;
-                    if it <= 4 {
-                        h = (h * 1.5).min(0.05);
+                    if it <= 3 {
+                        h = (h * 2.0).min(0.1);
+                    } else if it <= 5 {
+                        h = (h * 1.3).min(0.1);
                     }
                     let mut sh = Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale);
                     if let Ok(end) = sh.shoot(cur[0], cur[1], cur[2], None) {
@@ -688,6 +696,7 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                     }
                 }
                 Err(e) => {
+                    self.jac = None;
                     h *= 0.25;
                     if h < 1e-6 {
                         return Err(e);
