@@ -7,6 +7,7 @@ pub mod models;
 mod shooting;
 mod simulate;
 mod solver;
+pub mod thesis;
 
 pub use error::{MembraneError, Result};
 pub use models::{MooneyRivlinMembrane, PipkinRogersMembrane, PipkinRogersParams, PipkinRogersState};

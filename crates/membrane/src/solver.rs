@@ -618,11 +618,9 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         psi_end: f64,
         mut stop: impl FnMut(&[f64; 3], &ShotEnd) -> bool,
     ) -> std::result::Result<([f64; 3], [f64; 3]), NewtonFail> {
-        let mut prev = self.x;
         let mut cur = self.x;
         if !matches!(self.last_control, Control::ContactAngle(_)) && cur[1] <= 0.0 {
             cur[1] = 0.0;
-            prev[1] = 0.0;
         }
         // Start from the equilibrium at this dt and the current contact angle:
         // the shot is too sensitive to start from the previous step's state.
@@ -658,7 +656,7 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
             }
         }
         cur = xs;
-        prev = xs;
+        let mut prev = xs;
         let dir = if psi_end >= cur[1] { 1.0 } else { -1.0 };
         let mut h: f64 = 2e-3;
         let mut last_step = 0.0_f64;
