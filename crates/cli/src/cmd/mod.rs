@@ -4,6 +4,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+pub mod membrane;
+
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
 #[derive(Debug, Parser)]
@@ -22,6 +24,8 @@ pub struct Cli {
 pub enum Command {
     /// Print the version and the crates that make up this build.
     Version,
+    /// Fluid-filled NLV membrane squeezed between plates (ch. II, semi-analytical).
+    Membrane(membrane::MembraneArgs),
 }
 
 impl Command {
@@ -32,6 +36,7 @@ impl Command {
                 println!("nlvid {}", env!("CARGO_PKG_VERSION"));
                 Ok(ExitCode::SUCCESS)
             }
+            Command::Membrane(args) => membrane::run(args),
         }
     }
 }
