@@ -18,6 +18,7 @@ mod compare;
 pub mod build;
 pub mod sample;
 pub mod surrogate;
+pub mod membrane;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
@@ -89,6 +90,8 @@ pub enum Command {
     /// Kriging surrogates: fit, predict, check.
     #[command(subcommand)]
     Surrogate(surrogate::SurrogateCmd),
+    /// Fluid-filled NLV membrane squeezed between plates (ch. II, semi-analytical).
+    Membrane(membrane::MembraneArgs),
 }
 
 impl Command {
@@ -115,6 +118,10 @@ impl Command {
             Command::Build(a) => a.run(),
             Command::Merge(a) => a.run(),
             Command::Surrogate(c) => c.run(ctx.json),
+            Command::Membrane(mut args) => {
+                args.json = ctx.json;
+                membrane::run(args)
+            }
         }
     }
 }
