@@ -67,10 +67,7 @@ fn hertz_neo_hookean_half_space_within_3_percent() {
     let errors = hertz_errors(40, 40.0, 250.0);
     eprintln!("Hertz (δ/R, relative error): {errors:.4?}");
     for &(d, e) in &errors {
-        // Below δ/R = 0.02 the contact radius spans too few elements.
-        if d >= 0.02 {
-            assert!(e.abs() < 0.03, "δ/R = {d}: error {e:+.4}");
-        }
+        assert!(e.abs() < 0.03, "δ/R = {d}: error {e:+.4}");
     }
 }
 
