@@ -1,0 +1,168 @@
+//! Errors of study reading: every one names the file, line, column and key.
+
+use std::fmt;
+use std::path::PathBuf;
+
+use crate::units::{Dimension, UnitError};
+
+/// Result alias of this crate.
+pub type Result<T, E = StudyError> = std::result::Result<T, E>;
+
+/// A place in a study file: file name, 1-based line and column.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Location {
+    /// The file as given by the user (or a name such as `<stdin>`).
+    pub file: String,
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column, counted in characters.
+    pub column: usize,
+}
+
+impl fmt::Display for Location {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}:{}", self.file, self.line, self.column)
+    }
+}
+
+/// Everything that can go wrong when reading a study file.
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    /// The file could not be read.
+    #[error("{}: cannot read study file: {source}", path.display())]
+    Io {
+        /// The path that failed.
+        path: PathBuf,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The text is not valid TOML.
+    #[error("{at}: TOML syntax error: {message}")]
+    Syntax {
+        /// Where the parser stopped.
+        at: Location,
+        /// The parser's message.
+        message: String,
+    },
+    /// A key's value is wrong, missing or unknown.
+    #[error("{at}: key `{key}`: {kind}")]
+    Key {
+        /// Where: the value, or the key, or the table header for missing keys.
+        at: Location,
+        /// Full dotted key path, e.g. `geometry.radius` or `experiment[1].speed`.
+        key: String,
+        /// What is wrong (boxed to keep `Result`s small).
+        kind: Box<ErrorKind>,
+    },
+}
+
+impl StudyError {
+    /// The kind of a key error (`None` for I/O and syntax errors).
+    pub fn kind(&self) -> Option<&ErrorKind> {
+        match self {
+            StudyError::Key { kind, .. } => Some(kind),
+            _ => None,
+        }
+    }
+
+    /// The location, if the error has one.
+    pub fn location(&self) -> Option<&Location> {
+        match self {
+            StudyError::Key { at, .. } | StudyError::Syntax { at, .. } => Some(at),
+            StudyError::Io { .. } => None,
+        }
+    }
+
+    /// The dotted key path, if the error concerns a key.
+    pub fn key(&self) -> Option<&str> {
+        match self {
+            StudyError::Key { key, .. } => Some(key),
+            _ => None,
+        }
+    }
+}
+
+/// What is wrong with a key.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ErrorKind {
+    /// The key is not read by any stage: a typo or a misplaced key.
+    #[error("unknown key{}", expected_hint(.expected))]
+    UnknownKey {
+        /// Keys the reader asked for in this table (may be empty).
+        expected: Vec<String>,
+    },
+    /// A required key is absent.
+    #[error("missing required key ({expected})")]
+    MissingKey {
+        /// What the key should hold.
+        expected: String,
+    },
+    /// A value of the wrong TOML type.
+    #[error("expected {expected}, found {found}")]
+    WrongType {
+        /// The expected TOML type.
+        expected: String,
+        /// The TOML type found.
+        found: String,
+    },
+    /// A number without a unit where a dimensioned quantity is required.
+    #[error("`{text}` has no unit; expected a {expected}, e.g. \"{text} {}\"", expected.example_unit())]
+    MissingUnit {
+        /// The text found.
+        text: String,
+        /// The dimension required.
+        expected: Dimension,
+    },
+    /// A quantity of the wrong dimension.
+    #[error("`{text}` is a {found}, expected a {expected}")]
+    WrongDimension {
+        /// The text found.
+        text: String,
+        /// The dimension of the text.
+        found: Dimension,
+        /// The dimension required.
+        expected: Dimension,
+    },
+    /// The quantity could not be read.
+    #[error("cannot read `{text}`: {reason}")]
+    BadQuantity {
+        /// The text found.
+        text: String,
+        /// Why.
+        reason: UnitError,
+    },
+    /// NaN or infinity (also after conversion to SI).
+    #[error("`{text}` is not a finite number")]
+    NotFinite {
+        /// The text found.
+        text: String,
+    },
+    /// The value lies outside its allowed range.
+    #[error("{value} is out of range: must be {bounds}")]
+    OutOfRange {
+        /// The value, in SI, with its unit.
+        value: String,
+        /// The allowed range, in SI, with units.
+        bounds: String,
+    },
+    /// A string that is none of the allowed choices.
+    #[error("`{value}` is not one of: {}", .allowed.join(", "))]
+    BadChoice {
+        /// The text found.
+        value: String,
+        /// The allowed choices.
+        allowed: Vec<String>,
+    },
+    /// A check made by the stage that reads the section (cross-key rules).
+    #[error("{0}")]
+    Invalid(String),
+}
+
+fn expected_hint(expected: &[String]) -> String {
+    if expected.is_empty() {
+        String::new()
+    } else {
+        format!(" (expected one of: {})", expected.join(", "))
+    }
+}
