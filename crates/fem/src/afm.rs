@@ -225,14 +225,51 @@ pub struct AfmRun {
     pub wall_seconds: f64,
 }
 
-/// One run of the model for the eq. 5.1 parameters, with the fem crate's
-/// Prony neo-Hookean (Simo 1987, [`PronyNeoHookean`]) and bulk modulus
-/// `setup.bulk_ratio × G₀`.
+/// The cell material of eq. 5.1 from the `material` crate (ABAQUS-form
+/// finite-strain Prony viscoelasticity, §4.3, neo-Hookean elastic part).
+///
+/// `g0` is read as eq. 5.1 defines it, the instantaneous *shear modulus*
+/// G(0); the neo-Hookean constant is then C1 = G0/2 (W = C1(Ī1 − 3)). The
+/// thesis also calls G0 "the neo-Hookean parameter C1" (§5.4.1): reading it
+/// that way doubles the stiffness; see docs/theory/fem.md.
 ///
 /// # Errors
-/// [`FemError::Setting`] for bad parameters, [`FemError::NonConvergence`]
-/// when a step cannot be completed (time, step, residual in the error).
+/// [`FemError::Material`] naming the offending parameter.
+pub fn cell_material(params: &AfmParams, bulk_ratio: f64) -> Result<nlvid_material::PronyViscoelastic> {
+    nlvid_material::PronyViscoelastic::cell(
+        0.5 * params.g0,
+        params.g1,
+        params.tau1,
+        params.g2,
+        params.tau2,
+        bulk_ratio * params.g0,
+    )
+    .map_err(|source| FemError::Material {
+        element: 0,
+        point: 0,
+        source,
+    })
+}
+
+/// One run of the model for the eq. 5.1 parameters with the `material`
+/// crate's cell model ([`cell_material`]) and bulk modulus
+/// `setup.bulk_ratio × G₀`. This is the forward model of the surrogate stage.
+///
+/// # Errors
+/// [`FemError::Setting`] / [`FemError::Material`] for bad parameters,
+/// [`FemError::NonConvergence`] when a step cannot be completed (time,
+/// step, residual in the error).
 pub fn run(params: &AfmParams, setup: &AfmSetup) -> Result<AfmRun> {
+    run_with(cell_material(params, setup.bulk_ratio)?, setup)
+}
+
+/// [`run`] with the fem crate's own Simo-form Prony neo-Hookean
+/// ([`PronyNeoHookean`], shear modulus G0), used to cross-check the
+/// `material` crate's model.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_reference(params: &AfmParams, setup: &AfmSetup) -> Result<AfmRun> {
     let material = PronyNeoHookean::new(
         params.g0,
         setup.bulk_ratio * params.g0,

@@ -71,3 +71,18 @@ fn impossible_step_budget_is_a_typed_non_convergence_not_a_panic() {
         other => panic!("expected non-convergence, got {other:?}"),
     }
 }
+
+#[test]
+fn material_crate_cell_model_agrees_with_reference_prony_solid() {
+    // Two independent finite-strain Prony implementations (ABAQUS form in
+    // the material crate, Simo form here) coincide in the small-strain
+    // limit and stay close at the moderate strains of this run.
+    let setup = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    let a = afm::run(&params(), &setup).unwrap();
+    let b = afm::run_reference(&params(), &setup).unwrap();
+    let rel = (a.peak_force / b.peak_force - 1.0).abs();
+    eprintln!("peak: material crate {:.4e} N, reference {:.4e} N ({rel:.4})", a.peak_force, b.peak_force);
+    assert!(rel < 0.01, "peak forces differ by {rel}");
+    let relf = (a.final_force / b.final_force - 1.0).abs();
+    assert!(relf < 0.01, "final forces differ by {relf}");
+}
