@@ -26,8 +26,8 @@ fn afm_defaults_are_the_thesis_ch5_script() {
     let thesis = AfmScript::thesis_ch5(0.12).unwrap();
     assert_eq!(s.cycle_rates, thesis.cycle_rates);
     assert_close(
-        &s.piezo().unwrap().breakpoints(),
-        &thesis.piezo().unwrap().breakpoints(),
+        s.piezo().unwrap().breakpoints(),
+        thesis.piezo().unwrap().breakpoints(),
     );
     assert!((s.engage.setpoint_force - 0.48e-9).abs() < 1e-21);
     let g = p.output_grid().unwrap().unwrap();
@@ -50,7 +50,7 @@ cycle_rates = ["10 um/s", "5 um/s", "1 um/s"]
     let z = p.program().unwrap();
     // Same as the App. A script (first leg 3 µm).
     let app_a = AfmScript::thesis_app_a(0.072).unwrap().piezo().unwrap();
-    assert_close(&z.breakpoints(), &app_a.breakpoints());
+    assert_close(z.breakpoints(), app_a.breakpoints());
     let Loading::Afm(s) = &p.loading else {
         panic!("not afm")
     };
