@@ -13,9 +13,25 @@ pub enum MaterialError {
         /// What the admissible range is.
         reason: &'static str,
     },
+    /// A term of a Prony series is inadmissible.
+    #[error("Prony series `{series}`, term {index} (1-based): {reason}")]
+    PronyTerm {
+        /// Which series (e.g. `G1`, `G2`, `G`).
+        series: &'static str,
+        /// 1-based index of the offending term.
+        index: usize,
+        /// What is wrong and what to change.
+        reason: String,
+    },
     /// The deformation cannot be evaluated (e.g. det F ≤ 0, a stretch ≤ 0).
     #[error("inadmissible deformation: {0}")]
     Deformation(String),
+    /// A time increment is negative or not finite.
+    #[error("time increment dt = {0} is inadmissible: it must be finite and ≥ 0")]
+    TimeStep(f64),
+    /// A loading history for a homogeneous driver is inadmissible.
+    #[error("loading history: {0}")]
+    Loading(String),
 }
 
 /// Result alias of the material crate.

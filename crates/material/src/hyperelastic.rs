@@ -1,0 +1,143 @@
+//! Mooney–Rivlin and neo-Hookean hyperelasticity (eq. 4.1), the elastic part
+//! of every model in this crate and its `t = 0⁺` / `t → ∞` limit (eqs. 2.3–2.4).
+//!
+//! Strain energy with the isochoric/volumetric split used by ABAQUS and by
+//! mixed or F-bar finite elements:
+//! `W = C1 (Ī1 − 3) + C2 (Ī2 − 3) + K/2 (J − 1)²`, `Ī1 = J^{-2/3} I1`,
+//! `Ī2 = J^{-4/3} I2`. The volumetric part gives the Kirchhoff pressure term
+//! `K J (J − 1) I` of eqs. 2.50/D.5. At `J = 1` the Cauchy stress is eq. 4.1,
+//! `σ = −p I + 2 (C1 + I1 C2) B − 2 C2 B²`, and the small-strain shear
+//! modulus is `2 (C1 + C2)`. `K = 0` leaves the purely isochoric part, for
+//! formulations that carry the pressure as an unknown of their own.
+
+use crate::kernel::{IsoStress, Kin, XC, XCI, XI};
+use crate::{MaterialError, Result};
+
+/// Mooney–Rivlin solid (`C2 = 0`: neo-Hookean), eq. 4.1, with volumetric
+/// penalty `K`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MooneyRivlin {
+    c1: f64,
+    c2: f64,
+    bulk: f64,
+}
+
+pub(crate) fn check_bulk(bulk: f64) -> Result<()> {
+    if !(bulk.is_finite() && bulk >= 0.0) {
+        return Err(MaterialError::Parameter {
+            name: "bulk_modulus",
+            value: bulk,
+            reason: "the volumetric penalty K must be finite and ≥ 0 (Pa); \
+                     use K ≈ 10³·C1 for near-incompressibility, 0 for mixed formulations",
+        });
+    }
+    Ok(())
+}
+
+impl MooneyRivlin {
+    /// `C1 > 0`, `C2 ≥ 0` (thesis: "positive constants", eq. 2.4), `K ≥ 0`, in Pa.
+    ///
+    /// # Errors
+    /// [`MaterialError::Parameter`] naming the offending constant.
+    pub fn new(c1: f64, c2: f64, bulk: f64) -> Result<Self> {
+        if !(c1.is_finite() && c1 > 0.0) {
+            return Err(MaterialError::Parameter {
+                name: "C1",
+                value: c1,
+                reason: "must be finite and > 0 (Pa)",
+            });
+        }
+        if !(c2.is_finite() && c2 >= 0.0) {
+            return Err(MaterialError::Parameter {
+                name: "C2",
+                value: c2,
+                reason: "must be finite and ≥ 0 (Pa)",
+            });
+        }
+        check_bulk(bulk)?;
+        Ok(Self { c1, c2, bulk })
+    }
+
+    /// Neo-Hookean `W = C1 (Ī1 − 3) + K/2 (J − 1)²`.
+    ///
+    /// # Errors
+    /// As [`MooneyRivlin::new`].
+    pub fn neo_hookean(c1: f64, bulk: f64) -> Result<Self> {
+        Self::new(c1, 0.0, bulk)
+    }
+
+    /// Capsule form of §4.3: `C2 = α C1`.
+    ///
+    /// # Errors
+    /// As [`MooneyRivlin::new`]; `α` must be ≥ 0.
+    pub fn with_ratio(c1: f64, alpha: f64, bulk: f64) -> Result<Self> {
+        if !(alpha.is_finite() && alpha >= 0.0) {
+            return Err(MaterialError::Parameter {
+                name: "alpha",
+                value: alpha,
+                reason: "the Mooney–Rivlin ratio C2/C1 must be finite and ≥ 0",
+            });
+        }
+        Self::new(c1, alpha * c1, bulk)
+    }
+
+    /// `C1` in Pa.
+    pub fn c1(&self) -> f64 {
+        self.c1
+    }
+    /// `C2` in Pa.
+    pub fn c2(&self) -> f64 {
+        self.c2
+    }
+    /// Volumetric penalty `K` in Pa.
+    pub fn bulk(&self) -> f64 {
+        self.bulk
+    }
+
+    /// Adds `scale ·` the isochoric second Piola–Kirchhoff stress
+    /// `S_iso = 2∂/∂C [C1(Ī1−3) + C2(Ī2−3)]
+    ///        = 2C1 J^{-2/3}(I − I1/3 C⁻¹) + 2C2 J^{-4/3}(I1 I − C − 2I2/3 C⁻¹)`.
+    pub(crate) fn add_isochoric(&self, k: &Kin, scale: f64, out: &mut IsoStress) {
+        let (c1, c2) = (scale * self.c1, scale * self.c2);
+        let j23 = k.j.powf(-2.0 / 3.0);
+        let j43 = j23 * j23;
+        let ij = 1.0 / k.j;
+        out.add(
+            XI,
+            2.0 * c1 * j23 + 2.0 * c2 * j43 * k.i1,
+            k.grad(
+                2.0 * c2 * j43,
+                0.0,
+                -4.0 / 3.0 * c1 * j23 * ij - 8.0 / 3.0 * c2 * j43 * k.i1 * ij,
+                0.0,
+            ),
+        );
+        out.add(
+            XC,
+            -2.0 * c2 * j43,
+            k.grad(0.0, 0.0, 8.0 / 3.0 * c2 * j43 * ij, 0.0),
+        );
+        out.add(
+            XCI,
+            -2.0 / 3.0 * c1 * j23 * k.i1 - 4.0 / 3.0 * c2 * j43 * k.i2,
+            k.grad(
+                -2.0 / 3.0 * c1 * j23,
+                -4.0 / 3.0 * c2 * j43,
+                4.0 / 9.0 * c1 * j23 * k.i1 * ij + 16.0 / 9.0 * c2 * j43 * k.i2 * ij,
+                0.0,
+            ),
+        );
+    }
+}
+
+/// Adds the volumetric penalty `S_vol = K J (J − 1) C⁻¹` (Kirchhoff
+/// `K J (J − 1) I`, eqs. 2.50/D.5).
+pub(crate) fn add_volumetric(k: &Kin, bulk: f64, out: &mut IsoStress) {
+    if bulk != 0.0 {
+        out.add(
+            XCI,
+            bulk * k.j * (k.j - 1.0),
+            k.grad(0.0, 0.0, bulk * (2.0 * k.j - 1.0), 0.0),
+        );
+    }
+}

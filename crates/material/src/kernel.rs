@@ -1,0 +1,154 @@
+//! Kinematics and the tangent kernel shared by every 3D model.
+//!
+//! Every second Piola–Kirchhoff stress in this crate has the form
+//! `S = s_I I + s_C C + s_Ci C⁻¹ + s_H H` with scalar coefficients that depend
+//! on `C` only through `I1`, `I2`, `J` and `H:C`, where `H` is a constant
+//! symmetric tensor (frozen history). Its material tangent is
+//! `2∂S/∂C = Σ_ab m_ab X_a ⊗ X_b + 2 s_C 𝕀ˢ + 2 s_Ci ∂C⁻¹/∂C`
+//! with `X = (I, C, C⁻¹, H)` and `m_a·` the basis coefficients of `2∂s_a/∂C`
+//! (from `∂I1/∂C = I`, `∂I2/∂C = I1 I − C`, `∂J/∂C = J C⁻¹/2`,
+//! `∂(H:C)/∂C = H`). The first Piola tangent then is
+//! `∂P_iJ/∂F_kL = δ_ik S_LJ + F_iM (2∂S/∂C)_MJLQ F_kQ` (eq. 2.52 before the
+//! push-forward of D.12).
+
+use crate::{Mat3, MaterialError, Result, Tangent3};
+
+/// Kinematic quantities of a deformation gradient.
+#[derive(Debug, Clone)]
+pub(crate) struct Kin {
+    pub f: Mat3,
+    pub c: Mat3,
+    pub cinv: Mat3,
+    /// F⁻ᵀ
+    pub fit: Mat3,
+    pub b: Mat3,
+    pub j: f64,
+    pub i1: f64,
+    pub i2: f64,
+}
+
+impl Kin {
+    pub fn new(f: &Mat3) -> Result<Self> {
+        if f.iter().any(|x| !x.is_finite()) {
+            return Err(MaterialError::Deformation(format!(
+                "deformation gradient has a non-finite entry: {f:?}"
+            )));
+        }
+        let j = f.determinant();
+        if j <= 0.0 || j.is_nan() {
+            return Err(MaterialError::Deformation(format!(
+                "det F = {j} ≤ 0 (inverted or degenerate element)"
+            )));
+        }
+        let finv = f.try_inverse().ok_or_else(|| {
+            MaterialError::Deformation(format!("deformation gradient is singular (det F = {j})"))
+        })?;
+        let c = f.transpose() * f;
+        let i1 = c.trace();
+        let trc2 = c.component_mul(&c).sum();
+        Ok(Self {
+            f: *f,
+            c,
+            cinv: finv * finv.transpose(),
+            fit: finv.transpose(),
+            b: f * f.transpose(),
+            j,
+            i1,
+            i2: 0.5 * (i1 * i1 - trc2),
+        })
+    }
+
+    /// Basis coefficients of `2∂s/∂C` for a scalar `s(I1, I2, J, H:C)` with
+    /// the given partial derivatives.
+    pub fn grad(&self, d_i1: f64, d_i2: f64, d_j: f64, d_hc: f64) -> [f64; 4] {
+        [
+            2.0 * (d_i1 + self.i1 * d_i2),
+            -2.0 * d_i2,
+            self.j * d_j,
+            2.0 * d_hc,
+        ]
+    }
+}
+
+/// Index of each basis tensor in [`IsoStress`].
+pub(crate) const XI: usize = 0;
+pub(crate) const XC: usize = 1;
+pub(crate) const XCI: usize = 2;
+pub(crate) const XH: usize = 3;
+
+/// `S = Σ s_a X_a` plus the dyadic part of its tangent, see the module doc.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct IsoStress {
+    pub s: [f64; 4],
+    pub m: [[f64; 4]; 4],
+    pub h: Mat3,
+}
+
+impl IsoStress {
+    /// Adds `value · X_a` whose coefficient has gradient `grad` (from [`Kin::grad`]).
+    pub fn add(&mut self, a: usize, value: f64, grad: [f64; 4]) {
+        self.s[a] += value;
+        for (m, g) in self.m[a].iter_mut().zip(grad) {
+            *m += g;
+        }
+    }
+
+    /// Second Piola–Kirchhoff stress.
+    pub fn pk2(&self, k: &Kin) -> Mat3 {
+        Mat3::identity() * self.s[XI]
+            + k.c * self.s[XC]
+            + k.cinv * self.s[XCI]
+            + self.h * self.s[XH]
+    }
+
+    /// `∂P/∂F` for `P = F S`, row `3i+J`, column `3k+L`.
+    pub fn tangent(&self, k: &Kin, s: &Mat3) -> Tangent3 {
+        let u = [k.f, k.f * k.c, k.fit, k.f * self.h];
+        let mut v = [Mat3::zeros(); 4];
+        for (a, va) in v.iter_mut().enumerate() {
+            for (b, ub) in u.iter().enumerate() {
+                let m = self.m[a][b];
+                if m != 0.0 {
+                    *va += ub * m;
+                }
+            }
+        }
+        let (sc, sci) = (self.s[XC], self.s[XCI]);
+        let mut t = Tangent3::zeros();
+        for i in 0..3 {
+            for jj in 0..3 {
+                let r = 3 * i + jj;
+                for kk in 0..3 {
+                    for l in 0..3 {
+                        let mut x = 0.0;
+                        for a in 0..4 {
+                            x += u[a][(i, jj)] * v[a][(kk, l)];
+                        }
+                        x += sc * (k.f[(i, l)] * k.f[(kk, jj)])
+                            - sci * (k.fit[(i, l)] * k.fit[(kk, jj)]);
+                        if jj == l {
+                            x += sc * k.b[(i, kk)];
+                        }
+                        if i == kk {
+                            x += s[(l, jj)] - sci * k.cinv[(jj, l)];
+                        }
+                        t[(r, 3 * kk + l)] = x;
+                    }
+                }
+            }
+        }
+        t
+    }
+}
+
+impl IsoStress {
+    /// Adds `scale ·` another stress that does not use the `H` basis tensor.
+    pub fn add_scaled(&mut self, other: &IsoStress, scale: f64) {
+        for a in 0..4 {
+            self.s[a] += scale * other.s[a];
+            for b in 0..4 {
+                self.m[a][b] += scale * other.m[a][b];
+            }
+        }
+    }
+}

@@ -1,0 +1,163 @@
+//! Finite-strain Prony viscoelasticity of the ABAQUS form (§4.3, eqs.
+//! 4.1–4.3; ABAQUS Theory Manual §4.8.2), with a Mooney–Rivlin (capsules,
+//! 6 parameters C1, α = C2/C1, g1, τ1, g2, τ2) or neo-Hookean (cells,
+//! 5 parameters of eq. 5.1) elastic part.
+//!
+//! The deviatoric hereditary integral
+//! `τᴰ(t) = τ0ᴰ(t) + dev{F̄(t) [∫_0^t Ġ(s)/G0 F̄⁻¹(t−s) τ0ᴰ(t−s) F̄⁻ᵀ(t−s) ds] F̄ᵀ(t)}`
+//! is written with `S̄0 = F̄⁻¹ τ0ᴰ F̄⁻ᵀ` (the isochoric elastic stress pulled
+//! back by F̄) as `τᴰ = dev{F̄ [S̄0(t) − Σ g_k H_k(t)] F̄ᵀ}`,
+//! `H_k(t) = ∫_0^t (1/τ_k) e^{−(t−s)/τ_k} S̄0(s) ds`, updated recursively.
+//! The bulk response does not relax (`K(s) = K`): `τᴴ = K J (J − 1) I`.
+
+use crate::history::advance;
+use crate::hyperelastic::add_volumetric;
+use crate::kernel::{IsoStress, Kin, XCI, XH};
+use crate::model::{Kernel, impl_point_traits};
+use crate::{HistoryRule, Mat3, MooneyRivlin, Prony};
+
+/// ABAQUS-form finite-strain viscoelasticity, eqs. 4.1–4.3 / 5.1.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PronyViscoelastic {
+    elastic: MooneyRivlin,
+    prony: Prony,
+    rule: HistoryRule,
+}
+
+/// History of a [`PronyViscoelastic`] point: `H_k` per Prony term and `S̄0`
+/// at the last converged step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PronyViscoelasticState {
+    h: Vec<Mat3>,
+    sbar: Mat3,
+}
+
+impl PronyViscoelastic {
+    /// Instantaneous elastic part `elastic` (its `C1`, `C2` are the t = 0⁺
+    /// constants, its `K` the volumetric penalty) relaxed by `prony`
+    /// (weights `g_k`, `g∞ = 1 − Σ g_k`, eq. 4.3).
+    pub fn new(elastic: MooneyRivlin, prony: Prony) -> Self {
+        Self {
+            elastic,
+            prony,
+            rule: HistoryRule::default(),
+        }
+    }
+
+    /// The 5-parameter cell model of eq. 5.1: neo-Hookean `C1` (the thesis's
+    /// `G0`), two Prony terms `(g1, τ1)`, `(g2, τ2)` with `g1 + g2 < 1`.
+    ///
+    /// # Errors
+    /// [`crate::MaterialError`] naming the parameter or Prony term.
+    pub fn cell(c1: f64, g1: f64, tau1: f64, g2: f64, tau2: f64, bulk: f64) -> crate::Result<Self> {
+        Ok(Self::new(
+            MooneyRivlin::neo_hookean(c1, bulk)?,
+            Prony::new("G", &[(g1, tau1), (g2, tau2)])?,
+        ))
+    }
+
+    /// The 6-parameter capsule model of §4.3: Mooney–Rivlin `C1`,
+    /// `C2 = α C1` (eq. 4.1) and two Prony terms (eqs. 4.2–4.3).
+    ///
+    /// # Errors
+    /// [`crate::MaterialError`] naming the parameter or Prony term.
+    pub fn capsule(
+        c1: f64,
+        alpha: f64,
+        (g1, tau1): (f64, f64),
+        (g2, tau2): (f64, f64),
+        bulk: f64,
+    ) -> crate::Result<Self> {
+        Ok(Self::new(
+            MooneyRivlin::with_ratio(c1, alpha, bulk)?,
+            Prony::new("G", &[(g1, tau1), (g2, tau2)])?,
+        ))
+    }
+
+    /// Chooses the one-step quadrature of the hereditary integral.
+    pub fn with_rule(mut self, rule: HistoryRule) -> Self {
+        self.rule = rule;
+        self
+    }
+
+    /// Elastic (instantaneous) part.
+    pub fn elastic(&self) -> &MooneyRivlin {
+        &self.elastic
+    }
+    /// Normalised Prony series `g(t)`.
+    pub fn prony(&self) -> &Prony {
+        &self.prony
+    }
+
+    /// Long-time elastic response: Mooney–Rivlin with `g∞ C1`, `g∞ C2`.
+    ///
+    /// # Errors
+    /// Never for a valid model; typed for uniformity.
+    pub fn long_time(&self) -> crate::Result<MooneyRivlin> {
+        let g = self.prony.long_term_weight();
+        MooneyRivlin::new(
+            g * self.elastic.c1(),
+            g * self.elastic.c2(),
+            self.elastic.bulk(),
+        )
+    }
+
+    /// `G(t)` of eq. 5.1 as the thesis reports it: `G0 [g∞ + Σ g_k e^{−t/τ_k}]`
+    /// with `G0` ≡ the neo-Hookean/Mooney–Rivlin `C1` (§5.4.1, Table 5.3).
+    /// The small-strain shear modulus is `2 (C1 + C2) g(t)`.
+    pub fn relaxation_eq_5_1(&self, t: f64) -> f64 {
+        self.elastic.c1() * self.prony.value(t)
+    }
+}
+
+impl Kernel for PronyViscoelastic {
+    type State = PronyViscoelasticState;
+
+    fn init(&self) -> PronyViscoelasticState {
+        PronyViscoelasticState {
+            h: vec![Mat3::zeros(); self.prony.len()],
+            sbar: Mat3::zeros(),
+        }
+    }
+
+    fn bulk(&self) -> f64 {
+        self.elastic.bulk()
+    }
+
+    fn eval(
+        &self,
+        st: &PronyViscoelasticState,
+        k: &Kin,
+        dt: f64,
+        trial: &mut PronyViscoelasticState,
+        bulk: f64,
+    ) -> IsoStress {
+        let mut iso = IsoStress::default();
+        self.elastic.add_isochoric(k, 1.0, &mut iso);
+        let j23 = k.j.powf(-2.0 / 3.0);
+        let sbar = iso.pk2(k) / j23;
+        let (frozen, sum_b1) = advance(
+            self.rule,
+            &self.prony,
+            dt,
+            (&st.h, &st.sbar),
+            &sbar,
+            &mut trial.h,
+        );
+        trial.sbar = sbar;
+        let mut out = IsoStress::default();
+        out.add_scaled(&iso, 1.0 - sum_b1);
+        // J^{-2/3} DEV(frozen) = J^{-2/3} [h − (h:C)/3 C⁻¹].
+        let hc = frozen.dot(&k.c);
+        out.h = frozen;
+        out.add(XH, j23, k.grad(0.0, 0.0, -2.0 / 3.0 * j23 / k.j, 0.0));
+        out.add(
+            XCI,
+            -j23 * hc / 3.0,
+            k.grad(0.0, 0.0, 2.0 / 9.0 * j23 * hc / k.j, -j23 / 3.0),
+        );
+        add_volumetric(k, bulk, &mut out);
+        out
+    }
+}
+impl_point_traits!(PronyViscoelastic, PronyViscoelasticState);
