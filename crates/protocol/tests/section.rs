@@ -133,3 +133,35 @@ fn table_kind_reads_the_csv_next_to_the_study() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn bundled_example_study_protocol_reads_with_speed_displacement_and_sampling() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/study/capsule-compression.toml"
+    );
+    let mut st = Study::load(path).unwrap();
+    let p: ProtocolSettings = st.read("protocol").unwrap();
+    let z = p.program().unwrap();
+    // 0.6 mm at 5 mm/s = 0.12 s, then 50 s; 100 Hz → 5012 intervals.
+    assert_close(z.breakpoints(), &[0.0, 0.12, 50.12]);
+    assert!((z.value(0.06) - 0.3e-3).abs() < 1e-15);
+    assert_eq!(p.output_points, Some(5013));
+    let g = p.output_grid().unwrap().unwrap();
+    assert!((g[1] - g[0] - 0.01).abs() < 1e-12);
+}
+
+#[test]
+fn two_spellings_of_one_key_are_rejected() {
+    let e = read("[protocol]\nkind = \"ramp-hold\"\ntarget = \"1 mm\"\ndisplacement = \"1 mm\"\nrate = \"1 mm/s\"\nhold = \"1 s\"\n")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("study.toml:4") && e.contains("mean the same"),
+        "{e}"
+    );
+    let e = read("[protocol]\nkind = \"afm\"\nsampling = \"10 Hz\"\noutput_points = 100\n")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not both"), "{e}");
+}
