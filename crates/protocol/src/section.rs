@@ -130,7 +130,7 @@ fn read_afm(s: &mut Section) -> Result<AfmScript, StudyError> {
 fn points(s: &Section, sampling: Option<f64>, p: &Program) -> Result<Option<usize>, StudyError> {
     let Some(f) = sampling else { return Ok(None) };
     let n = (p.duration() * f).round();
-    if !(n >= 1.0 && n < 1e8) {
+    if !(1.0..1e8).contains(&n) {
         return Err(s.invalid(
             "sampling",
             format!(
