@@ -110,10 +110,6 @@ impl Command {
                 Ok(ExitCode::SUCCESS)
             }
             Command::Check(a) => a.run(ctx),
-            Command::Compare(mut a) => {
-                a.json = ctx.json;
-                a.run()
-            }
             Command::Sample(a) => a.run(),
             Command::Build(a) => a.run(),
             Command::Merge(a) => a.run(),
@@ -122,6 +118,7 @@ impl Command {
                 args.json = ctx.json;
                 membrane::run(args)
             }
+            Command::Compare(a) => a.run(ctx),
         }
     }
 }
