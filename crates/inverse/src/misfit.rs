@@ -11,6 +11,7 @@
 use nalgebra::DMatrix;
 
 use crate::error::{InverseError, Result};
+use crate::measured::MeasuredCurve;
 use crate::model::{Model, check_finite, check_len};
 
 /// Range-normalised RMSE (eq. 5.3) of `model` against `reference`
@@ -151,6 +152,23 @@ impl<M: Model> Experiment<M> {
             weights,
             range,
         })
+    }
+
+    /// Pairs a measured curve with a model: `values` (one per sample of
+    /// `curve`, e.g. `curve.force`) are resampled onto `model.times()`,
+    /// which count from the curve's first sample.
+    ///
+    /// # Errors
+    /// As [`MeasuredCurve::resample`] and [`Experiment::new`].
+    pub fn from_measured(
+        label: &str,
+        model: M,
+        curve: &MeasuredCurve,
+        values: &[f64],
+        weights: Option<Vec<f64>>,
+    ) -> Result<Self> {
+        let data = curve.resample(values, model.times())?;
+        Self::new(label, model, data, weights)
     }
 
     /// Range of the data (max − min), the eq. 5.3 normaliser.
