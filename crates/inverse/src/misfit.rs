@@ -12,7 +12,7 @@ use nalgebra::DMatrix;
 
 use crate::error::{InverseError, Result};
 use crate::measured::MeasuredCurve;
-use crate::model::{Model, check_finite, check_len};
+use crate::model::{Model, check_finite, check_jacobian, check_len};
 
 /// Range-normalised RMSE (eq. 5.3) of `model` against `reference`
 /// (the measured curve, whose range normalises), with optional weights.
@@ -216,6 +216,7 @@ impl<M: Model> Experiment<M> {
     pub fn misfit_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
         let (y, jac) = self.model.response_and_jacobian(x)?;
         let e = self.misfit_of_curve(&y, x)?;
+        check_jacobian(&jac, y.len(), x.len())?;
         Ok((e, self.gradient_from(&y, &jac, e)))
     }
 

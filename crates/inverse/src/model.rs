@@ -134,6 +134,15 @@ pub fn check_len(what: &str, expected: usize, got: usize) -> Result<()> {
     }
 }
 
+/// Checks that a Jacobian is m × n.
+///
+/// # Errors
+/// [`InverseError::LengthMismatch`].
+pub fn check_jacobian(jac: &DMatrix<f64>, m: usize, n: usize) -> Result<()> {
+    check_len("Jacobian rows (time points)", m, jac.nrows())?;
+    check_len("Jacobian columns (parameters)", n, jac.ncols())
+}
+
 /// Checks that every value of a model curve is finite.
 ///
 /// # Errors
