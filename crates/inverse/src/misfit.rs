@@ -10,6 +10,7 @@
 
 use nalgebra::DMatrix;
 
+use crate::domain::Domain;
 use crate::error::{InverseError, Result};
 use crate::measured::MeasuredCurve;
 use crate::model::{Model, check_finite, check_jacobian, check_len};
@@ -238,6 +239,46 @@ impl<M: Model> Experiment<M> {
     }
 }
 
+/// What [`crate::MultiStart`] minimises: a scalar misfit over a [`Domain`]
+/// with its gradient (argmin's cost + gradient traits in one).
+pub trait Objective {
+    /// The parameter domain.
+    fn domain(&self) -> &Domain;
+
+    /// Objective value at physical parameters x.
+    ///
+    /// # Errors
+    /// Model errors.
+    fn value(&self, x: &[f64]) -> Result<f64>;
+
+    /// Value and gradient (physical units).
+    ///
+    /// # Errors
+    /// Model errors.
+    fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)>;
+
+    /// Eq. 5.3 misfit of each experiment (for reports).
+    ///
+    /// # Errors
+    /// Model errors.
+    fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>>;
+}
+
+impl<M: Model> Objective for Misfit<M> {
+    fn domain(&self) -> &Domain {
+        Misfit::domain(self)
+    }
+    fn value(&self, x: &[f64]) -> Result<f64> {
+        Misfit::value(self, x)
+    }
+    fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
+        Misfit::value_and_gradient(self, x)
+    }
+    fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>> {
+        Misfit::per_experiment(self, x)
+    }
+}
+
 /// Sum of eq. 5.3 misfits of several experiments sharing one parameter set.
 #[derive(Debug, Clone)]
 pub struct Misfit<M> {
@@ -285,7 +326,7 @@ impl<M: Model> Misfit<M> {
     }
 
     /// The shared domain (that of the first experiment).
-    pub fn domain(&self) -> &crate::domain::Domain {
+    pub fn domain(&self) -> &Domain {
         self.experiments[0].model.domain()
     }
 

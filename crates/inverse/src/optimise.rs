@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use crate::domain::{BoundHit, BoundSide, Domain};
 use crate::error::{InverseError, Result};
-use crate::misfit::Misfit;
+use crate::misfit::{Misfit, Objective};
 use crate::model::Model;
 use crate::prony::{ModulusPoint, ParameterTable, PronyShear};
 use crate::starts::feasible_starts;
@@ -134,7 +134,7 @@ impl MultiStart {
     /// [`InverseError::NoConvergence`] if no local run produced a feasible
     /// finite result (the message carries the last status or model error);
     /// start-point generation errors.
-    pub fn fit<M: Model>(&self, misfit: &Misfit<M>) -> Result<FitResult> {
+    pub fn fit<O: Objective + ?Sized>(&self, misfit: &O) -> Result<FitResult> {
         let domain = misfit.domain();
         let starts = feasible_starts(domain, self.starts, self.seed)?;
         let mut locals = Vec::new();
@@ -191,7 +191,7 @@ impl MultiStart {
         })
     }
 
-    fn optimum<M: Model>(&self, misfit: &Misfit<M>, run: LocalRun) -> Result<LocalOptimum> {
+    fn optimum<O: Objective + ?Sized>(&self, misfit: &O, run: LocalRun) -> Result<LocalOptimum> {
         let domain = misfit.domain();
         Ok(LocalOptimum {
             per_experiment: misfit.per_experiment(&run.x)?,
@@ -205,9 +205,9 @@ impl MultiStart {
     }
 
     /// One SLSQP run from x0; Err carries a message and the evaluations used.
-    fn local<M: Model>(
+    fn local<O: Objective + ?Sized>(
         &self,
-        misfit: &Misfit<M>,
+        misfit: &O,
         x0: &[f64],
     ) -> std::result::Result<LocalRun, (String, usize)> {
         let domain = misfit.domain();
