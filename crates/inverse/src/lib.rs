@@ -46,6 +46,7 @@
 
 #![warn(missing_docs)]
 
+mod basis;
 mod domain;
 mod error;
 mod hertz;
@@ -57,6 +58,7 @@ mod optimise;
 mod prony;
 mod starts;
 
+pub use basis::{AsModel, BasisExperiment, BasisMisfit, BasisModel, gram};
 pub use domain::{BoundHit, BoundSide, Domain, LinearConstraint, Parameter, Scale};
 pub use error::{InverseError, Result};
 pub use hertz::{LeeRadokHertz, ramp_hold_grid, ramp_hold_indentation};
