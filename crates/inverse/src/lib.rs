@@ -10,7 +10,9 @@
 //!   grid, with an analytic or finite-difference Jacobian;
 //! - [`Misfit`]: the range-normalised RMSE of eq. 5.3, with optional
 //!   per-segment weights, summed over experiments fitted with one
-//!   parameter set, and its gradient;
+//!   parameter set, and its gradient; [`BasisMisfit`] computes the same
+//!   value in O(N²) for Kriging-form models y = μ + Bᵀφ(x) ([`BasisModel`]);
+//!   both are [`Objective`]s;
 //! - [`MultiStart`]: seeded feasible Latin-hypercube starts, SLSQP local
 //!   runs, clustering into distinct optima, alternatives within a misfit
 //!   tolerance, bound flags; [`verify`] re-scores the optimum with another

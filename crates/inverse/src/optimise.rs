@@ -128,7 +128,23 @@ impl MultiStart {
         Ok(self)
     }
 
-    /// Runs the multistart fit.
+    /// Scaled distance from a bound within which a parameter is flagged
+    /// as on the bound (≥ 0).
+    ///
+    /// # Errors
+    /// [`InverseError::InvalidSetting`] if negative or ≥ 0.5.
+    pub fn with_bound_tolerance(mut self, tol: f64) -> Result<Self> {
+        if !(0.0..0.5).contains(&tol) {
+            return Err(InverseError::InvalidSetting(format!(
+                "bound_tolerance must be in [0, 0.5), got {tol}"
+            )));
+        }
+        self.bound_tolerance = tol;
+        Ok(self)
+    }
+
+    /// Runs the multistart fit on any [`Objective`] ([`Misfit`],
+    /// [`crate::BasisMisfit`]).
     ///
     /// # Errors
     /// [`InverseError::NoConvergence`] if no local run produced a feasible

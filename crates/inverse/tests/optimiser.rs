@@ -225,4 +225,6 @@ fn invalid_settings_are_rejected() {
     assert!(MultiStart::new().with_max_evals(3).is_err());
     assert!(MultiStart::new().with_cluster_radius(0.0).is_err());
     assert!(MultiStart::new().with_misfit_tolerance(f64::NAN).is_err());
+    assert!(MultiStart::new().with_bound_tolerance(0.5).is_err());
+    assert!(MultiStart::new().with_ftol_rel(-1.0).is_err());
 }
