@@ -464,6 +464,24 @@ pub struct Verification {
     pub rerun: Vec<f64>,
 }
 
+impl Verification {
+    /// Largest |fitted − rerun| over the experiments (eq. 5.3 units).
+    pub fn max_difference(&self) -> f64 {
+        self.fitted
+            .iter()
+            .zip(&self.rerun)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// True when the two misfits agree within `tolerance` for every
+    /// experiment — e.g. the surrogate's checking error (eq. 5.2), as
+    /// issue 6 requires.
+    pub fn agrees_within(&self, tolerance: f64) -> bool {
+        self.max_difference() <= tolerance
+    }
+}
+
 /// Evaluates x under both misfits (same experiments, different models).
 ///
 /// # Errors
