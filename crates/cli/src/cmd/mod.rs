@@ -4,6 +4,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod inspect;
+
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
 #[derive(Debug, Parser)]
@@ -22,6 +24,8 @@ pub struct Cli {
 pub enum Command {
     /// Print the version and the crates that make up this build.
     Version,
+    /// Show what an AFM instrument file holds (segments, channels, calibration); export CSV, plot, quick fits.
+    Inspect(inspect::Args),
 }
 
 impl Command {
@@ -32,6 +36,7 @@ impl Command {
                 println!("nlvid {}", env!("CARGO_PKG_VERSION"));
                 Ok(ExitCode::SUCCESS)
             }
+            Command::Inspect(args) => args.run(),
         }
     }
 }
