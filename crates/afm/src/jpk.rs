@@ -119,9 +119,11 @@ pub fn read_jpk_bytes(
     } else {
         None
     };
+    // Shortest non-empty `...description.instrument` key (HashMap order is not stable).
     let instrument = header
         .iter()
-        .find(|(k, _)| k.ends_with("description.instrument"))
+        .filter(|(k, v)| k.ends_with("description.instrument") && !v.trim().is_empty())
+        .min_by_key(|(k, _)| (k.len(), k.as_str()))
         .map(|(_, v)| v.clone());
 
     // Curve prefixes: "" for a single curve, "index/<n>/" for each curve of a map.
@@ -197,7 +199,7 @@ fn position_of(p: &Props) -> Option<(f64, f64)> {
     let get = |suffix: &str| {
         p.iter()
             .filter(|(k, _)| k.ends_with(suffix) && !k.contains("scanner"))
-            .min_by_key(|(k, _)| k.len())
+            .min_by_key(|(k, _)| (k.len(), k.as_str()))
             .and_then(|(_, v)| v.parse::<f64>().ok())
     };
     Some((get("position.x")?, get("position.y")?))

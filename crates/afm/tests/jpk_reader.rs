@@ -68,6 +68,11 @@ fn relaxation_file_decodes_to_readme_values() {
 fn approach_retract_file_decodes_to_readme_values() {
     let c = read_force_curve(FD).expect("read");
     assert_eq!(c.format_version, "0.12");
+    assert_eq!(c.instrument.as_deref(), Some("A0042-CellHesion"));
+    assert_eq!(
+        c.position,
+        Some((-1.6666666666666667e-5, -1.6666666666666667e-5))
+    );
     assert_eq!(c.segments.len(), 2);
     assert_eq!(c.segments[0].kind, SegmentKind::Extend);
     assert_eq!(c.segments[1].kind, SegmentKind::Retract);
