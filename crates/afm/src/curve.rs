@@ -197,7 +197,7 @@ impl ForceCurve {
 
     /// Write all segments as CSV with unit-suffixed headers:
     /// `segment,kind,time_s,<channel>_<unit>,...`, one row per sample. Channels that a
-    /// segment lacks are left empty. Numbers use Rust's shortest round-trip format.
+    /// segment lacks are left empty. Values use Rust's shortest round-trip scientific format (`2.878322343068329e-5`).
     ///
     /// # Errors
     /// [`AfmError::Io`] if writing fails.
@@ -233,7 +233,7 @@ impl ForceCurve {
                 for c in &cols {
                     line.push(',');
                     if let Some(v) = c.and_then(|c| c.values.get(i)) {
-                        line.push_str(&v.to_string());
+                        line.push_str(&format!("{v:e}"));
                     }
                 }
                 writeln!(out, "{line}").map_err(io)?;

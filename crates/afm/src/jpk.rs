@@ -19,7 +19,7 @@
 //! base slot (`volts`) to the default slot, each step `y = offset + multiplier·x`
 //! (`vDeflection`: volts → distance [m] → force [N]).
 
-use std::collections::{BTreeSet, HashMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::io::{Cursor, Read};
 use std::path::Path;
 
@@ -97,8 +97,8 @@ pub fn read_jpk_bytes(
     let mut zip = ZipArchive::new(Cursor::new(bytes)).map_err(|e| AfmError::NotZip {
         detail: e.to_string(),
     })?;
-    let names: Vec<String> = zip.file_names().map(str::to_owned).collect();
-    if !names.iter().any(|n| n == "header.properties") {
+    let names: HashSet<String> = zip.file_names().map(str::to_owned).collect();
+    if !names.contains("header.properties") {
         return Err(AfmError::NotJpk {
             detail: "ZIP archive without header.properties".into(),
         });
@@ -114,37 +114,62 @@ pub fn read_jpk_bytes(
         .get("file-format-version")
         .cloned()
         .unwrap_or_else(|| "unknown".into());
-    let shared = if names.iter().any(|n| n == "shared-data/header.properties") {
+    let shared = if names.contains("shared-data/header.properties") {
         Some(read_props(&mut zip, "shared-data/header.properties")?)
     } else {
         None
     };
+    // Shortest non-empty `...description.instrument` key (HashMap order is not stable).
     let instrument = header
         .iter()
-        .find(|(k, _)| k.ends_with("description.instrument"))
+        .filter(|(k, v)| k.ends_with("description.instrument") && !v.trim().is_empty())
+        .min_by_key(|(k, _)| (k.len(), k.as_str()))
         .map(|(_, v)| v.clone());
 
-    // Curve prefixes: "" for a single curve, "index/<n>/" for each curve of a map.
-    let map_indices: BTreeSet<usize> = names
-        .iter()
-        .filter_map(|n| n.strip_prefix("index/"))
-        .filter_map(|rest| rest.split('/').next()?.parse().ok())
-        .collect();
-    let prefixes: Vec<(String, String)> = if map_indices.is_empty() {
-        vec![(String::new(), source.to_string())]
-    } else {
-        map_indices
-            .iter()
-            .map(|i| (format!("index/{i}/"), format!("{source}#{i}")))
-            .collect()
-    };
+    // One pass over the entry names: segment ids per curve (None = single curve,
+    // Some(n) = curve n of a map under index/<n>/).
+    let mut layout: BTreeMap<Option<usize>, BTreeSet<usize>> = BTreeMap::new();
+    for n in &names {
+        let (curve, rest) = match n.strip_prefix("index/") {
+            Some(r) => match r.split_once('/') {
+                Some((i, rest)) => match i.parse::<usize>() {
+                    Ok(i) => (Some(i), rest),
+                    Err(_) => continue,
+                },
+                None => continue,
+            },
+            None => (None, n.as_str()),
+        };
+        if let Some(seg) = rest
+            .strip_prefix("segments/")
+            .and_then(|r| r.strip_suffix("/segment-header.properties"))
+            .and_then(|id| id.parse::<usize>().ok())
+        {
+            layout.entry(curve).or_default().insert(seg);
+        }
+    }
+    if layout.contains_key(&None) && layout.len() > 1 {
+        return Err(AfmError::NotJpk {
+            detail: "archive mixes a single-curve segments/ tree with force-map index/<n>/ curves"
+                .into(),
+        });
+    }
+    if layout.is_empty() {
+        return Err(AfmError::NotJpk {
+            detail: "no segments/<n>/segment-header.properties in the archive".into(),
+        });
+    }
 
     let ctx = Ctx {
         shared: shared.as_ref(),
         options,
     };
-    let mut curves = Vec::with_capacity(prefixes.len());
-    for (prefix, name) in prefixes {
+    let mut curves = Vec::with_capacity(layout.len());
+    for (index, seg_ids) in layout {
+        let (prefix, name) = match index {
+            None => (String::new(), source.to_string()),
+            Some(i) => (format!("index/{i}/"), format!("{source}#{i}")),
+        };
         let curve_header = if prefix.is_empty() {
             None
         } else {
@@ -159,7 +184,7 @@ pub fn read_jpk_bytes(
             .as_ref()
             .and_then(position_of)
             .or_else(|| position_of(&header));
-        let mut curve = read_curve(&mut zip, &names, &prefix, &ctx)?;
+        let mut curve = read_curve(&mut zip, &names, &prefix, &seg_ids, &ctx)?;
         curve.source = name;
         curve.format_version = format_version.clone();
         curve.instrument = instrument.clone();
@@ -197,7 +222,7 @@ fn position_of(p: &Props) -> Option<(f64, f64)> {
     let get = |suffix: &str| {
         p.iter()
             .filter(|(k, _)| k.ends_with(suffix) && !k.contains("scanner"))
-            .min_by_key(|(k, _)| k.len())
+            .min_by_key(|(k, _)| (k.len(), k.as_str()))
             .and_then(|(_, v)| v.parse::<f64>().ok())
     };
     Some((get("position.x")?, get("position.y")?))
@@ -286,28 +311,16 @@ impl<'a> Hdr<'a> {
 
 fn read_curve(
     zip: &mut Zip<'_>,
-    names: &[String],
+    names: &HashSet<String>,
     prefix: &str,
+    seg_ids: &BTreeSet<usize>,
     ctx: &Ctx<'_>,
 ) -> Result<ForceCurve> {
     let seg_prefix = format!("{prefix}segments/");
-    let seg_ids: BTreeSet<usize> = names
-        .iter()
-        .filter_map(|n| n.strip_prefix(&seg_prefix))
-        .filter_map(|rest| {
-            let (id, tail) = rest.split_once('/')?;
-            (tail == "segment-header.properties").then(|| id.parse().ok())?
-        })
-        .collect();
-    if seg_ids.is_empty() {
-        return Err(AfmError::NotJpk {
-            detail: format!("no {seg_prefix}<n>/segment-header.properties in the archive"),
-        });
-    }
     let mut segments = Vec::with_capacity(seg_ids.len());
     let mut calibration: Option<Calibration> = None;
     let mut t0 = 0.0;
-    for (index, id) in seg_ids.into_iter().enumerate() {
+    for (index, id) in seg_ids.iter().enumerate() {
         let dir = format!("{seg_prefix}{id}/");
         let entry = format!("{dir}segment-header.properties");
         let props = read_props(zip, &entry)?;
@@ -377,7 +390,7 @@ fn segment_kind(hdr: Hdr<'_>) -> Result<SegmentKind> {
 
 fn read_segment(
     zip: &mut Zip<'_>,
-    names: &[String],
+    names: &HashSet<String>,
     dir: &str,
     hdr: Hdr<'_>,
     index: usize,

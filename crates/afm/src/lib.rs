@@ -14,12 +14,18 @@
 //! O(n) per objective evaluation (recursive exponential convolution), a few hundred
 //! evaluations in all.
 //!
-//! ```no_run
-//! use nlvid_afm::{read_force_curve, SegmentKind};
-//! let curve = read_force_curve("fmt-jpk-fd_spot3-0192.jpk-force")?;
+//! ```
+//! use nlvid_afm::{ContactMethod, HertzSettings, SegmentKind, fit_hertz, prepare_approach, read_force_curve};
+//! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/fmt-jpk-fd_spot3-0192.jpk-force");
+//! let curve = read_force_curve(path)?;
 //! let extend = curve.segment(SegmentKind::Extend)?;
-//! println!("k = {} N/m, {} points, first force {} N",
-//!     curve.calibration.spring_constant, extend.len(), extend.force()?[0]);
+//! assert_eq!(extend.len(), 2000);
+//! assert_eq!(extend.force()?[0], -5.145579192349918e-10); // N
+//!
+//! // paraboloidal Hertz fit, R = 40 nm, ν = 0.5 (eq. 1.1)
+//! let approach = prepare_approach(&curve, ContactMethod::default())?;
+//! let fit = fit_hertz(&approach.separation, &approach.force, &HertzSettings::new(40e-9, 0.5))?;
+//! assert!((fit.youngs_modulus / 233.1e3 - 1.0).abs() < 0.01);
 //! # Ok::<(), nlvid_afm::AfmError>(())
 //! ```
 #![warn(missing_docs)]

@@ -68,6 +68,11 @@ fn relaxation_file_decodes_to_readme_values() {
 fn approach_retract_file_decodes_to_readme_values() {
     let c = read_force_curve(FD).expect("read");
     assert_eq!(c.format_version, "0.12");
+    assert_eq!(c.instrument.as_deref(), Some("A0042-CellHesion"));
+    assert_eq!(
+        c.position,
+        Some((-1.6666666666666667e-5, -1.6666666666666667e-5))
+    );
     assert_eq!(c.segments.len(), 2);
     assert_eq!(c.segments[0].kind, SegmentKind::Extend);
     assert_eq!(c.segments[1].kind, SegmentKind::Retract);
@@ -358,4 +363,66 @@ fn bad_header_values_name_entry_and_key() {
         read_jpk_bytes(&bad, "x", &ReadOptions::default()),
         Err(AfmError::MissingKey { .. })
     ));
+}
+
+#[test]
+fn integer_and_float_storage_decode_like_short() {
+    // Re-encode the approach file's vDeflection raw shorts as 32-bit integers and as
+    // 32-bit floats; with the same encoder scaling the forces must be identical.
+    let bytes = std::fs::read(FD).expect("read");
+    let reference = read_force_curve(FD).expect("read");
+    let entry = "segments/0/channels/vDeflection.dat";
+    let hdr = "segments/0/segment-header.properties";
+    let shorts: Vec<i16> = entries(&bytes)
+        .into_iter()
+        .find(|(n, _)| n == entry)
+        .expect("entry")
+        .1
+        .chunks_exact(2)
+        .map(|c| i16::from_be_bytes([c[0], c[1]]))
+        .collect();
+    let as_i32: Vec<u8> = shorts
+        .iter()
+        .flat_map(|v| i32::from(*v).to_be_bytes())
+        .collect();
+    let as_f32: Vec<u8> = shorts
+        .iter()
+        .flat_map(|v| f32::from(*v).to_be_bytes())
+        .collect();
+    for (ty, data) in [("integer", as_i32), ("float-data", as_f32)] {
+        let b = with_entry(&bytes, entry, |_| data.clone());
+        let b = with_text(
+            &b,
+            hdr,
+            "channel.vDeflection.data.type=short",
+            &format!("channel.vDeflection.data.type={ty}"),
+        );
+        let c = read_jpk_bytes(&b, "x", &ReadOptions::default()).expect(ty);
+        assert_eq!(
+            c[0].segments[0].force().expect("f"),
+            reference.segments[0].force().expect("f"),
+            "{ty}"
+        );
+    }
+}
+
+#[test]
+fn constant_force_pause_is_a_creep_segment() {
+    let bytes = std::fs::read(SR).expect("read");
+    let hdr = "segments/2/segment-header.properties";
+    let b = with_text(
+        &bytes,
+        hdr,
+        "segment-settings.type=constant-height-pause",
+        "segment-settings.type=constant-force-pause",
+    );
+    let b = with_text(
+        &b,
+        hdr,
+        "pause-option.type=constant-height",
+        "pause-option.type=constant-force",
+    );
+    let c = read_jpk_bytes(&b, "x", &ReadOptions::default()).expect("read");
+    assert_eq!(c[0].segments[2].kind, SegmentKind::Creep);
+    assert_eq!(c[0].segments[0].kind, SegmentKind::Hold);
 }

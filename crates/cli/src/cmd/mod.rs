@@ -19,6 +19,7 @@ pub mod build;
 pub mod sample;
 pub mod surrogate;
 pub mod membrane;
+mod inspect;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
@@ -92,6 +93,8 @@ pub enum Command {
     Surrogate(surrogate::SurrogateCmd),
     /// Fluid-filled NLV membrane squeezed between plates (ch. II, semi-analytical).
     Membrane(membrane::MembraneArgs),
+    /// Show what an AFM instrument file holds (segments, channels, calibration); export CSV, plot, quick fits.
+    Inspect(inspect::Args),
 }
 
 impl Command {
@@ -119,6 +122,10 @@ impl Command {
                 membrane::run(args)
             }
             Command::Compare(a) => a.run(ctx),
+            Command::Inspect(mut args) => {
+                args.json = ctx.json;
+                args.run()
+            }
         }
     }
 }
