@@ -28,6 +28,15 @@ pub enum Mode {
 }
 
 impl Mode {
+    /// Name as written in study files (`uniaxial`, `equibiaxial`, `simple-shear`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Uniaxial => "uniaxial",
+            Mode::Equibiaxial => "equibiaxial",
+            Mode::SimpleShear => "simple-shear",
+        }
+    }
+
     /// The undeformed value of the controlled quantity (λ = 1, γ = 0).
     pub fn rest_value(self) -> f64 {
         match self {

@@ -38,6 +38,7 @@ pub mod point;
 mod prony;
 mod prony_visco;
 pub mod reference;
+mod spec;
 
 pub use error::{MaterialError, Result};
 pub use history::HistoryRule;
@@ -47,3 +48,4 @@ pub use pipkin_rogers::{Eq256, PipkinRogers, PipkinRogersState};
 pub use point::{Mat3, Material3, MembraneMaterial, MembraneResponse, PointResponse3, Tangent3};
 pub use prony::{Prony, PronyTerm, Relaxation, ThreeParameterSolid};
 pub use prony_visco::{PronyViscoelastic, PronyViscoelasticState};
+pub use spec::{LoadingSpec, MaterialSpec, read_table};

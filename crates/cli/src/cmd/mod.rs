@@ -15,6 +15,7 @@ use clap::{Parser, Subcommand};
 
 mod check;
 mod compare;
+mod material;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
@@ -75,6 +76,8 @@ pub enum Command {
     Version,
     /// Validate a study file and print every value as the program reads it, in SI.
     Check(check::Args),
+    /// Drive one material through uniaxial, equibiaxial or simple-shear loading; CSV of stresses.
+    Material(material::Args),
     /// Group G(t) (mean ± sd) and rank-sum p(t) between two groups of cells.
     Compare(compare::Args),
 }
@@ -95,6 +98,7 @@ impl Command {
                 Ok(ExitCode::SUCCESS)
             }
             Command::Check(a) => a.run(ctx),
+            Command::Material(a) => a.run(ctx),
             Command::Compare(mut a) => {
                 a.json = ctx.json;
                 a.run()
