@@ -28,6 +28,15 @@ pub enum Mode {
 }
 
 impl Mode {
+    /// Name as written in study files (`uniaxial`, `equibiaxial`, `simple-shear`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Uniaxial => "uniaxial",
+            Mode::Equibiaxial => "equibiaxial",
+            Mode::SimpleShear => "simple-shear",
+        }
+    }
+
     /// The undeformed value of the controlled quantity (λ = 1, γ = 0).
     pub fn rest_value(self) -> f64 {
         match self {
@@ -264,4 +273,75 @@ fn principal(mode: Mode, s: &Mat3) -> [f64; 3] {
     let m = 0.5 * (a + b);
     let r = (0.25 * (a - b) * (a - b) + c * c).sqrt();
     [m + r, m - r, s[(2, 2)]]
+}
+
+/// Uniaxial tension of a compressible (penalty) [`crate::Material3`]: at each
+/// step the lateral stretch μ of `F = diag(λ, μ, μ)` is found by Newton's
+/// method on `P22(μ) = 0` (traction-free lateral faces) with the consistent
+/// tangent `∂P22/∂F22 + ∂P22/∂F33`. Returns `(time, λ, μ, σ11)` per step,
+/// starting from the undeformed state. This is the check that a 3D point
+/// update used by finite elements reproduces the incompressible response
+/// of [`drive`] as the penalty grows.
+///
+/// # Errors
+/// [`MaterialError::Loading`] for a bad history, or when Newton does not
+/// reach `|P22| ≤ 1e-10·max(|P11|, 1 Pa)` in 50 iterations (the message
+/// gives the time and residual: reduce `max_dt`).
+pub fn drive_uniaxial_3d<M: crate::Material3>(
+    material: &M,
+    history: &History,
+    max_dt: f64,
+) -> Result<Vec<[f64; 4]>> {
+    positive("max_dt", max_dt)?;
+    let knots = history.knots(Mode::Uniaxial)?;
+    let mut state = material.initial_state();
+    let mut trial = state.clone();
+    let mut out = vec![[0.0, knots[0].1, 1.0, 0.0]];
+    let (mut t_n, mut mu) = (0.0, 1.0);
+    for w in knots.windows(2) {
+        let ((t0, v0), (t1, v1)) = (w[0], w[1]);
+        let len = t1 - t0;
+        let n = if len > 0.0 {
+            (len / max_dt).ceil().max(1.0) as usize
+        } else {
+            1
+        };
+        for i in 1..=n {
+            let s = i as f64 / n as f64;
+            let t = if i == n { t1 } else { t0 + s * len };
+            let l = v0 + s * (v1 - v0);
+            let dt = t - t_n;
+            // Start from the incompressible guess when the stretch jumps.
+            if (mu * mu * l - 1.0).abs() > 0.1 {
+                mu = 1.0 / l.sqrt();
+            }
+            let mut converged = None;
+            for _ in 0..50 {
+                let f = Mat3::from_diagonal(&nalgebra::Vector3::new(l, mu, mu));
+                let r = material.update(&state, &f, dt, &mut trial)?;
+                let p22 = r.first_piola[(1, 1)];
+                if p22.abs() <= 1e-10 * r.first_piola[(0, 0)].abs().max(1.0) {
+                    converged = Some(r.cauchy[(0, 0)]);
+                    break;
+                }
+                let d = r.tangent[(4, 4)] + r.tangent[(4, 8)];
+                let step = p22 / d;
+                if !step.is_finite() {
+                    break;
+                }
+                // Keep μ positive: at most halve it per iteration.
+                mu = (mu - step).max(0.5 * mu);
+            }
+            let s11 = converged.ok_or_else(|| {
+                MaterialError::Loading(format!(
+                    "lateral traction did not vanish at t = {t} s (λ = {l}, μ = {mu}) \
+                     within 50 Newton iterations; reduce max_dt"
+                ))
+            })?;
+            std::mem::swap(&mut state, &mut trial);
+            t_n = t;
+            out.push([t, l, mu, s11]);
+        }
+    }
+    Ok(out)
 }

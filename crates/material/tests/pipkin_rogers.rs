@@ -497,3 +497,48 @@ pub fn rotating_history() -> Vec<(f64, Mat3)> {
     }
     out
 }
+
+#[test]
+fn appendix_d3_uniaxial_verification_case_matches_direct_quadrature() {
+    // App. D.3: g1 = g2 = 0.99, τ1 = τ2 = 0.01 s, G10 = 100 (UMAT convention,
+    // eq. D.2), a = 0, d = 1; stretch ramped to 2 in 0.01 s and held to
+    // 0.15 s. (The text prints "λ = 1 + t" for the ramp, which cannot reach
+    // 2 at t = 0.01; we read it as a linear ramp from 1 to 2.)
+    let p = || Prony::new("G", &[(0.99, 0.01)]).expect("ok");
+    let m = PipkinRogers::from_umat_d2(100.0, 1.0, p(), p(), 0.0, 0.0).expect("ok");
+    let g = G {
+        g0: 50.0,
+        terms: vec![(0.99, 0.01)],
+    };
+    let (tr, l1) = (0.01, 2.0);
+    let lam = move |s: f64| {
+        if s < tr {
+            1.0 + (l1 - 1.0) * s / tr
+        } else {
+            l1
+        }
+    };
+    let out = drive(
+        &m,
+        Mode::Uniaxial,
+        &History::RampHold {
+            value: l1,
+            ramp: tr,
+            hold: 0.14,
+        },
+        2e-5,
+    )
+    .expect("ok");
+    for &t in &[0.005, 0.01, 0.02, 0.05, 0.15] {
+        let direct = sigma_direct(&g, &g, 0.0, &lam, &[tr], t);
+        let got = at(&out, t).principal[0];
+        assert!(
+            ((got - direct) / direct).abs() < 1e-3,
+            "t = {t}: {got} vs {direct}"
+        );
+    }
+    // Long-time: Mooney–Rivlin with C1 = C2 = 0.01·50 Pa.
+    let sinf = mr_uniaxial(0.5, 0.5, 2.0);
+    let end = out.last().expect("sample").principal[0];
+    assert!(((end - sinf) / sinf).abs() < 1e-3, "{end} vs {sinf}");
+}

@@ -135,3 +135,51 @@ fn cell_model_has_five_parameters_and_checks_them() {
     let e = PronyViscoelastic::cell(0.0, 0.1, 0.5, 0.1, 10.0, 0.0).expect_err("C1 = 0");
     assert!(e.to_string().contains("`C1`"), "{e}");
 }
+
+#[test]
+fn penalty_3d_updates_reproduce_the_incompressible_response_under_ramp_hold() {
+    use nlvid_material::homogeneous::drive_uniaxial_3d;
+    use nlvid_material::{PipkinRogers, Prony, Relaxation};
+    let hist = History::RampHold {
+        value: 2.5,
+        ramp: 0.5,
+        hold: 3.0,
+    };
+    let pv_inc = capsule();
+    let pv_pen =
+        PronyViscoelastic::capsule(2000.0, 0.3, (0.35, 0.4), (0.25, 5.0), 2.0e8).expect("ok");
+    let g1 = Relaxation::new(
+        "G1",
+        1000.0,
+        Prony::new("G1", &[(0.4, 0.5), (0.3, 4.0)]).expect("ok"),
+    )
+    .expect("ok");
+    let g2 =
+        Relaxation::new("G2", 120.0, Prony::new("G2", &[(0.5, 0.2)]).expect("ok")).expect("ok");
+    let pr_inc = PipkinRogers::new(g1.clone(), g2.clone(), 0.15, 0.0).expect("ok");
+    let pr_pen = PipkinRogers::new(g1, g2, 0.15, 1.0e8).expect("ok");
+    let a = drive(&pv_inc, Mode::Uniaxial, &hist, 0.01).expect("ok");
+    let b = drive_uniaxial_3d(&pv_pen, &hist, 0.01).expect("ok");
+    let c = drive(&pr_inc, Mode::Uniaxial, &hist, 0.01).expect("ok");
+    let d = drive_uniaxial_3d(&pr_pen, &hist, 0.01).expect("ok");
+    assert_eq!(a.len(), b.len());
+    for (inc, pen) in [(&a, &b), (&c, &d)] {
+        let peak = inc.iter().map(|s| s.principal[0].abs()).fold(0.0, f64::max);
+        for (x, y) in inc.iter().zip(pen.iter()) {
+            assert!((x.time - y[0]).abs() < 1e-12);
+            // J − 1 = O(σ/K): relative agreement O(1e-5) with K = 1e5·C1.
+            assert!(
+                (x.principal[0] - y[3]).abs() < 1e-4 * peak,
+                "t = {}: {} vs {}",
+                x.time,
+                x.principal[0],
+                y[3]
+            );
+            assert!(
+                (y[2] * y[2] * y[1] - 1.0).abs() < 1e-4,
+                "J = {}",
+                y[2] * y[2] * y[1]
+            );
+        }
+    }
+}

@@ -20,6 +20,7 @@ pub mod sample;
 pub mod surrogate;
 pub mod membrane;
 mod inspect;
+mod material;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
@@ -80,6 +81,8 @@ pub enum Command {
     Version,
     /// Validate a study file and print every value as the program reads it, in SI.
     Check(check::Args),
+    /// Drive one material through uniaxial, equibiaxial or simple-shear loading; CSV of stresses.
+    Material(material::Args),
     /// Group G(t) (mean ± sd) and rank-sum p(t) between two groups of cells.
     Compare(compare::Args),
     /// Latin-hypercube training and checking designs in a parameter domain.
@@ -125,6 +128,10 @@ impl Command {
             Command::Inspect(mut args) => {
                 args.json = ctx.json;
                 args.run()
+            Command::Material(a) => a.run(ctx),
+            Command::Compare(mut a) => {
+                a.json = ctx.json;
+                a.run()
             }
         }
     }
