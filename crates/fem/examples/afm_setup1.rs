@@ -29,7 +29,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
             println!(
                 "n = {n:4} elements = {:6}  peak = {:.5e} N  final = {:.5e} N  min = {:.3e} N  steps = {} cutbacks = {} iterations = {}  wall = {:.2} s",
-                run.elements, run.peak_force, run.final_force, min_force, run.steps, run.cutbacks, run.iterations, run.wall_seconds
+                run.elements,
+                run.peak_force,
+                run.final_force,
+                min_force,
+                run.steps,
+                run.cutbacks,
+                run.iterations,
+                run.wall_seconds
             );
             results.push(run);
         }
@@ -58,9 +65,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
         println!(
             "setup 1, {} elements: peak {:.5e} N, final {:.5e} N, min {:.3e} N, steps {}, cutbacks {}, iterations {}",
-            run.elements, run.peak_force, run.final_force, min_force, run.steps, run.cutbacks, run.iterations
+            run.elements,
+            run.peak_force,
+            run.final_force,
+            min_force,
+            run.steps,
+            run.cutbacks,
+            run.iterations
         );
     }
-    println!("wall time: median of 5 = {:.3} s (all: {walls:.3?})", walls[2]);
+    println!(
+        "wall time: median of 5 = {:.3} s (all: {walls:.3?})",
+        walls[2]
+    );
     Ok(())
 }

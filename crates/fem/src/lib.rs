@@ -40,5 +40,6 @@ pub use error::{FemError, NonConvergence, Result};
 pub use history::History;
 pub use mesh::Mesh;
 pub use model::{
-    Component, Control, Counters, Model, ProbeDrive, RigidPlane, Settings, Stage, StepRecord, SphereProbe, Support,
+    Component, Control, Counters, Model, ProbeDrive, RigidPlane, Settings, SphereProbe, Stage,
+    StepRecord, Support,
 };

@@ -324,7 +324,12 @@ impl<M: Material3> Model<M> {
         };
         let mut blocks: Vec<Vec<usize>> = Vec::with_capacity(mesh.elements.len() + 1);
         for conn in &mesh.elements {
-            blocks.push(elem_eqs(conn).into_iter().filter(|&e| e != NO_SLOT).collect());
+            blocks.push(
+                elem_eqs(conn)
+                    .into_iter()
+                    .filter(|&e| e != NO_SLOT)
+                    .collect(),
+            );
         }
         let probe_nodes = match &probe {
             Some(p) => mesh.nodes_in(&p.surface)?.to_vec(),
@@ -480,7 +485,12 @@ impl<M: Material3> Model<M> {
     /// [`FemError::Mesh`] for a missing set.
     pub fn reaction(&self, set: &str, component: Component) -> Result<f64> {
         let c = usize::from(component == Component::Z);
-        Ok(self.mesh.nodes_in(set)?.iter().map(|&a| self.residual[2 * a + c]).sum())
+        Ok(self
+            .mesh
+            .nodes_in(set)?
+            .iter()
+            .map(|&a| self.residual[2 * a + c])
+            .sum())
     }
 
     fn assemble(&mut self, ctl: &Control, dt: f64, tangent: bool) -> Result<Assembly> {
@@ -621,7 +631,10 @@ impl<M: Material3> Model<M> {
                     self.residual[wdof] += force;
                     asm.scale = asm.scale.max(force.abs());
                 }
-                ProbeDrive::Spring { stiffness, free_end } => {
+                ProbeDrive::Spring {
+                    stiffness,
+                    free_end,
+                } => {
                     self.residual[wdof] += stiffness * (self.u[wdof] - free_end);
                     if tangent {
                         self.system.values[diag] += stiffness;
@@ -663,7 +676,11 @@ impl<M: Material3> Model<M> {
 
     /// Newton iterations for one step; Ok((iterations, assembly)) or the
     /// failure (residual, tolerance, iterations, cause).
-    fn newton(&mut self, ctl: &Control, dt: f64) -> std::result::Result<(usize, Assembly), (f64, f64, usize, String)> {
+    fn newton(
+        &mut self,
+        ctl: &Control,
+        dt: f64,
+    ) -> std::result::Result<(usize, Assembly), (f64, f64, usize, String)> {
         self.apply_prescribed(ctl);
         let mut asm = match self.assemble(ctl, dt, true) {
             Ok(a) => a,
@@ -723,7 +740,12 @@ impl<M: Material3> Model<M> {
                 return Err((norm, tol, it + 1, last_err));
             }
         }
-        Err((norm, 0.0, self.settings.max_iterations, "iteration limit".into()))
+        Err((
+            norm,
+            0.0,
+            self.settings.max_iterations,
+            "iteration limit".into(),
+        ))
     }
 
     /// Advances through `stage` with adaptive steps: a failed attempt is
@@ -760,7 +782,8 @@ impl<M: Material3> Model<M> {
             if self.settings.extrapolate && !first && self.last_dt > 0.0 {
                 let s = dt / self.last_dt;
                 for d in 0..self.u.len() {
-                    self.u[d] = self.u_committed[d] + s * (self.u_committed[d] - self.u_previous[d]);
+                    self.u[d] =
+                        self.u_committed[d] + s * (self.u_committed[d] - self.u_previous[d]);
                 }
             } else {
                 self.u.copy_from_slice(&self.u_committed);

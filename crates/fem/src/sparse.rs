@@ -27,7 +27,12 @@ pub(crate) struct SparseSystem {
 
 impl std::fmt::Debug for SparseSystem {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "SparseSystem(n = {}, nnz = {})", self.n, self.values.len())
+        write!(
+            f,
+            "SparseSystem(n = {}, nnz = {})",
+            self.n,
+            self.values.len()
+        )
     }
 }
 
@@ -57,8 +62,8 @@ impl SparseSystem {
         }
         let nnz = row_idx.len();
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let lu_symbolic =
-            SymbolicLu::try_new(symbolic.as_ref()).map_err(|e| FemError::Solver(format!("symbolic LU: {e:?}")))?;
+        let lu_symbolic = SymbolicLu::try_new(symbolic.as_ref())
+            .map_err(|e| FemError::Solver(format!("symbolic LU: {e:?}")))?;
         Ok(Self {
             n,
             symbolic,
@@ -109,7 +114,9 @@ impl SparseSystem {
         if rhs.iter().all(|x| x.is_finite()) {
             Ok(())
         } else {
-            Err(FemError::Solver("singular tangent (non-finite solution)".into()))
+            Err(FemError::Solver(
+                "singular tangent (non-finite solution)".into(),
+            ))
         }
     }
 }

@@ -13,14 +13,14 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+pub mod build;
 mod check;
 mod compare;
-pub mod build;
-pub mod sample;
-pub mod surrogate;
-pub mod membrane;
 mod inspect;
 mod material;
+pub mod membrane;
+pub mod sample;
+pub mod surrogate;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
@@ -128,11 +128,8 @@ impl Command {
             Command::Inspect(mut args) => {
                 args.json = ctx.json;
                 args.run()
-            Command::Material(a) => a.run(ctx),
-            Command::Compare(mut a) => {
-                a.json = ctx.json;
-                a.run()
             }
+            Command::Material(a) => a.run(ctx),
         }
     }
 }
