@@ -134,7 +134,7 @@ impl Kernel for PronyViscoelastic {
     ) -> IsoStress {
         let mut iso = IsoStress::default();
         self.elastic.add_isochoric(k, 1.0, &mut iso);
-        let j23 = k.j.powf(-2.0 / 3.0);
+        let j23 = 1.0 / (k.j.cbrt() * k.j.cbrt());
         let sbar = iso.pk2(k) / j23;
         let (frozen, sum_b1) = advance(
             self.rule,
