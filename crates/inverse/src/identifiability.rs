@@ -20,7 +20,7 @@ use serde::Serialize;
 
 use crate::error::{InverseError, Result};
 use crate::misfit::Misfit;
-use crate::model::{Model, check_finite};
+use crate::model::{Model, check_finite, check_jacobian, check_len};
 
 /// z of a two-sided 95 % normal interval.
 pub const Z95: f64 = 1.959_963_984_540_054;
@@ -98,6 +98,12 @@ pub fn identifiability<M: Model>(
     for e in misfit.experiments() {
         let (y, jac) = e.model.response_and_jacobian(x)?;
         check_finite(&y, e.model.times(), x)?;
+        check_len(
+            &format!("model curve of '{}'", e.label),
+            e.data.len(),
+            y.len(),
+        )?;
+        check_jacobian(&jac, y.len(), n)?;
         let range = e.data_range();
         for j in 0..y.len() {
             let sw = e.weights.as_ref().map_or(1.0, |w| w[j]).sqrt();

@@ -10,7 +10,9 @@
 //!   grid, with an analytic or finite-difference Jacobian;
 //! - [`Misfit`]: the range-normalised RMSE of eq. 5.3, with optional
 //!   per-segment weights, summed over experiments fitted with one
-//!   parameter set, and its gradient;
+//!   parameter set, and its gradient; [`BasisMisfit`] computes the same
+//!   value in O(N²) for Kriging-form models y = μ + Bᵀφ(x) ([`BasisModel`]);
+//!   both are [`Objective`]s;
 //! - [`MultiStart`]: seeded feasible Latin-hypercube starts, SLSQP local
 //!   runs, clustering into distinct optima, alternatives within a misfit
 //!   tolerance, bound flags; [`verify`] re-scores the optimum with another
@@ -46,6 +48,7 @@
 
 #![warn(missing_docs)]
 
+mod basis;
 mod domain;
 mod error;
 mod hertz;
@@ -57,6 +60,7 @@ mod optimise;
 mod prony;
 mod starts;
 
+pub use basis::{AsModel, BasisExperiment, BasisMisfit, BasisModel, gram};
 pub use domain::{BoundHit, BoundSide, Domain, LinearConstraint, Parameter, Scale};
 pub use error::{InverseError, Result};
 pub use hertz::{LeeRadokHertz, ramp_hold_grid, ramp_hold_indentation};
@@ -65,8 +69,8 @@ pub use measured::{
     AfmColumns, Calibration, CompressionColumns, Dimension, MeasuredCurve, ProtocolTolerance,
     read_afm_csv, read_compression_csv,
 };
-pub use misfit::{Experiment, Misfit, Segment, range_normalised_rmse, segment_weights};
-pub use model::{FD_STEP_UNIT, Model, check_finite, check_len, fd_jacobian};
+pub use misfit::{Experiment, Misfit, Objective, Segment, range_normalised_rmse, segment_weights};
+pub use model::{FD_STEP_UNIT, Model, check_finite, check_jacobian, check_len, fd_jacobian};
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
 pub use prony::{ModulusPoint, ParameterTable, PronyShear, PronyTerm};
 pub use starts::{feasible_starts, latin_hypercube};

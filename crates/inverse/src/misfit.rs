@@ -10,8 +10,10 @@
 
 use nalgebra::DMatrix;
 
+use crate::domain::Domain;
 use crate::error::{InverseError, Result};
-use crate::model::{Model, check_finite, check_len};
+use crate::measured::MeasuredCurve;
+use crate::model::{Model, check_finite, check_jacobian, check_len};
 
 /// Range-normalised RMSE (eq. 5.3) of `model` against `reference`
 /// (the measured curve, whose range normalises), with optional weights.
@@ -153,6 +155,23 @@ impl<M: Model> Experiment<M> {
         })
     }
 
+    /// Pairs a measured curve with a model: `values` (one per sample of
+    /// `curve`, e.g. `curve.force`) are resampled onto `model.times()`,
+    /// which count from the curve's first sample.
+    ///
+    /// # Errors
+    /// As [`MeasuredCurve::resample`] and [`Experiment::new`].
+    pub fn from_measured(
+        label: &str,
+        model: M,
+        curve: &MeasuredCurve,
+        values: &[f64],
+        weights: Option<Vec<f64>>,
+    ) -> Result<Self> {
+        let data = curve.resample(values, model.times())?;
+        Self::new(label, model, data, weights)
+    }
+
     /// Range of the data (max − min), the eq. 5.3 normaliser.
     pub fn data_range(&self) -> f64 {
         self.range
@@ -198,6 +217,7 @@ impl<M: Model> Experiment<M> {
     pub fn misfit_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
         let (y, jac) = self.model.response_and_jacobian(x)?;
         let e = self.misfit_of_curve(&y, x)?;
+        check_jacobian(&jac, y.len(), x.len())?;
         Ok((e, self.gradient_from(&y, &jac, e)))
     }
 
@@ -216,6 +236,46 @@ impl<M: Model> Experiment<M> {
                     / denom
             })
             .collect()
+    }
+}
+
+/// What [`crate::MultiStart`] minimises: a scalar misfit over a [`Domain`]
+/// with its gradient (argmin's cost + gradient traits in one).
+pub trait Objective {
+    /// The parameter domain.
+    fn domain(&self) -> &Domain;
+
+    /// Objective value at physical parameters x.
+    ///
+    /// # Errors
+    /// Model errors.
+    fn value(&self, x: &[f64]) -> Result<f64>;
+
+    /// Value and gradient (physical units).
+    ///
+    /// # Errors
+    /// Model errors.
+    fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)>;
+
+    /// Eq. 5.3 misfit of each experiment (for reports).
+    ///
+    /// # Errors
+    /// Model errors.
+    fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>>;
+}
+
+impl<M: Model> Objective for Misfit<M> {
+    fn domain(&self) -> &Domain {
+        Misfit::domain(self)
+    }
+    fn value(&self, x: &[f64]) -> Result<f64> {
+        Misfit::value(self, x)
+    }
+    fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
+        Misfit::value_and_gradient(self, x)
+    }
+    fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>> {
+        Misfit::per_experiment(self, x)
     }
 }
 
@@ -266,7 +326,7 @@ impl<M: Model> Misfit<M> {
     }
 
     /// The shared domain (that of the first experiment).
-    pub fn domain(&self) -> &crate::domain::Domain {
+    pub fn domain(&self) -> &Domain {
         self.experiments[0].model.domain()
     }
 

@@ -67,6 +67,24 @@ impl<M: Model + ?Sized> Model for &M {
     }
 }
 
+impl<M: Model + ?Sized> Model for Box<M> {
+    fn domain(&self) -> &Domain {
+        (**self).domain()
+    }
+    fn times(&self) -> &[f64] {
+        (**self).times()
+    }
+    fn response(&self, x: &[f64]) -> Result<Vec<f64>> {
+        (**self).response(x)
+    }
+    fn jacobian(&self, x: &[f64]) -> Result<DMatrix<f64>> {
+        (**self).jacobian(x)
+    }
+    fn response_and_jacobian(&self, x: &[f64]) -> Result<(Vec<f64>, DMatrix<f64>)> {
+        (**self).response_and_jacobian(x)
+    }
+}
+
 /// Central finite-difference Jacobian of a model, stepping
 /// [`FD_STEP_UNIT`] in each scaled coordinate (so log-scaled parameters get
 /// relative steps); at a bound the stencil is clipped to the domain and
@@ -114,6 +132,15 @@ pub fn check_len(what: &str, expected: usize, got: usize) -> Result<()> {
             got,
         })
     }
+}
+
+/// Checks that a Jacobian is m × n.
+///
+/// # Errors
+/// [`InverseError::LengthMismatch`].
+pub fn check_jacobian(jac: &DMatrix<f64>, m: usize, n: usize) -> Result<()> {
+    check_len("Jacobian rows (time points)", m, jac.nrows())?;
+    check_len("Jacobian columns (parameters)", n, jac.ncols())
 }
 
 /// Checks that every value of a model curve is finite.

@@ -19,7 +19,7 @@ use serde::Serialize;
 
 use crate::domain::{BoundHit, BoundSide, Domain};
 use crate::error::{InverseError, Result};
-use crate::misfit::Misfit;
+use crate::misfit::{Misfit, Objective};
 use crate::model::Model;
 use crate::prony::{ModulusPoint, ParameterTable, PronyShear};
 use crate::starts::feasible_starts;
@@ -128,13 +128,29 @@ impl MultiStart {
         Ok(self)
     }
 
-    /// Runs the multistart fit.
+    /// Scaled distance from a bound within which a parameter is flagged
+    /// as on the bound (≥ 0).
+    ///
+    /// # Errors
+    /// [`InverseError::InvalidSetting`] if negative or ≥ 0.5.
+    pub fn with_bound_tolerance(mut self, tol: f64) -> Result<Self> {
+        if !(0.0..0.5).contains(&tol) {
+            return Err(InverseError::InvalidSetting(format!(
+                "bound_tolerance must be in [0, 0.5), got {tol}"
+            )));
+        }
+        self.bound_tolerance = tol;
+        Ok(self)
+    }
+
+    /// Runs the multistart fit on any [`Objective`] ([`Misfit`],
+    /// [`crate::BasisMisfit`]).
     ///
     /// # Errors
     /// [`InverseError::NoConvergence`] if no local run produced a feasible
     /// finite result (the message carries the last status or model error);
     /// start-point generation errors.
-    pub fn fit<M: Model>(&self, misfit: &Misfit<M>) -> Result<FitResult> {
+    pub fn fit<O: Objective + ?Sized>(&self, misfit: &O) -> Result<FitResult> {
         let domain = misfit.domain();
         let starts = feasible_starts(domain, self.starts, self.seed)?;
         let mut locals = Vec::new();
@@ -191,7 +207,7 @@ impl MultiStart {
         })
     }
 
-    fn optimum<M: Model>(&self, misfit: &Misfit<M>, run: LocalRun) -> Result<LocalOptimum> {
+    fn optimum<O: Objective + ?Sized>(&self, misfit: &O, run: LocalRun) -> Result<LocalOptimum> {
         let domain = misfit.domain();
         Ok(LocalOptimum {
             per_experiment: misfit.per_experiment(&run.x)?,
@@ -205,9 +221,9 @@ impl MultiStart {
     }
 
     /// One SLSQP run from x0; Err carries a message and the evaluations used.
-    fn local<M: Model>(
+    fn local<O: Objective + ?Sized>(
         &self,
-        misfit: &Misfit<M>,
+        misfit: &O,
         x0: &[f64],
     ) -> std::result::Result<LocalRun, (String, usize)> {
         let domain = misfit.domain();
@@ -446,6 +462,24 @@ pub struct Verification {
     pub fitted: Vec<f64>,
     /// Eq. 5.3 misfit of each experiment under the checking model.
     pub rerun: Vec<f64>,
+}
+
+impl Verification {
+    /// Largest |fitted − rerun| over the experiments (eq. 5.3 units).
+    pub fn max_difference(&self) -> f64 {
+        self.fitted
+            .iter()
+            .zip(&self.rerun)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// True when the two misfits agree within `tolerance` for every
+    /// experiment — e.g. the surrogate's checking error (eq. 5.2), as
+    /// issue 6 requires.
+    pub fn agrees_within(&self, tolerance: f64) -> bool {
+        self.max_difference() <= tolerance
+    }
 }
 
 /// Evaluates x under both misfits (same experiments, different models).

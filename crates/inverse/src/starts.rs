@@ -38,7 +38,7 @@ pub fn latin_hypercube(n: usize, dim: usize, rng: &mut ChaCha8Rng) -> Vec<Vec<f6
 ///
 /// # Errors
 /// [`InverseError::InvalidSetting`] if n = 0 or the feasible region is so
-/// small that [`MAX_BATCHES`] hypercubes do not yield n points.
+/// small that 200 hypercubes do not yield n points.
 pub fn feasible_starts(domain: &Domain, n: usize, seed: u64) -> Result<Vec<Vec<f64>>> {
     if n == 0 {
         return Err(InverseError::InvalidSetting(

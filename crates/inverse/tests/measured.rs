@@ -259,3 +259,32 @@ fn resampling_is_linear_and_refuses_grids_beyond_the_data() {
         "{e}"
     );
 }
+
+#[test]
+fn a_measured_curve_becomes_an_experiment_on_the_model_grid() {
+    use nlvid_inverse::{Domain, Experiment, LeeRadokHertz, Model};
+    let domain = Domain::prony2_table_5_3(0.01).expect("domain");
+    let grid: Vec<f64> = (0..=20).map(|i| i as f64 * 0.1).collect();
+    let delta: Vec<f64> = grid.iter().map(|t| (10e-6 * t).min(2e-6)).collect();
+    let model = LeeRadokHertz::new(domain, grid, &delta, 2.5e-6, 0.5).expect("model");
+    let x = [1000.0, 0.3, 0.1, 0.3, 5.0];
+    let clean = model.response(&x).expect("y");
+    // the measured file samples twice as densely, starting at t = 3 s
+    let mut s = String::from("time [s],height [um],vDeflection [nN]\n");
+    for i in 0..=40 {
+        let t = i as f64 * 0.05;
+        let f = if i % 2 == 0 {
+            clean[i / 2]
+        } else {
+            0.5 * (clean[i / 2] + clean[i / 2 + 1])
+        };
+        s.push_str(&format!("{},{},{}\n", 3.0 + t, 10.0 * t, f * 1e9));
+    }
+    let p = write("exp.csv", &s);
+    let curve = read_afm_csv(&p, &afm_cols(), &cal()).expect("read");
+    let e = Experiment::from_measured("RH", model, &curve, &curve.force, None).expect("e");
+    for (a, b) in e.data.iter().zip(&clean) {
+        assert!((a - b).abs() < 1e-9 * b.abs().max(1e-12), "{a} vs {b}");
+    }
+    assert!(e.misfit(&x).expect("misfit") < 1e-9);
+}

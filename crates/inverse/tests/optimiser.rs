@@ -217,6 +217,22 @@ fn verification_reports_both_misfits() {
     let v = verify(&a, &b, &[0.9, 0.6]).expect("v");
     assert_eq!(v.fitted, v.rerun);
     assert!(v.fitted[0] > 0.0);
+    assert!(v.agrees_within(0.0));
+    // a "real" model that differs: the misfits differ by a known amount
+    let m3 = Linear2::new(2.0, None);
+    let d3 = m3.response(&[0.9, 0.6]).expect("d");
+    let exact = Misfit::new(vec![
+        Experiment::new("lin", m3, d3.clone(), None).expect("e"),
+    ])
+    .expect("m");
+    let m4 = Linear2::new(2.0, None);
+    let shifted: Vec<f64> = d3.iter().map(|v| v + 0.01).collect();
+    let off = Misfit::new(vec![Experiment::new("lin", m4, shifted, None).expect("e")]).expect("m");
+    let v = verify(&exact, &off, &[0.9, 0.6]).expect("v");
+    let range = d3.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+        - d3.iter().cloned().fold(f64::INFINITY, f64::min);
+    assert!((v.max_difference() - 0.01 / range).abs() < 1e-12);
+    assert!(v.agrees_within(0.011 / range) && !v.agrees_within(0.009 / range));
 }
 
 #[test]
@@ -225,4 +241,6 @@ fn invalid_settings_are_rejected() {
     assert!(MultiStart::new().with_max_evals(3).is_err());
     assert!(MultiStart::new().with_cluster_radius(0.0).is_err());
     assert!(MultiStart::new().with_misfit_tolerance(f64::NAN).is_err());
+    assert!(MultiStart::new().with_bound_tolerance(0.5).is_err());
+    assert!(MultiStart::new().with_ftol_rel(-1.0).is_err());
 }

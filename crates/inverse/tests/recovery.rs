@@ -104,3 +104,30 @@ fn recovers_g0_long_term_weight_and_g52_from_noisy_ramp_hold_curves() {
         lines.join("\n")
     );
 }
+
+#[test]
+fn two_depths_fitted_together_recover_the_parameters_from_clean_data() {
+    // §4.4.2: RH at two depths fitted with one parameter set; boxed models
+    // so experiments of different model types could be mixed.
+    let domain = Domain::prony2_table_5_3(0.01).expect("domain");
+    let x_true = [1200.0, 0.35, 0.3, 0.4, 15.0];
+    let mut experiments: Vec<Experiment<Box<dyn Model>>> = Vec::new();
+    for (label, depth) in [("RH 2 um", 2e-6), ("RH 1 um", 1e-6)] {
+        let t = ramp_hold_grid(0.2, 60, 52.0, 200, 1e-3).expect("grid");
+        let delta = ramp_hold_indentation(&t, 10e-6, depth);
+        let m = LeeRadokHertz::new(domain.clone(), t, &delta, 2.5e-6, 0.5).expect("model");
+        let data = m.response(&x_true).expect("data");
+        experiments
+            .push(Experiment::new(label, Box::new(m) as Box<dyn Model>, data, None).expect("e"));
+    }
+    let misfit = Misfit::new(experiments).expect("misfit");
+    let fit = MultiStart::new()
+        .with_starts(4)
+        .expect("s")
+        .fit(&misfit)
+        .expect("fit");
+    assert_eq!(fit.best.per_experiment.len(), 2);
+    for (k, (a, b)) in fit.best.x.iter().zip(&x_true).enumerate() {
+        assert!((a / b - 1.0).abs() < 1e-3, "parameter {k}: {a} vs {b}");
+    }
+}

@@ -21,9 +21,11 @@ use crate::output::print_json;
 type SectionReader = fn(&mut Section) -> Result<(), StudyError>;
 
 /// Stages register `(section name, reader)` here so that `nlvid check`
-/// validates their sections' schema. None are registered yet: today `check`
-/// validates syntax, units and numbers of every section, not their keys.
-const STAGE_READERS: &[(&str, SectionReader)] = &[];
+/// validates their sections' schema; other sections get syntax, units and
+/// numbers checked, not their keys.
+const STAGE_READERS: &[(&str, SectionReader)] = &[("protocol", |s| {
+    <nlvid_protocol::ProtocolSettings as nlvid_study::FromSection>::from_section(s).map(|_| ())
+})];
 
 /// Raw arguments of `nlvid check`.
 #[derive(Debug, clap::Args)]

@@ -6,14 +6,18 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{Context as _, bail};
+use anyhow::bail;
 use nlvid_stats::{
     Effect, Method, Policy, Prony, RankSum, ResultsTable, compare_over_time, effect, group_curves,
     mean_sd, rank_sum, read_results, relaxation_amounts, write_group_curves,
     write_time_comparisons,
 };
-use nlvid_study::{Dimension, Quantity};
+use nlvid_study::Dimension;
 use serde_json::{Value, json};
+
+use super::{Context, Run};
+use crate::args::quantity;
+use crate::output::{print_json, write_atomic};
 
 /// Raw arguments of `nlvid compare`.
 #[derive(Debug, clap::Args)]
@@ -24,8 +28,8 @@ pub struct Args {
     #[arg(long, value_delimiter = ',')]
     pub groups: Option<Vec<String>>,
     /// End of the time grid, with a unit (the thesis compares up to 52 s).
-    #[arg(long, default_value = "52 s")]
-    pub t_end: String,
+    #[arg(long, default_value = "52 s", value_parser = |s: &str| quantity(s, Dimension::TIME))]
+    pub t_end: f64,
     /// Number of points of the uniform time grid from 0 to --t-end.
     #[arg(long, default_value_t = 53)]
     pub points: usize,
@@ -36,9 +40,6 @@ pub struct Args {
     /// Directory for the CSV outputs (default: next to the results table).
     #[arg(long)]
     pub out_dir: Option<PathBuf>,
-    /// Set from the global `--json` flag.
-    #[arg(skip)]
-    pub json: bool,
 }
 
 /// Validated configuration.
@@ -52,25 +53,19 @@ pub struct Config {
     method_name: String,
     groups_csv: PathBuf,
     pvalues_csv: PathBuf,
-    json: bool,
 }
 
-impl Args {
-    /// Check every argument and read the table.
-    ///
-    /// # Errors
-    /// Unreadable or malformed table, unknown group or method, a time
-    /// without a time unit, fewer than 2 grid points.
-    pub fn validate(self) -> anyhow::Result<Config> {
-        let q = Quantity::parse(&self.t_end)
-            .map_err(|e| anyhow::anyhow!("--t-end `{}`: {e}", self.t_end))?;
-        if q.dim != Dimension::TIME || q.value <= 0.0 {
-            bail!(
-                "--t-end `{}`: give a positive time with its unit, e.g. `52 s`",
-                self.t_end
-            );
+impl Run for Args {
+    type Config = Config;
+
+    /// Check every argument and read the table: unreadable or malformed
+    /// table, unknown group or method, a non-positive --t-end, fewer than 2
+    /// grid points.
+    fn validate(self, _ctx: &Context) -> anyhow::Result<Config> {
+        if self.t_end <= 0.0 {
+            bail!("--t-end: give a positive time, e.g. `52 s`");
         }
-        let times = nlvid_protocol::grid::uniform(0.0, q.value, self.points)
+        let times = nlvid_protocol::grid::uniform(0.0, self.t_end, self.points)
             .map_err(|e| anyhow::anyhow!("--points {}: {e}", self.points))?;
         let method = match self.method.as_str() {
             "matlab" => Method::Auto(Policy::Matlab),
@@ -133,25 +128,12 @@ impl Args {
             method_name: self.method,
             groups_csv: dir.join(format!("{stem}.groups.csv")),
             pvalues_csv: dir.join(format!("{stem}.pvalues.csv")),
-            json: self.json,
         })
     }
 
-    /// Validate, then execute.
-    ///
-    /// # Errors
-    /// As [`Args::validate`] and [`execute`].
-    pub fn run(self) -> anyhow::Result<ExitCode> {
-        execute(self.validate()?)
+    fn execute(config: Config, ctx: &Context) -> anyhow::Result<ExitCode> {
+        execute(config, ctx.json)
     }
-}
-
-/// Write `bytes` to `path` via a temporary file and a rename.
-fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let tmp = path.with_extension(format!("tmp{}", std::process::id()));
-    std::fs::write(&tmp, bytes)
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .with_context(|| format!("{}: cannot write", path.display()))
 }
 
 fn test_json(r: &RankSum) -> Value {
@@ -190,10 +172,7 @@ fn contrast(
 }
 
 /// Compute the group curves and the comparison, write the CSVs, print.
-///
-/// # Errors
-/// Statistics on invalid groups, or an output file cannot be written.
-pub fn execute(c: Config) -> anyhow::Result<ExitCode> {
+fn execute(c: Config, json_out: bool) -> anyhow::Result<ExitCode> {
     let t_end = c.times[c.times.len() - 1];
     let names = c.table.groups();
     let mut curves = Vec::with_capacity(names.len());
@@ -251,7 +230,7 @@ pub fn execute(c: Config) -> anyhow::Result<ExitCode> {
         )?);
     }
 
-    if c.json {
+    if json_out {
         let comparison = c.pair.as_ref().map(|(a, b)| {
             json!({
                 "a": a, "b": b, "method": c.method_name,
@@ -275,7 +254,7 @@ pub fn execute(c: Config) -> anyhow::Result<ExitCode> {
             "comparison": comparison,
             "groups_csv": c.groups_csv.display().to_string(),
         });
-        println!("{}", serde_json::to_string_pretty(&doc)?);
+        print_json(&doc)?;
         return Ok(ExitCode::SUCCESS);
     }
 

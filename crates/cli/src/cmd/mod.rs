@@ -16,6 +16,10 @@ use clap::{Parser, Subcommand};
 mod check;
 mod compare;
 mod material;
+pub mod build;
+pub mod sample;
+pub mod surrogate;
+pub mod membrane;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
@@ -80,6 +84,17 @@ pub enum Command {
     Material(material::Args),
     /// Group G(t) (mean ± sd) and rank-sum p(t) between two groups of cells.
     Compare(compare::Args),
+    /// Latin-hypercube training and checking designs in a parameter domain.
+    Sample(sample::SampleArgs),
+    /// Run a forward model over a design: parallel, resumable, shardable.
+    Build(build::BuildArgs),
+    /// Merge shard stores of one build.
+    Merge(build::MergeArgs),
+    /// Kriging surrogates: fit, predict, check.
+    #[command(subcommand)]
+    Surrogate(surrogate::SurrogateCmd),
+    /// Fluid-filled NLV membrane squeezed between plates (ch. II, semi-analytical).
+    Membrane(membrane::MembraneArgs),
 }
 
 impl Command {
@@ -99,10 +114,15 @@ impl Command {
             }
             Command::Check(a) => a.run(ctx),
             Command::Material(a) => a.run(ctx),
-            Command::Compare(mut a) => {
-                a.json = ctx.json;
-                a.run()
+            Command::Sample(a) => a.run(),
+            Command::Build(a) => a.run(),
+            Command::Merge(a) => a.run(),
+            Command::Surrogate(c) => c.run(ctx.json),
+            Command::Membrane(mut args) => {
+                args.json = ctx.json;
+                membrane::run(args)
             }
+            Command::Compare(a) => a.run(ctx),
         }
     }
 }

@@ -1,0 +1,204 @@
+//! The forward model as one call: parameters, geometry and a loading program
+//! in, F(t) (and ψc, p, H1, profiles) on a time grid out.
+
+use nlvid_material::MembraneMaterial;
+use nlvid_protocol::Program;
+use serde::Serialize;
+
+use crate::{Control, Geometry, MembraneError, MembraneSolver, PipkinRogersParams, Result, Solution};
+
+/// Which quantity the loading program prescribes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ControlKind {
+    /// Plate displacement D/r0 (eq. 2.43).
+    Displacement,
+    /// Contact force F/(C1 h0 r0) (eq. 2.44).
+    Force,
+}
+
+/// A loading: the prescribed quantity, its program (dimensionless values,
+/// eq. 2.47) and the solve times (t0 = t/τ1 when τ1 = 1).
+#[derive(Debug, Clone)]
+pub struct Loading {
+    /// Displacement or force control.
+    pub control: ControlKind,
+    /// D/r0 or F/(C1 h0 r0) as a function of time.
+    pub program: Program,
+    /// Strictly increasing solve times; the first is the instantaneous response.
+    pub times: Vec<f64>,
+    /// Times at which full profiles are kept (nearest solve time is used).
+    pub profile_times: Vec<f64>,
+}
+
+impl Loading {
+    /// A loading solved on `times`; every breakpoint of the program inside
+    /// the grid is added so kinks are stepped onto exactly.
+    ///
+    /// # Errors
+    /// [`MembraneError::Input`] when `times` is empty, not increasing or not finite.
+    pub fn new(control: ControlKind, program: Program, times: Vec<f64>) -> Result<Self> {
+        let mut t = times;
+        if t.is_empty() {
+            return Err(MembraneError::Input {
+                name: "times",
+                value: 0.0,
+                reason: "at least one solve time is needed".into(),
+            });
+        }
+        let (t0, t1) = (t[0], t[t.len() - 1]);
+        for &b in program.breakpoints() {
+            if b > t0 && b < t1 {
+                t.push(b);
+            }
+        }
+        t.sort_by(f64::total_cmp);
+        t.dedup_by(|a, b| (*a - *b).abs() <= 1e-12 * (1.0 + b.abs()));
+        for (i, w) in t.windows(2).enumerate() {
+            if !(w[1] > w[0]) || !w[1].is_finite() {
+                return Err(MembraneError::Input {
+                    name: "times",
+                    value: w[1],
+                    reason: format!("solve times must be finite and increasing (index {})", i + 1),
+                });
+            }
+        }
+        Ok(Self {
+            control,
+            program,
+            times: t,
+            profile_times: Vec::new(),
+        })
+    }
+
+    /// Keep profiles at these times.
+    pub fn with_profiles(mut self, times: &[f64]) -> Self {
+        self.profile_times = times.to_vec();
+        self
+    }
+
+    fn control_at(&self, t: f64) -> Control {
+        let v = self.program.value(t);
+        match self.control {
+            ControlKind::Displacement => Control::Displacement(v),
+            ControlKind::Force => Control::Force(v),
+        }
+    }
+}
+
+/// One row of the time history (dimensionless, eq. 2.47).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StepRecord {
+    /// Time.
+    pub time: f64,
+    /// Plate displacement D/r0.
+    pub displacement: f64,
+    /// Half-height H1/r0.
+    pub h1: f64,
+    /// Contact force F/(C1 h0 r0).
+    pub force: f64,
+    /// Pressure p r0/(C1 h0).
+    pub pressure: f64,
+    /// Contact angle ψc (rad).
+    pub psi_c: f64,
+    /// Crown stretch λ0.
+    pub lambda0: f64,
+    /// Contact radius a/r0.
+    pub contact_radius: f64,
+    /// Equatorial radius ρ(π/2)/r0.
+    pub equator_radius: f64,
+    /// Smallest principal tension over the nodes, min(T1, T2)/(C1 h0).
+    pub min_tension: f64,
+}
+
+impl From<&Solution> for StepRecord {
+    fn from(s: &Solution) -> Self {
+        let min_tension = s
+            .profile
+            .iter()
+            .fold(f64::INFINITY, |m, v| m.min(v.t1).min(v.t2));
+        Self {
+            time: s.time,
+            displacement: s.displacement,
+            h1: s.h1,
+            force: s.force,
+            pressure: s.pressure,
+            psi_c: s.psi_c,
+            lambda0: s.lambda0,
+            contact_radius: s.contact_radius,
+            equator_radius: s.equator_radius,
+            min_tension,
+        }
+    }
+}
+
+/// The result of a forward run.
+#[derive(Debug, Clone, Serialize)]
+pub struct MembraneRun {
+    /// One record per solve time.
+    pub history: Vec<StepRecord>,
+    /// Full solutions (profiles) at the requested times, in time order.
+    pub profiles: Vec<Solution>,
+}
+
+impl MembraneRun {
+    /// Times of the history.
+    pub fn times(&self) -> Vec<f64> {
+        self.history.iter().map(|r| r.time).collect()
+    }
+    /// F(t)/(C1 h0 r0) on the time grid.
+    pub fn force(&self) -> Vec<f64> {
+        self.history.iter().map(|r| r.force).collect()
+    }
+}
+
+/// Forward model with the ch. II Pipkin–Rogers membrane: `params` (eqs.
+/// 2.53–2.56), `geometry` (r_s, nodes), `loading` → F(t) etc. Uses the
+/// params' C1 as the stress scale, so results are dimensionless (eq. 2.47).
+///
+/// # Errors
+/// [`MembraneError::Input`] for bad parameters; the solver's errors
+/// (wrinkling, non-convergence) with the time at which they happened.
+pub fn simulate(params: &PipkinRogersParams, geometry: &Geometry, loading: &Loading) -> Result<MembraneRun> {
+    let m = params.check()?;
+    simulate_with(m, params.c1, geometry, loading)
+}
+
+/// [`simulate`] for any membrane material; `stress_scale` is C1 of eq. 2.47.
+///
+/// # Errors
+/// As [`simulate`].
+pub fn simulate_with<M: MembraneMaterial>(
+    material: M,
+    stress_scale: f64,
+    geometry: &Geometry,
+    loading: &Loading,
+) -> Result<MembraneRun> {
+    let mut solver = MembraneSolver::new(material, *geometry, stress_scale)?;
+    let mut history = Vec::with_capacity(loading.times.len());
+    let mut profiles = Vec::new();
+    // Index of the solve time nearest to each requested profile time.
+    let mut want: Vec<usize> = loading
+        .profile_times
+        .iter()
+        .map(|&tp| {
+            let mut best = 0;
+            for (i, &t) in loading.times.iter().enumerate() {
+                if (t - tp).abs() < (loading.times[best] - tp).abs() {
+                    best = i;
+                }
+            }
+            best
+        })
+        .collect();
+    want.sort_unstable();
+    want.dedup();
+    for (i, &t) in loading.times.iter().enumerate() {
+        let sol = solver.advance(t, loading.control_at(t))?;
+        history.push(StepRecord::from(&sol));
+        if want.binary_search(&i).is_ok() {
+            profiles.push(sol);
+        }
+    }
+    Ok(MembraneRun { history, profiles })
+}

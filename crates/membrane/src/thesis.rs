@@ -1,0 +1,336 @@
+//! The data behind Figs. 2.3–2.14 and Table 2.1 of the thesis (§2.5.1),
+//! regenerated with this crate's solver, for side-by-side comparison.
+//!
+//! Every case uses r_s = 1.03, C1 = τ1 = 1 (dimensionless, eq. 2.47) and the
+//! default [`Geometry`]. Where the thesis is ambiguous the choice is stated
+//! in the series label and in `docs/theory/membrane.md`.
+
+use nlvid_protocol::{Quantity, programs};
+use serde::Serialize;
+
+use crate::{
+    Control, ControlKind, Geometry, Loading, MembraneError, MembraneRun, MembraneSolver, MooneyRivlinMembrane,
+    PipkinRogersParams, Result, Solution, simulate,
+};
+
+/// One curve.
+#[derive(Debug, Clone, Serialize)]
+pub struct Series {
+    /// Legend label.
+    pub label: String,
+    /// Abscissae.
+    pub x: Vec<f64>,
+    /// Ordinates.
+    pub y: Vec<f64>,
+}
+
+/// One figure's data.
+#[derive(Debug, Clone, Serialize)]
+pub struct Figure {
+    /// File stem, e.g. `fig2_4`.
+    pub id: String,
+    /// Title (thesis caption, shortened).
+    pub title: String,
+    /// Abscissa label.
+    pub x_label: String,
+    /// Ordinate label.
+    pub y_label: String,
+    /// Curves.
+    pub series: Vec<Series>,
+}
+
+/// One row of Table 2.1 as reproduced.
+#[derive(Debug, Clone, Serialize)]
+pub struct SlopeRow {
+    /// Maximum displacement D/r0.
+    pub d_max: f64,
+    /// Unloading rate s_u.
+    pub unload_rate: f64,
+    /// Model label.
+    pub model: String,
+    /// Thesis value (None where the table is blank).
+    pub thesis: Option<f64>,
+    /// Tangent dF/dD over the first unloading step (ΔD = s_u·5e-5).
+    pub slope: f64,
+}
+
+fn fig(id: &str, title: &str, x: &str, y: &str, series: Vec<Series>) -> Figure {
+    Figure {
+        id: id.into(),
+        title: title.into(),
+        x_label: x.into(),
+        y_label: y.into(),
+        series,
+    }
+}
+
+fn mr(gamma: f64) -> Result<MembraneSolver<MooneyRivlinMembrane>> {
+    MembraneSolver::new(MooneyRivlinMembrane::new(1.0, gamma)?, Geometry::default(), 1.0)
+}
+
+fn pr(g1: f64, g2: f64, c: f64) -> PipkinRogersParams {
+    PipkinRogersParams {
+        g1,
+        g2,
+        c,
+        gamma0: 0.1,
+        ..Default::default()
+    }
+}
+
+fn step_run(p: &PipkinRogersParams, d: f64, profiles: bool) -> Result<MembraneRun> {
+    let prog = programs::step(Quantity::Dimensionless, d, 10.0).map_err(proto)?;
+    let times: Vec<f64> = (0..=100).map(|k| 0.1 * k as f64).collect();
+    let mut l = Loading::new(ControlKind::Displacement, prog, times.clone())?;
+    if profiles {
+        l = l.with_profiles(&times);
+    }
+    simulate(p, &Geometry::default(), &l)
+}
+
+fn proto(e: nlvid_protocol::ProtocolError) -> MembraneError {
+    MembraneError::Input {
+        name: "program",
+        value: f64::NAN,
+        reason: e.to_string(),
+    }
+}
+
+/// Linear interpolation of a node quantity at reference angle `psi`.
+pub fn at_psi(sol: &Solution, psi: f64, f: impl Fn(&crate::NodeValue) -> f64) -> f64 {
+    let p = &sol.profile;
+    let h = p[1].psi - p[0].psi;
+    let j = ((psi / h).floor() as usize).min(p.len() - 2);
+    let w = psi / h - j as f64;
+    (1.0 - w) * f(&p[j]) + w * f(&p[j + 1])
+}
+
+fn load_unload(p: Option<&PipkinRogersParams>, d_max: f64, su: f64) -> Result<(MembraneRun, usize)> {
+    let prog = programs::load_unload(Quantity::Dimensionless, d_max, 1.0, su, 0.0).map_err(proto)?;
+    let t_peak = d_max;
+    let t_end = t_peak + d_max / su;
+    let mut times: Vec<f64> = (0..=100).map(|k| t_peak * k as f64 / 100.0).collect();
+    times.extend((1..=20).map(|k| t_peak + 1e-3 * k as f64 / 20.0));
+    times.extend((1..=100).map(|k| t_peak + 1e-3 + (t_end - t_peak - 1e-3) * k as f64 / 100.0));
+    let l = Loading::new(ControlKind::Displacement, prog, times)?;
+    let params = p.copied().unwrap_or(PipkinRogersParams {
+        g1: 1.0,
+        g2: 1.0,
+        ..pr(1.0, 1.0, 1.0)
+    });
+    // Loss of contact near the end of a fast unloading is reported by the
+    // solver; keep what was computed up to there.
+    let run = simulate(&params, &Geometry::default(), &l)?;
+    let i = run
+        .history
+        .iter()
+        .position(|r| (r.time - t_peak).abs() < 1e-12)
+        .unwrap_or(0);
+    Ok((run, i))
+}
+
+/// Regenerate the data of Figs. 2.3–2.14 and Table 2.1 (a few seconds in release builds).
+///
+/// # Errors
+/// Any solver error, with the case in the message.
+pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
+    let mut figs = Vec::new();
+
+    // Fig. 2.3: NLE profiles, γ = 0.1.
+    let mut s = mr(0.1)?;
+    let mut series = Vec::new();
+    for d in [0.1, 0.28, 0.53, 0.78] {
+        let sol = s.equilibrium(0.0, Control::Displacement(d))?;
+        series.push(Series {
+            label: format!("D/r0 = {d}"),
+            x: sol.profile.iter().map(|v| v.rho).collect(),
+            y: sol.profile.iter().map(|v| v.eta).collect(),
+        });
+        series.push(Series {
+            label: format!("contact edge, D/r0 = {d}"),
+            x: vec![sol.contact_radius],
+            y: vec![sol.h1],
+        });
+    }
+    figs.push(fig("fig2_3", "Fig. 2.3: NLE profiles, γ = 0.1", "ρ/r0", "η/r0", series));
+
+    // Fig. 2.4: F–D for several γ.
+    let ds: Vec<f64> = (1..=39).map(|k| 0.02 * k as f64).collect();
+    let mut series = Vec::new();
+    for gamma in [0.0, 0.1, 0.2, 0.3] {
+        let mut s = mr(gamma)?;
+        let mut f = Vec::new();
+        for &d in &ds {
+            f.push(s.equilibrium(0.0, Control::Displacement(d))?.force);
+        }
+        series.push(Series {
+            label: format!("γ = {gamma}"),
+            x: ds.clone(),
+            y: f,
+        });
+    }
+    figs.push(fig("fig2_4", "Fig. 2.4: NLE force vs displacement", "D/r0", "F/(C1 h0 r0)", series));
+
+    // Fig. 2.5: NLE vs QLV at D = 2t, t, t/2.
+    let qlv = pr(0.2, 0.2, 1.0);
+    let mut series = vec![Series {
+        label: "NLE γ = 0.1".into(),
+        x: ds.clone(),
+        y: figs[1].series[1].y.clone(),
+    }];
+    for rate in [2.0, 1.0, 0.5] {
+        let prog = programs::constant_rate(Quantity::Dimensionless, rate, 0.78 / rate).map_err(proto)?;
+        let times = (0..=100).map(|k| 0.78 / rate * k as f64 / 100.0).collect();
+        let run = simulate(&qlv, &Geometry::default(), &Loading::new(ControlKind::Displacement, prog, times)?)?;
+        series.push(Series {
+            label: format!("QLV g1 = g2 = 0.2, D = {rate} t"),
+            x: run.history.iter().map(|r| r.displacement).collect(),
+            y: run.force(),
+        });
+    }
+    figs.push(fig("fig2_5", "Fig. 2.5: NLE vs QLV at constant rates", "D/r0", "F/(C1 h0 r0)", series));
+
+    // Fig. 2.6: relaxation at two displacements.
+    let nlv6 = pr(0.2, 0.3, 0.5);
+    let mut series = Vec::new();
+    for d in [0.53, 0.78] {
+        for (name, p) in [("QLV g1=g2=0.2, c=1", &qlv), ("NLV g1=0.2, g2=0.3, c=1/2", &nlv6)] {
+            let run = step_run(p, d, false)?;
+            series.push(Series {
+                label: format!("{name}, D/r0 = {d}"),
+                x: run.times(),
+                y: run.force(),
+            });
+        }
+    }
+    figs.push(fig("fig2_6", "Fig. 2.6: force relaxation", "t/τ1", "F/(C1 h0 r0)", series));
+
+    // Figs. 2.7–2.11 at D/r0 = 0.78.
+    let cases_c = [("c = 1 (QLV)", pr(0.2, 0.2, 1.0)), ("c = 1/2", pr(0.2, 0.2, 0.5)), ("c = 2", pr(0.2, 0.2, 2.0))];
+    let cases_g = [("g2 = 0.2 (QLV)", pr(0.2, 0.2, 1.0)), ("g2 = 0.1", pr(0.2, 0.1, 1.0)), ("g2 = 0.3", pr(0.2, 0.3, 1.0))];
+    let mut runs_c = Vec::new();
+    for (n, p) in &cases_c {
+        runs_c.push((*n, step_run(p, 0.78, true)?));
+    }
+    let mut runs_g = Vec::new();
+    for (n, p) in &cases_g {
+        runs_g.push((*n, step_run(p, 0.78, true)?));
+    }
+    let force = |runs: &[(&str, MembraneRun)]| {
+        runs.iter()
+            .map(|(n, r)| Series { label: n.to_string(), x: r.times(), y: r.force() })
+            .collect::<Vec<_>>()
+    };
+    figs.push(fig("fig2_7", "Fig. 2.7: relaxation, g1 = g2 = 0.2, varying c", "t/τ1", "F/(C1 h0 r0)", force(&runs_c)));
+    figs.push(fig("fig2_8", "Fig. 2.8: relaxation, c = 1, varying g2", "t/τ1", "F/(C1 h0 r0)", force(&runs_g)));
+    let psic = runs_c
+        .iter()
+        .chain(runs_g.iter().skip(1))
+        .map(|(n, r)| Series {
+            label: n.to_string(),
+            x: r.times(),
+            y: r.history.iter().map(|h| h.psi_c).collect(),
+        })
+        .collect();
+    figs.push(fig("fig2_9", "Fig. 2.9: contact angle ψc(t), D/r0 = 0.78", "t/τ1", "ψc (rad)", psic));
+    let stretches = |runs: &[(&str, MembraneRun)]| {
+        let mut v = Vec::new();
+        for (n, r) in runs {
+            for (k, name) in [(0, "λ1"), (1, "λ2")] {
+                v.push(Series {
+                    label: format!("{name}, {n}"),
+                    x: r.profiles.iter().map(|s| s.time).collect(),
+                    y: r.profiles
+                        .iter()
+                        .map(|s| at_psi(s, 0.25, |p| if k == 0 { p.lambda1 } else { p.lambda2 }))
+                        .collect(),
+                });
+            }
+        }
+        v
+    };
+    figs.push(fig("fig2_10", "Fig. 2.10: stretches at ψ = 0.25, varying c", "t/τ1", "stretch", stretches(&runs_c)));
+    figs.push(fig("fig2_11", "Fig. 2.11: stretches at ψ = 0.25, varying g2", "t/τ1", "stretch", stretches(&runs_g)));
+
+    // Fig. 2.12: distributions at t = 10 for g2 = 0.3.
+    let last = runs_g[2].1.profiles.last().ok_or_else(|| MembraneError::Input {
+        name: "profiles",
+        value: 10.0,
+        reason: "no profile at t = 10".into(),
+    })?;
+    let col = |f: fn(&crate::NodeValue) -> f64| last.profile.iter().map(f).collect::<Vec<_>>();
+    let psi = col(|v| v.psi);
+    figs.push(fig(
+        "fig2_12",
+        "Fig. 2.12: stretches and stresses at t = 10, g1 = 0.2, g2 = 0.3, c = 1",
+        "ψ (rad)",
+        "λ, σ/C1",
+        vec![
+            Series { label: "λ1".into(), x: psi.clone(), y: col(|v| v.lambda1) },
+            Series { label: "λ2".into(), x: psi.clone(), y: col(|v| v.lambda2) },
+            Series { label: "σ1/C1".into(), x: psi.clone(), y: col(|v| v.sigma1) },
+            Series { label: "σ2/C1".into(), x: psi.clone(), y: col(|v| v.sigma2) },
+            Series { label: "ψc".into(), x: vec![last.psi_c], y: vec![at_psi(last, last.psi_c, |v| v.lambda2)] },
+        ],
+    ));
+
+    // Figs. 2.13–2.14 and Table 2.1.
+    let nlv13 = pr(0.2, 0.6, 0.5);
+    let mut rows = Vec::new();
+    let thesis = |d: f64, su: f64, m: &str| -> Option<f64> {
+        match (d > 0.5, su < 0.5, m) {
+            (_, true, "NLE") => None,
+            (false, false, "NLE") => Some(4.7),
+            (true, false, "NLE") => Some(324.5),
+            (false, false, "QLV") => Some(4.6),
+            (false, true, "QLV") => Some(6.0),
+            (true, false, "QLV") => Some(257.0),
+            (true, true, "QLV") => Some(297.0),
+            (false, false, _) => Some(4.5),
+            (false, true, _) => Some(6.0),
+            (true, false, _) => Some(241.0),
+            (true, true, _) => Some(287.5),
+        }
+    };
+    for (id, d_max) in [("fig2_13", 0.28), ("fig2_14", 0.78)] {
+        let mut series = Vec::new();
+        for su in [1.0, 0.2] {
+            let models: [(&str, Option<&PipkinRogersParams>); 4] = [
+                ("NLE", None),
+                ("QLV", Some(&qlv)),
+                ("NLV c=1/2", Some(&nlv13)),
+                ("NLV c=1", Some(&pr(0.2, 0.6, 1.0))),
+            ];
+            for (m, p) in models {
+                if m == "NLE" && su < 0.5 {
+                    continue;
+                }
+                let (run, i) = load_unload(p, d_max, su)?;
+                let h = &run.history;
+                let slope = (h[i].force - h[i + 1].force) / (h[i].displacement - h[i + 1].displacement);
+                rows.push(SlopeRow {
+                    d_max,
+                    unload_rate: su,
+                    model: m.into(),
+                    thesis: thesis(d_max, su, m.split(' ').next().unwrap_or(m)),
+                    slope,
+                });
+                if m != "QLV" && m != "NLV c=1" {
+                    series.push(Series {
+                        label: format!("{m}, s_u = {su}"),
+                        x: h.iter().map(|r| r.displacement).collect(),
+                        y: h.iter().map(|r| r.force).collect(),
+                    });
+                }
+            }
+        }
+        figs.push(fig(
+            id,
+            &format!("Fig. {}: loading–unloading to D/r0 = {d_max}, s_l = 1", if d_max < 0.5 { "2.13" } else { "2.14" }),
+            "D/r0",
+            "F/(C1 h0 r0)",
+            series,
+        ));
+    }
+    Ok((figs, rows))
+}
