@@ -108,6 +108,13 @@ impl PronyViscoelastic {
     pub fn relaxation_eq_5_1(&self, t: f64) -> f64 {
         self.elastic.c1() * self.prony.value(t)
     }
+
+    /// Small-strain shear relaxation modulus `μ(t) = 2 (C1 + C2) g(t)` in Pa
+    /// (the reading of eq. 5.1's `G0` as a shear modulus, `G0 = 2 C1` for
+    /// neo-Hookean; see docs/theory/material.md, choice 8).
+    pub fn shear_relaxation_modulus(&self, t: f64) -> f64 {
+        2.0 * (self.elastic.c1() + self.elastic.c2()) * self.prony.value(t)
+    }
 }
 
 impl Kernel for PronyViscoelastic {

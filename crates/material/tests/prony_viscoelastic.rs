@@ -127,6 +127,20 @@ fn cell_model_has_five_parameters_and_checks_them() {
     let m = PronyViscoelastic::cell(500.0, 0.4, 0.5, 0.3, 10.0, 0.0).expect("ok");
     assert!((m.relaxation_eq_5_1(0.0) - 500.0).abs() < 1e-12);
     assert!((m.relaxation_eq_5_1(1e4) - 0.3 * 500.0).abs() < 1e-9);
+    assert!((m.shear_relaxation_modulus(0.0) - 1000.0).abs() < 1e-12);
+    // Small-strain check of μ(0) = 2 C1: simple shear σ12/γ at 0⁺.
+    let g = 1e-6;
+    let out = drive(
+        &m,
+        Mode::SimpleShear,
+        &History::Step {
+            value: g,
+            hold: 0.0,
+        },
+        1.0,
+    )
+    .expect("ok");
+    assert!((out[1].cauchy[(0, 1)] / g - m.shear_relaxation_modulus(0.0)).abs() < 1e-6 * 1000.0);
     let e = PronyViscoelastic::cell(500.0, 0.6, 0.5, 0.5, 10.0, 0.0).expect_err("g1+g2 ≥ 1");
     assert!(
         e.to_string().contains("term 2") && e.to_string().contains("g_inf"),
