@@ -57,6 +57,9 @@ fn relaxation_file_decodes_to_readme_values() {
     assert!(rel(mean(&c.segments[2].time), 16.998046875) < TOL);
     assert!(rel(c.segments[3].time[20], 32.009765625) < TOL);
     assert!(rel(ext.force().expect("force")[1], -1.1663463779185065e-07) < TOL);
+    // deflection = F/k, back in metres: volts × sensitivity
+    let d = ext.deflection(&c.calibration).expect("deflection");
+    assert!(rel(d[1], -1.1663463779185065e-07 / 1.0677) < TOL);
     // every channel is present and has the segment's length
     for s in &c.segments {
         assert_eq!(s.channels.len(), 7);
