@@ -5,6 +5,7 @@
 #![no_main]
 
 use std::io::{Cursor, Read, Write};
+use std::sync::OnceLock;
 
 use libfuzzer_sys::fuzz_target;
 use nlvid_afm::{ReadOptions, read_jpk_bytes};
@@ -34,11 +35,17 @@ fuzz_target!(|data: &[u8]| {
     let Some((&sel, content)) = data.split_first() else {
         return;
     };
-    let src = if sel & 0x80 == 0 { SR } else { FD };
-    let mut e: Vec<_> = entries(src)
-        .into_iter()
-        .filter(|(n, _)| !n.ends_with('/'))
-        .collect();
+    static CACHE: OnceLock<[Vec<(String, Vec<u8>)>; 2]> = OnceLock::new();
+    let files = CACHE.get_or_init(|| {
+        let files = |src| {
+            entries(src)
+                .into_iter()
+                .filter(|(n, _)| !n.ends_with('/'))
+                .collect()
+        };
+        [files(SR), files(FD)]
+    });
+    let mut e = files[usize::from(sel >> 7)].clone();
     if e.is_empty() {
         return;
     }
