@@ -108,6 +108,16 @@ impl Segment {
         Ok(&self.channel("vDeflection")?.values)
     }
 
+    /// Cantilever deflection d = F/k, m (positive = bent away from the sample), with k
+    /// from `calibration` (thesis §5.2.2, F = k d).
+    ///
+    /// # Errors
+    /// [`AfmError::MissingChannel`] if there is no `vDeflection`.
+    pub fn deflection(&self, calibration: &Calibration) -> Result<Vec<f64>> {
+        let k = calibration.spring_constant;
+        Ok(self.force()?.iter().map(|f| f / k).collect())
+    }
+
     /// Piezo height, m (channel `height`, open-loop actuator signal).
     ///
     /// # Errors

@@ -255,11 +255,22 @@ fn read_entry(zip: &mut Zip<'_>, name: &str) -> Result<Vec<u8>> {
 
 fn read_props(zip: &mut Zip<'_>, name: &str) -> Result<Props> {
     let bytes = read_entry(zip, name)?;
-    java_properties::read(bytes.as_slice()).map_err(|e| AfmError::Properties {
-        entry: name.into(),
-        line: e.line_number().unwrap_or(0),
-        detail: e.to_string(),
-    })
+    // Decode ISO-8859-1 (the .properties encoding) here and hand java-properties valid
+    // UTF-8: its own decoder sniffs byte-order marks and panics on a UTF-16 BOM followed
+    // by an odd byte count (found by fuzzing, java-properties 2.0.0 / encoding_rs 0.8).
+    // Latin-1 text re-encoded as UTF-8 can hold neither a BOM nor an incomplete sequence.
+    let text: String = bytes.iter().map(|&b| char::from(b)).collect();
+    let mut props = Props::new();
+    java_properties::PropertiesIter::new_with_encoding(text.as_bytes(), encoding_rs::UTF_8)
+        .read_into(|k, v| {
+            props.insert(k, v);
+        })
+        .map_err(|e| AfmError::Properties {
+            entry: name.into(),
+            line: e.line_number().unwrap_or(0),
+            detail: e.to_string(),
+        })?;
+    Ok(props)
 }
 
 /// A header file together with its name, for error messages.

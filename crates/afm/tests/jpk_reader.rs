@@ -57,6 +57,9 @@ fn relaxation_file_decodes_to_readme_values() {
     assert!(rel(mean(&c.segments[2].time), 16.998046875) < TOL);
     assert!(rel(c.segments[3].time[20], 32.009765625) < TOL);
     assert!(rel(ext.force().expect("force")[1], -1.1663463779185065e-07) < TOL);
+    // deflection = F/k, back in metres: volts × sensitivity
+    let d = ext.deflection(&c.calibration).expect("deflection");
+    assert!(rel(d[1], -1.1663463779185065e-07 / 1.0677) < TOL);
     // every channel is present and has the segment's length
     for s in &c.segments {
         assert_eq!(s.channels.len(), 7);
@@ -425,4 +428,27 @@ fn constant_force_pause_is_a_creep_segment() {
     let c = read_jpk_bytes(&b, "x", &ReadOptions::default()).expect("read");
     assert_eq!(c[0].segments[2].kind, SegmentKind::Creep);
     assert_eq!(c[0].segments[0].kind, SegmentKind::Hold);
+}
+
+#[test]
+fn regression_fuzz_utf16_bom_header_does_not_panic() {
+    // Crash found by the replace_entry fuzz target: a header starting with a UTF-16LE
+    // byte-order mark and an odd byte count made java-properties' decoder panic.
+    let bytes = std::fs::read(FD).expect("read");
+    let mut evil = vec![0xff, 0xfe];
+    evil.extend(std::iter::repeat_n(0xff, 15));
+    evil.extend([0x6c, 0x00]);
+    for entry in ["header.properties", "segments/1/segment-header.properties"] {
+        let b = with_entry(&bytes, entry, |_| evil.clone());
+        let r = read_jpk_bytes(&b, "x", &ReadOptions::default());
+        assert!(r.is_err(), "{entry}: {r:?}");
+    }
+    // Latin-1 text still decodes byte for byte: 'µ' (0xB5) in a value survives.
+    let b = with_entry(&bytes, "segments/1/segment-header.properties", |d| {
+        let mut d = d.to_vec();
+        d.extend(b"\nforce-segment-header.name.name=retract\xb5\n");
+        d
+    });
+    let c = read_jpk_bytes(&b, "x", &ReadOptions::default()).expect("latin-1");
+    assert_eq!(c[0].segments[1].name, "retract\u{b5}");
 }
