@@ -83,8 +83,10 @@ pub struct KrigingSettings {
     pub theta: ThetaSearch,
     /// Nugget added to the diagonal of R on top of DACE's (10+n)·eps.
     pub nugget: f64,
-    /// If R is not positive definite anywhere the search went, retry with
-    /// nugget 1e-10, 1e-8, 1e-6, 1e-4 (the value used is reported).
+    /// Treat R as unusable when it is not positive definite or when the
+    /// lower bound (max C_ii / min C_ii)² of its condition number exceeds
+    /// 1e13, and then retry with nugget 1e-10, 1e-8, 1e-6, 1e-4 (the value
+    /// used is reported). `false`: exactly DACE (any positive definite R).
     pub auto_nugget: bool,
     /// Reduce the outputs to the leading principal components holding this
     /// fraction of the variance of the standardised outputs (e.g. 0.99999).
@@ -115,6 +117,10 @@ pub struct Pca {
     pub energy: f64,
     /// Orthonormal basis V_k, m × k, column-major.
     pub basis: Vec<f64>,
+    /// ρᵀρ/n of the kriged scores (k × k): σ² of output j is
+    /// s_j² v_jᵀ Σ v_j (v_j row j of V_k), cross terms included.
+    #[serde(default)]
+    pub residual_cov: Vec<f64>,
 }
 
 /// What the fit did, for reports.
@@ -334,6 +340,7 @@ impl KrigingModel {
                         n_components: k,
                         energy,
                         basis: to_vec(basis.as_ref()),
+                        residual_cov: Vec::new(),
                     }),
                     energy,
                 )
@@ -358,25 +365,32 @@ impl KrigingModel {
         };
         let mut last_theta = Vec::new();
         for &nugget in &nuggets {
-            let prob = Problem::new(
+            let max_cond = if settings.auto_nugget {
+                1e13
+            } else {
+                f64::INFINITY
+            };
+            let mut prob = Problem::new(
                 s.as_ref(),
                 theta_outputs.as_ref(),
                 settings.regression,
                 settings.correlation,
                 nugget,
             );
+            prob.max_cond = max_cond;
             let (res, search) = search_theta(&prob, &settings.theta)?;
             last_theta = res.theta.clone();
             if !res.psi.is_finite() {
                 continue;
             }
-            let prob = Problem::new(
+            let mut prob = Problem::new(
                 s.as_ref(),
                 kriged.as_ref(),
                 settings.regression,
                 settings.correlation,
                 nugget,
             );
+            prob.max_cond = max_cond;
             let Eval::Ok(fac) = prob.eval(&res.theta)? else {
                 continue;
             };
@@ -389,6 +403,11 @@ impl KrigingModel {
                 sigma2,
                 psi,
             } = *fac;
+            let mut pca = pca;
+            if let Some(pc) = pca.as_mut() {
+                let cov = rho.transpose() * &rho;
+                pc.residual_cov = to_vec(cov.as_ref()).iter().map(|v| v / n as f64).collect();
+            }
             let mut gamma = rho;
             solve_upper_triangular_in_place(c.transpose(), gamma.as_mut(), Par::rayon(0));
             let report = FitReport {
@@ -533,14 +552,22 @@ impl KrigingModel {
             None => (0..m)
                 .map(|j| self.sigma2[j] * self.y_std[j].powi(2))
                 .collect(),
-            Some(pca) => (0..m)
-                .map(|j| {
-                    let s: f64 = (0..pca.n_components)
-                        .map(|k| pca.basis[k * m + j].powi(2) * self.sigma2[k])
-                        .sum();
-                    s * self.y_std[j].powi(2)
-                })
-                .collect(),
+            Some(pca) => {
+                let k = pca.n_components;
+                (0..m)
+                    .map(|j| {
+                        let mut s = 0.0;
+                        for a in 0..k {
+                            for b in 0..k {
+                                s += pca.basis[a * m + j]
+                                    * pca.basis[b * m + j]
+                                    * pca.residual_cov[b * k + a];
+                            }
+                        }
+                        s * self.y_std[j].powi(2)
+                    })
+                    .collect()
+            }
         }
     }
 
