@@ -91,6 +91,11 @@ pub struct KrigingSettings {
     /// Reduce the outputs to the leading principal components holding this
     /// fraction of the variance of the standardised outputs (e.g. 0.99999).
     pub pca_energy: Option<f64>,
+    /// Krige ln y instead of y (all outputs must be > 0). Force curves of
+    /// a domain spanning decades of stiffness differ mostly by a factor;
+    /// in ln y that factor is an additive term the regression captures,
+    /// which keeps the *relative* error of soft and stiff cases alike.
+    pub log_outputs: bool,
 }
 
 impl KrigingSettings {
@@ -104,6 +109,7 @@ impl KrigingSettings {
             nugget: 0.0,
             auto_nugget: true,
             pca_energy: None,
+            log_outputs: false,
         }
     }
 }
@@ -181,6 +187,9 @@ pub struct KrigingModel {
     g: Vec<f64>,
     /// Output reduction, if any.
     pub pca: Option<Pca>,
+    /// The model predicts ln y (see [`KrigingSettings::log_outputs`]).
+    #[serde(default)]
+    pub log_outputs: bool,
     /// How the model was obtained.
     pub report: FitReport,
 }
@@ -311,6 +320,21 @@ impl KrigingModel {
             }
         }
 
+        let ylog;
+        let y = if settings.log_outputs {
+            for j in 0..m {
+                if let Some(i) = (0..n).find(|&i| y[(i, j)] <= 0.0) {
+                    return Err(SurrogateError::InvalidInput(format!(
+                        "log outputs need y > 0, but y row {i}, column {j} is {}",
+                        y[(i, j)]
+                    )));
+                }
+            }
+            ylog = Mat::from_fn(n, m, |i, j| y[(i, j)].ln());
+            ylog.as_ref()
+        } else {
+            y
+        };
         let (x_mean, x_std): (Vec<f64>, Vec<f64>) = (0..d)
             .map(|k| mean_std(x.col(k).iter().copied(), n))
             .unzip();
@@ -438,6 +462,7 @@ impl KrigingModel {
                 ft: to_vec(ft.as_ref()),
                 g: to_vec(g.as_ref()),
                 pca,
+                log_outputs: settings.log_outputs,
                 report,
             });
         }
@@ -528,6 +553,9 @@ impl KrigingModel {
         self.scaled(&xn, &mut r, &mut f, &mut z);
         let mut y = vec![0.0; self.n_outputs];
         self.unscale(&z, &mut y, true);
+        if self.log_outputs {
+            y.iter_mut().for_each(|v| *v = v.exp());
+        }
         Ok(y)
     }
 
@@ -668,6 +696,20 @@ impl KrigingModel {
             for k in 0..d {
                 dmse[j * d + k] = 2.0 * pv[j] * half_dphi[k] / self.x_std[k];
             }
+        }
+        if self.log_outputs {
+            // y = exp(ŷ_ln); MSE by the delta method, MSE_y ≈ y²·MSE_ln.
+            let (mut y, mut dy, mut mse, mut dmse) = (y, dy, mse, dmse);
+            for j in 0..m {
+                y[j] = y[j].exp();
+                let y2 = y[j] * y[j];
+                for k in 0..d {
+                    dmse[j * d + k] = 2.0 * y2 * dy[j * d + k] * mse[j] + y2 * dmse[j * d + k];
+                    dy[j * d + k] *= y[j];
+                }
+                mse[j] *= y2;
+            }
+            return Ok(PointPrediction { y, dy, mse, dmse });
         }
         Ok(PointPrediction { y, dy, mse, dmse })
     }

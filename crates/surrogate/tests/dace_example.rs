@@ -357,7 +357,7 @@ fn gradients_match_central_differences() {
         if j == 0 {
             y1[(i, 0)]
         } else {
-            (s[(i, 0)] / 20.0).cos() * s[(i, 1)]
+            (2.0 + (s[(i, 0)] / 20.0).cos()) * s[(i, 1)] + 1.0
         }
     });
     for (reg, corr, theta) in [
@@ -365,15 +365,22 @@ fn gradients_match_central_differences() {
         (Regression::Poly2, Correlation::Expg, vec![1.0, 2.0, 1.7]),
         (Regression::Poly1, Correlation::Spline, vec![0.5, 0.6]),
         (Regression::Poly1, Correlation::Spherical, vec![0.3, 0.4]),
+        (Regression::Poly1, Correlation::Gauss, vec![2.0, 1.0]),
     ] {
         let mut set = KrigingSettings::new(reg, corr, 2);
+        // The last case also checks the ln-output chain rule (data > 0).
+        set.log_outputs = corr == Correlation::Gauss && reg == Regression::Poly1;
         set.theta = ThetaSearch::Fixed(theta);
         let model = KrigingModel::fit(s.as_ref(), y.as_ref(), &set).unwrap();
         for x in [[50.0, 50.0], [23.0, 71.0]] {
             let p = model.predict_full(&x).unwrap();
             for k in 0..2 {
                 // Small step: spherical/spline kernels have kinks in s''.
-                let h = 1e-5;
+                let h = if corr == Correlation::Gauss {
+                    1e-3
+                } else {
+                    1e-5
+                };
                 let (mut xp, mut xm) = (x, x);
                 xp[k] += h;
                 xm[k] -= h;
@@ -391,7 +398,8 @@ fn gradients_match_central_differences() {
                     let fd = (pp.mse[j] - pm.mse[j]) / (2.0 * h);
                     assert!(
                         (fd - p.dmse[j * 2 + k]).abs() < 1e-6 * (1.0 + fd.abs()),
-                        "{corr:?} dmse: {fd} vs {}",
+                        "{reg:?} {corr:?} log {} at {x:?} out {j}: dmse: {fd} vs {}",
+                        set.log_outputs,
                         p.dmse[j * 2 + k]
                     );
                 }
