@@ -67,16 +67,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let xt: Vec<Vec<f64>> = train.iter().map(tr).collect();
         let xm = Mat::from_fn(n, 5, |i, k| xt[i][k]);
         let ym = Mat::from_fn(n, 200, |i, j| yt[i][j]);
-        for (corr, reg) in [
-            (Correlation::Gauss, Regression::Poly1),
-            (Correlation::Expg, Regression::Poly1),
-            (Correlation::Expg, Regression::Poly2),
+        for (corr, reg, log) in [
+            (Correlation::Gauss, Regression::Poly1, false),
+            (Correlation::Gauss, Regression::Poly1, true),
+            (Correlation::Expg, Regression::Poly1, true),
         ] {
             if reg.n_terms(5) >= n {
                 continue;
             }
             let mut s = KrigingSettings::new(reg, corr, 5);
             s.pca_energy = Some(1.0 - 1e-10);
+            s.log_outputs = log;
             let t0 = std::time::Instant::now();
             let km = KrigingModel::fit(xm.as_ref(), ym.as_ref(), &s)?;
             let secs = t0.elapsed().as_secs_f64();
@@ -86,7 +87,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .collect::<Result<_, _>>()?;
             let sm = summarise(&yc, &preds)?;
             println!(
-                "{n}, {}, {}, log-axes, {}, {secs:.2}, {:.4}, {:.4}, {:.4}",
+                "{n}, {}, {}, ln_y={log}, {}, {secs:.2}, {:.4}, {:.4}, {:.4}",
                 corr.name(),
                 reg.name(),
                 km.report.kriged_outputs,

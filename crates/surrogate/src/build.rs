@@ -343,7 +343,7 @@ pub fn export(mm: &MetaModel, dir: &Path) -> Result<()> {
     write_npy(&dir.join("Y.npy"), &mm.y, mm.meta.time.len())?;
     write_npy(
         &dir.join("t.npy"),
-        &[mm.meta.time.clone()],
+        std::slice::from_ref(&mm.meta.time),
         mm.meta.time.len(),
     )?;
     let sidecar = serde_json::json!({

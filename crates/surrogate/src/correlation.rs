@@ -195,19 +195,28 @@ impl Correlation {
     pub fn value_and_grad_theta(self, theta: &[f64], d: &[f64], grad: &mut [f64]) -> f64 {
         let p = self.power(theta);
         let dim = d.len();
-        let mut r = 1.0;
+        let mut small = [[0.0; 4]; 16];
+        let mut big = Vec::new();
+        let ks: &mut [[f64; 4]] = if dim <= 16 {
+            &mut small[..dim]
+        } else {
+            big.resize(dim, [0.0; 4]);
+            &mut big
+        };
+        for k in 0..dim {
+            ks[k] = self.kernel(theta[k], p, d[k]);
+        }
+        let r: f64 = ks.iter().map(|k| k[0]).product();
         let mut dp = 0.0;
         for k in 0..dim {
-            let kk = self.kernel(theta[k], p, d[k]);
-            r *= kk[0];
-            let mut others = 1.0;
-            for l in 0..dim {
-                if l != k {
-                    others *= self.kernel(theta[l], p, d[l])[0];
-                }
-            }
-            grad[k] = others * kk[2];
-            dp += others * kk[3];
+            let others: f64 = ks
+                .iter()
+                .enumerate()
+                .filter(|(l, _)| *l != k)
+                .map(|(_, kl)| kl[0])
+                .product();
+            grad[k] = others * ks[k][2];
+            dp += others * ks[k][3];
         }
         if self == Correlation::Expg {
             grad[dim] = dp;

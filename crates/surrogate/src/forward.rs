@@ -39,6 +39,8 @@ impl std::fmt::Display for RunFailure {
     }
 }
 
+impl std::error::Error for RunFailure {}
+
 /// A forward model: one run maps parameters to the response on
 /// [`ForwardModel::time_grid`].
 pub trait ForwardModel: Sync {

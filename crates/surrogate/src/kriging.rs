@@ -83,12 +83,19 @@ pub struct KrigingSettings {
     pub theta: ThetaSearch,
     /// Nugget added to the diagonal of R on top of DACE's (10+n)·eps.
     pub nugget: f64,
-    /// If R is not positive definite anywhere the search went, retry with
-    /// nugget 1e-10, 1e-8, 1e-6, 1e-4 (the value used is reported).
+    /// Treat R as unusable when it is not positive definite or when the
+    /// lower bound (max C_ii / min C_ii)² of its condition number exceeds
+    /// 1e13, and then retry with nugget 1e-10, 1e-8, 1e-6, 1e-4 (the value
+    /// used is reported). `false`: exactly DACE (any positive definite R).
     pub auto_nugget: bool,
     /// Reduce the outputs to the leading principal components holding this
     /// fraction of the variance of the standardised outputs (e.g. 0.99999).
     pub pca_energy: Option<f64>,
+    /// Krige ln y instead of y (all outputs must be > 0). Force curves of
+    /// a domain spanning decades of stiffness differ mostly by a factor;
+    /// in ln y that factor is an additive term the regression captures,
+    /// which keeps the *relative* error of soft and stiff cases alike.
+    pub log_outputs: bool,
 }
 
 impl KrigingSettings {
@@ -102,6 +109,7 @@ impl KrigingSettings {
             nugget: 0.0,
             auto_nugget: true,
             pca_energy: None,
+            log_outputs: false,
         }
     }
 }
@@ -115,6 +123,10 @@ pub struct Pca {
     pub energy: f64,
     /// Orthonormal basis V_k, m × k, column-major.
     pub basis: Vec<f64>,
+    /// ρᵀρ/n of the kriged scores (k × k): σ² of output j is
+    /// s_j² v_jᵀ Σ v_j (v_j row j of V_k), cross terms included.
+    #[serde(default)]
+    pub residual_cov: Vec<f64>,
 }
 
 /// What the fit did, for reports.
@@ -175,6 +187,9 @@ pub struct KrigingModel {
     g: Vec<f64>,
     /// Output reduction, if any.
     pub pca: Option<Pca>,
+    /// The model predicts ln y (see [`KrigingSettings::log_outputs`]).
+    #[serde(default)]
+    pub log_outputs: bool,
     /// How the model was obtained.
     pub report: FitReport,
 }
@@ -305,6 +320,21 @@ impl KrigingModel {
             }
         }
 
+        let ylog;
+        let y = if settings.log_outputs {
+            for j in 0..m {
+                if let Some(i) = (0..n).find(|&i| y[(i, j)] <= 0.0) {
+                    return Err(SurrogateError::InvalidInput(format!(
+                        "log outputs need y > 0, but y row {i}, column {j} is {}",
+                        y[(i, j)]
+                    )));
+                }
+            }
+            ylog = Mat::from_fn(n, m, |i, j| y[(i, j)].ln());
+            ylog.as_ref()
+        } else {
+            y
+        };
         let (x_mean, x_std): (Vec<f64>, Vec<f64>) = (0..d)
             .map(|k| mean_std(x.col(k).iter().copied(), n))
             .unzip();
@@ -334,6 +364,7 @@ impl KrigingModel {
                         n_components: k,
                         energy,
                         basis: to_vec(basis.as_ref()),
+                        residual_cov: Vec::new(),
                     }),
                     energy,
                 )
@@ -358,25 +389,32 @@ impl KrigingModel {
         };
         let mut last_theta = Vec::new();
         for &nugget in &nuggets {
-            let prob = Problem::new(
+            let max_cond = if settings.auto_nugget {
+                1e13
+            } else {
+                f64::INFINITY
+            };
+            let mut prob = Problem::new(
                 s.as_ref(),
                 theta_outputs.as_ref(),
                 settings.regression,
                 settings.correlation,
                 nugget,
             );
+            prob.max_cond = max_cond;
             let (res, search) = search_theta(&prob, &settings.theta)?;
             last_theta = res.theta.clone();
             if !res.psi.is_finite() {
                 continue;
             }
-            let prob = Problem::new(
+            let mut prob = Problem::new(
                 s.as_ref(),
                 kriged.as_ref(),
                 settings.regression,
                 settings.correlation,
                 nugget,
             );
+            prob.max_cond = max_cond;
             let Eval::Ok(fac) = prob.eval(&res.theta)? else {
                 continue;
             };
@@ -389,6 +427,11 @@ impl KrigingModel {
                 sigma2,
                 psi,
             } = *fac;
+            let mut pca = pca;
+            if let Some(pc) = pca.as_mut() {
+                let cov = rho.transpose() * &rho;
+                pc.residual_cov = to_vec(cov.as_ref()).iter().map(|v| v / n as f64).collect();
+            }
             let mut gamma = rho;
             solve_upper_triangular_in_place(c.transpose(), gamma.as_mut(), Par::rayon(0));
             let report = FitReport {
@@ -419,6 +462,7 @@ impl KrigingModel {
                 ft: to_vec(ft.as_ref()),
                 g: to_vec(g.as_ref()),
                 pca,
+                log_outputs: settings.log_outputs,
                 report,
             });
         }
@@ -509,6 +553,9 @@ impl KrigingModel {
         self.scaled(&xn, &mut r, &mut f, &mut z);
         let mut y = vec![0.0; self.n_outputs];
         self.unscale(&z, &mut y, true);
+        if self.log_outputs {
+            y.iter_mut().for_each(|v| *v = v.exp());
+        }
         Ok(y)
     }
 
@@ -533,14 +580,22 @@ impl KrigingModel {
             None => (0..m)
                 .map(|j| self.sigma2[j] * self.y_std[j].powi(2))
                 .collect(),
-            Some(pca) => (0..m)
-                .map(|j| {
-                    let s: f64 = (0..pca.n_components)
-                        .map(|k| pca.basis[k * m + j].powi(2) * self.sigma2[k])
-                        .sum();
-                    s * self.y_std[j].powi(2)
-                })
-                .collect(),
+            Some(pca) => {
+                let k = pca.n_components;
+                (0..m)
+                    .map(|j| {
+                        let mut s = 0.0;
+                        for a in 0..k {
+                            for b in 0..k {
+                                s += pca.basis[a * m + j]
+                                    * pca.basis[b * m + j]
+                                    * pca.residual_cov[b * k + a];
+                            }
+                        }
+                        s * self.y_std[j].powi(2)
+                    })
+                    .collect()
+            }
         }
     }
 
@@ -641,6 +696,20 @@ impl KrigingModel {
             for k in 0..d {
                 dmse[j * d + k] = 2.0 * pv[j] * half_dphi[k] / self.x_std[k];
             }
+        }
+        if self.log_outputs {
+            // y = exp(ŷ_ln); MSE by the delta method, MSE_y ≈ y²·MSE_ln.
+            let (mut y, mut dy, mut mse, mut dmse) = (y, dy, mse, dmse);
+            for j in 0..m {
+                y[j] = y[j].exp();
+                let y2 = y[j] * y[j];
+                for k in 0..d {
+                    dmse[j * d + k] = 2.0 * y2 * dy[j * d + k] * mse[j] + y2 * dmse[j * d + k];
+                    dy[j * d + k] *= y[j];
+                }
+                mse[j] *= y2;
+            }
+            return Ok(PointPrediction { y, dy, mse, dmse });
         }
         Ok(PointPrediction { y, dy, mse, dmse })
     }

@@ -31,6 +31,8 @@
 //! ```
 
 #![warn(missing_docs)]
+// Index loops mirror the matrix formulas they implement.
+#![allow(clippy::needless_range_loop)]
 
 mod boxmin;
 mod build;

@@ -29,6 +29,9 @@ pub(crate) struct Problem<'a> {
     pub corr: Correlation,
     /// Added to the unit diagonal of R (DACE's (10+n)·eps plus any nugget).
     pub diag_add: f64,
+    /// Treat θ as infeasible when the lower bound (max C_ii / min C_ii)² of
+    /// cond(R) exceeds this (∞: DACE behaviour, any positive definite R).
+    pub max_cond: f64,
     pairs: Vec<(usize, usize)>,
     /// Pair differences, row-major npairs × d.
     diffs: Vec<f64>,
@@ -99,6 +102,7 @@ impl<'a> Problem<'a> {
             f,
             corr,
             diag_add,
+            max_cond: f64::INFINITY,
             pairs,
             diffs,
             par: Par::rayon(0),
@@ -134,6 +138,13 @@ impl<'a> Problem<'a> {
         };
         let c = llt.L().to_owned();
         drop(r);
+        if self.max_cond.is_finite() {
+            let d = (0..n).map(|i| c[(i, i)]);
+            let (lo, hi) = d.fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
+            if (hi / lo).powi(2) > self.max_cond {
+                return Ok(Eval::Infeasible);
+            }
+        }
         let mut ft = self.f.clone();
         solve_lower_triangular_in_place(c.as_ref(), ft.as_mut(), self.par);
         let g = r_factor(ft.as_ref());
@@ -251,4 +262,98 @@ pub(crate) fn rcond_upper(g: MatRef<'_, f64>) -> f64 {
     };
     let r = 1.0 / (norm1(g) * norm1(inv.as_ref()));
     if r.is_finite() { r } else { 0.0 }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn problem_data() -> (Mat<f64>, Mat<f64>) {
+        // Deterministic scattered sites in [−1.5, 1.5]² and 3 smooth outputs.
+        let n = 30;
+        let s = Mat::from_fn(n, 2, |i, k| {
+            let v = ((i * (7 + 5 * k) + 3 * k) % n) as f64 / n as f64;
+            3.0 * (v + 0.013 * i as f64 % 0.03) - 1.5
+        });
+        let y = Mat::from_fn(n, 3, |i, j| {
+            let (a, b) = (s[(i, 0)], s[(i, 1)]);
+            match j {
+                0 => (2.0 * a).sin() + b * b,
+                1 => a * b - 0.3 * b,
+                _ => (a + b).cos(),
+            }
+        });
+        (s, y)
+    }
+
+    #[test]
+    fn log_likelihood_gradient_matches_central_differences() {
+        let (s, y) = problem_data();
+        for (corr, theta) in [
+            (Correlation::Gauss, vec![0.7, 1.9]),
+            (Correlation::Expg, vec![0.9, 1.4, 1.7]),
+            (Correlation::Exp, vec![0.5, 0.8]),
+        ] {
+            let prob = Problem::new(s.as_ref(), y.as_ref(), Regression::Poly1, corr, 1e-10);
+            let Eval::Ok(fac) = prob.eval(&theta).unwrap() else {
+                panic!("infeasible")
+            };
+            let g = prob.grad_log_psi(&theta, &fac);
+            for k in 0..theta.len() {
+                let h: f64 = 1e-5;
+                let (mut tp, mut tm) = (theta.clone(), theta.clone());
+                tp[k] *= h.exp();
+                tm[k] *= (-h).exp();
+                let f = |t: &[f64]| match prob.eval(t).unwrap() {
+                    Eval::Ok(f) => f.psi.ln(),
+                    Eval::Infeasible => f64::NAN,
+                };
+                let fd = (f(&tp) - f(&tm)) / (2.0 * h);
+                assert!(
+                    (fd - g[k]).abs() < 1e-6 * (1.0 + fd.abs()),
+                    "{corr:?} θ{k}: fd {fd} vs {}",
+                    g[k]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn psi_is_invariant_under_an_orthogonal_rotation_of_the_outputs() {
+        let (s, y) = problem_data();
+        // Rotation by a Householder reflection H = I − 2vvᵀ/vᵀv.
+        let v = [0.3, -1.1, 0.7];
+        let vv: f64 = v.iter().map(|a| a * a).sum();
+        let h = Mat::from_fn(
+            3,
+            3,
+            |i, j| if i == j { 1.0 } else { 0.0 } - 2.0 * v[i] * v[j] / vv,
+        );
+        let yr = &y * &h;
+        let theta = [1.1, 0.6];
+        let p1 = Problem::new(
+            s.as_ref(),
+            y.as_ref(),
+            Regression::Poly1,
+            Correlation::Gauss,
+            0.0,
+        );
+        let p2 = Problem::new(
+            s.as_ref(),
+            yr.as_ref(),
+            Regression::Poly1,
+            Correlation::Gauss,
+            0.0,
+        );
+        let (Eval::Ok(a), Eval::Ok(b)) = (p1.eval(&theta).unwrap(), p2.eval(&theta).unwrap())
+        else {
+            panic!("infeasible")
+        };
+        assert!(
+            (a.psi / b.psi - 1.0).abs() < 1e-12,
+            "{} vs {}",
+            a.psi,
+            b.psi
+        );
+    }
 }

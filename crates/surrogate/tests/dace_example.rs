@@ -3,6 +3,8 @@
 //! published numbers), and an independent implementation of the DACE
 //! formulas written here with nalgebra (explicit inverses, no Cholesky/QR).
 
+#![allow(clippy::unwrap_used, clippy::type_complexity)]
+
 use nalgebra::{DMatrix, DVector};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
@@ -355,7 +357,7 @@ fn gradients_match_central_differences() {
         if j == 0 {
             y1[(i, 0)]
         } else {
-            (s[(i, 0)] / 20.0).cos() * s[(i, 1)]
+            (2.0 + (s[(i, 0)] / 20.0).cos()) * s[(i, 1)] + 1.0
         }
     });
     for (reg, corr, theta) in [
@@ -363,15 +365,22 @@ fn gradients_match_central_differences() {
         (Regression::Poly2, Correlation::Expg, vec![1.0, 2.0, 1.7]),
         (Regression::Poly1, Correlation::Spline, vec![0.5, 0.6]),
         (Regression::Poly1, Correlation::Spherical, vec![0.3, 0.4]),
+        (Regression::Poly1, Correlation::Gauss, vec![2.0, 1.0]),
     ] {
         let mut set = KrigingSettings::new(reg, corr, 2);
+        // The last case also checks the ln-output chain rule (data > 0).
+        set.log_outputs = corr == Correlation::Gauss && reg == Regression::Poly1;
         set.theta = ThetaSearch::Fixed(theta);
         let model = KrigingModel::fit(s.as_ref(), y.as_ref(), &set).unwrap();
         for x in [[50.0, 50.0], [23.0, 71.0]] {
             let p = model.predict_full(&x).unwrap();
             for k in 0..2 {
                 // Small step: spherical/spline kernels have kinks in s''.
-                let h = 1e-5;
+                let h = if corr == Correlation::Gauss {
+                    1e-3
+                } else {
+                    1e-5
+                };
                 let (mut xp, mut xm) = (x, x);
                 xp[k] += h;
                 xm[k] -= h;
@@ -389,11 +398,88 @@ fn gradients_match_central_differences() {
                     let fd = (pp.mse[j] - pm.mse[j]) / (2.0 * h);
                     assert!(
                         (fd - p.dmse[j * 2 + k]).abs() < 1e-6 * (1.0 + fd.abs()),
-                        "{corr:?} dmse: {fd} vs {}",
+                        "{reg:?} {corr:?} log {} at {x:?} out {j}: dmse: {fd} vs {}",
+                        set.log_outputs,
                         p.dmse[j * 2 + k]
                     );
                 }
             }
         }
     }
+}
+
+#[test]
+fn output_reduction_keeps_predictions_and_reports_components() {
+    let (s, y1) = data();
+    let n = s.nrows();
+    // 40 outputs spanned by 3 functions: 3 components hold all variance.
+    let basis = |i: usize| [y1[(i, 0)], (s[(i, 0)] / 25.0).sin() * 10.0, s[(i, 1)] * 0.1];
+    let y = Mat::from_fn(n, 40, |i, j| {
+        let b = basis(i);
+        b[0] * (1.0 + j as f64 * 0.01) + b[1] * ((j as f64) * 0.3).cos() + b[2] * j as f64
+    });
+    let mut full = KrigingSettings::new(Regression::Poly1, Correlation::Gauss, 2);
+    full.theta = ThetaSearch::Fixed(vec![3.0, 2.0]);
+    let mut red = full.clone();
+    red.pca_energy = Some(1.0 - 1e-12);
+    let a = KrigingModel::fit(s.as_ref(), y.as_ref(), &full).unwrap();
+    let b = KrigingModel::fit(s.as_ref(), y.as_ref(), &red).unwrap();
+    assert_eq!(b.report.kriged_outputs, 3);
+    assert_eq!(b.pca.as_ref().unwrap().n_components, 3);
+    // Same θ, same ψ (rotation invariance), same predictions and MSE.
+    assert!(
+        (a.report.psi / b.report.psi - 1.0).abs() < 1e-9,
+        "{} vs {}",
+        a.report.psi,
+        b.report.psi
+    );
+    for x in [[50.0, 50.0], [10.0, 80.0]] {
+        let (pa, pb) = (a.predict_full(&x).unwrap(), b.predict_full(&x).unwrap());
+        for j in 0..40 {
+            assert!((pa.y[j] - pb.y[j]).abs() < 1e-9 * (1.0 + pa.y[j].abs()));
+            assert!((pa.mse[j] - pb.mse[j]).abs() < 1e-9 * (1.0 + pa.mse[j].abs()));
+        }
+    }
+}
+
+#[test]
+fn numerically_singular_correlation_needs_a_nugget_and_it_is_reported() {
+    // 200 sites on a line, very wide Gaussian correlation: R is singular to
+    // working precision (eigenvalues decay faster than (10+n)·eps).
+    let n = 200;
+    let s2 = Mat::from_fn(n, 1, |i, _| i as f64 / n as f64);
+    let y2 = Mat::from_fn(n, 1, |i, _| (6.0 * i as f64 / n as f64).sin());
+    let mut set = KrigingSettings::new(Regression::Poly0, Correlation::Gauss, 1);
+    set.theta = ThetaSearch::Fixed(vec![1e-2]);
+    // DACE mode accepts R as long as its Cholesky factorisation runs.
+    set.auto_nugget = false;
+    let dace = KrigingModel::fit(s2.as_ref(), y2.as_ref(), &set).unwrap();
+    assert_eq!(dace.report.nugget, 0.0);
+    // Default: the ill-conditioning is detected and a nugget added.
+    set.auto_nugget = true;
+    let m = KrigingModel::fit(s2.as_ref(), y2.as_ref(), &set).unwrap();
+    assert!(m.report.nugget > 0.0);
+    // With the nugget the model smooths instead of interpolating; it must
+    // still follow the data to 1 % of their range (2).
+    let worst = (0..n)
+        .map(|i| (m.predict(&[s2[(i, 0)]]).unwrap()[0] - y2[(i, 0)]).abs())
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 0.02,
+        "nugget {:e}: worst site error {worst}",
+        m.report.nugget
+    );
+}
+
+#[test]
+fn model_survives_a_json_round_trip() {
+    let (s, y) = data();
+    let mut set = KrigingSettings::new(Regression::Poly1, Correlation::Expg, 2);
+    set.theta = ThetaSearch::Fixed(vec![1.0, 2.0, 1.5]);
+    let m = KrigingModel::fit(s.as_ref(), y.as_ref(), &set).unwrap();
+    let back: KrigingModel = serde_json::from_str(&serde_json::to_string(&m).unwrap()).unwrap();
+    assert_eq!(
+        m.predict(&[33.0, 44.0]).unwrap(),
+        back.predict(&[33.0, 44.0]).unwrap()
+    );
 }
