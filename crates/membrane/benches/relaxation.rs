@@ -7,7 +7,13 @@ use nlvid_membrane::{ControlKind, Geometry, Loading, PipkinRogersParams, simulat
 use nlvid_protocol::{Quantity, programs};
 
 fn fig_2_6(c: &mut Criterion) {
-    let p = PipkinRogersParams { g1: 0.2, g2: 0.3, c: 0.5, gamma0: 0.1, ..Default::default() };
+    let p = PipkinRogersParams {
+        g1: 0.2,
+        g2: 0.3,
+        c: 0.5,
+        gamma0: 0.1,
+        ..Default::default()
+    };
     let mut g = c.benchmark_group("membrane");
     g.sample_size(10);
     for d in [0.53, 0.78] {

@@ -47,7 +47,9 @@ mod solver;
 pub mod thesis;
 
 pub use error::{MembraneError, Result};
-pub use models::{MooneyRivlinMembrane, PipkinRogersMembrane, PipkinRogersParams, PipkinRogersState};
+pub use models::{
+    MooneyRivlinMembrane, PipkinRogersMembrane, PipkinRogersParams, PipkinRogersState,
+};
 pub use shooting::NodeValue;
 pub use simulate::{ControlKind, Loading, MembraneRun, StepRecord, simulate, simulate_with};
 pub use solver::{Control, Geometry, MembraneSolver, NewtonSettings, Solution};

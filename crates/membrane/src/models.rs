@@ -52,10 +52,7 @@ impl MooneyRivlinMembrane {
                 reason: "the Mooney–Rivlin parameter γ = C2/C1 must be ≥ 0".into(),
             });
         }
-        Ok(Self {
-            c1,
-            c2: gamma * c1,
-        })
+        Ok(Self { c1, c2: gamma * c1 })
     }
 }
 
@@ -280,8 +277,10 @@ impl MembraneMaterial for PipkinRogersMembrane {
         let w2 = g20 + 0.5 * dt * k2_0;
         let mut s = [0.0; 3];
         for i in 0..3 {
-            trial.i1[i] = e1 * state_n.i1[i] + 0.5 * dt * (k1_0 * e1 * state_n.a_prev[i] + k1_0 * a[i]);
-            trial.i2[i] = e2 * state_n.i2[i] + 0.5 * dt * (k2_0 * e2 * state_n.b_prev[i] + k2_0 * b[i]);
+            trial.i1[i] =
+                e1 * state_n.i1[i] + 0.5 * dt * (k1_0 * e1 * state_n.a_prev[i] + k1_0 * a[i]);
+            trial.i2[i] =
+                e2 * state_n.i2[i] + 0.5 * dt * (k2_0 * e2 * state_n.b_prev[i] + k2_0 * b[i]);
             trial.a_prev[i] = a[i];
             trial.b_prev[i] = b[i];
             s[i] = g10 * a[i] + g20 * b[i] + trial.i1[i] + trial.i2[i];
@@ -322,7 +321,12 @@ mod tests {
         ]
     }
 
-    fn fd_tangent<M: MembraneMaterial>(m: &M, st: &M::State, l: [f64; 2], dt: f64) -> [[f64; 2]; 2] {
+    fn fd_tangent<M: MembraneMaterial>(
+        m: &M,
+        st: &M::State,
+        l: [f64; 2],
+        dt: f64,
+    ) -> [[f64; 2]; 2] {
         let h = 1e-6;
         let mut t = [[0.0; 2]; 2];
         let mut tr = m.initial_state();
@@ -357,7 +361,12 @@ mod tests {
     #[test]
     fn pipkin_rogers_instantaneous_response_is_mooney_rivlin_for_any_phi() {
         for a in [0.0, 0.3] {
-            let p = PipkinRogersParams { a, gamma0: 0.15, c1: 2.0, ..Default::default() };
+            let p = PipkinRogersParams {
+                a,
+                gamma0: 0.15,
+                c1: 2.0,
+                ..Default::default()
+            };
             let m = p.check().unwrap();
             let mut tr = m.initial_state();
             for l in [[1.1, 1.3], [1.7, 1.05]] {
@@ -371,7 +380,14 @@ mod tests {
 
     #[test]
     fn pipkin_rogers_tangent_matches_finite_differences_with_history() {
-        let p = PipkinRogersParams { a: 0.2, g1: 0.3, g2: 0.6, c: 2.0, gamma0: 0.2, ..Default::default() };
+        let p = PipkinRogersParams {
+            a: 0.2,
+            g1: 0.3,
+            g2: 0.6,
+            c: 2.0,
+            gamma0: 0.2,
+            ..Default::default()
+        };
         let m = p.check().unwrap();
         let mut s0 = m.initial_state();
         let mut s1 = m.initial_state();
@@ -393,7 +409,12 @@ mod tests {
     fn pipkin_rogers_step_relaxation_follows_trapezoidal_g() {
         // QLV (g1 = g2, c = 1): under a held stretch σ(t)/σ(0) = G_trap(t)/G(0), where
         // G_trap is the trapezoidal integral of the kernel written here separately.
-        let p = PipkinRogersParams { g1: 0.2, g2: 0.2, c: 1.0, ..Default::default() };
+        let p = PipkinRogersParams {
+            g1: 0.2,
+            g2: 0.2,
+            c: 1.0,
+            ..Default::default()
+        };
         let m = p.check().unwrap();
         let l = [1.3, 1.2];
         let mut st = m.initial_state();

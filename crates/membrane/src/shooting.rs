@@ -31,10 +31,7 @@ pub(crate) enum ShotFail {
     /// λ1 could not be recovered from T1, or values became non-finite.
     Breakdown { psi: f64, what: &'static str },
     /// The material point update failed.
-    Material {
-        psi: f64,
-        err: String,
-    },
+    Material { psi: f64, err: String },
 }
 
 /// Values at a material node of a converged shot.
@@ -150,7 +147,11 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
                 value: t1,
             });
         }
-        let mut l1 = if self.lam1_guess > 0.0 { self.lam1_guess } else { l2 };
+        let mut l1 = if self.lam1_guess > 0.0 {
+            self.lam1_guess
+        } else {
+            l2
+        };
         for _ in 0..60 {
             let (s, ds1) = self.stress(psi, [l1, l2])?;
             let f = s[0] / (l1 * l2) - t1;
@@ -211,7 +212,14 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
         Ok([dt1, dl2, dth, deta, dv])
     }
 
-    fn rk4(&mut self, a: f64, b: f64, y: &mut [f64; Y], p: f64, contact: bool) -> Result<(), ShotFail> {
+    fn rk4(
+        &mut self,
+        a: f64,
+        b: f64,
+        y: &mut [f64; Y],
+        p: f64,
+        contact: bool,
+    ) -> Result<(), ShotFail> {
         let h = b - a;
         if h <= 0.0 {
             return Ok(());

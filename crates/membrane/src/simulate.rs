@@ -5,7 +5,9 @@ use nlvid_material::MembraneMaterial;
 use nlvid_protocol::Program;
 use serde::Serialize;
 
-use crate::{Control, Geometry, MembraneError, MembraneSolver, PipkinRogersParams, Result, Solution};
+use crate::{
+    Control, Geometry, MembraneError, MembraneSolver, PipkinRogersParams, Result, Solution,
+};
 
 /// Which quantity the loading program prescribes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
@@ -59,7 +61,10 @@ impl Loading {
                 return Err(MembraneError::Input {
                     name: "times",
                     value: w[1],
-                    reason: format!("solve times must be finite and increasing (index {})", i + 1),
+                    reason: format!(
+                        "solve times must be finite and increasing (index {})",
+                        i + 1
+                    ),
                 });
             }
         }
@@ -159,7 +164,11 @@ impl MembraneRun {
 /// # Errors
 /// [`MembraneError::Input`] for bad parameters; the solver's errors
 /// (wrinkling, non-convergence) with the time at which they happened.
-pub fn simulate(params: &PipkinRogersParams, geometry: &Geometry, loading: &Loading) -> Result<MembraneRun> {
+pub fn simulate(
+    params: &PipkinRogersParams,
+    geometry: &Geometry,
+    loading: &Loading,
+) -> Result<MembraneRun> {
     let m = params.check()?;
     simulate_with(m, params.c1, geometry, loading)
 }

@@ -7,7 +7,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 use nlvid_material::MembraneMaterial;
 use serde::{Deserialize, Serialize};
 
-use crate::shooting::{NodeValue, ShotEnd, ShotFail, Shooter};
+use crate::shooting::{NodeValue, Shooter, ShotEnd, ShotFail};
 use crate::{MembraneError, Result};
 
 /// Geometry and discretisation of the membrane (dimensionless, eq. 2.47).
@@ -21,7 +21,10 @@ pub struct Geometry {
 
 impl Default for Geometry {
     fn default() -> Self {
-        Self { rs: 1.03, nodes: 64 }
+        Self {
+            rs: 1.03,
+            nodes: 64,
+        }
     }
 }
 
@@ -332,7 +335,9 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
             };
             x
         };
-        let (mut r, _) = self.residual(&mut sh, x, control).map_err(NewtonFail::Shot)?;
+        let (mut r, _) = self
+            .residual(&mut sh, x, control)
+            .map_err(NewtonFail::Shot)?;
         let mut jac = self.jac;
         let mut fresh = false;
         let mut last_shot = None;
@@ -358,7 +363,9 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                         Ok(v) => v,
                         Err(_) => {
                             xp[k] = x[k] - h;
-                            let (rm, _) = self.residual(&mut sh, xp, control).map_err(NewtonFail::Shot)?;
+                            let (rm, _) = self
+                                .residual(&mut sh, xp, control)
+                                .map_err(NewtonFail::Shot)?;
                             for i in 0..3 {
                                 j[i][k] = (r[i] - rm[i]) / h;
                             }
@@ -378,13 +385,21 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
             } else {
                 // 2×2 system in (λ0, p) from the slope and volume residuals.
                 solve3(
-                    [[j[0][0], 0.0, j[0][2]], [0.0, 1.0, 0.0], [j[1][0], 0.0, j[1][2]]],
+                    [
+                        [j[0][0], 0.0, j[0][2]],
+                        [0.0, 1.0, 0.0],
+                        [j[1][0], 0.0, j[1][2]],
+                    ],
                     [-r[0], 0.0, -r[1]],
                 )
             };
             let Some(dx) = dx else {
                 if fresh {
-                    return Err(NewtonFail::Stalled { residual: r, iterations: it, last_shot });
+                    return Err(NewtonFail::Stalled {
+                        residual: r,
+                        iterations: it,
+                        last_shot,
+                    });
                 }
                 jac = None;
                 continue;
@@ -392,7 +407,11 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
             let mut alpha = 1.0;
             let mut accepted = false;
             while alpha >= 1.0 / 1024.0 {
-                let xt = clamp([x[0] + alpha * dx[0], x[1] + alpha * dx[1], x[2] + alpha * dx[2]]);
+                let xt = clamp([
+                    x[0] + alpha * dx[0],
+                    x[1] + alpha * dx[1],
+                    x[2] + alpha * dx[2],
+                ]);
                 match self.residual(&mut sh, xt, control) {
                     Ok((rt, _)) if norm(&rt) < (1.0 - 1e-4 * alpha) * norm(&r) => {
                         // A reused Jacobian that contracts slowly is refreshed next time;
@@ -429,7 +448,11 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
             }
             if !accepted {
                 if fresh {
-                    return Err(NewtonFail::Stalled { residual: r, iterations: it + 1, last_shot });
+                    return Err(NewtonFail::Stalled {
+                        residual: r,
+                        iterations: it + 1,
+                        last_shot,
+                    });
                 }
                 jac = None;
             }
@@ -581,7 +604,11 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
     fn detached_solution(&mut self, dt: f64, d: f64) -> Option<[f64; 3]> {
         let saved = (self.x, self.jac);
         let free = self.sweep_psi(dt, 0.0, |_, _| false).ok().map(|(_, x)| x);
-        let free = free.and_then(|x| self.newton(dt, Control::Displacement(0.0), x).ok().map(|(x, _)| x));
+        let free = free.and_then(|x| {
+            self.newton(dt, Control::Displacement(0.0), x)
+                .ok()
+                .map(|(x, _)| x)
+        });
         self.x = saved.0;
         self.jac = None;
         let x = free?;
@@ -606,7 +633,11 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         // ψc (and the shot is very sensitive): go straight to the ψc sweep.
         let first_contact = self.x[1] <= 0.0 && control.touches();
         let first = if first_contact && !matches!(control, Control::ContactAngle(_)) {
-            NewtonFail::Stalled { residual: [f64::NAN; 3], iterations: 0, last_shot: None }
+            NewtonFail::Stalled {
+                residual: [f64::NAN; 3],
+                iterations: 0,
+                last_shot: None,
+            }
         } else {
             match self.newton(dt, control, self.guess_for(control)) {
                 Ok((x, it)) => return Ok((x, it, control)),
@@ -628,7 +659,8 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
             let q0 = if self.x[1] > 0.0 {
                 let (_, x0) = self.sweep_psi(dt, self.x[1], |_, _| false)?;
                 self.x = x0;
-                let mut sh = Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale);
+                let mut sh =
+                    Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale);
                 match sh.shoot(x0[0], x0[1], x0[2], None) {
                     Ok(end) => self.control_value(control, &x0, &end),
                     Err(_) => 0.0,
@@ -649,7 +681,11 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                 (q >= target) == up
             })?;
             let (qa, qb) = qs;
-            let f = if (qb - qa).abs() > 1e-300 { ((target - qa) / (qb - qa)).clamp(0.0, 1.0) } else { 1.0 };
+            let f = if (qb - qa).abs() > 1e-300 {
+                ((target - qa) / (qb - qa)).clamp(0.0, 1.0)
+            } else {
+                1.0
+            };
             let mut guess = [0.0; 3];
             for k in 0..3 {
                 guess[k] = prev[k] + f * (cur[k] - prev[k]);
@@ -661,14 +697,18 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                 // singular: solve q(ψc) = target by the Illinois method with the
                 // well-conditioned fixed-ψc problem inside.
                 Err(e) => {
-                    let mut eval = |s: &mut Self, psi: f64, g: [f64; 3]| -> Option<([f64; 3], f64)> {
-                        s.jac = None;
-                        let (x, _) = s.newton(dt, Control::ContactAngle(psi), g).ok()?;
-                        let mut sh = Shooter::new(&s.material, &s.states, s.uniform, dt, s.scale);
-                        let end = sh.shoot(x[0], x[1], x[2], None).ok()?;
-                        Some((x, s.control_value(control, &x, &end) - target))
-                    };
-                    let (Some((mut xa, mut fa)), Some((mut xb, mut fb))) = (eval(self, prev[1], prev), eval(self, cur[1], cur)) else {
+                    let eval =
+                        |s: &mut Self, psi: f64, g: [f64; 3]| -> Option<([f64; 3], f64)> {
+                            s.jac = None;
+                            let (x, _) = s.newton(dt, Control::ContactAngle(psi), g).ok()?;
+                            let mut sh =
+                                Shooter::new(&s.material, &s.states, s.uniform, dt, s.scale);
+                            let end = sh.shoot(x[0], x[1], x[2], None).ok()?;
+                            Some((x, s.control_value(control, &x, &end) - target))
+                        };
+                    let (Some((mut xa, mut fa)), Some((mut xb, mut fb))) =
+                        (eval(self, prev[1], prev), eval(self, cur[1], cur))
+                    else {
                         return Err(e);
                     };
                     if std::env::var("NLVID_DEBUG").is_ok() {
@@ -683,7 +723,9 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                         let psi = (xa[1] * fb - xb[1] * fa) / (fb - fa);
                         let w = (psi - xa[1]) / (xb[1] - xa[1]);
                         let g = [0, 1, 2].map(|k| xa[k] + w * (xb[k] - xa[k]));
-                        let Some((x, fx)) = eval(self, psi, g) else { return Err(e) };
+                        let Some((x, fx)) = eval(self, psi, g) else {
+                            return Err(e);
+                        };
                         if std::env::var("NLVID_DEBUG").is_ok() {
                             eprintln!("illinois {it}: psi {psi} f {fx}");
                         }
@@ -737,7 +779,11 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         // the shot is too sensitive to start from the previous step's state.
         // At dt = 0 the committed state solves the problem exactly, so the
         // equilibrium at dt is reached by continuation in the time increment.
-        let start = if cur[1] > 0.0 { Control::ContactAngle(cur[1]) } else { Control::Displacement(0.0) };
+        let start = if cur[1] > 0.0 {
+            Control::ContactAngle(cur[1])
+        } else {
+            Control::Displacement(0.0)
+        };
         let (mut s, mut ds) = (0.0_f64, 1.0_f64);
         let (mut xs, mut xs_prev, mut ds_prev) = (cur, cur, 0.0_f64);
         while s < 1.0 {
@@ -797,7 +843,8 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                     } else if it <= 5 {
                         h = (h * 1.3).min(0.1);
                     }
-                    let mut sh = Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale);
+                    let mut sh =
+                        Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale);
                     if let Ok(end) = sh.shoot(cur[0], cur[1], cur[2], None) {
                         if stop(&cur, &end) {
                             return Ok((prev, cur));
@@ -816,7 +863,14 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         Ok((prev, cur))
     }
 
-    fn build_solution(&self, time: f64, dt: f64, x: [f64; 3], control: Control, iterations: usize) -> Result<Solution> {
+    fn build_solution(
+        &self,
+        time: f64,
+        dt: f64,
+        x: [f64; 3],
+        control: Control,
+        iterations: usize,
+    ) -> Result<Solution> {
         let mut sh = Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale);
         let psi_c = if control.touches() { x[1] } else { 0.0 };
         let mut prof = Vec::with_capacity(self.geometry.nodes + 1);
@@ -863,7 +917,11 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
     /// # Errors
     /// As [`Self::advance`].
     pub fn equilibrium(&mut self, t: f64, control: Control) -> Result<Solution> {
-        let dt = if self.time.is_none() { 0.0 } else { self.dt_to(t)? };
+        let dt = if self.time.is_none() {
+            0.0
+        } else {
+            self.dt_to(t)?
+        };
         let (x, it, c) = self.solve_with_continuation(t, dt, control)?;
         self.x = x;
         self.last_control = c;
@@ -882,7 +940,12 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         let dt = self.dt_to(t)?;
         // Secant predictor in time (§2.3.3 uses the last solution as the guess).
         self.predicted = match self.x_prev {
-            Some((xp, dtp)) if dtp > 0.0 && dt > 0.0 && std::mem::discriminant(&control) == std::mem::discriminant(&self.last_control) => {
+            Some((xp, dtp))
+                if dtp > 0.0
+                    && dt > 0.0
+                    && std::mem::discriminant(&control)
+                        == std::mem::discriminant(&self.last_control) =>
+            {
                 let f = (dt / dtp).min(2.0);
                 Some([0, 1, 2].map(|k| self.x[k] + f * (self.x[k] - xp[k])))
             }
@@ -894,7 +957,12 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         let sol = self.build_solution(t, dt, x, c, it)?;
         for (j, v) in sol.profile.iter().enumerate() {
             self.material
-                .update(&self.states[j], [v.lambda1, v.lambda2], dt, &mut self.trial[j])
+                .update(
+                    &self.states[j],
+                    [v.lambda1, v.lambda2],
+                    dt,
+                    &mut self.trial[j],
+                )
                 .map_err(|e| MembraneError::Material {
                     psi: v.psi,
                     time: t,
@@ -925,12 +993,23 @@ mod debug_tests {
     #[ignore]
     fn debug_profile() {
         let m = MooneyRivlinMembrane::new(1.0, 0.1).unwrap();
-        let s = MembraneSolver::new(m, Geometry { rs: 1.03, nodes: 32 }, 1.0).unwrap();
+        let s = MembraneSolver::new(
+            m,
+            Geometry {
+                rs: 1.03,
+                nodes: 32,
+            },
+            1.0,
+        )
+        .unwrap();
         let mut sh = Shooter::new(&s.material, &s.states, true, 0.0, 1.0);
         let mut prof = Vec::new();
         let e = sh.shoot(1.03, 0.444, 0.698, Some(&mut prof));
         for v in &prof {
-            eprintln!("{:.3} l1 {:.4} l2 {:.4} T1 {:.4} T2 {:.4} th {:.4} rho {:.4} eta {:.4}", v.psi, v.lambda1, v.lambda2, v.t1, v.t2, v.theta, v.rho, v.eta);
+            eprintln!(
+                "{:.3} l1 {:.4} l2 {:.4} T1 {:.4} T2 {:.4} th {:.4} rho {:.4} eta {:.4}",
+                v.psi, v.lambda1, v.lambda2, v.t1, v.t2, v.theta, v.rho, v.eta
+            );
         }
         eprintln!("{e:?}");
     }
@@ -945,10 +1024,25 @@ mod sweep_tests {
     #[ignore]
     fn debug_sweep() {
         let m = MooneyRivlinMembrane::new(1.0, 0.1).unwrap();
-        let mut s = MembraneSolver::new(m, Geometry { rs: 1.03, nodes: 96 }, 1.0).unwrap();
+        let mut s = MembraneSolver::new(
+            m,
+            Geometry {
+                rs: 1.03,
+                nodes: 96,
+            },
+            1.0,
+        )
+        .unwrap();
         let rs = 1.03;
         let r = s.sweep_psi(0.0, 1.45, |x, e| {
-            eprintln!("psi {:.4} l0 {:.5} p {:.5} D {:.5} F {:.5}", x[1], x[0], x[2], rs - e.h1, std::f64::consts::PI * e.contact_radius.powi(2) * x[2]);
+            eprintln!(
+                "psi {:.4} l0 {:.5} p {:.5} D {:.5} F {:.5}",
+                x[1],
+                x[0],
+                x[2],
+                rs - e.h1,
+                std::f64::consts::PI * e.contact_radius.powi(2) * x[2]
+            );
             false
         });
         eprintln!("{:?}", r.map(|_| ()));

@@ -9,8 +9,8 @@ use nlvid_protocol::{Quantity, programs};
 use serde::Serialize;
 
 use crate::{
-    Control, ControlKind, Geometry, Loading, MembraneError, MembraneRun, MembraneSolver, MooneyRivlinMembrane,
-    PipkinRogersParams, Result, Solution, simulate,
+    Control, ControlKind, Geometry, Loading, MembraneError, MembraneRun, MembraneSolver,
+    MooneyRivlinMembrane, PipkinRogersParams, Result, Solution, simulate,
 };
 
 /// One curve.
@@ -65,7 +65,11 @@ fn fig(id: &str, title: &str, x: &str, y: &str, series: Vec<Series>) -> Figure {
 }
 
 fn mr(gamma: f64) -> Result<MembraneSolver<MooneyRivlinMembrane>> {
-    MembraneSolver::new(MooneyRivlinMembrane::new(1.0, gamma)?, Geometry::default(), 1.0)
+    MembraneSolver::new(
+        MooneyRivlinMembrane::new(1.0, gamma)?,
+        Geometry::default(),
+        1.0,
+    )
 }
 
 fn pr(g1: f64, g2: f64, c: f64) -> PipkinRogersParams {
@@ -105,8 +109,13 @@ pub fn at_psi(sol: &Solution, psi: f64, f: impl Fn(&crate::NodeValue) -> f64) ->
     (1.0 - w) * f(&p[j]) + w * f(&p[j + 1])
 }
 
-fn load_unload(p: Option<&PipkinRogersParams>, d_max: f64, su: f64) -> Result<(MembraneRun, usize)> {
-    let prog = programs::load_unload(Quantity::Dimensionless, d_max, 1.0, su, 0.0).map_err(proto)?;
+fn load_unload(
+    p: Option<&PipkinRogersParams>,
+    d_max: f64,
+    su: f64,
+) -> Result<(MembraneRun, usize, Option<String>)> {
+    let prog =
+        programs::load_unload(Quantity::Dimensionless, d_max, 1.0, su, 0.0).map_err(proto)?;
     let t_peak = d_max;
     let t_end = t_peak + d_max / su;
     let mut times: Vec<f64> = (0..=100).map(|k| t_peak * k as f64 / 100.0).collect();
@@ -118,23 +127,41 @@ fn load_unload(p: Option<&PipkinRogersParams>, d_max: f64, su: f64) -> Result<(M
         g2: 1.0,
         ..pr(1.0, 1.0, 1.0)
     });
-    // Loss of contact near the end of a fast unloading is reported by the
-    // solver; keep what was computed up to there.
-    let run = simulate(&params, &Geometry::default(), &l)?;
+    // A step that fails (e.g. wrinkling late in a slow unloading) ends the
+    // curve there; the failure is returned as a note.
+    let mut solver = MembraneSolver::new(params.check()?, Geometry::default(), params.c1)?;
+    let mut history = Vec::new();
+    let mut note = None;
+    for &t in &l.times {
+        match solver.advance(t, Control::Displacement(l.program.value(t))) {
+            Ok(sol) => history.push(crate::StepRecord::from(&sol)),
+            Err(e) => {
+                note = Some(e.to_string());
+                break;
+            }
+        }
+    }
+    let run = MembraneRun {
+        history,
+        profiles: Vec::new(),
+    };
     let i = run
         .history
         .iter()
         .position(|r| (r.time - t_peak).abs() < 1e-12)
         .unwrap_or(0);
-    Ok((run, i))
+    Ok((run, i, note))
 }
 
-/// Regenerate the data of Figs. 2.3–2.14 and Table 2.1 (a few seconds in release builds).
+/// Regenerate the data of Figs. 2.3–2.14 and Table 2.1 (a few seconds in
+/// release builds). Returns figures, Table 2.1 rows and notes on curves that
+/// ended early.
 ///
 /// # Errors
 /// Any solver error, with the case in the message.
-pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
+pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
     let mut figs = Vec::new();
+    let mut notes = Vec::new();
 
     // Fig. 2.3: NLE profiles, γ = 0.1.
     let mut s = mr(0.1)?;
@@ -152,7 +179,13 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
             y: vec![sol.h1],
         });
     }
-    figs.push(fig("fig2_3", "Fig. 2.3: NLE profiles, γ = 0.1", "ρ/r0", "η/r0", series));
+    figs.push(fig(
+        "fig2_3",
+        "Fig. 2.3: NLE profiles, γ = 0.1",
+        "ρ/r0",
+        "η/r0",
+        series,
+    ));
 
     // Fig. 2.4: F–D for several γ.
     let ds: Vec<f64> = (1..=39).map(|k| 0.02 * k as f64).collect();
@@ -169,7 +202,13 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
             y: f,
         });
     }
-    figs.push(fig("fig2_4", "Fig. 2.4: NLE force vs displacement", "D/r0", "F/(C1 h0 r0)", series));
+    figs.push(fig(
+        "fig2_4",
+        "Fig. 2.4: NLE force vs displacement",
+        "D/r0",
+        "F/(C1 h0 r0)",
+        series,
+    ));
 
     // Fig. 2.5: NLE vs QLV at D = 2t, t, t/2.
     let qlv = pr(0.2, 0.2, 1.0);
@@ -179,22 +218,36 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
         y: figs[1].series[1].y.clone(),
     }];
     for rate in [2.0, 1.0, 0.5] {
-        let prog = programs::constant_rate(Quantity::Dimensionless, rate, 0.78 / rate).map_err(proto)?;
+        let prog =
+            programs::constant_rate(Quantity::Dimensionless, rate, 0.78 / rate).map_err(proto)?;
         let times = (0..=100).map(|k| 0.78 / rate * k as f64 / 100.0).collect();
-        let run = simulate(&qlv, &Geometry::default(), &Loading::new(ControlKind::Displacement, prog, times)?)?;
+        let run = simulate(
+            &qlv,
+            &Geometry::default(),
+            &Loading::new(ControlKind::Displacement, prog, times)?,
+        )?;
         series.push(Series {
             label: format!("QLV g1 = g2 = 0.2, D = {rate} t"),
             x: run.history.iter().map(|r| r.displacement).collect(),
             y: run.force(),
         });
     }
-    figs.push(fig("fig2_5", "Fig. 2.5: NLE vs QLV at constant rates", "D/r0", "F/(C1 h0 r0)", series));
+    figs.push(fig(
+        "fig2_5",
+        "Fig. 2.5: NLE vs QLV at constant rates",
+        "D/r0",
+        "F/(C1 h0 r0)",
+        series,
+    ));
 
     // Fig. 2.6: relaxation at two displacements.
     let nlv6 = pr(0.2, 0.3, 0.5);
     let mut series = Vec::new();
     for d in [0.53, 0.78] {
-        for (name, p) in [("QLV g1=g2=0.2, c=1", &qlv), ("NLV g1=0.2, g2=0.3, c=1/2", &nlv6)] {
+        for (name, p) in [
+            ("QLV g1=g2=0.2, c=1", &qlv),
+            ("NLV g1=0.2, g2=0.3, c=1/2", &nlv6),
+        ] {
             let run = step_run(p, d, false)?;
             series.push(Series {
                 label: format!("{name}, D/r0 = {d}"),
@@ -203,11 +256,25 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
             });
         }
     }
-    figs.push(fig("fig2_6", "Fig. 2.6: force relaxation", "t/τ1", "F/(C1 h0 r0)", series));
+    figs.push(fig(
+        "fig2_6",
+        "Fig. 2.6: force relaxation",
+        "t/τ1",
+        "F/(C1 h0 r0)",
+        series,
+    ));
 
     // Figs. 2.7–2.11 at D/r0 = 0.78.
-    let cases_c = [("c = 1 (QLV)", pr(0.2, 0.2, 1.0)), ("c = 1/2", pr(0.2, 0.2, 0.5)), ("c = 2", pr(0.2, 0.2, 2.0))];
-    let cases_g = [("g2 = 0.2 (QLV)", pr(0.2, 0.2, 1.0)), ("g2 = 0.1", pr(0.2, 0.1, 1.0)), ("g2 = 0.3", pr(0.2, 0.3, 1.0))];
+    let cases_c = [
+        ("c = 1 (QLV)", pr(0.2, 0.2, 1.0)),
+        ("c = 1/2", pr(0.2, 0.2, 0.5)),
+        ("c = 2", pr(0.2, 0.2, 2.0)),
+    ];
+    let cases_g = [
+        ("g2 = 0.2 (QLV)", pr(0.2, 0.2, 1.0)),
+        ("g2 = 0.1", pr(0.2, 0.1, 1.0)),
+        ("g2 = 0.3", pr(0.2, 0.3, 1.0)),
+    ];
     let mut runs_c = Vec::new();
     for (n, p) in &cases_c {
         runs_c.push((*n, step_run(p, 0.78, true)?));
@@ -218,11 +285,27 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
     }
     let force = |runs: &[(&str, MembraneRun)]| {
         runs.iter()
-            .map(|(n, r)| Series { label: n.to_string(), x: r.times(), y: r.force() })
+            .map(|(n, r)| Series {
+                label: n.to_string(),
+                x: r.times(),
+                y: r.force(),
+            })
             .collect::<Vec<_>>()
     };
-    figs.push(fig("fig2_7", "Fig. 2.7: relaxation, g1 = g2 = 0.2, varying c", "t/τ1", "F/(C1 h0 r0)", force(&runs_c)));
-    figs.push(fig("fig2_8", "Fig. 2.8: relaxation, c = 1, varying g2", "t/τ1", "F/(C1 h0 r0)", force(&runs_g)));
+    figs.push(fig(
+        "fig2_7",
+        "Fig. 2.7: relaxation, g1 = g2 = 0.2, varying c",
+        "t/τ1",
+        "F/(C1 h0 r0)",
+        force(&runs_c),
+    ));
+    figs.push(fig(
+        "fig2_8",
+        "Fig. 2.8: relaxation, c = 1, varying g2",
+        "t/τ1",
+        "F/(C1 h0 r0)",
+        force(&runs_g),
+    ));
     let psic = runs_c
         .iter()
         .chain(runs_g.iter().skip(1))
@@ -232,7 +315,13 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
             y: r.history.iter().map(|h| h.psi_c).collect(),
         })
         .collect();
-    figs.push(fig("fig2_9", "Fig. 2.9: contact angle ψc(t), D/r0 = 0.78", "t/τ1", "ψc (rad)", psic));
+    figs.push(fig(
+        "fig2_9",
+        "Fig. 2.9: contact angle ψc(t), D/r0 = 0.78",
+        "t/τ1",
+        "ψc (rad)",
+        psic,
+    ));
     let stretches = |runs: &[(&str, MembraneRun)]| {
         let mut v = Vec::new();
         for (n, r) in runs {
@@ -249,15 +338,31 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
         }
         v
     };
-    figs.push(fig("fig2_10", "Fig. 2.10: stretches at ψ = 0.25, varying c", "t/τ1", "stretch", stretches(&runs_c)));
-    figs.push(fig("fig2_11", "Fig. 2.11: stretches at ψ = 0.25, varying g2", "t/τ1", "stretch", stretches(&runs_g)));
+    figs.push(fig(
+        "fig2_10",
+        "Fig. 2.10: stretches at ψ = 0.25, varying c",
+        "t/τ1",
+        "stretch",
+        stretches(&runs_c),
+    ));
+    figs.push(fig(
+        "fig2_11",
+        "Fig. 2.11: stretches at ψ = 0.25, varying g2",
+        "t/τ1",
+        "stretch",
+        stretches(&runs_g),
+    ));
 
     // Fig. 2.12: distributions at t = 10 for g2 = 0.3.
-    let last = runs_g[2].1.profiles.last().ok_or_else(|| MembraneError::Input {
-        name: "profiles",
-        value: 10.0,
-        reason: "no profile at t = 10".into(),
-    })?;
+    let last = runs_g[2]
+        .1
+        .profiles
+        .last()
+        .ok_or_else(|| MembraneError::Input {
+            name: "profiles",
+            value: 10.0,
+            reason: "no profile at t = 10".into(),
+        })?;
     let col = |f: fn(&crate::NodeValue) -> f64| last.profile.iter().map(f).collect::<Vec<_>>();
     let psi = col(|v| v.psi);
     figs.push(fig(
@@ -266,11 +371,31 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
         "ψ (rad)",
         "λ, σ/C1",
         vec![
-            Series { label: "λ1".into(), x: psi.clone(), y: col(|v| v.lambda1) },
-            Series { label: "λ2".into(), x: psi.clone(), y: col(|v| v.lambda2) },
-            Series { label: "σ1/C1".into(), x: psi.clone(), y: col(|v| v.sigma1) },
-            Series { label: "σ2/C1".into(), x: psi.clone(), y: col(|v| v.sigma2) },
-            Series { label: "ψc".into(), x: vec![last.psi_c], y: vec![at_psi(last, last.psi_c, |v| v.lambda2)] },
+            Series {
+                label: "λ1".into(),
+                x: psi.clone(),
+                y: col(|v| v.lambda1),
+            },
+            Series {
+                label: "λ2".into(),
+                x: psi.clone(),
+                y: col(|v| v.lambda2),
+            },
+            Series {
+                label: "σ1/C1".into(),
+                x: psi.clone(),
+                y: col(|v| v.sigma1),
+            },
+            Series {
+                label: "σ2/C1".into(),
+                x: psi.clone(),
+                y: col(|v| v.sigma2),
+            },
+            Series {
+                label: "ψc".into(),
+                x: vec![last.psi_c],
+                y: vec![at_psi(last, last.psi_c, |v| v.lambda2)],
+            },
         ],
     ));
 
@@ -305,9 +430,16 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
                 if m == "NLE" && su < 0.5 {
                     continue;
                 }
-                let (run, i) = load_unload(p, d_max, su)?;
+                let (run, i, note) = load_unload(p, d_max, su)?;
+                if let Some(n) = note {
+                    notes.push(format!("{id} {m} s_u = {su}: curve ends early: {n}"));
+                }
                 let h = &run.history;
-                let slope = (h[i].force - h[i + 1].force) / (h[i].displacement - h[i + 1].displacement);
+                if h.len() < i + 2 {
+                    continue;
+                }
+                let slope =
+                    (h[i].force - h[i + 1].force) / (h[i].displacement - h[i + 1].displacement);
                 rows.push(SlopeRow {
                     d_max,
                     unload_rate: su,
@@ -326,11 +458,14 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
         }
         figs.push(fig(
             id,
-            &format!("Fig. {}: loading–unloading to D/r0 = {d_max}, s_l = 1", if d_max < 0.5 { "2.13" } else { "2.14" }),
+            &format!(
+                "Fig. {}: loading–unloading to D/r0 = {d_max}, s_l = 1",
+                if d_max < 0.5 { "2.13" } else { "2.14" }
+            ),
             "D/r0",
             "F/(C1 h0 r0)",
             series,
         ));
     }
-    Ok((figs, rows))
+    Ok((figs, rows, notes))
 }

@@ -3,7 +3,9 @@
 
 use std::f64::consts::PI;
 
-use nlvid_membrane::{Control, Geometry, MembraneError, MembraneSolver, MooneyRivlinMembrane, Solution};
+use nlvid_membrane::{
+    Control, Geometry, MembraneError, MembraneSolver, MooneyRivlinMembrane, Solution,
+};
 
 fn solver(gamma: f64, rs: f64, nodes: usize) -> MembraneSolver<MooneyRivlinMembrane> {
     let m = MooneyRivlinMembrane::new(1.0, gamma).unwrap();
@@ -11,7 +13,9 @@ fn solver(gamma: f64, rs: f64, nodes: usize) -> MembraneSolver<MooneyRivlinMembr
 }
 
 fn squeeze(gamma: f64, d: f64, nodes: usize) -> Solution {
-    solver(gamma, 1.03, nodes).equilibrium(0.0, Control::Displacement(d)).unwrap()
+    solver(gamma, 1.03, nodes)
+        .equilibrium(0.0, Control::Displacement(d))
+        .unwrap()
 }
 
 #[test]
@@ -20,7 +24,9 @@ fn free_inflation_satisfies_rivlin_identity_with_fourth_order_convergence() {
         for rs in [1.03f64, 1.2, 1.5] {
             let rivlin: f64 = 4.0 * (1.0 / rs - f64::powi(rs, -7)) * (1.0 + gamma * rs * rs);
             let err = |n| {
-                let sol = solver(gamma, rs, n).equilibrium(0.0, Control::Displacement(0.0)).unwrap();
+                let sol = solver(gamma, rs, n)
+                    .equilibrium(0.0, Control::Displacement(0.0))
+                    .unwrap();
                 approx::assert_relative_eq!(sol.lambda0, rs, max_relative = 1e-6);
                 approx::assert_relative_eq!(sol.h1, rs, max_relative = 1e-6);
                 assert_eq!(sol.force, 0.0);
@@ -29,7 +35,10 @@ fn free_inflation_satisfies_rivlin_identity_with_fourth_order_convergence() {
             let (e32, e64) = (err(32), err(64));
             assert!(e64 < 1e-7, "γ={gamma} rs={rs}: error {e64:.2e}");
             // RK4: halving the step divides the error by ~16.
-            assert!(e64 < e32 / 8.0 || e64 < 1e-12, "γ={gamma} rs={rs}: {e32:.2e} → {e64:.2e}");
+            assert!(
+                e64 < e32 / 8.0 || e64 < 1e-12,
+                "γ={gamma} rs={rs}: {e32:.2e} → {e64:.2e}"
+            );
         }
     }
 }
@@ -42,14 +51,26 @@ fn squeezed_membrane_is_in_vertical_equilibrium_at_every_cut() {
     for gamma in [0.0, 0.1] {
         for d in [0.1, 0.28, 0.53, 0.78] {
             let sol = squeeze(gamma, d, 96);
-            approx::assert_relative_eq!(sol.force, PI * sol.contact_radius.powi(2) * sol.pressure, max_relative = 1e-12);
+            approx::assert_relative_eq!(
+                sol.force,
+                PI * sol.contact_radius.powi(2) * sol.pressure,
+                max_relative = 1e-12
+            );
             let cap = sol.pressure * PI * (sol.equator_radius.powi(2) - sol.contact_radius.powi(2));
-            approx::assert_relative_eq!(cap, 2.0 * PI * sol.equator_radius * sol.t1_equator, max_relative = 1e-6);
+            approx::assert_relative_eq!(
+                cap,
+                2.0 * PI * sol.equator_radius * sol.t1_equator,
+                max_relative = 1e-6
+            );
             for v in sol.profile.iter().filter(|v| v.psi > sol.psi_c) {
                 let f = PI * v.rho * v.rho * sol.pressure - 2.0 * PI * v.rho * v.t1 * v.theta.sin();
                 approx::assert_relative_eq!(f, sol.force, max_relative = 1e-6, epsilon = 1e-9);
             }
-            approx::assert_relative_eq!(sol.volume, 4.0 / 3.0 * PI * 1.03f64.powi(3), max_relative = 1e-10);
+            approx::assert_relative_eq!(
+                sol.volume,
+                4.0 / 3.0 * PI * 1.03f64.powi(3),
+                max_relative = 1e-10
+            );
         }
     }
 }
@@ -96,10 +117,19 @@ fn fig_2_4_force_displacement_stiffens_with_gamma() {
     let mut prev_curve: Option<Vec<f64>> = None;
     for gamma in [0.0, 0.1, 0.2, 0.3] {
         let mut s = solver(gamma, 1.03, 96);
-        let f: Vec<f64> = ds.iter().map(|&d| s.equilibrium(0.0, Control::Displacement(d)).unwrap().force).collect();
-        assert!(f.windows(2).all(|w| w[1] > w[0]), "γ={gamma}: F not increasing in D: {f:?}");
+        let f: Vec<f64> = ds
+            .iter()
+            .map(|&d| s.equilibrium(0.0, Control::Displacement(d)).unwrap().force)
+            .collect();
+        assert!(
+            f.windows(2).all(|w| w[1] > w[0]),
+            "γ={gamma}: F not increasing in D: {f:?}"
+        );
         if let Some(p) = &prev_curve {
-            assert!(f.iter().zip(p).all(|(a, b)| a > b), "γ={gamma} not stiffer than the previous γ");
+            assert!(
+                f.iter().zip(p).all(|(a, b)| a > b),
+                "γ={gamma} not stiffer than the previous γ"
+            );
         }
         prev_curve = Some(f);
     }
@@ -124,7 +154,9 @@ fn force_grows_about_tenfold_from_d053_to_d078() {
 fn displacement_and_force_control_give_the_same_equilibrium() {
     for d in [0.05, 0.28, 0.78] {
         let by_d = squeeze(0.1, d, 96);
-        let by_f = solver(0.1, 1.03, 96).equilibrium(0.0, Control::Force(by_d.force)).unwrap();
+        let by_f = solver(0.1, 1.03, 96)
+            .equilibrium(0.0, Control::Force(by_d.force))
+            .unwrap();
         approx::assert_relative_eq!(by_f.displacement, d, max_relative = 1e-7);
         approx::assert_relative_eq!(by_f.psi_c, by_d.psi_c, max_relative = 1e-7);
         approx::assert_relative_eq!(by_f.pressure, by_d.pressure, max_relative = 1e-7);
@@ -154,9 +186,17 @@ fn stress_free_membrane_reports_wrinkling_instead_of_panicking() {
 #[test]
 fn excessive_displacement_is_a_typed_error_with_advice() {
     let mut s = solver(0.1, 1.03, 48);
-    let e = s.equilibrium(0.0, Control::Displacement(1.025)).unwrap_err();
+    let e = s
+        .equilibrium(0.0, Control::Displacement(1.025))
+        .unwrap_err();
     let msg = e.to_string();
-    assert!(matches!(e, MembraneError::NoConvergence { .. } | MembraneError::Wrinkling { .. }), "{msg}");
+    assert!(
+        matches!(
+            e,
+            MembraneError::NoConvergence { .. } | MembraneError::Wrinkling { .. }
+        ),
+        "{msg}"
+    );
     assert!(msg.contains("D/r0 = 1.025"), "{msg}");
     // The solver is still usable afterwards.
     assert!(s.equilibrium(0.0, Control::Displacement(0.5)).is_ok());
