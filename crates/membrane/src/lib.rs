@@ -38,6 +38,10 @@
 //! [`Loading`] in, F(t), ψc(t), p(t), H1(t) and profiles out).
 
 #![warn(missing_docs)]
+// `!(x > 0.0)` is used on purpose: it rejects NaN as well as non-positive values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// Small fixed-size numeric kernels read better with explicit indices.
+#![allow(clippy::needless_range_loop)]
 
 mod error;
 pub mod models;

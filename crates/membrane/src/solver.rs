@@ -342,9 +342,6 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         let mut fresh = false;
         let mut last_shot = None;
         for it in 0..self.newton.max_iter {
-            if std::env::var("NLVID_DEBUG").is_ok() {
-                eprintln!("it {it} x {x:?} r {r:?} ctl {control}");
-            }
             if norm(&r) <= self.newton.tol {
                 self.jac = jac;
                 return Ok((x, it));
@@ -437,12 +434,7 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                         break;
                     }
                     Ok(_) => {}
-                    Err(e) => {
-                        if std::env::var("NLVID_DEBUG").is_ok() {
-                            eprintln!("   fail at {xt:?}: {e:?}");
-                        }
-                        last_shot = Some(e)
-                    }
+                    Err(e) => last_shot = Some(e),
                 }
                 alpha *= 0.5;
             }
@@ -697,23 +689,18 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                 // singular: solve q(ψc) = target by the Illinois method with the
                 // well-conditioned fixed-ψc problem inside.
                 Err(e) => {
-                    let eval =
-                        |s: &mut Self, psi: f64, g: [f64; 3]| -> Option<([f64; 3], f64)> {
-                            s.jac = None;
-                            let (x, _) = s.newton(dt, Control::ContactAngle(psi), g).ok()?;
-                            let mut sh =
-                                Shooter::new(&s.material, &s.states, s.uniform, dt, s.scale);
-                            let end = sh.shoot(x[0], x[1], x[2], None).ok()?;
-                            Some((x, s.control_value(control, &x, &end) - target))
-                        };
+                    let eval = |s: &mut Self, psi: f64, g: [f64; 3]| -> Option<([f64; 3], f64)> {
+                        s.jac = None;
+                        let (x, _) = s.newton(dt, Control::ContactAngle(psi), g).ok()?;
+                        let mut sh = Shooter::new(&s.material, &s.states, s.uniform, dt, s.scale);
+                        let end = sh.shoot(x[0], x[1], x[2], None).ok()?;
+                        Some((x, s.control_value(control, &x, &end) - target))
+                    };
                     let (Some((mut xa, mut fa)), Some((mut xb, mut fb))) =
                         (eval(self, prev[1], prev), eval(self, cur[1], cur))
                     else {
                         return Err(e);
                     };
-                    if std::env::var("NLVID_DEBUG").is_ok() {
-                        eprintln!("illinois: psi {} f {fa} / psi {} f {fb}", xa[1], xb[1]);
-                    }
                     if fa * fb > 0.0 {
                         return Err(e);
                     }
@@ -726,9 +713,6 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                         let Some((x, fx)) = eval(self, psi, g) else {
                             return Err(e);
                         };
-                        if std::env::var("NLVID_DEBUG").is_ok() {
-                            eprintln!("illinois {it}: psi {psi} f {fx}");
-                        }
                         if fx.abs() <= tol || (xb[1] - xa[1]).abs() < 1e-14 {
                             return Ok((x, it + 1));
                         }
@@ -981,70 +965,5 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         self.x = x;
         self.last_control = c;
         Ok(sol)
-    }
-}
-
-#[cfg(test)]
-mod debug_tests {
-    use super::*;
-    use crate::MooneyRivlinMembrane;
-
-    #[test]
-    #[ignore]
-    fn debug_profile() {
-        let m = MooneyRivlinMembrane::new(1.0, 0.1).unwrap();
-        let s = MembraneSolver::new(
-            m,
-            Geometry {
-                rs: 1.03,
-                nodes: 32,
-            },
-            1.0,
-        )
-        .unwrap();
-        let mut sh = Shooter::new(&s.material, &s.states, true, 0.0, 1.0);
-        let mut prof = Vec::new();
-        let e = sh.shoot(1.03, 0.444, 0.698, Some(&mut prof));
-        for v in &prof {
-            eprintln!(
-                "{:.3} l1 {:.4} l2 {:.4} T1 {:.4} T2 {:.4} th {:.4} rho {:.4} eta {:.4}",
-                v.psi, v.lambda1, v.lambda2, v.t1, v.t2, v.theta, v.rho, v.eta
-            );
-        }
-        eprintln!("{e:?}");
-    }
-}
-
-#[cfg(test)]
-mod sweep_tests {
-    use super::*;
-    use crate::MooneyRivlinMembrane;
-
-    #[test]
-    #[ignore]
-    fn debug_sweep() {
-        let m = MooneyRivlinMembrane::new(1.0, 0.1).unwrap();
-        let mut s = MembraneSolver::new(
-            m,
-            Geometry {
-                rs: 1.03,
-                nodes: 96,
-            },
-            1.0,
-        )
-        .unwrap();
-        let rs = 1.03;
-        let r = s.sweep_psi(0.0, 1.45, |x, e| {
-            eprintln!(
-                "psi {:.4} l0 {:.5} p {:.5} D {:.5} F {:.5}",
-                x[1],
-                x[0],
-                x[2],
-                rs - e.h1,
-                std::f64::consts::PI * e.contact_radius.powi(2) * x[2]
-            );
-            false
-        });
-        eprintln!("{:?}", r.map(|_| ()));
     }
 }

@@ -1,4 +1,5 @@
 //! Table 2.1: initial unloading slopes (tangent over the first unloading step).
+#![allow(clippy::unwrap_used)]
 use nlvid_membrane::*;
 use nlvid_protocol::{Quantity, programs};
 fn run(p: PipkinRogersParams, dmax: f64, su: f64, label: &str) {

@@ -275,10 +275,10 @@ fn svg_plot(f: &Figure) -> String {
             y1 = y1.max(*y);
         }
     }
-    if !(x1 > x0) {
+    if x1.partial_cmp(&x0) != Some(std::cmp::Ordering::Greater) {
         x1 = x0 + 1.0;
     }
-    if !(y1 > y0) {
+    if y1.partial_cmp(&y0) != Some(std::cmp::Ordering::Greater) {
         y1 = y0 + 1.0;
     }
     let px = |x: f64| ml + (x - x0) / (x1 - x0) * (w - ml - mr);
