@@ -740,6 +740,8 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                 let err = self.fail_to_error(time, control, e);
                 match err {
                     MembraneError::Wrinkling { .. } => Err(err),
+                    // No direct attempt was made at first contact: report the sweep's failure.
+                    _ if first_contact => Err(err),
                     _ => Err(self.fail_to_error(time, control, first)),
                 }
             }
