@@ -1,1 +1,57 @@
-//! Measured AFM data: JPK instrument files, calibration, contact point, Hertz and Lee–Radok fits (thesis §1.3.2, §5.2, App. B).
+//! Measured AFM data: JPK instrument files, calibration, contact point, Hertz and
+//! Lee–Radok fits (thesis §1.3.2, §5.2, App. B).
+//!
+//! What it models: an AFM force curve as recorded by the instrument — segments
+//! (extend, hold = constant-height pause, creep = constant-force pause, retract), each with
+//! its time axis and channels in SI units — and the small-strain analysis of such curves:
+//! baseline correction, tip–sample separation, contact point, indentation δ = Z − d
+//! (§5.2.2), the Hertz fit of a paraboloidal probe (eq. 1.1) and a linear-viscoelastic
+//! Prony fit through the Lee–Radok hereditary integral. App. B.2 cell geometry helpers
+//! (cell height, eq. B.1; base diameter √(d1·d2)) live in [`geometry`].
+//!
+//! Cost: reading a 10 000-point JPK file takes a few milliseconds (ZIP inflate + one pass
+//! per channel); a Hertz fit is O(n) per contact-point trial; the Lee–Radok fit is
+//! O(n) per objective evaluation (recursive exponential convolution), a few hundred
+//! evaluations in all.
+//!
+//! ```
+//! use nlvid_afm::{ContactMethod, HertzSettings, SegmentKind, fit_hertz, prepare_approach, read_force_curve};
+//! let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/fmt-jpk-fd_spot3-0192.jpk-force");
+//! let curve = read_force_curve(path)?;
+//! let extend = curve.segment(SegmentKind::Extend)?;
+//! assert_eq!(extend.len(), 2000);
+//! assert_eq!(extend.force()?[0], -5.145579192349918e-10); // N
+//!
+//! // paraboloidal Hertz fit, R = 40 nm, ν = 0.5 (eq. 1.1)
+//! let approach = prepare_approach(&curve, ContactMethod::default())?;
+//! let fit = fit_hertz(&approach.separation, &approach.force, &HertzSettings::new(40e-9, 0.5))?;
+//! assert!((fit.youngs_modulus / 233.1e3 - 1.0).abs() < 0.01);
+//! # Ok::<(), nlvid_afm::AfmError>(())
+//! ```
+#![warn(missing_docs)]
+
+mod curve;
+mod error;
+pub mod geometry;
+mod hertz;
+mod jpk;
+mod lee_radok;
+pub mod plot;
+mod prepare;
+
+pub use curve::{Calibration, CalibrationSource, Channel, ForceCurve, Segment, SegmentKind};
+pub use error::{AfmError, Result};
+pub use hertz::{
+    Approach, HertzFit, HertzSettings, fit_hertz, hertz_baseline, hertz_force, prepare_approach,
+};
+pub use jpk::{
+    ReadOptions, read_force_curve, read_force_curve_with, read_force_map, read_jpk_bytes,
+};
+pub use lee_radok::{
+    LeeRadokFit, LeeRadokSettings, Prony, RampHold, fit_lee_radok, lee_radok_force,
+    prepare_ramp_hold,
+};
+pub use prepare::{
+    Baseline, ContactMethod, ContactPoint, contact_point, contact_point_from_baseline, indentation,
+    tip_sample_separation,
+};

@@ -61,6 +61,31 @@ impl HistoryRule {
     }
 }
 
+/// Advances every term of `prony` over one step: writes
+/// `H_k(t_{n+1}) = E H_k(t_n) + β0 A_n + β1 A_{n+1}` to `h_out` and returns
+/// `(−Σ g_k (E H_k(t_n) + β0 A_n), Σ g_k β1_k)`: the part frozen at `t_n`
+/// and the weight of the current `A_{n+1}`.
+pub(crate) fn advance(
+    rule: HistoryRule,
+    prony: &crate::Prony,
+    dt: f64,
+    (h_n, a_n): (&[crate::Mat3], &crate::Mat3),
+    a_new: &crate::Mat3,
+    h_out: &mut Vec<crate::Mat3>,
+) -> (crate::Mat3, f64) {
+    h_out.resize(prony.len(), crate::Mat3::zeros());
+    let mut frozen = crate::Mat3::zeros();
+    let mut sum_b1 = 0.0;
+    for ((term, hn), ho) in prony.terms().iter().zip(h_n).zip(h_out.iter_mut()) {
+        let w = rule.weights(dt, term.tau);
+        let old = hn * w.decay + a_n * w.beta0;
+        frozen -= old * term.weight;
+        *ho = old + a_new * w.beta1;
+        sum_b1 += term.weight * w.beta1;
+    }
+    (frozen, sum_b1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

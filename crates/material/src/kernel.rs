@@ -114,31 +114,54 @@ impl IsoStress {
             }
         }
         let (sc, sci) = (self.s[XC], self.s[XCI]);
-        let mut t = Tangent3::zeros();
-        for i in 0..3 {
-            for jj in 0..3 {
-                let r = 3 * i + jj;
-                for kk in 0..3 {
-                    for l in 0..3 {
-                        let mut x = 0.0;
-                        for a in 0..4 {
-                            x += u[a][(i, jj)] * v[a][(kk, l)];
-                        }
-                        x += sc * (k.f[(i, l)] * k.f[(kk, jj)])
-                            - sci * (k.fit[(i, l)] * k.fit[(kk, jj)]);
-                        if jj == l {
-                            x += sc * k.b[(i, kk)];
-                        }
-                        if i == kk {
-                            x += s[(l, jj)] - sci * k.cinv[(jj, l)];
-                        }
-                        t[(r, 3 * kk + l)] = x;
-                    }
+        let f = rows(&k.f);
+        let fit = rows(&k.fit);
+        let b = rows(&k.b);
+        // δ_ik block: S_LJ − s_Ci C⁻¹_JL (S, C⁻¹ symmetric).
+        let diag = rows(&(s - k.cinv * sci));
+        let ua = u.map(|x| flat(&x));
+        let va = v.map(|x| flat(&x));
+        let mut t = [[0.0f64; 9]; 9];
+        for (a, (ur, vr)) in ua.iter().zip(&va).enumerate() {
+            if self.m[a].iter().all(|&m| m == 0.0) {
+                continue;
+            }
+            for (row, &x) in t.iter_mut().zip(ur) {
+                for (y, &z) in row.iter_mut().zip(vr) {
+                    *y += x * z;
                 }
             }
         }
-        t
+        for i in 0..3 {
+            for jj in 0..3 {
+                let row = &mut t[3 * i + jj];
+                for kk in 0..3 {
+                    for l in 0..3 {
+                        row[3 * kk + l] +=
+                            sc * (f[i][l] * f[kk][jj]) - sci * (fit[i][l] * fit[kk][jj]);
+                    }
+                    row[3 * kk + jj] += sc * b[i][kk];
+                }
+                for l in 0..3 {
+                    row[3 * i + l] += diag[jj][l];
+                }
+            }
+        }
+        Tangent3::from_fn(|r, c| t[r][c])
     }
+}
+
+/// Row-major copy of a 3×3 matrix.
+fn rows(m: &Mat3) -> [[f64; 3]; 3] {
+    [0, 1, 2].map(|i| [m[(i, 0)], m[(i, 1)], m[(i, 2)]])
+}
+
+/// Row-major flattening, index `3i + J`.
+fn flat(m: &Mat3) -> [f64; 9] {
+    let r = rows(m);
+    [
+        r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2],
+    ]
 }
 
 impl IsoStress {

@@ -16,6 +16,7 @@
 //! `K J (J − 1)` of eqs. 2.50/D.5 (the thesis evaluates R on `C`, not `C̄`,
 //! and so do we).
 
+use crate::history::advance;
 use crate::hyperelastic::{add_volumetric, check_bulk};
 use crate::kernel::{IsoStress, Kin, XC, XCI, XH, XI};
 use crate::model::{Kernel, impl_point_traits};
@@ -252,30 +253,6 @@ fn basis(k: &Kin, a: f64) -> (Mat3, Mat3, f64) {
     (id * 2.0 - ci, id * (2.0 * k.i1) - k.c * 2.0 - ci * 2.0, phi)
 }
 
-fn step_series(
-    rule: HistoryRule,
-    prony: &Prony,
-    dt: f64,
-    h_n: &[Mat3],
-    a_n: &Mat3,
-    a_new: &Mat3,
-    h_out: &mut Vec<Mat3>,
-    frozen: &mut Mat3,
-) -> f64 {
-    // Returns Σ g_k β1_k; accumulates −Σ g_k (E H_n + β0 A_n) into `frozen`
-    // (to be scaled by G0 by the caller) and writes H_{n+1}.
-    h_out.resize(prony.len(), Mat3::zeros());
-    let mut sum_b1 = 0.0;
-    for ((term, hn), ho) in prony.terms().iter().zip(h_n).zip(h_out.iter_mut()) {
-        let w = rule.weights(dt, term.tau);
-        let old = hn * w.decay + a_n * w.beta0;
-        *frozen -= old * term.weight;
-        *ho = old + a_new * w.beta1;
-        sum_b1 += term.weight * w.beta1;
-    }
-    sum_b1
-}
-
 impl Kernel for PipkinRogers {
     type State = PipkinRogersState;
 
@@ -301,27 +278,21 @@ impl Kernel for PipkinRogers {
         bulk: f64,
     ) -> IsoStress {
         let (a1, a2, phi) = basis(k, self.a);
-        let mut f1 = Mat3::zeros();
-        let b1 = step_series(
+        let (f1, b1) = advance(
             self.rule,
             self.g1.prony(),
             dt,
-            &st.h1,
-            &st.a1,
+            (&st.h1, &st.a1),
             &a1,
             &mut trial.h1,
-            &mut f1,
         );
-        let mut f2 = Mat3::zeros();
-        let b2 = step_series(
+        let (f2, b2) = advance(
             self.rule,
             self.g2.prony(),
             dt,
-            &st.h2,
-            &st.a2,
+            (&st.h2, &st.a2),
             &a2,
             &mut trial.h2,
-            &mut f2,
         );
         trial.a1 = a1;
         trial.a2 = a2;

@@ -10,6 +10,7 @@
 //! `H_k(t) = ∫_0^t (1/τ_k) e^{−(t−s)/τ_k} S̄0(s) ds`, updated recursively.
 //! The bulk response does not relax (`K(s) = K`): `τᴴ = K J (J − 1) I`.
 
+use crate::history::advance;
 use crate::hyperelastic::add_volumetric;
 use crate::kernel::{IsoStress, Kin, XCI, XH};
 use crate::model::{Kernel, impl_point_traits};
@@ -41,6 +42,36 @@ impl PronyViscoelastic {
             prony,
             rule: HistoryRule::default(),
         }
+    }
+
+    /// The 5-parameter cell model of eq. 5.1: neo-Hookean `C1` (the thesis's
+    /// `G0`), two Prony terms `(g1, τ1)`, `(g2, τ2)` with `g1 + g2 < 1`.
+    ///
+    /// # Errors
+    /// [`crate::MaterialError`] naming the parameter or Prony term.
+    pub fn cell(c1: f64, g1: f64, tau1: f64, g2: f64, tau2: f64, bulk: f64) -> crate::Result<Self> {
+        Ok(Self::new(
+            MooneyRivlin::neo_hookean(c1, bulk)?,
+            Prony::new("G", &[(g1, tau1), (g2, tau2)])?,
+        ))
+    }
+
+    /// The 6-parameter capsule model of §4.3: Mooney–Rivlin `C1`,
+    /// `C2 = α C1` (eq. 4.1) and two Prony terms (eqs. 4.2–4.3).
+    ///
+    /// # Errors
+    /// [`crate::MaterialError`] naming the parameter or Prony term.
+    pub fn capsule(
+        c1: f64,
+        alpha: f64,
+        (g1, tau1): (f64, f64),
+        (g2, tau2): (f64, f64),
+        bulk: f64,
+    ) -> crate::Result<Self> {
+        Ok(Self::new(
+            MooneyRivlin::with_ratio(c1, alpha, bulk)?,
+            Prony::new("G", &[(g1, tau1), (g2, tau2)])?,
+        ))
     }
 
     /// Chooses the one-step quadrature of the hereditary integral.
@@ -103,18 +134,16 @@ impl Kernel for PronyViscoelastic {
     ) -> IsoStress {
         let mut iso = IsoStress::default();
         self.elastic.add_isochoric(k, 1.0, &mut iso);
-        let j23 = k.j.powf(-2.0 / 3.0);
+        let j23 = 1.0 / (k.j.cbrt() * k.j.cbrt());
         let sbar = iso.pk2(k) / j23;
-        trial.h.resize(self.prony.len(), Mat3::zeros());
-        let mut frozen = Mat3::zeros();
-        let mut sum_b1 = 0.0;
-        for ((term, hn), ho) in self.prony.terms().iter().zip(&st.h).zip(trial.h.iter_mut()) {
-            let w = self.rule.weights(dt, term.tau);
-            let old = hn * w.decay + st.sbar * w.beta0;
-            frozen -= old * term.weight;
-            *ho = old + sbar * w.beta1;
-            sum_b1 += term.weight * w.beta1;
-        }
+        let (frozen, sum_b1) = advance(
+            self.rule,
+            &self.prony,
+            dt,
+            (&st.h, &st.sbar),
+            &sbar,
+            &mut trial.h,
+        );
         trial.sbar = sbar;
         let mut out = IsoStress::default();
         out.add_scaled(&iso, 1.0 - sum_b1);

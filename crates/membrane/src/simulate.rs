@@ -49,7 +49,7 @@ impl Loading {
             });
         }
         let (t0, t1) = (t[0], t[t.len() - 1]);
-        for b in program.breakpoints() {
+        for &b in program.breakpoints() {
             if b > t0 && b < t1 {
                 t.push(b);
             }

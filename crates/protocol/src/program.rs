@@ -153,6 +153,8 @@ pub struct Program {
     segments: Vec<Segment>,
     /// Segments of positive duration, indices into `segments`, for lookup.
     timed: Vec<usize>,
+    /// Sorted distinct segment ends.
+    bps: Vec<f64>,
 }
 
 impl Program {
@@ -253,23 +255,15 @@ impl Program {
 
     /// Every time where the rate or the value may change: segment ends,
     /// sorted, without duplicates (a jump contributes one time).
-    pub fn breakpoints(&self) -> Vec<f64> {
-        let mut out = Vec::with_capacity(self.segments.len() + 1);
-        out.push(self.start());
-        for s in &self.segments {
-            if s.t1 > out[out.len() - 1] {
-                out.push(s.t1);
-            }
-        }
-        out
+    pub fn breakpoints(&self) -> &[f64] {
+        &self.bps
     }
 
     /// The first breakpoint strictly after `t`, if any. Time steppers take
     /// `dt = dt.min(bp − t)` so they never step over a kink.
     pub fn next_breakpoint(&self, t: f64) -> Option<f64> {
-        let bps = self.breakpoints();
-        let k = bps.partition_point(|&b| b <= t);
-        bps.get(k).copied()
+        let k = self.bps.partition_point(|&b| b <= t);
+        self.bps.get(k).copied()
     }
 
     /// Times of the jumps (zero-length segments).
@@ -478,10 +472,18 @@ impl ProgramBuilder {
         if timed.is_empty() {
             return Err(ProtocolError::Empty);
         }
+        let mut bps = Vec::with_capacity(timed.len() + 1);
+        bps.push(self.segments[0].t0);
+        for s in &self.segments {
+            if s.t1 > bps[bps.len() - 1] {
+                bps.push(s.t1);
+            }
+        }
         Ok(Program {
             quantity: self.quantity,
             segments: self.segments,
             timed,
+            bps,
         })
     }
 }

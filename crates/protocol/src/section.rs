@@ -8,6 +8,8 @@
 //! output_points = 5095         # optional uniform output grid
 //! ```
 //!
+//! `sampling = "100 Hz"` may replace `output_points` (points = round(T·f) + 1).
+//!
 //! Non-AFM kinds take `control = "displacement" | "force" | "dimensionless"`
 //! (default displacement): values are lengths, forces, or bare numbers
 //! (D/r0), and rates their time derivatives; with `dimensionless`, times are
@@ -61,6 +63,24 @@ impl ProtocolSettings {
     }
 }
 
+/// A required quantity that may be spelled several ways (`rate` or
+/// `speed`); two spellings at once are an error at the second one.
+fn req_alias(
+    s: &mut Section,
+    keys: &[&str],
+    dim: Dimension,
+    bounds: Bounds,
+) -> Result<f64, StudyError> {
+    let present: Vec<&str> = keys.iter().copied().filter(|k| s.has(k)).collect();
+    match present.as_slice() {
+        [] | [_] => s.req_quantity(present.first().copied().unwrap_or(keys[0]), dim, bounds),
+        [first, second, ..] => Err(s.invalid(
+            second,
+            format!("`{second}` and `{first}` mean the same; give one"),
+        )),
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Kind {
     Afm,
@@ -105,6 +125,23 @@ fn read_afm(s: &mut Section) -> Result<AfmScript, StudyError> {
     Ok(script)
 }
 
+/// Output points for a sampling frequency f over the program: one every
+/// 1/f from the start, plus the end (round(duration · f) + 1 points).
+fn points(s: &Section, sampling: Option<f64>, p: &Program) -> Result<Option<usize>, StudyError> {
+    let Some(f) = sampling else { return Ok(None) };
+    let n = (p.duration() * f).round();
+    if !(1.0..1e8).contains(&n) {
+        return Err(s.invalid(
+            "sampling",
+            format!(
+                "gives {n} intervals over {} s; expected 1 to 1e8",
+                p.duration()
+            ),
+        ));
+    }
+    Ok(Some(n as usize + 1))
+}
+
 impl FromSection for ProtocolSettings {
     fn from_section(s: &mut Section) -> Result<Self, StudyError> {
         let kind = s.req_enum(
@@ -120,6 +157,10 @@ impl FromSection for ProtocolSettings {
             ],
         )?;
         let output_points = s.opt_usize("output_points", Bounds::at_least(2.0))?;
+        let sampling = s.opt_quantity("sampling", Dimension::FREQUENCY, Bounds::positive())?;
+        if sampling.is_some() && output_points.is_some() {
+            return Err(s.invalid("sampling", "give `sampling` or `output_points`, not both"));
+        }
         let q = if kind == Kind::Afm {
             Quantity::Displacement
         } else {
@@ -140,31 +181,42 @@ impl FromSection for ProtocolSettings {
         };
         let pos = Bounds::positive();
         let any = Bounds::ANY;
+        // The value key may also be spelled `displacement` under displacement
+        // control, and `rate` may be spelled `speed` (as in the bundled
+        // example study).
+        let value_keys = |k: &'static str| -> Vec<&'static str> {
+            if q == Quantity::Displacement {
+                vec![k, "displacement"]
+            } else {
+                vec![k]
+            }
+        };
+        let rate_keys = ["rate", "speed"];
         let built = match kind {
             Kind::Step => {
-                let a = s.req_quantity("amplitude", v, any)?;
+                let a = req_alias(s, &value_keys("amplitude"), v, any)?;
                 let h = s.req_quantity("hold", t, pos)?;
                 programs::step(q, a, h)
             }
             Kind::ConstantRate => {
-                let rate = s.req_quantity("rate", r, any)?;
+                let rate = req_alias(s, &rate_keys, r, any)?;
                 let d = s.req_quantity("duration", t, pos)?;
                 programs::constant_rate(q, rate, d)
             }
             Kind::RampHold => {
-                let target = s.req_quantity("target", v, any)?;
-                let rate = s.req_quantity("rate", r, pos)?;
+                let target = req_alias(s, &value_keys("target"), v, any)?;
+                let rate = req_alias(s, &rate_keys, r, pos)?;
                 let h = s.req_quantity("hold", t, pos)?;
                 programs::ramp_hold(q, target, rate, h)
             }
             Kind::RampReverse => {
-                let peak = s.req_quantity("peak", v, any)?;
-                let rate = s.req_quantity("rate", r, pos)?;
+                let peak = req_alias(s, &value_keys("peak"), v, any)?;
+                let rate = req_alias(s, &rate_keys, r, pos)?;
                 let end = s.quantity_or("end", v, any, 0.0)?;
                 programs::ramp_reverse(q, peak, rate, end)
             }
             Kind::LoadUnload => {
-                let peak = s.req_quantity("peak", v, any)?;
+                let peak = req_alias(s, &value_keys("peak"), v, any)?;
                 let lr = s.req_quantity("load_rate", r, pos)?;
                 let ur = s.req_quantity("unload_rate", r, pos)?;
                 let end = s.quantity_or("end", v, any, 0.0)?;
@@ -178,16 +230,20 @@ impl FromSection for ProtocolSettings {
                 Ok(table)
             }
             Kind::Afm => {
+                let script = read_afm(s)?;
+                let program = script
+                    .piezo()
+                    .map_err(|e| s.invalid("kind", e.to_string()))?;
                 return Ok(Self {
-                    loading: Loading::Afm(read_afm(s)?),
-                    output_points,
+                    output_points: points(s, sampling, &program)?.or(output_points),
+                    loading: Loading::Afm(script),
                 });
             }
         };
         let program = built.map_err(|e| s.invalid("kind", e.to_string()))?;
         Ok(Self {
+            output_points: points(s, sampling, &program)?.or(output_points),
             loading: Loading::Program(program),
-            output_points,
         })
     }
 }

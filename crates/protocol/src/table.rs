@@ -139,6 +139,9 @@ pub fn parse_table<R: std::io::Read>(
                 column: raw[i].clone(),
                 message,
             };
+            if s.is_empty() {
+                return Err(bad("empty cell".into()));
+            }
             let v: f64 = s
                 .parse()
                 .map_err(|_| bad(format!("`{s}` is not a number")))?;

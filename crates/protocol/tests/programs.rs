@@ -26,7 +26,7 @@ fn afm_ch5_piezo_breakpoints_and_values_match_hand_computation() {
     let want_t = [0.0, 0.2, 0.3, 0.5, 0.7, 1.7, 2.7, 2.8, 52.8];
     let want_z = [0.0, 2.0, 1.0, 2.0, 1.0, 2.0, 1.0, 2.0, 2.0];
     let bps = z.breakpoints();
-    assert_all_close(&bps, &want_t, 1e-12);
+    assert_all_close(bps, &want_t, 1e-12);
     for (t, zz) in bps.iter().zip(want_z) {
         assert!(close(z.value(*t), zz * UM, 1e-18), "Z({t})");
     }
@@ -68,12 +68,12 @@ fn afm_app_a_script_uses_3um_and_15s_engage_hold() {
     let z = s.piezo().unwrap();
     // 3 µm at 10 → 0.3 s, back 1 µm 0.1 s; 2↔3 µm at 5 → 0.2 s; at 1 → 1 s.
     let want_t = [0.0, 0.3, 0.4, 0.6, 0.8, 1.8, 2.8, 2.9, 52.9];
-    assert_all_close(&z.breakpoints(), &want_t, 1e-12);
+    assert_all_close(z.breakpoints(), &want_t, 1e-12);
     assert!(close(z.value(0.8), 2.0 * UM, 1e-18));
     // Step 1: δd = 5 nm at 1 nm/s on k = 0.072 N/m → 0.36 nN over 5 s, hold 15 s.
     let f = s.engage_program().unwrap();
     assert!(close(s.engage.setpoint_force, 0.36e-9, 1e-21));
-    assert_all_close(&f.breakpoints(), &[0.0, 5.0, 20.0], 1e-12);
+    assert_all_close(f.breakpoints(), &[0.0, 5.0, 20.0], 1e-12);
     assert!(close(f.value(2.5), 0.18e-9, 1e-21));
     assert_eq!(f.label(10.0), Label::EngageHold);
     assert_eq!(f.quantity(), Quantity::Force);
@@ -140,16 +140,16 @@ fn constant_rate_ramp_hold_and_load_unload_match_closed_forms() {
         }
     }
     let rh = programs::ramp_hold(Quantity::Displacement, 1.5e-3, 0.2e-3, 20.0).unwrap();
-    assert_all_close(&rh.breakpoints(), &[0.0, 7.5, 27.5], 1e-12);
+    assert_all_close(rh.breakpoints(), &[0.0, 7.5, 27.5], 1e-12);
     assert!(close(rh.value(3.0), 0.6e-3, 1e-15));
     // Fig. 2.14: D/r0 = 0.78 at s_l = 1, unloading at s_u = 1/5.
     let lu = programs::load_unload(Quantity::Dimensionless, 0.78, 1.0, 0.2, 0.0).unwrap();
-    assert_all_close(&lu.breakpoints(), &[0.0, 0.78, 0.78 + 3.9], 1e-12);
+    assert_all_close(lu.breakpoints(), &[0.0, 0.78, 0.78 + 3.9], 1e-12);
     assert!(close(lu.value(0.78 + 1.0), 0.78 - 0.2, 1e-12));
     assert_eq!(lu.label(0.5), Label::Load);
     assert_eq!(lu.label(1.0), Label::Unload);
     let rr = programs::ramp_reverse(Quantity::Displacement, 1e-3, 0.2e-3, 0.0).unwrap();
-    assert_all_close(&rr.breakpoints(), &[0.0, 5.0, 10.0], 1e-12);
+    assert_all_close(rr.breakpoints(), &[0.0, 5.0, 10.0], 1e-12);
 }
 
 #[test]
@@ -215,7 +215,7 @@ fn check_grid_contains_breakpoints(g: &[f64], bps: &[f64], max_dt: f64) {
 fn stepper_grid_hits_every_breakpoint_with_steps_at_most_max_dt() {
     let z = AfmScript::thesis_ch5(0.12).unwrap().piezo().unwrap();
     let g = z.stepper_grid(0.05).unwrap();
-    check_grid_contains_breakpoints(&g, &z.breakpoints(), 0.05);
+    check_grid_contains_breakpoints(&g, z.breakpoints(), 0.05);
     // 0.2/0.05 = 4, 0.1 → 2, 0.2 → 4, 0.2 → 4, 1 → 20, 1 → 20, 0.1 → 2, 50 → 1000.
     assert_eq!(g.len(), 1 + 4 + 2 + 4 + 4 + 20 + 20 + 2 + 1000);
 }
@@ -226,8 +226,8 @@ fn refined_grid_is_fine_at_breakpoints_and_coarse_inside() {
     let (min_dt, max_dt) = (1e-3, 0.5);
     let g = z.refined_grid(min_dt, max_dt, 1.2).unwrap();
     let bps = z.breakpoints();
-    check_grid_contains_breakpoints(&g, &bps, max_dt);
-    for b in &bps {
+    check_grid_contains_breakpoints(&g, bps, max_dt);
+    for b in bps {
         let i = g.iter().position(|x| x == b).unwrap();
         if i + 1 < g.len() {
             assert!(g[i + 1] - g[i] <= min_dt * (1.0 + 1e-12));

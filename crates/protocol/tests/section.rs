@@ -26,8 +26,8 @@ fn afm_defaults_are_the_thesis_ch5_script() {
     let thesis = AfmScript::thesis_ch5(0.12).unwrap();
     assert_eq!(s.cycle_rates, thesis.cycle_rates);
     assert_close(
-        &s.piezo().unwrap().breakpoints(),
-        &thesis.piezo().unwrap().breakpoints(),
+        s.piezo().unwrap().breakpoints(),
+        thesis.piezo().unwrap().breakpoints(),
     );
     assert!((s.engage.setpoint_force - 0.48e-9).abs() < 1e-21);
     let g = p.output_grid().unwrap().unwrap();
@@ -50,7 +50,7 @@ cycle_rates = ["10 um/s", "5 um/s", "1 um/s"]
     let z = p.program().unwrap();
     // Same as the App. A script (first leg 3 µm).
     let app_a = AfmScript::thesis_app_a(0.072).unwrap().piezo().unwrap();
-    assert_close(&z.breakpoints(), &app_a.breakpoints());
+    assert_close(z.breakpoints(), app_a.breakpoints());
     let Loading::Afm(s) = &p.loading else {
         panic!("not afm")
     };
@@ -132,4 +132,36 @@ fn table_kind_reads_the_csv_next_to_the_study() {
         "{e}"
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bundled_example_study_protocol_reads_with_speed_displacement_and_sampling() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/study/capsule-compression.toml"
+    );
+    let mut st = Study::load(path).unwrap();
+    let p: ProtocolSettings = st.read("protocol").unwrap();
+    let z = p.program().unwrap();
+    // 0.6 mm at 5 mm/s = 0.12 s, then 50 s; 100 Hz → 5012 intervals.
+    assert_close(z.breakpoints(), &[0.0, 0.12, 50.12]);
+    assert!((z.value(0.06) - 0.3e-3).abs() < 1e-15);
+    assert_eq!(p.output_points, Some(5013));
+    let g = p.output_grid().unwrap().unwrap();
+    assert!((g[1] - g[0] - 0.01).abs() < 1e-12);
+}
+
+#[test]
+fn two_spellings_of_one_key_are_rejected() {
+    let e = read("[protocol]\nkind = \"ramp-hold\"\ntarget = \"1 mm\"\ndisplacement = \"1 mm\"\nrate = \"1 mm/s\"\nhold = \"1 s\"\n")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("study.toml:4") && e.contains("mean the same"),
+        "{e}"
+    );
+    let e = read("[protocol]\nkind = \"afm\"\nsampling = \"10 Hz\"\noutput_points = 100\n")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("not both"), "{e}");
 }

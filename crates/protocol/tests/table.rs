@@ -105,3 +105,24 @@ fn unreadable_file_error_names_the_file() {
     .to_string();
     assert!(e.contains("/nonexistent/z.csv"), "{e}");
 }
+
+#[test]
+fn afm_script_written_at_its_breakpoints_reads_back_identically() {
+    let z = nlvid_protocol::AfmScript::thesis_ch5(0.12)
+        .unwrap()
+        .piezo()
+        .unwrap();
+    let mut csv = String::from("time_s,piezo_m\n");
+    for &t in z.breakpoints() {
+        csv.push_str(&format!("{t},{}\n", z.value(t)));
+    }
+    let back = parse(&csv, Quantity::Displacement).unwrap();
+    assert_eq!(back.breakpoints(), z.breakpoints());
+    for i in 0..=1000 {
+        let t = 52.8 * i as f64 / 1000.0;
+        assert!((back.value(t) - z.value(t)).abs() < 1e-18, "t = {t}");
+        if !z.breakpoints().contains(&t) {
+            assert!((back.rate(t) - z.rate(t)).abs() < 1e-12, "t = {t}");
+        }
+    }
+}

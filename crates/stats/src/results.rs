@@ -260,6 +260,14 @@ pub fn parse_results<R: std::io::Read>(reader: R, source: &Path) -> Result<Resul
         }
         let num = |i: usize, scale: f64| -> Result<f64> {
             let s = get(i);
+            if s.is_empty() {
+                return Err(err(
+                    line,
+                    Some(&raw[i]),
+                    "empty cell (a used row needs every parameter; set `status` to exclude it)"
+                        .into(),
+                ));
+            }
             let v: f64 = s
                 .parse()
                 .map_err(|_| err(line, Some(&raw[i]), format!("`{s}` is not a number")))?;

@@ -80,6 +80,13 @@ fn errors_name_file_line_and_column() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("line 2") && e.contains("g_inf"), "{e}");
+    let e = parse("group,G0_kPa,g1,tau1_s\nA,2.9,,1\n")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("line 2") && e.contains("`g1`") && e.contains("empty cell"),
+        "{e}"
+    );
     let e = parse("group,G0_kPa\n,1\n").unwrap_err().to_string();
     assert!(e.contains("empty group"), "{e}");
 }

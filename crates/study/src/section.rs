@@ -356,6 +356,46 @@ impl Section {
         }
     }
 
+    /// An optional choice with a default used when absent.
+    ///
+    /// # Errors
+    /// As [`Self::opt_enum`].
+    pub fn enum_or<T: Copy>(&mut self, key: &str, choices: &[(&str, T)], default: T) -> Result<T> {
+        Ok(self.opt_enum(key, choices)?.unwrap_or(default))
+    }
+
+    /// A required interval `[lo, hi]` written as a two-element array of
+    /// quantities, e.g. a parameter's search domain `C1 = ["1 kPa", "10 kPa"]`.
+    /// Both ends must lie in `bounds` and `lo < hi`.
+    ///
+    /// # Errors
+    /// As [`Self::req_quantities`], or not exactly two elements, or `lo >= hi`.
+    pub fn req_range(
+        &mut self,
+        key: &str,
+        dim: Dimension,
+        bounds: impl Into<Bounds>,
+    ) -> Result<(f64, f64)> {
+        let i = self.require(key, &format!("[lower, upper] as two values of {dim}"))?;
+        self.range_of(i, key, dim, bounds.into())
+    }
+
+    /// An optional interval, as [`Self::req_range`].
+    ///
+    /// # Errors
+    /// As [`Self::req_range`], except for a missing key.
+    pub fn opt_range(
+        &mut self,
+        key: &str,
+        dim: Dimension,
+        bounds: impl Into<Bounds>,
+    ) -> Result<Option<(f64, f64)>> {
+        match self.take(key) {
+            None => Ok(None),
+            Some(i) => self.range_of(i, key, dim, bounds.into()).map(Some),
+        }
+    }
+
     /// A required path, resolved against the study file's directory.
     /// Existence is not checked (outputs need not exist); see [`Self::req_input_file`].
     ///
@@ -648,6 +688,27 @@ impl Section {
             .enumerate()
             .map(|(j, n)| self.quantity_of(n, &self.key_path(&format!("{key}[{j}]")), dim, bounds))
             .collect()
+    }
+
+    fn range_of(&self, i: usize, key: &str, dim: Dimension, bounds: Bounds) -> Result<(f64, f64)> {
+        let v = self.quantities_of(i, key, dim, bounds)?;
+        let at = self.entries[i].node.span.start;
+        match v[..] {
+            [lo, hi] if lo < hi => Ok((lo, hi)),
+            [_, _] => Err(self.err(
+                at,
+                key,
+                ErrorKind::Invalid("lower end must be below upper end".into()),
+            )),
+            _ => Err(self.err(
+                at,
+                key,
+                ErrorKind::Invalid(format!(
+                    "expected [lower, upper] (2 values), found {} value(s)",
+                    v.len()
+                )),
+            )),
+        }
     }
 
     fn u64_of(&self, i: usize, key: &str) -> Result<u64> {

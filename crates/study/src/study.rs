@@ -149,6 +149,8 @@ pub struct Leaf {
     pub key: String,
     /// 1-based line of the value.
     pub line: usize,
+    /// 1-based column of the value.
+    pub column: usize,
     /// The value.
     pub value: LeafValue,
 }
@@ -187,7 +189,8 @@ fn walk(src: &Source, prefix: &str, entries: &[Entry], out: &mut Vec<Leaf>) {
 }
 
 fn walk_value(src: &Source, key: String, node: &tree::Node, out: &mut Vec<Leaf>) {
-    let line = src.locate(node.span.start).line;
+    let at = src.locate(node.span.start);
+    let (line, column) = (at.line, at.column);
     let value = match &node.value {
         Value::Table(t) => return walk(src, &key, t, out),
         Value::Array(a) => {
@@ -208,7 +211,12 @@ fn walk_value(src: &Source, key: String, node: &tree::Node, out: &mut Vec<Leaf>)
         Value::Bool(b) => LeafValue::Bool(*b),
         Value::Datetime(d) => LeafValue::Datetime(d.clone()),
     };
-    out.push(Leaf { key, line, value });
+    out.push(Leaf {
+        key,
+        line,
+        column,
+        value,
+    });
 }
 
 /// SHA-256 of a study's canonical content, for provenance in outputs.

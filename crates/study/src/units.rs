@@ -183,6 +183,9 @@ const NAMED: &[(Dimension, &str, &str, &str)] = &[
 /// A unit symbol: its factor to SI, its dimension, whether SI prefixes apply.
 struct UnitDef {
     symbol: &'static str,
+    /// Decimal part of the factor to SI (g → -3), applied exactly.
+    pow10: i32,
+    /// Remaining factor (deg → π/180, min → 60), 1 for decimal units.
     factor: f64,
     dim: Dimension,
     prefixable: bool,
@@ -190,36 +193,36 @@ struct UnitDef {
 
 #[rustfmt::skip]
 const UNITS: &[UnitDef] = &[
-    UnitDef { symbol: "m", factor: 1.0, dim: Dimension::LENGTH, prefixable: true },
-    UnitDef { symbol: "g", factor: 1e-3, dim: Dimension::MASS, prefixable: true },
-    UnitDef { symbol: "s", factor: 1.0, dim: Dimension::TIME, prefixable: true },
-    UnitDef { symbol: "min", factor: 60.0, dim: Dimension::TIME, prefixable: false },
-    UnitDef { symbol: "h", factor: 3600.0, dim: Dimension::TIME, prefixable: false },
-    UnitDef { symbol: "Hz", factor: 1.0, dim: Dimension::FREQUENCY, prefixable: true },
-    UnitDef { symbol: "N", factor: 1.0, dim: Dimension::FORCE, prefixable: true },
-    UnitDef { symbol: "Pa", factor: 1.0, dim: Dimension::PRESSURE, prefixable: true },
-    UnitDef { symbol: "J", factor: 1.0, dim: Dimension::ENERGY, prefixable: true },
-    UnitDef { symbol: "A", factor: 1.0, dim: Dimension::CURRENT, prefixable: true },
-    UnitDef { symbol: "V", factor: 1.0, dim: Dimension::VOLTAGE, prefixable: true },
-    UnitDef { symbol: "rad", factor: 1.0, dim: Dimension::ANGLE, prefixable: true },
-    UnitDef { symbol: "deg", factor: std::f64::consts::PI / 180.0, dim: Dimension::ANGLE, prefixable: false },
-    UnitDef { symbol: "°", factor: std::f64::consts::PI / 180.0, dim: Dimension::ANGLE, prefixable: false },
-    UnitDef { symbol: "%", factor: 0.01, dim: Dimension::NONE, prefixable: false },
-    UnitDef { symbol: "1", factor: 1.0, dim: Dimension::NONE, prefixable: false },
+    UnitDef { symbol: "m", pow10: 0, factor: 1.0, dim: Dimension::LENGTH, prefixable: true },
+    UnitDef { symbol: "g", pow10: -3, factor: 1.0, dim: Dimension::MASS, prefixable: true },
+    UnitDef { symbol: "s", pow10: 0, factor: 1.0, dim: Dimension::TIME, prefixable: true },
+    UnitDef { symbol: "min", pow10: 0, factor: 60.0, dim: Dimension::TIME, prefixable: false },
+    UnitDef { symbol: "h", pow10: 0, factor: 3600.0, dim: Dimension::TIME, prefixable: false },
+    UnitDef { symbol: "Hz", pow10: 0, factor: 1.0, dim: Dimension::FREQUENCY, prefixable: true },
+    UnitDef { symbol: "N", pow10: 0, factor: 1.0, dim: Dimension::FORCE, prefixable: true },
+    UnitDef { symbol: "Pa", pow10: 0, factor: 1.0, dim: Dimension::PRESSURE, prefixable: true },
+    UnitDef { symbol: "J", pow10: 0, factor: 1.0, dim: Dimension::ENERGY, prefixable: true },
+    UnitDef { symbol: "A", pow10: 0, factor: 1.0, dim: Dimension::CURRENT, prefixable: true },
+    UnitDef { symbol: "V", pow10: 0, factor: 1.0, dim: Dimension::VOLTAGE, prefixable: true },
+    UnitDef { symbol: "rad", pow10: 0, factor: 1.0, dim: Dimension::ANGLE, prefixable: true },
+    UnitDef { symbol: "deg", pow10: 0, factor: std::f64::consts::PI / 180.0, dim: Dimension::ANGLE, prefixable: false },
+    UnitDef { symbol: "°", pow10: 0, factor: std::f64::consts::PI / 180.0, dim: Dimension::ANGLE, prefixable: false },
+    UnitDef { symbol: "%", pow10: -2, factor: 1.0, dim: Dimension::NONE, prefixable: false },
+    UnitDef { symbol: "1", pow10: 0, factor: 1.0, dim: Dimension::NONE, prefixable: false },
 ];
 
 /// SI prefixes; `u`, `µ` (micro sign) and `μ` (Greek mu) all mean 1e-6.
-const PREFIXES: &[(&str, f64)] = &[
-    ("p", 1e-12),
-    ("n", 1e-9),
-    ("u", 1e-6),
-    ("\u{b5}", 1e-6),
-    ("\u{3bc}", 1e-6),
-    ("m", 1e-3),
-    ("c", 1e-2),
-    ("k", 1e3),
-    ("M", 1e6),
-    ("G", 1e9),
+const PREFIXES: &[(&str, i32)] = &[
+    ("p", -12),
+    ("n", -9),
+    ("u", -6),
+    ("\u{b5}", -6),
+    ("\u{3bc}", -6),
+    ("m", -3),
+    ("c", -2),
+    ("k", 3),
+    ("M", 6),
+    ("G", 9),
 ];
 
 /// Why a quantity string could not be read.
@@ -282,11 +285,21 @@ impl Quantity {
         if n == 0 {
             return Err(UnitError::BadNumber(t.to_string()));
         }
-        let number: f64 = t[..n]
+        let (mantissa, exp10) = match t[..n].find(['e', 'E']) {
+            Some(k) => {
+                // Exponents beyond i32 overflow or underflow any f64 anyway.
+                let e: i64 = t[k + 1..n].parse().map_err(|_| UnitError::NotFinite)?;
+                (&t[..k], e)
+            }
+            None => (&t[..n], 0),
+        };
+        let (pow10, factor, dim) = parse_unit_scaled(t[n..].trim())?;
+        // Decimal scaling is done by the decimal parser, so "40 um" gives the
+        // double nearest 4e-5 (not 40 * 1e-6 = 3.9999999999999996e-5).
+        let decimal: f64 = format!("{mantissa}e{}", exp10 + i64::from(pow10))
             .parse()
             .map_err(|_| UnitError::BadNumber(t.to_string()))?;
-        let (factor, dim) = parse_unit(t[n..].trim())?;
-        let value = number * factor;
+        let value = decimal * factor;
         if !value.is_finite() {
             return Err(UnitError::NotFinite);
         }
@@ -359,7 +372,16 @@ fn number_prefix_len(t: &str) -> usize {
 }
 
 /// Parses a unit expression into (factor to SI, dimension). Empty means 1.
+///
+/// # Errors
+/// Unknown symbols, bad exponents, misplaced operators (see module docs).
 pub fn parse_unit(expr: &str) -> Result<(f64, Dimension), UnitError> {
+    let (p, f, d) = parse_unit_scaled(expr)?;
+    Ok((10f64.powi(p) * f, d))
+}
+
+/// As [`parse_unit`], the factor split into an exact power of ten and the rest.
+fn parse_unit_scaled(expr: &str) -> Result<(i32, f64, Dimension), UnitError> {
     #[derive(PartialEq, Clone, Copy)]
     enum Op {
         Mul,
@@ -367,6 +389,7 @@ pub fn parse_unit(expr: &str) -> Result<(f64, Dimension), UnitError> {
         Implicit,
     }
     let syntax = |why| UnitError::Syntax(expr.to_string(), why);
+    let mut pow10 = 0i32;
     let mut factor = 1.0;
     let mut dim = Dimension::NONE;
     let mut pending: Option<Op> = None; // operator seen since the last atom
@@ -402,7 +425,7 @@ pub fn parse_unit(expr: &str) -> Result<(f64, Dimension), UnitError> {
                     chars.next();
                 }
                 let atom = &expr[i..end];
-                let (f, d) = parse_atom(atom)?;
+                let (p, f, d) = parse_atom(atom)?;
                 let op = if seen_atom {
                     pending.unwrap_or(Op::Implicit)
                 } else {
@@ -416,10 +439,12 @@ pub fn parse_unit(expr: &str) -> Result<(f64, Dimension), UnitError> {
                 match op {
                     Op::Div => {
                         seen_div = true;
+                        pow10 -= p;
                         factor /= f;
                         dim = dim.div(d);
                     }
                     Op::Mul | Op::Implicit => {
+                        pow10 += p;
                         factor *= f;
                         dim = dim.mul(d);
                     }
@@ -432,11 +457,11 @@ pub fn parse_unit(expr: &str) -> Result<(f64, Dimension), UnitError> {
     if matches!(pending, Some(Op::Mul) | Some(Op::Div)) {
         return Err(syntax("operator at the end"));
     }
-    Ok((factor, dim))
+    Ok((pow10, factor, dim))
 }
 
 /// One unit symbol with optional prefix and `^exponent`.
-fn parse_atom(atom: &str) -> Result<(f64, Dimension), UnitError> {
+fn parse_atom(atom: &str) -> Result<(i32, f64, Dimension), UnitError> {
     let (sym, exp) = match atom.split_once('^') {
         Some((s, e)) => {
             let e: i8 = e
@@ -448,19 +473,20 @@ fn parse_atom(atom: &str) -> Result<(f64, Dimension), UnitError> {
         }
         None => (atom, 1),
     };
-    let (f, d) = lookup_symbol(sym).ok_or_else(|| UnitError::UnknownUnit(sym.to_string()))?;
-    Ok((f.powi(i32::from(exp)), d.powi(exp)))
+    let (p, f, d) = lookup_symbol(sym).ok_or_else(|| UnitError::UnknownUnit(sym.to_string()))?;
+    let e = i32::from(exp);
+    Ok((p * e, f.powi(e), d.powi(exp)))
 }
 
-fn lookup_symbol(sym: &str) -> Option<(f64, Dimension)> {
+fn lookup_symbol(sym: &str) -> Option<(i32, f64, Dimension)> {
     if let Some(u) = UNITS.iter().find(|u| u.symbol == sym) {
-        return Some((u.factor, u.dim));
+        return Some((u.pow10, u.factor, u.dim));
     }
     for (p, pf) in PREFIXES {
         if let Some(rest) = sym.strip_prefix(p)
             && let Some(u) = UNITS.iter().find(|u| u.prefixable && u.symbol == rest)
         {
-            return Some((pf * u.factor, u.dim));
+            return Some((pf + u.pow10, u.factor, u.dim));
         }
     }
     None
@@ -519,6 +545,27 @@ mod tests {
             assert!(close(got, v), "{t}: {got} != {v}");
             assert_eq!(gd, d, "{t}");
         }
+    }
+
+    #[test]
+    fn decimal_prefixes_give_the_double_nearest_the_written_value() {
+        // Compared with Rust's own decimal parser on the SI spelling.
+        let cases = [
+            ("40 um", "4e-5"),
+            ("1.8 mm", "1.8e-3"),
+            ("2.94 kPa", "2940"),
+            ("0.12 mN/um", "120"),
+            ("12.22 um", "12.22e-6"),
+            ("5 mm/s", "0.005"),
+            ("3 um^2", "3e-12"),
+            ("7 %", "0.07"),
+            ("1.5e-3 mm", "1.5e-6"),
+        ];
+        for (t, want) in cases {
+            let want: f64 = want.parse().unwrap();
+            assert_eq!(Quantity::parse(t).unwrap().value, want, "{t}");
+        }
+        assert_eq!(parse_unit("nm/V").unwrap().0, 1e-9);
     }
 
     #[test]
@@ -585,5 +632,56 @@ mod tests {
             Quantity::parse("12.22 um").unwrap().to_string(),
             "1.222e-5 m"
         );
+    }
+}
+
+#[cfg(test)]
+mod robustness {
+    use super::*;
+
+    #[test]
+    fn odd_numbers_parse_like_rusts_decimal_parser() {
+        for (t, v) in [
+            ("1. m", 1.0),
+            ("1.e3 m", 1000.0),
+            ("+2 m", 2.0),
+            ("1E-3 m", 1e-3),
+        ] {
+            assert_eq!(Quantity::parse(t).map(|q| q.value), Ok(v), "{t}");
+        }
+        assert!(Quantity::parse("1e m").is_err());
+        assert!(Quantity::parse(".").is_err());
+        assert!(Quantity::parse("-").is_err());
+        assert_eq!(
+            Quantity::parse("1e99999999999 m"),
+            Err(UnitError::NotFinite)
+        );
+    }
+
+    #[test]
+    fn arbitrary_text_never_panics() {
+        // Deterministic pseudo-random strings over an alphabet of the characters
+        // the parser treats specially (seeded LCG, no dependency).
+        let alphabet: Vec<char> = "0123456789.eE+-^/*· umkMGnpcµμsNPaVHz%°_x"
+            .chars()
+            .collect();
+        let mut state: u64 = 0x9e37_79b9_7f4a_7c15;
+        for _ in 0..20_000 {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            let len = (state >> 60) as usize;
+            let s: String = (0..len)
+                .map(|_| {
+                    state = state
+                        .wrapping_mul(6_364_136_223_846_793_005)
+                        .wrapping_add(1_442_695_040_888_963_407);
+                    alphabet[(state >> 33) as usize % alphabet.len()]
+                })
+                .collect();
+            if let Ok(q) = Quantity::parse(&s) {
+                assert!(q.value.is_finite(), "{s:?}");
+            }
+        }
     }
 }

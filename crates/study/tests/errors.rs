@@ -260,3 +260,26 @@ fn unknown_keys_in_nested_tables_are_reported_on_finish() {
         "bad.toml:6:1: key `material.prony.tua`: unknown key (expected one of: g, tau)"
     );
 }
+
+#[test]
+fn ranges_need_two_ordered_values_of_the_right_dimension() {
+    let text = "[bounds]\nC1 = [\"1 kPa\", \"10 kPa\"]\nC2 = [\"10 kPa\", \"1 kPa\"]\ntau = [\"1 s\"]\ng = [0.1, \"2 s\"]\n";
+    let mut s = section(text, "bounds");
+    assert_eq!(
+        s.req_range("C1", Dimension::PRESSURE, Bounds::positive())
+            .unwrap(),
+        (1000.0, 10000.0)
+    );
+    assert_eq!(
+        msg(s.req_range("C2", Dimension::PRESSURE, Bounds::positive())),
+        "bad.toml:3:6: key `bounds.C2`: lower end must be below upper end"
+    );
+    assert_eq!(
+        msg(s.req_range("tau", Dimension::TIME, Bounds::positive())),
+        "bad.toml:4:7: key `bounds.tau`: expected [lower, upper] (2 values), found 1 value(s)"
+    );
+    assert_eq!(
+        msg(s.req_range("g", Dimension::NONE, 0.0..=1.0)),
+        "bad.toml:5:11: key `bounds.g[1]`: `2 s` is a time (s), expected a dimensionless number"
+    );
+}

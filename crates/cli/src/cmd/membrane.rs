@@ -25,8 +25,8 @@ pub struct MembraneArgs {
     /// Output directory for CSV (and SVG) files.
     #[arg(long, default_value = "membrane-out")]
     pub out: PathBuf,
-    /// Print a JSON summary on stdout.
-    #[arg(long)]
+    /// Set from the global `--json` flag.
+    #[arg(skip)]
     pub json: bool,
 }
 

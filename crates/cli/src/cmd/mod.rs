@@ -1,10 +1,26 @@
 //! Command-line surface: one module per subcommand.
+//!
+//! Adding a subcommand `foo`:
+//! 1. `src/cmd/foo.rs` with `pub struct Args` (derive `clap::Args`: the raw
+//!    flags), a validated `Config` built by `Args::validate`, and
+//!    `impl Run for Args` — see `check.rs`. Bad values are rejected in
+//!    `validate`, once, with a message that says what to change.
+//! 2. Here: `mod foo;`, a variant `Foo(foo::Args)` in [`Command`], and one
+//!    arm in [`Command::run`].
+//! 3. `docs/cli/foo.md`.
 
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+pub mod build;
+mod check;
+mod compare;
+mod inspect;
+mod material;
 pub mod membrane;
+pub mod sample;
+pub mod surrogate;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
@@ -15,8 +31,47 @@ pub struct Cli {
     #[arg(short, long, action = clap::ArgAction::Count, global = true)]
     pub verbose: u8,
 
+    /// Print results as one JSON document on stdout instead of text.
+    #[arg(long, global = true)]
+    pub json: bool,
+
+    /// The subcommand to run.
     #[command(subcommand)]
     pub command: Command,
+}
+
+/// Options every subcommand sees.
+#[derive(Clone, Copy, Debug)]
+pub struct Context {
+    /// `--json`: stdout carries exactly one JSON document.
+    pub json: bool,
+}
+
+/// A subcommand: raw clap arguments that validate into a configuration,
+/// which then runs. Two stages, so that every check on user input happens
+/// before any work starts.
+pub trait Run: Sized {
+    /// The validated configuration.
+    type Config;
+    /// Checks the raw arguments (and any study file they name).
+    ///
+    /// # Errors
+    /// Any invalid input, with a message naming where it is.
+    fn validate(self, ctx: &Context) -> anyhow::Result<Self::Config>;
+    /// Does the work.
+    ///
+    /// # Errors
+    /// Failures of the work itself (I/O, non-convergence, ...).
+    fn execute(config: Self::Config, ctx: &Context) -> anyhow::Result<ExitCode>;
+
+    /// `validate` then `execute`.
+    ///
+    /// # Errors
+    /// As `validate` and `execute`.
+    fn run(self, ctx: &Context) -> anyhow::Result<ExitCode> {
+        let config = self.validate(ctx)?;
+        Self::execute(config, ctx)
+    }
 }
 
 /// The subcommands, in pipeline order.
@@ -24,19 +79,57 @@ pub struct Cli {
 pub enum Command {
     /// Print the version and the crates that make up this build.
     Version,
+    /// Validate a study file and print every value as the program reads it, in SI.
+    Check(check::Args),
+    /// Drive one material through uniaxial, equibiaxial or simple-shear loading; CSV of stresses.
+    Material(material::Args),
+    /// Group G(t) (mean ± sd) and rank-sum p(t) between two groups of cells.
+    Compare(compare::Args),
+    /// Latin-hypercube training and checking designs in a parameter domain.
+    Sample(sample::SampleArgs),
+    /// Run a forward model over a design: parallel, resumable, shardable.
+    Build(build::BuildArgs),
+    /// Merge shard stores of one build.
+    Merge(build::MergeArgs),
+    /// Kriging surrogates: fit, predict, check.
+    #[command(subcommand)]
+    Surrogate(surrogate::SurrogateCmd),
     /// Fluid-filled NLV membrane squeezed between plates (ch. II, semi-analytical).
     Membrane(membrane::MembraneArgs),
+    /// Show what an AFM instrument file holds (segments, channels, calibration); export CSV, plot, quick fits.
+    Inspect(inspect::Args),
 }
 
 impl Command {
     /// Run the chosen subcommand.
-    pub fn run(self) -> anyhow::Result<ExitCode> {
+    pub fn run(self, ctx: &Context) -> anyhow::Result<ExitCode> {
         match self {
             Command::Version => {
-                println!("nlvid {}", env!("CARGO_PKG_VERSION"));
+                if ctx.json {
+                    crate::output::print_json(&serde_json::json!({
+                        "name": "nlvid",
+                        "version": env!("CARGO_PKG_VERSION"),
+                    }))?;
+                } else {
+                    println!("nlvid {}", env!("CARGO_PKG_VERSION"));
+                }
                 Ok(ExitCode::SUCCESS)
             }
-            Command::Membrane(args) => membrane::run(args),
+            Command::Check(a) => a.run(ctx),
+            Command::Sample(a) => a.run(),
+            Command::Build(a) => a.run(),
+            Command::Merge(a) => a.run(),
+            Command::Surrogate(c) => c.run(ctx.json),
+            Command::Membrane(mut args) => {
+                args.json = ctx.json;
+                membrane::run(args)
+            }
+            Command::Compare(a) => a.run(ctx),
+            Command::Inspect(mut args) => {
+                args.json = ctx.json;
+                args.run()
+            }
+            Command::Material(a) => a.run(ctx),
         }
     }
 }

@@ -1,0 +1,185 @@
+//! `nlvid check <study.toml>`: validate a study file and print every value
+//! as the program reads it, in SI.
+//!
+//! Checks TOML syntax, every quantity string (unit known, finite), bare
+//! non-finite numbers, and — for sections whose stage has registered a
+//! reader in [`STAGE_READERS`] — the full schema (required keys, dimensions,
+//! ranges, unknown keys).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context as _;
+use nlvid_study::{LeafValue, Quantity, Section, Study, StudyError, UnitError, fmt_number};
+use serde_json::json;
+
+use super::{Context, Run};
+use crate::output::print_json;
+
+/// A stage's schema check for one top-level section: reads it fully (the
+/// caller then reports unknown keys).
+type SectionReader = fn(&mut Section) -> Result<(), StudyError>;
+
+/// Stages register `(section name, reader)` here so that `nlvid check`
+/// validates their sections' schema; other sections get syntax, units and
+/// numbers checked, not their keys.
+const STAGE_READERS: &[(&str, SectionReader)] = &[("protocol", |s| {
+    <nlvid_protocol::ProtocolSettings as nlvid_study::FromSection>::from_section(s).map(|_| ())
+})];
+
+/// Raw arguments of `nlvid check`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// The study file (TOML).
+    pub study: PathBuf,
+    /// Treat warnings (strings that look like quantities but cannot be read) as errors.
+    #[arg(long)]
+    pub strict: bool,
+}
+
+/// What `check` found: the study's values and any warnings.
+#[derive(Debug)]
+pub struct Config {
+    path: PathBuf,
+    hash: String,
+    leaves: Vec<nlvid_study::Leaf>,
+    schema_checked: Vec<&'static str>,
+    warnings: Vec<String>,
+    strict: bool,
+}
+
+impl Run for Args {
+    type Config = Config;
+
+    fn validate(self, _ctx: &Context) -> anyhow::Result<Config> {
+        let mut study = Study::load(&self.study)?;
+        let mut schema_checked = Vec::new();
+        for (name, reader) in STAGE_READERS {
+            if let Some(mut s) = study.opt_section(name)? {
+                reader(&mut s)?;
+                s.finish()?;
+                schema_checked.push(*name);
+            }
+        }
+        let leaves = study.leaves();
+        let mut warnings = Vec::new();
+        for leaf in &leaves {
+            match &leaf.value {
+                LeafValue::Number(x) if !x.is_finite() => {
+                    anyhow::bail!(
+                        "{}:{}:{}: key `{}`: `{x}` is not a finite number",
+                        study.name(),
+                        leaf.line,
+                        leaf.column,
+                        leaf.key
+                    );
+                }
+                LeafValue::Text(t) => match Quantity::parse(t) {
+                    Err(UnitError::NotFinite) => anyhow::bail!(
+                        "{}:{}:{}: key `{}`: `{t}` is not a finite number",
+                        study.name(),
+                        leaf.line,
+                        leaf.column,
+                        leaf.key
+                    ),
+                    Err(
+                        e @ (UnitError::UnknownUnit(_)
+                        | UnitError::BadExponent(_)
+                        | UnitError::Syntax(..)),
+                    ) => warnings.push(format!(
+                        "{}:{}:{}: key `{}`: `{t}` looks like a quantity but cannot be read: {e}",
+                        study.name(),
+                        leaf.line,
+                        leaf.column,
+                        leaf.key
+                    )),
+                    _ => {}
+                },
+                _ => {}
+            }
+        }
+        Ok(Config {
+            path: self.study,
+            hash: study.hash().to_string(),
+            leaves,
+            schema_checked,
+            warnings,
+            strict: self.strict,
+        })
+    }
+
+    fn execute(c: Config, ctx: &Context) -> anyhow::Result<ExitCode> {
+        if ctx.json {
+            let values: Vec<_> = c.leaves.iter().map(leaf_json).collect();
+            print_json(&json!({
+                "study": c.path.display().to_string(),
+                "sha256": c.hash,
+                "schema_checked_sections": c.schema_checked,
+                "values": values,
+                "warnings": c.warnings,
+            }))?;
+        } else {
+            print_text(&c).context("writing to stdout")?;
+            for w in &c.warnings {
+                eprintln!("warning: {w}");
+            }
+        }
+        if c.strict && !c.warnings.is_empty() {
+            eprintln!("error: {} warning(s) with --strict", c.warnings.len());
+            return Ok(ExitCode::FAILURE);
+        }
+        Ok(ExitCode::SUCCESS)
+    }
+}
+
+fn print_text(c: &Config) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{}  sha256 {}", c.path.display(), c.hash)?;
+    let kw = c
+        .leaves
+        .iter()
+        .map(|l| l.key.len())
+        .max()
+        .unwrap_or(3)
+        .max(3);
+    writeln!(
+        out,
+        "{:>4}  {:kw$}  {:20}  as written",
+        "line", "key", "value (SI)"
+    )?;
+    for l in &c.leaves {
+        let (si, written) = match &l.value {
+            LeafValue::Quantity { text, si } => (si.to_string(), text.clone()),
+            LeafValue::Number(x) => (fmt_number(*x), String::new()),
+            LeafValue::Integer(i) => (i.to_string(), String::new()),
+            LeafValue::Bool(b) => (b.to_string(), String::new()),
+            LeafValue::Text(t) | LeafValue::Datetime(t) => (t.clone(), String::new()),
+        };
+        writeln!(out, "{:>4}  {:kw$}  {:20}  {written}", l.line, l.key, si)?;
+    }
+    let checked = if c.schema_checked.is_empty() {
+        "none registered yet".to_string()
+    } else {
+        c.schema_checked.join(", ")
+    };
+    writeln!(
+        out,
+        "ok: syntax, units and numbers valid; section schemas checked: {checked}"
+    )
+}
+
+fn leaf_json(l: &nlvid_study::Leaf) -> serde_json::Value {
+    let mut v = json!({ "key": l.key, "line": l.line });
+    let (value, unit, written) = match &l.value {
+        LeafValue::Quantity { text, si } => (json!(si.value), si.dim.si_unit(), json!(text)),
+        LeafValue::Number(x) => (json!(x), String::new(), json!(null)),
+        LeafValue::Integer(i) => (json!(i), String::new(), json!(null)),
+        LeafValue::Bool(b) => (json!(b), String::new(), json!(null)),
+        LeafValue::Text(t) | LeafValue::Datetime(t) => (json!(t), String::new(), json!(null)),
+    };
+    v["value"] = value;
+    v["unit"] = json!(unit);
+    v["written"] = written;
+    v
+}

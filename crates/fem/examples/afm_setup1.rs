@@ -1,0 +1,82 @@
+//! Thesis-scale AFM run (setup 1 of ch. V) and the mesh-convergence study of
+//! Fig. 5.11.
+//!
+//! ```text
+//! cargo run -p nlvid-fem --release --example afm_setup1            # default mesh, timing (median of 5)
+//! cargo run -p nlvid-fem --release --example afm_setup1 -- study   # n = 35, 65, 129 (≈1200/4200/16600 elements)
+//! ```
+
+use nlvid_fem::afm::{self, AfmParams, AfmSetup};
+
+fn params() -> AfmParams {
+    AfmParams {
+        g0: 1e3,
+        g1: 0.3,
+        tau1: 0.5,
+        g2: 0.3,
+        tau2: 10.0,
+    }
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mode = std::env::args().nth(1).unwrap_or_default();
+    if mode == "study" {
+        let mut results = Vec::new();
+        for n in [35usize, 65, 129] {
+            let mut setup = AfmSetup::thesis_setup1();
+            setup.mesh.elements_per_side = n;
+            let run = afm::run(&params(), &setup)?;
+            let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
+            println!(
+                "n = {n:4} elements = {:6}  peak = {:.5e} N  final = {:.5e} N  min = {:.3e} N  steps = {} cutbacks = {} iterations = {}  wall = {:.2} s",
+                run.elements,
+                run.peak_force,
+                run.final_force,
+                min_force,
+                run.steps,
+                run.cutbacks,
+                run.iterations,
+                run.wall_seconds
+            );
+            results.push(run);
+        }
+        let finest = &results[2];
+        for r in &results[..2] {
+            println!(
+                "elements {:6}: peak-force error {:+.3} %, final-force error {:+.3} % (vs {} elements)",
+                r.elements,
+                100.0 * (r.peak_force / finest.peak_force - 1.0),
+                100.0 * (r.final_force / finest.final_force - 1.0),
+                finest.elements
+            );
+        }
+        return Ok(());
+    }
+    let setup = AfmSetup::thesis_setup1();
+    let mut walls = Vec::new();
+    let mut last = None;
+    for _ in 0..5 {
+        let run = afm::run(&params(), &setup)?;
+        walls.push(run.wall_seconds);
+        last = Some(run);
+    }
+    walls.sort_by(f64::total_cmp);
+    if let Some(run) = last {
+        let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
+        println!(
+            "setup 1, {} elements: peak {:.5e} N, final {:.5e} N, min {:.3e} N, steps {}, cutbacks {}, iterations {}",
+            run.elements,
+            run.peak_force,
+            run.final_force,
+            min_force,
+            run.steps,
+            run.cutbacks,
+            run.iterations
+        );
+    }
+    println!(
+        "wall time: median of 5 = {:.3} s (all: {walls:.3?})",
+        walls[2]
+    );
+    Ok(())
+}

@@ -1,0 +1,474 @@
+//! The AFM cell-indentation model of thesis §5.3 (App. A.1.4): an
+//! axisymmetric oblate cell (height H, base diameter D) with its base fixed
+//! to the glass, indented by a rigid sphere that hangs on the cantilever
+//! spring k. Step 1 engages with a force ramp (force control); step 2
+//! drives the spring's free end with the piezo program Z(t) (§5.2.2,
+//! Fig. 5.2). F = k d, δ = Z − d.
+//!
+//! Sign convention (as the `protocol` crate): Z, d and δ are positive
+//! toward the cell; Z = 0 at the first contact (probe touching the top of
+//! the undeformed cell with zero force), so after engagement Z(0) = δ₀ + d₀;
+//! time t = 0 at the start of step 2, step 1 runs at negative times.
+
+use crate::model::{
+    Component, Control, ProbeDrive, Settings, SphereProbe, Stage, StepRecord, Support,
+};
+use crate::reference::PronyNeoHookean;
+use crate::{FemError, Mesh, Model, Result};
+use nlvid_material::Material3;
+
+/// The five NLV parameters of eq. 5.1: G(s) = G₀ [g_∞ + Σ g_k e^{−s/τ_k}].
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct AfmParams {
+    /// Instantaneous shear modulus G₀ = C₁ (Pa).
+    pub g0: f64,
+    /// First Prony weight.
+    pub g1: f64,
+    /// First relaxation time (s).
+    pub tau1: f64,
+    /// Second Prony weight.
+    pub g2: f64,
+    /// Second relaxation time (s).
+    pub tau2: f64,
+}
+
+/// How the probe is held.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum Cantilever {
+    /// Linear spring of stiffness k (N/m): the real AFM.
+    Spring {
+        /// Spring constant (N/m).
+        stiffness: f64,
+    },
+    /// Infinitely stiff: the probe follows the piezo (δ = Z).
+    Rigid,
+}
+
+/// Step 1: ramp the set-point force to `force` over `ramp` s, then hold.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Engagement {
+    /// Engagement force (N); 0 skips step 1.
+    pub force: f64,
+    /// Ramp duration (s).
+    pub ramp: f64,
+    /// Hold duration (s).
+    pub hold: f64,
+}
+
+/// Mesh density of the cell (see [`Mesh::oblate_cell`]).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct MeshSpec {
+    /// Elements per side (n × n elements).
+    pub elements_per_side: usize,
+    /// Coarsest/finest spacing ratio toward the contact.
+    pub bias: f64,
+}
+
+/// Everything but the material: geometry, cantilever, protocol, mesh,
+/// output grid and solver settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AfmSetup {
+    /// Cell height H (m).
+    pub height: f64,
+    /// Cell base diameter D (m).
+    pub diameter: f64,
+    /// Probe radius (m), 2.5 µm in the thesis.
+    pub probe_radius: f64,
+    /// Cantilever.
+    pub cantilever: Cantilever,
+    /// Step 1.
+    pub engagement: Engagement,
+    /// Step 2: piezo position Z (m, toward the cell, relative to its value
+    /// at the end of step 1) at increasing times (s) from 0, linear between.
+    pub piezo: Vec<(f64, f64)>,
+    /// Mesh density.
+    pub mesh: MeshSpec,
+    /// Bulk modulus over G₀ (near-incompressibility penalty).
+    pub bulk_ratio: f64,
+    /// Output times (s, step-2 clock).
+    pub output_times: Vec<f64>,
+    /// Largest step in ramps as a fraction of the ramp duration.
+    pub ramp_step_fraction: f64,
+    /// Largest step in holds (s).
+    pub hold_step_max: f64,
+    /// Nonlinear solver settings.
+    pub settings: Settings,
+}
+
+/// Thesis ch. V piezo program (setup 1): 0 → 2 µm at 10 µm/s, back 1 µm,
+/// then 1 ↔ 2 µm at 5 and 1 µm/s, a 10 µm/s ramp to 2 µm and a 50 s hold.
+pub fn thesis_piezo(depth: f64, retract: f64) -> Vec<(f64, f64)> {
+    let mut pts = vec![(0.0, 0.0)];
+    let mut push = |dz: f64, rate: f64| {
+        let &(t, z) = pts.last().unwrap_or(&(0.0, 0.0));
+        pts.push((t + dz.abs() / rate, z + dz));
+    };
+    push(depth, 10e-6);
+    push(-retract, 10e-6);
+    for rate in [5e-6, 1e-6] {
+        push(retract, rate);
+        push(-retract, rate);
+    }
+    push(retract, 10e-6);
+    let &(t, z) = pts.last().unwrap_or(&(0.0, 0.0));
+    pts.push((t + 50.0, z));
+    pts
+}
+
+impl AfmSetup {
+    /// Setup 1 of ch. V: H = 12.22 µm, D = 28.88 µm, 5 µm sphere,
+    /// k = 0.12 N/m, engagement k·4 nm = 0.48 nN at 1 nm/s, the thesis
+    /// piezo program, m = 5095 output points, the default mesh.
+    pub fn thesis_setup1() -> Self {
+        let k = 0.12;
+        let piezo = thesis_piezo(2e-6, 1e-6);
+        let end = piezo.last().map(|p| p.0).unwrap_or(0.0);
+        let m = 5095;
+        Self {
+            height: 12.22e-6,
+            diameter: 28.88e-6,
+            probe_radius: 2.5e-6,
+            cantilever: Cantilever::Spring { stiffness: k },
+            engagement: Engagement {
+                force: k * 4e-9,
+                ramp: 4.0,
+                hold: 0.0,
+            },
+            piezo,
+            mesh: MeshSpec {
+                elements_per_side: 35,
+                bias: 4.0,
+            },
+            bulk_ratio: 1000.0,
+            output_times: (0..m).map(|i| end * i as f64 / (m - 1) as f64).collect(),
+            ramp_step_fraction: 0.1,
+            hold_step_max: 2.0,
+            settings: Settings::default(),
+        }
+    }
+
+    fn check(&self) -> Result<()> {
+        let positive = |name, v: f64| {
+            if v > 0.0 && v.is_finite() {
+                Ok(())
+            } else {
+                Err(FemError::Setting {
+                    name,
+                    value: v,
+                    reason: "must be positive and finite",
+                })
+            }
+        };
+        positive("cell height", self.height)?;
+        positive("cell diameter", self.diameter)?;
+        positive("probe radius", self.probe_radius)?;
+        positive("bulk ratio", self.bulk_ratio)?;
+        positive("ramp step fraction", self.ramp_step_fraction)?;
+        positive("hold step max", self.hold_step_max)?;
+        if let Cantilever::Spring { stiffness } = self.cantilever {
+            positive("cantilever stiffness", stiffness)?;
+        }
+        if !(self.engagement.force >= 0.0) {
+            return Err(FemError::Setting {
+                name: "engagement force",
+                value: self.engagement.force,
+                reason: "must be ≥ 0",
+            });
+        }
+        if self.engagement.force > 0.0 {
+            positive("engagement ramp", self.engagement.ramp)?;
+        }
+        if self.piezo.len() < 2 || self.piezo[0].0 != 0.0 {
+            return Err(FemError::Setting {
+                name: "piezo program",
+                value: self.piezo.len() as f64,
+                reason: "needs ≥ 2 points starting at t = 0",
+            });
+        }
+        for w in self.piezo.windows(2) {
+            if !(w[1].0 > w[0].0) {
+                return Err(FemError::Setting {
+                    name: "piezo program time",
+                    value: w[1].0,
+                    reason: "times must increase",
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Result of one AFM run on the output grid.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct AfmRun {
+    /// Output times (s).
+    pub time: Vec<f64>,
+    /// Piezo position Z (m).
+    pub piezo: Vec<f64>,
+    /// Cantilever deflection d = F/k (m); 0 for a rigid cantilever.
+    pub deflection: Vec<f64>,
+    /// Force on the probe F (N), repulsive positive.
+    pub force: Vec<f64>,
+    /// Indentation δ = Z − d (m).
+    pub indentation: Vec<f64>,
+    /// Largest force over the run (N).
+    pub peak_force: f64,
+    /// Force at the last output time (N).
+    pub final_force: f64,
+    /// Converged time steps.
+    pub steps: usize,
+    /// Cut-backs.
+    pub cutbacks: usize,
+    /// Newton iterations (linear solves).
+    pub iterations: usize,
+    /// Elements in the mesh.
+    pub elements: usize,
+    /// Wall time of the run (s).
+    pub wall_seconds: f64,
+}
+
+/// The cell material of eq. 5.1 from the `material` crate (ABAQUS-form
+/// finite-strain Prony viscoelasticity, §4.3, neo-Hookean elastic part).
+///
+/// `g0` is read as eq. 5.1 defines it, the instantaneous *shear modulus*
+/// G(0); the neo-Hookean constant is then C1 = G0/2 (W = C1(Ī1 − 3)). The
+/// thesis also calls G0 "the neo-Hookean parameter C1" (§5.4.1): reading it
+/// that way doubles the stiffness; see docs/theory/fem.md.
+///
+/// # Errors
+/// [`FemError::Material`] naming the offending parameter.
+pub fn cell_material(
+    params: &AfmParams,
+    bulk_ratio: f64,
+) -> Result<nlvid_material::PronyViscoelastic> {
+    nlvid_material::PronyViscoelastic::cell(
+        0.5 * params.g0,
+        params.g1,
+        params.tau1,
+        params.g2,
+        params.tau2,
+        bulk_ratio * params.g0,
+    )
+    .map_err(|source| FemError::Material {
+        element: 0,
+        point: 0,
+        source,
+    })
+}
+
+/// One run of the model for the eq. 5.1 parameters with the `material`
+/// crate's cell model ([`cell_material`]) and bulk modulus
+/// `setup.bulk_ratio × G₀`. This is the forward model of the surrogate stage.
+///
+/// # Errors
+/// [`FemError::Setting`] / [`FemError::Material`] for bad parameters,
+/// [`FemError::NonConvergence`] when a step cannot be completed (time,
+/// step, residual in the error).
+pub fn run(params: &AfmParams, setup: &AfmSetup) -> Result<AfmRun> {
+    run_with(cell_material(params, setup.bulk_ratio)?, setup)
+}
+
+/// [`run`] with the fem crate's own Simo-form Prony neo-Hookean
+/// ([`PronyNeoHookean`], shear modulus G0), used to cross-check the
+/// `material` crate's model.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_reference(params: &AfmParams, setup: &AfmSetup) -> Result<AfmRun> {
+    let material = PronyNeoHookean::new(
+        params.g0,
+        setup.bulk_ratio * params.g0,
+        vec![(params.g1, params.tau1), (params.g2, params.tau2)],
+    )
+    .map_err(|source| FemError::Material {
+        element: 0,
+        point: 0,
+        source,
+    })?;
+    run_with(material, setup)
+}
+
+/// Linear interpolation in a sorted table.
+pub fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
+    if xs.is_empty() {
+        return f64::NAN;
+    }
+    let k = xs.partition_point(|&v| v <= x);
+    if k == 0 {
+        return ys[0];
+    }
+    if k >= xs.len() {
+        return ys[xs.len() - 1];
+    }
+    let (x0, x1) = (xs[k - 1], xs[k]);
+    let s = if x1 > x0 { (x - x0) / (x1 - x0) } else { 1.0 };
+    ys[k - 1] + s * (ys[k] - ys[k - 1])
+}
+
+/// The cell model (mesh, supports, probe) for `setup`, ready to run.
+///
+/// # Errors
+/// As [`Model::new`].
+pub fn build<M: Material3>(material: M, setup: &AfmSetup) -> Result<Model<M>> {
+    setup.check()?;
+    let mesh = Mesh::oblate_cell(
+        setup.height,
+        setup.diameter,
+        setup.mesh.elements_per_side,
+        setup.mesh.bias,
+    )?;
+    let supports = [
+        Support::fixed("axis", Component::R),
+        Support::fixed("base", Component::R),
+        Support::fixed("base", Component::Z),
+    ];
+    let probe = SphereProbe {
+        radius: setup.probe_radius,
+        centre_z: setup.height + setup.probe_radius,
+        surface: "surface".into(),
+    };
+    Model::new(
+        mesh,
+        material,
+        &supports,
+        Some(probe),
+        None,
+        setup.settings.clone(),
+    )
+}
+
+/// [`run`] with any material.
+///
+/// # Errors
+/// As [`run`].
+pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
+    let start = std::time::Instant::now();
+    let mut model = build(material, setup)?;
+    let eng = setup.engagement;
+    let t_engage = if eng.force > 0.0 {
+        eng.ramp + eng.hold
+    } else {
+        0.0
+    };
+    model.set_time(-t_engage);
+    if eng.force > 0.0 {
+        let ramp_end = -eng.hold;
+        let force_at = move |t: f64| {
+            let s = ((t + t_engage) / eng.ramp).clamp(0.0, 1.0);
+            Control {
+                probe: ProbeDrive::Force(eng.force * s),
+                ..Control::default()
+            }
+        };
+        model.run_stage(&Stage {
+            name: "engage ramp",
+            end: ramp_end,
+            dt_initial: eng.ramp * 0.05,
+            dt_max: eng.ramp * 0.25,
+            control: &force_at,
+        })?;
+        if eng.hold > 0.0 {
+            model.run_stage(&Stage {
+                name: "engage hold",
+                end: 0.0,
+                dt_initial: (0.05 * eng.hold).min(0.02),
+                dt_max: setup.hold_step_max,
+                control: &force_at,
+            })?;
+        }
+    }
+    // Step 2 clock starts here.
+    let w0 = model.probe_displacement();
+    let (k, free0) = match setup.cantilever {
+        Cantilever::Spring { stiffness } => (stiffness, w0 - eng.force / stiffness),
+        Cantilever::Rigid => (f64::INFINITY, w0),
+    };
+    let n_engage_records = model.records().len();
+    let piezo = &setup.piezo;
+    for (seg, win) in piezo.windows(2).enumerate() {
+        let (t0, z0) = win[0];
+        let (t1, z1) = win[1];
+        let drive = move |t: f64| {
+            let z = z0 + (z1 - z0) * ((t - t0) / (t1 - t0)).clamp(0.0, 1.0);
+            let probe = match setup.cantilever {
+                Cantilever::Spring { stiffness } => ProbeDrive::Spring {
+                    stiffness,
+                    free_end: free0 - z,
+                },
+                Cantilever::Rigid => ProbeDrive::Displacement(free0 - z),
+            };
+            Control {
+                probe,
+                ..Control::default()
+            }
+        };
+        let duration = t1 - t0;
+        let (dt_initial, dt_max) = if z1 == z0 {
+            (
+                (0.002 * duration).min(0.01),
+                setup.hold_step_max.min(duration),
+            )
+        } else {
+            let h = setup.ramp_step_fraction * duration;
+            (h, h)
+        };
+        let name = format!("piezo segment {seg}");
+        model.run_stage(&Stage {
+            name: &name,
+            end: t1,
+            dt_initial,
+            dt_max,
+            control: &drive,
+        })?;
+    }
+    // Traces at the converged steps, starting with the engaged state.
+    let recs: &[StepRecord] = model.records();
+    let mut ts = vec![0.0];
+    let mut zs = vec![0.0];
+    let mut fs = vec![eng.force];
+    let mut ws = vec![w0];
+    for r in &recs[n_engage_records..] {
+        let z_piezo = interpolate(
+            &piezo.iter().map(|p| p.0).collect::<Vec<_>>(),
+            &piezo.iter().map(|p| p.1).collect::<Vec<_>>(),
+            r.time,
+        );
+        ts.push(r.time);
+        zs.push(z_piezo);
+        let f = match setup.cantilever {
+            Cantilever::Spring { stiffness } => stiffness * (r.probe_w - r.free_end),
+            Cantilever::Rigid => r.contact_force,
+        };
+        fs.push(f);
+        ws.push(r.probe_w);
+    }
+    // Absolute piezo position: Z_abs = −z_free, so that δ = −w = Z − d.
+    let z_offset = -free0;
+    let mut out = AfmRun {
+        time: setup.output_times.clone(),
+        piezo: Vec::with_capacity(setup.output_times.len()),
+        deflection: Vec::with_capacity(setup.output_times.len()),
+        force: Vec::with_capacity(setup.output_times.len()),
+        indentation: Vec::with_capacity(setup.output_times.len()),
+        peak_force: fs.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+        final_force: 0.0,
+        steps: model.counters().steps,
+        cutbacks: model.counters().cutbacks,
+        iterations: model.counters().iterations,
+        elements: model.mesh().elements.len(),
+        wall_seconds: 0.0,
+    };
+    for &t in &setup.output_times {
+        let f = interpolate(&ts, &fs, t);
+        let w = interpolate(&ts, &ws, t);
+        let z = interpolate(&ts, &zs, t) + z_offset;
+        let d = if k.is_finite() { f / k } else { 0.0 };
+        out.piezo.push(z);
+        out.deflection.push(d);
+        out.force.push(f);
+        out.indentation.push(-w);
+    }
+    out.final_force = out.force.last().copied().unwrap_or(f64::NAN);
+    out.wall_seconds = start.elapsed().as_secs_f64();
+    Ok(out)
+}

@@ -1,0 +1,418 @@
+//! The axisymmetric 4-node F-bar element (total Lagrangian).
+//!
+//! Displacements (u_r, u_z) are bilinear. At each of the 2×2 Gauss points
+//! the deformation gradient has the components, in the frame (r, z, θ),
+//!
+//! ```text
+//! F = [[1 + ∂u_r/∂R, ∂u_r/∂Z, 0], [∂u_z/∂R, 1 + ∂u_z/∂Z, 0], [0, 0, 1 + u_r/R]]
+//! ```
+//!
+//! (hoop stretch F_θθ = r/R). Volumetric locking is removed by the F-bar
+//! idea in its variational (mean-dilatation) form: the material sees
+//! `F̄ = (J̄/J)^{1/3} F`, where `J̄ = ∫J dV₀ / ∫dV₀` is the element's mean
+//! Jacobian. The element is the stationary point of `∫ Ψ(F̄(u)) dV₀`, so its
+//! residual is `∫ P(F̄) : ∂F̄/∂u dV₀` and its tangent is the exact second
+//! derivative (symmetric whenever ∂P/∂F is). For a decoupled energy
+//! Ψ = Ψ_iso(F) + U(J) this is exactly the Q1/P0 mixed element of
+//! Simo–Taylor–Pister with the pressure condensed out.
+
+/// 2×2 Gauss points (ξ, η); all weights are 1.
+pub const GAUSS: [(f64, f64); 4] = {
+    const G: f64 = 0.577_350_269_189_625_8;
+    [(-G, -G), (G, -G), (G, G), (-G, G)]
+};
+
+/// Components of F stored by the element, and their index in the 3×3
+/// matrix (row-major `3i+J`): rR, rZ, zR, zZ, θθ.
+pub(crate) const FIDX: [(usize, usize); 5] = [(0, 0), (0, 1), (1, 0), (1, 1), (2, 2)];
+
+/// Shape functions N, their reference gradients ∂N/∂(R, Z) and det J at
+/// (ξ, η) for an element with nodes `x`.
+pub fn shape_gradients(x: &[[f64; 2]; 4], xi: f64, eta: f64) -> ([f64; 4], [[f64; 2]; 4], f64) {
+    let sx = [-1.0, 1.0, 1.0, -1.0];
+    let se = [-1.0, -1.0, 1.0, 1.0];
+    let mut n = [0.0; 4];
+    let mut dn = [[0.0; 2]; 4];
+    for a in 0..4 {
+        n[a] = 0.25 * (1.0 + sx[a] * xi) * (1.0 + se[a] * eta);
+        dn[a] = [
+            0.25 * sx[a] * (1.0 + se[a] * eta),
+            0.25 * se[a] * (1.0 + sx[a] * xi),
+        ];
+    }
+    let mut jac = [[0.0; 2]; 2];
+    for a in 0..4 {
+        for i in 0..2 {
+            for k in 0..2 {
+                jac[i][k] += x[a][i] * dn[a][k];
+            }
+        }
+    }
+    let det = jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0];
+    let inv = [
+        [jac[1][1] / det, -jac[0][1] / det],
+        [-jac[1][0] / det, jac[0][0] / det],
+    ];
+    let mut dx = [[0.0; 2]; 4];
+    for a in 0..4 {
+        for i in 0..2 {
+            dx[a][i] = dn[a][0] * inv[0][i] + dn[a][1] * inv[1][i];
+        }
+    }
+    (n, dx, det)
+}
+
+/// Reference-configuration data of one Gauss point.
+#[derive(Debug, Clone, Copy)]
+pub struct PointGeometry {
+    /// Shape functions.
+    pub n: [f64; 4],
+    /// ∂N/∂R, ∂N/∂Z.
+    pub dn: [[f64; 2]; 4],
+    /// Reference radius R.
+    pub r: f64,
+    /// Integration weight 2π R det J (m³).
+    pub weight: f64,
+}
+
+/// Gauss-point geometry of one element.
+pub fn element_geometry(x: &[[f64; 2]; 4]) -> [PointGeometry; 4] {
+    GAUSS.map(|(xi, eta)| {
+        let (n, dn, det) = shape_gradients(x, xi, eta);
+        let r: f64 = (0..4).map(|a| n[a] * x[a][0]).sum();
+        PointGeometry {
+            n,
+            dn,
+            r,
+            weight: 2.0 * std::f64::consts::PI * r * det,
+        }
+    })
+}
+
+/// ∂F/∂u at a point: row = stored F component (see `FIDX`), column =
+/// element dof (u_r0, u_z0, u_r1, …). F is linear in u, so this is constant.
+pub(crate) fn grad_operator(g: &PointGeometry) -> [[f64; 8]; 5] {
+    let mut b = [[0.0; 8]; 5];
+    for a in 0..4 {
+        b[0][2 * a] = g.dn[a][0];
+        b[1][2 * a] = g.dn[a][1];
+        b[2][2 * a + 1] = g.dn[a][0];
+        b[3][2 * a + 1] = g.dn[a][1];
+        b[4][2 * a] = g.n[a] / g.r;
+    }
+    b
+}
+
+/// The stored F components at a point for element displacements `u`.
+pub(crate) fn deformation(b: &[[f64; 8]; 5], u: &[f64; 8]) -> [f64; 5] {
+    let mut f = [1.0, 0.0, 0.0, 1.0, 1.0];
+    for (fc, row) in f.iter_mut().zip(b) {
+        *fc += row.iter().zip(u).map(|(x, y)| x * y).sum::<f64>();
+    }
+    f
+}
+
+/// J = det F for stored components, its gradient and Hessian w.r.t. them.
+pub(crate) fn jacobian_derivatives(f: &[f64; 5]) -> (f64, [f64; 5], [[f64; 5]; 5]) {
+    let j2 = f[0] * f[3] - f[1] * f[2];
+    let h = f[4];
+    let dj = [f[3] * h, -f[2] * h, -f[1] * h, f[0] * h, j2];
+    let mut hj = [[0.0; 5]; 5];
+    hj[0][3] = h;
+    hj[3][0] = h;
+    hj[1][2] = -h;
+    hj[2][1] = -h;
+    hj[0][4] = f[3];
+    hj[4][0] = f[3];
+    hj[3][4] = f[0];
+    hj[4][3] = f[0];
+    hj[1][4] = -f[2];
+    hj[4][1] = -f[2];
+    hj[2][4] = -f[1];
+    hj[4][2] = -f[1];
+    (j2 * h, dj, hj)
+}
+
+/// The 3×3 matrix of the stored components.
+pub(crate) fn to_mat3(f: &[f64; 5]) -> nlvid_material::Mat3 {
+    nlvid_material::Mat3::new(f[0], f[1], 0.0, f[2], f[3], 0.0, 0.0, 0.0, f[4])
+}
+
+/// Bᵀ v for a 5×8 operator.
+pub(crate) fn bt_v(b: &[[f64; 8]; 5], v: &[f64; 5]) -> [f64; 8] {
+    let mut out = [0.0; 8];
+    for (row, &vi) in b.iter().zip(v) {
+        for (o, &x) in out.iter_mut().zip(row) {
+            *o += x * vi;
+        }
+    }
+    out
+}
+
+/// Bᵀ M B for a 5×8 operator and a 5×5 matrix, added to `out` with factor `w`.
+pub(crate) fn add_bt_m_b(out: &mut [[f64; 8]; 8], b: &[[f64; 8]; 5], m: &[[f64; 5]; 5], w: f64) {
+    let mut mb = [[0.0; 8]; 5];
+    for i in 0..5 {
+        for k in 0..5 {
+            let mik = m[i][k];
+            if mik != 0.0 {
+                for c in 0..8 {
+                    mb[i][c] += mik * b[k][c];
+                }
+            }
+        }
+    }
+    for r in 0..8 {
+        for i in 0..5 {
+            let bir = b[i][r] * w;
+            if bir != 0.0 {
+                for c in 0..8 {
+                    out[r][c] += bir * mb[i][c];
+                }
+            }
+        }
+    }
+}
+
+/// out += w (a ⊗ b).
+pub(crate) fn add_outer(out: &mut [[f64; 8]; 8], a: &[f64; 8], b: &[f64; 8], w: f64) {
+    for r in 0..8 {
+        let ar = a[r] * w;
+        for c in 0..8 {
+            out[r][c] += ar * b[c];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn jacobian_gradient_and_hessian_match_finite_differences() {
+        let f = [1.1, 0.2, -0.15, 0.93, 1.07];
+        let (_, dj, hj) = jacobian_derivatives(&f);
+        let h = 1e-6;
+        for k in 0..5 {
+            let mut fp = f;
+            let mut fm = f;
+            fp[k] += h;
+            fm[k] -= h;
+            let (jp, dp, _) = jacobian_derivatives(&fp);
+            let (jm, dm, _) = jacobian_derivatives(&fm);
+            assert!(((jp - jm) / (2.0 * h) - dj[k]).abs() < 1e-8);
+            for i in 0..5 {
+                assert!(((dp[i] - dm[i]) / (2.0 * h) - hj[i][k]).abs() < 1e-8);
+            }
+        }
+    }
+
+    fn tangent_fd(fbar: bool) {
+        let mat = crate::reference::NeoHookean {
+            mu: 1.0,
+            kappa: 30.0,
+        };
+        let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
+        let geo = element_geometry(&x);
+        let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
+        let mut out = ElementOutput::zero();
+        let sn = [(); 4];
+        let mut tr = [(); 4];
+        fbar_element(&mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut out).unwrap();
+        let h = 1e-7;
+        let mut op = ElementOutput::zero();
+        let mut om = ElementOutput::zero();
+        for c in 0..8 {
+            let mut up = u;
+            let mut um = u;
+            up[c] += h;
+            um[c] -= h;
+            fbar_element(&mat, &geo, &up, &sn, &mut tr, 0.1, fbar, false, &mut op).unwrap();
+            fbar_element(&mat, &geo, &um, &sn, &mut tr, 0.1, fbar, false, &mut om).unwrap();
+            for r in 0..8 {
+                let fd = (op.r[r] - om.r[r]) / (2.0 * h);
+                assert!(
+                    (fd - out.k[r][c]).abs() < 1e-5 * (1.0 + fd.abs()),
+                    "K[{r}][{c}] = {} vs fd {fd}",
+                    out.k[r][c]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn fbar_tangent_matches_finite_differences_of_residual() {
+        tangent_fd(true);
+    }
+
+    #[test]
+    fn displacement_tangent_matches_finite_differences_of_residual() {
+        tangent_fd(false);
+    }
+
+    #[test]
+    fn weights_integrate_ring_volume() {
+        // Square [1,2]×[0,1]: volume of the ring = π (2² − 1²) · 1.
+        let x = [[1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0]];
+        let v: f64 = element_geometry(&x).iter().map(|g| g.weight).sum();
+        assert!((v - 3.0 * std::f64::consts::PI).abs() < 1e-12);
+    }
+}
+
+/// Residual and tangent of one element.
+#[derive(Debug, Clone)]
+pub(crate) struct ElementOutput {
+    /// Internal force ∂W/∂u (N).
+    pub r: [f64; 8],
+    /// Tangent ∂r/∂u (N/m).
+    pub k: [[f64; 8]; 8],
+}
+
+impl ElementOutput {
+    pub(crate) fn zero() -> Self {
+        Self {
+            r: [0.0; 8],
+            k: [[0.0; 8]; 8],
+        }
+    }
+}
+
+/// Where an element evaluation failed: Gauss point and the material error.
+pub(crate) type PointFailure = (usize, nlvid_material::MaterialError);
+
+/// Internal force and tangent of one axisymmetric element (module docs),
+/// F-bar if `fbar`, plain displacement element otherwise (for the locking
+/// comparison). Writes the trial history of the element's four points.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn fbar_element<M: nlvid_material::Material3>(
+    material: &M,
+    geometry: &[PointGeometry; 4],
+    u: &[f64; 8],
+    state_n: &[M::State],
+    trial: &mut [M::State],
+    dt: f64,
+    fbar: bool,
+    tangent: bool,
+    out: &mut ElementOutput,
+) -> std::result::Result<(), PointFailure> {
+    *out = ElementOutput::zero();
+    let mut b = [[[0.0; 8]; 5]; 4];
+    let mut f = [[0.0; 5]; 4];
+    let mut jq = [0.0; 4];
+    let mut dju = [[0.0; 8]; 4];
+    let mut hju = [[[0.0; 8]; 8]; 4];
+    let mut vol = 0.0;
+    let mut jbar = 0.0;
+    let mut djbar = [0.0; 8];
+    let mut d2jbar = [[0.0; 8]; 8];
+    for q in 0..4 {
+        b[q] = grad_operator(&geometry[q]);
+        f[q] = deformation(&b[q], u);
+        let (j, dj, hj) = jacobian_derivatives(&f[q]);
+        if !(j > 0.0) {
+            return Err((
+                q,
+                nlvid_material::MaterialError::Deformation(format!("det F = {j:.3e} ≤ 0")),
+            ));
+        }
+        jq[q] = j;
+        if fbar {
+            let w = geometry[q].weight;
+            dju[q] = bt_v(&b[q], &dj);
+            if tangent {
+                add_bt_m_b(&mut hju[q], &b[q], &hj, 1.0);
+            }
+            vol += w;
+            jbar += w * j;
+            for c in 0..8 {
+                djbar[c] += w * dju[q][c];
+            }
+            if tangent {
+                for r in 0..8 {
+                    for c in 0..8 {
+                        d2jbar[r][c] += w * hju[q][r][c];
+                    }
+                }
+            }
+        }
+    }
+    let mut dlnjbar = [0.0; 8];
+    let mut d2lnjbar = [[0.0; 8]; 8];
+    if fbar {
+        jbar /= vol;
+        for c in 0..8 {
+            djbar[c] /= vol;
+            dlnjbar[c] = djbar[c] / jbar;
+        }
+        if tangent {
+            for r in 0..8 {
+                for c in 0..8 {
+                    d2lnjbar[r][c] = d2jbar[r][c] / vol / jbar - dlnjbar[r] * dlnjbar[c];
+                }
+            }
+        }
+    }
+    for q in 0..4 {
+        let w = geometry[q].weight;
+        let (alpha, dlnalpha) = if fbar {
+            let mut d = [0.0; 8];
+            for c in 0..8 {
+                d[c] = (dlnjbar[c] - dju[q][c] / jq[q]) / 3.0;
+            }
+            ((jbar / jq[q]).cbrt(), d)
+        } else {
+            (1.0, [0.0; 8])
+        };
+        let mut fbar_q = f[q];
+        for x in &mut fbar_q {
+            *x *= alpha;
+        }
+        let resp = material
+            .update(&state_n[q], &to_mat3(&fbar_q), dt, &mut trial[q])
+            .map_err(|e| (q, e))?;
+        let mut p5 = [0.0; 5];
+        let mut a5 = [[0.0; 5]; 5];
+        for (i, &(i0, j0)) in FIDX.iter().enumerate() {
+            p5[i] = resp.first_piola[(i0, j0)];
+            if tangent {
+                for (k, &(k0, l0)) in FIDX.iter().enumerate() {
+                    a5[i][k] = resp.tangent[(3 * i0 + j0, 3 * k0 + l0)];
+                }
+            }
+        }
+        let mut dalpha = [0.0; 8];
+        for c in 0..8 {
+            dalpha[c] = alpha * dlnalpha[c];
+        }
+        let mut bb = b[q];
+        for i in 0..5 {
+            for c in 0..8 {
+                bb[i][c] = alpha * b[q][i][c] + f[q][i] * dalpha[c];
+            }
+        }
+        let rq = bt_v(&bb, &p5);
+        for c in 0..8 {
+            out.r[c] += w * rq[c];
+        }
+        if !tangent {
+            continue;
+        }
+        add_bt_m_b(&mut out.k, &bb, &a5, w);
+        if fbar {
+            let gp = bt_v(&b[q], &p5);
+            add_outer(&mut out.k, &gp, &dalpha, w);
+            add_outer(&mut out.k, &dalpha, &gp, w);
+            let pf: f64 = (0..5).map(|i| p5[i] * f[q][i]).sum();
+            let s = w * pf * alpha;
+            let jj = jq[q];
+            for r in 0..8 {
+                for c in 0..8 {
+                    let d2lnj = hju[q][r][c] / jj - dju[q][r] * dju[q][c] / (jj * jj);
+                    let d2lnalpha = (d2lnjbar[r][c] - d2lnj) / 3.0;
+                    out.k[r][c] += s * (dlnalpha[r] * dlnalpha[c] + d2lnalpha);
+                }
+            }
+        }
+    }
+    Ok(())
+}

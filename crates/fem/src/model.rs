@@ -1,0 +1,839 @@
+//! The finite-element model: mesh + material + supports + rigid bodies,
+//! global assembly, Newton with line search and adaptive time stepping.
+//!
+//! Unknowns are the nodal displacements (u_r, u_z) and one vertical
+//! displacement `w` of the rigid spherical probe. The probe is driven in one
+//! of three ways ([`ProbeDrive`]): its displacement prescribed (rigid
+//! cantilever), a force applied to it (force-controlled engagement), or a
+//! linear spring between it and a prescribed point (the cantilever whose
+//! free end follows the piezo). The total potential is
+//!
+//! ```text
+//! Π = Σ_e ∫ Ψ(F̄) dV₀ + Σ_a ½ ε_a ⟨−g_a⟩² + ½ k (w − z_free)² + F w ,
+//! ```
+//!
+//! g_a the gap between surface node a and the sphere (or plane), so the
+//! tangent is the exact Hessian and symmetric for hyperelastic materials.
+
+use crate::element::{ElementOutput, PointGeometry, element_geometry, fbar_element};
+use crate::history::History;
+use crate::sparse::{NO_SLOT, SparseSystem};
+use crate::{FemError, NonConvergence, Result};
+use nlvid_material::{Mat3, Material3};
+
+/// Displacement component of a support.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Component {
+    /// Radial.
+    R,
+    /// Axial.
+    Z,
+}
+
+/// A prescribed displacement on every node of a named set; its value at
+/// time t is `value × Control::support_scale`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Support {
+    /// Node set name.
+    pub set: String,
+    /// Constrained component.
+    pub component: Component,
+    /// Displacement at support scale 1 (m).
+    pub value: f64,
+}
+
+impl Support {
+    /// A fixed (zero) displacement.
+    pub fn fixed(set: &str, component: Component) -> Self {
+        Self {
+            set: set.to_owned(),
+            component,
+            value: 0.0,
+        }
+    }
+}
+
+/// A rigid sphere moving along the axis, in frictionless penalty contact
+/// with an ordered surface node set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SphereProbe {
+    /// Sphere radius (m).
+    pub radius: f64,
+    /// Height of the centre at w = 0 (m).
+    pub centre_z: f64,
+    /// Ordered surface node set that may touch it.
+    pub surface: String,
+}
+
+/// A rigid horizontal plane above the body (facing down), its height given
+/// by [`Control::plane_z`], in frictionless penalty contact with a surface.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigidPlane {
+    /// Ordered surface node set that may touch it.
+    pub surface: String,
+}
+
+/// How the probe's vertical displacement w is driven.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ProbeDrive {
+    /// w prescribed (m): the rigid-cantilever option.
+    Displacement(f64),
+    /// A downward force (N) on the probe: force-controlled engagement.
+    Force(f64),
+    /// A spring of `stiffness` (N/m) between the probe and a point whose
+    /// vertical displacement is `free_end` (m): the cantilever.
+    Spring {
+        /// Spring constant k (N/m).
+        stiffness: f64,
+        /// Displacement of the spring's free end (m, z up).
+        free_end: f64,
+    },
+}
+
+/// Loads at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Control {
+    /// Probe drive.
+    pub probe: ProbeDrive,
+    /// Plane height (m), if there is a plane.
+    pub plane_z: f64,
+    /// Scale of the prescribed support displacements.
+    pub support_scale: f64,
+}
+
+impl Default for Control {
+    fn default() -> Self {
+        Self {
+            probe: ProbeDrive::Displacement(0.0),
+            plane_z: f64::INFINITY,
+            support_scale: 1.0,
+        }
+    }
+}
+
+/// Solver settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    /// Use the F-bar element (true) or the plain displacement element.
+    pub fbar: bool,
+    /// Residual tolerance relative to the gross internal force.
+    pub rtol: f64,
+    /// Newton iterations allowed per attempt.
+    pub max_iterations: usize,
+    /// Step halvings allowed in the line search.
+    pub line_search: usize,
+    /// Contact penalty ε = penalty · G / h (G from the material at F = I,
+    /// h the local surface spacing): penetration ≈ p h / (penalty G).
+    pub penalty: f64,
+    /// Step growth factor after an easy step (≤ `easy_iterations`).
+    pub growth: f64,
+    /// Newton iterations below which a step counts as easy.
+    pub easy_iterations: usize,
+    /// Step reduction factor after a failed attempt.
+    pub cutback: f64,
+    /// Smallest step, as a fraction of the stage duration.
+    pub min_step_fraction: f64,
+    /// Extrapolate the last increment as the Newton predictor.
+    pub extrapolate: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            fbar: true,
+            rtol: 1e-9,
+            max_iterations: 14,
+            line_search: 6,
+            penalty: 100.0,
+            growth: 1.5,
+            easy_iterations: 4,
+            cutback: 0.25,
+            min_step_fraction: 1e-6,
+            extrapolate: true,
+        }
+    }
+}
+
+/// One loading stage: the control as a function of time up to `end`.
+pub struct Stage<'a> {
+    /// Name for reports.
+    pub name: &'a str,
+    /// End time (s).
+    pub end: f64,
+    /// First step size (s).
+    pub dt_initial: f64,
+    /// Largest step size (s).
+    pub dt_max: f64,
+    /// Loads at time t.
+    pub control: &'a dyn Fn(f64) -> Control,
+}
+
+/// State after a converged step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepRecord {
+    /// Time (s).
+    pub time: f64,
+    /// Probe displacement w (m, z up).
+    pub probe_w: f64,
+    /// Spring free-end displacement (m); NaN without a spring.
+    pub free_end: f64,
+    /// Upward force of the body on the probe from contact (N).
+    pub contact_force: f64,
+    /// Upward force of the body on the plane (N).
+    pub plane_force: f64,
+    /// Deepest penetration into the probe (m, ≥ 0).
+    pub penetration: f64,
+    /// Newton iterations of the step.
+    pub iterations: usize,
+}
+
+/// Counters of a run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Converged steps.
+    pub steps: usize,
+    /// Failed attempts that were cut back.
+    pub cutbacks: usize,
+    /// Newton iterations (linear solves) in total.
+    pub iterations: usize,
+    /// Global assemblies in total (including line-search trials).
+    pub assemblies: usize,
+}
+
+struct ContactSet {
+    nodes: Vec<usize>,
+    eps: Vec<f64>,
+    /// Per node, 3×3 slots over (u_r, u_z, w) (plane: w unused).
+    slots: Vec<[usize; 9]>,
+}
+
+#[derive(Debug, Default, Clone, Copy)]
+struct Assembly {
+    scale: f64,
+    contact_force: f64,
+    plane_force: f64,
+    penetration: f64,
+}
+
+/// Axisymmetric finite-strain model (see module docs).
+pub struct Model<M: Material3> {
+    mesh: crate::Mesh,
+    material: M,
+    settings: Settings,
+    geometry: Vec<[PointGeometry; 4]>,
+    history: History<M::State>,
+    dof_eq: Vec<usize>,
+    prescribed: Vec<(usize, f64)>,
+    u: Vec<f64>,
+    u_committed: Vec<f64>,
+    u_previous: Vec<f64>,
+    time: f64,
+    last_dt: f64,
+    elem_slots: Vec<usize>,
+    probe: Option<(SphereProbe, ContactSet)>,
+    plane: Option<ContactSet>,
+    system: SparseSystem,
+    residual: Vec<f64>,
+    rhs: Vec<f64>,
+    element_out: ElementOutput,
+    probe_diag: f64,
+    length: f64,
+    records: Vec<StepRecord>,
+    counters: Counters,
+}
+
+impl<M: Material3> std::fmt::Debug for Model<M> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Model({} nodes, {} elements, {:?})",
+            self.mesh.nodes.len(),
+            self.mesh.elements.len(),
+            self.system
+        )
+    }
+}
+
+fn tributary(mesh: &crate::Mesh, nodes: &[usize]) -> (Vec<f64>, Vec<f64>) {
+    let mut area = vec![0.0; nodes.len()];
+    let mut len = vec![0.0; nodes.len()];
+    for k in 0..nodes.len().saturating_sub(1) {
+        let a = mesh.nodes[nodes[k]];
+        let b = mesh.nodes[nodes[k + 1]];
+        let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        let tp = 2.0 * std::f64::consts::PI * l;
+        area[k] += tp * (a[0] / 3.0 + b[0] / 6.0);
+        area[k + 1] += tp * (a[0] / 6.0 + b[0] / 3.0);
+        len[k] += 0.5 * l;
+        len[k + 1] += 0.5 * l;
+    }
+    // End nodes have one segment: use its full length as the spacing.
+    if let Some(f) = len.first_mut() {
+        *f *= 2.0;
+    }
+    if let Some(l) = len.last_mut() {
+        *l *= 2.0;
+    }
+    (area, len)
+}
+
+impl<M: Material3> Model<M> {
+    /// Builds the model: dof numbering, sparse pattern, symbolic LU,
+    /// contact penalties.
+    ///
+    /// # Errors
+    /// [`FemError::Mesh`] for a missing node set; [`FemError::Material`] if
+    /// the material cannot be evaluated at F = I; [`FemError::Solver`] if
+    /// the symbolic factorisation fails.
+    pub fn new(
+        mesh: crate::Mesh,
+        material: M,
+        supports: &[Support],
+        probe: Option<SphereProbe>,
+        plane: Option<RigidPlane>,
+        settings: Settings,
+    ) -> Result<Self> {
+        let nn = mesh.nodes.len();
+        let ndof = 2 * nn + 1;
+        let wdof = 2 * nn;
+        let mut constrained = vec![false; ndof];
+        let mut prescribed = Vec::new();
+        for s in supports {
+            for &a in mesh.nodes_in(&s.set)? {
+                let dof = 2 * a + usize::from(s.component == Component::Z);
+                if !constrained[dof] {
+                    constrained[dof] = true;
+                    prescribed.push((dof, s.value));
+                }
+            }
+        }
+        if probe.is_none() {
+            constrained[wdof] = true;
+            prescribed.push((wdof, 0.0));
+        }
+        let mut dof_eq = vec![NO_SLOT; ndof];
+        let mut neq = 0;
+        for (d, eq) in dof_eq.iter_mut().enumerate() {
+            if !constrained[d] {
+                *eq = neq;
+                neq += 1;
+            }
+        }
+        let elem_eqs = |conn: &[usize; 4]| -> Vec<usize> {
+            (0..8).map(|k| dof_eq[2 * conn[k / 2] + k % 2]).collect()
+        };
+        let mut blocks: Vec<Vec<usize>> = Vec::with_capacity(mesh.elements.len() + 1);
+        for conn in &mesh.elements {
+            blocks.push(
+                elem_eqs(conn)
+                    .into_iter()
+                    .filter(|&e| e != NO_SLOT)
+                    .collect(),
+            );
+        }
+        let probe_nodes = match &probe {
+            Some(p) => mesh.nodes_in(&p.surface)?.to_vec(),
+            None => Vec::new(),
+        };
+        if probe.is_some() {
+            // The probe couples with each surface node, not nodes with each other.
+            for &a in &probe_nodes {
+                blocks.push(
+                    [dof_eq[2 * a], dof_eq[2 * a + 1], dof_eq[wdof]]
+                        .into_iter()
+                        .filter(|&e| e != NO_SLOT)
+                        .collect(),
+                );
+            }
+            blocks.push(vec![dof_eq[wdof]]);
+        }
+        let system = SparseSystem::new(neq, &blocks)?;
+        let mut elem_slots = Vec::with_capacity(64 * mesh.elements.len());
+        let mut tmp = Vec::with_capacity(64);
+        for conn in &mesh.elements {
+            system.block_slots(&elem_eqs(conn), &mut tmp)?;
+            elem_slots.extend_from_slice(&tmp);
+        }
+        // Shear modulus at F = I for the penalty scale.
+        let g0 = {
+            let s0 = material.initial_state();
+            let mut tr = s0.clone();
+            let resp = material
+                .update(&s0, &Mat3::identity(), 1e-6, &mut tr)
+                .map_err(|source| FemError::Material {
+                    element: 0,
+                    point: 0,
+                    source,
+                })?;
+            resp.tangent[(1, 1)]
+        };
+        let mut make_set = |nodes: Vec<usize>, with_w: bool| -> Result<ContactSet> {
+            let (area, len) = tributary(&mesh, &nodes);
+            let eps = area
+                .iter()
+                .zip(&len)
+                .map(|(a, h)| settings.penalty * g0 * a / h.max(f64::MIN_POSITIVE))
+                .collect();
+            let mut slots = Vec::with_capacity(nodes.len());
+            for &a in &nodes {
+                let w = if with_w { dof_eq[wdof] } else { NO_SLOT };
+                system.block_slots(&[dof_eq[2 * a], dof_eq[2 * a + 1], w], &mut tmp)?;
+                let mut s = [NO_SLOT; 9];
+                s.copy_from_slice(&tmp);
+                slots.push(s);
+            }
+            Ok(ContactSet { nodes, eps, slots })
+        };
+        let probe = match probe {
+            Some(p) => {
+                let set = make_set(probe_nodes, true)?;
+                Some((p, set))
+            }
+            None => None,
+        };
+        let plane = match plane {
+            Some(p) => Some(make_set(mesh.nodes_in(&p.surface)?.to_vec(), false)?),
+            None => None,
+        };
+        let probe_diag = probe
+            .as_ref()
+            .map(|(_, s)| s.eps.iter().cloned().fold(0.0, f64::max))
+            .unwrap_or(1.0)
+            .max(f64::MIN_POSITIVE);
+        let geometry = mesh
+            .elements
+            .iter()
+            .map(|conn| element_geometry(&conn.map(|a| mesh.nodes[a])))
+            .collect();
+        let history = History::new(&material, 4 * mesh.elements.len());
+        Ok(Self {
+            geometry,
+            history,
+            dof_eq,
+            prescribed,
+            u: vec![0.0; ndof],
+            u_committed: vec![0.0; ndof],
+            u_previous: vec![0.0; ndof],
+            time: 0.0,
+            last_dt: 0.0,
+            elem_slots,
+            probe,
+            plane,
+            residual: vec![0.0; ndof],
+            rhs: vec![0.0; neq],
+            element_out: ElementOutput::zero(),
+            probe_diag,
+            length: mesh
+                .nodes
+                .iter()
+                .fold(0.0, |m: f64, p| m.max(p[0].abs()).max(p[1].abs())),
+            records: Vec::new(),
+            counters: Counters::default(),
+            system,
+            mesh,
+            material,
+            settings,
+        })
+    }
+
+    /// The mesh.
+    pub fn mesh(&self) -> &crate::Mesh {
+        &self.mesh
+    }
+
+    /// Current time (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Sets the clock (before the first stage).
+    pub fn set_time(&mut self, t: f64) {
+        self.time = t;
+    }
+
+    /// Converged nodal displacements, (u_r, u_z) per node.
+    pub fn displacements(&self) -> impl Iterator<Item = [f64; 2]> + '_ {
+        self.u_committed[..2 * self.mesh.nodes.len()]
+            .chunks_exact(2)
+            .map(|c| [c[0], c[1]])
+    }
+
+    /// Converged probe displacement w (m).
+    pub fn probe_displacement(&self) -> f64 {
+        self.u_committed[2 * self.mesh.nodes.len()]
+    }
+
+    /// Records of all converged steps so far.
+    pub fn records(&self) -> &[StepRecord] {
+        &self.records
+    }
+
+    /// Run counters.
+    pub fn counters(&self) -> Counters {
+        self.counters
+    }
+
+    /// Number of equations.
+    pub fn equations(&self) -> usize {
+        self.system.dim()
+    }
+
+    /// Sum over a node set of the internal force in `component` at the last
+    /// converged state: the support reaction on the body there (N).
+    ///
+    /// # Errors
+    /// [`FemError::Mesh`] for a missing set.
+    pub fn reaction(&self, set: &str, component: Component) -> Result<f64> {
+        let c = usize::from(component == Component::Z);
+        Ok(self
+            .mesh
+            .nodes_in(set)?
+            .iter()
+            .map(|&a| self.residual[2 * a + c])
+            .sum())
+    }
+
+    fn assemble(&mut self, ctl: &Control, dt: f64, tangent: bool) -> Result<Assembly> {
+        self.counters.assemblies += 1;
+        self.residual.fill(0.0);
+        if tangent {
+            self.system.values.fill(0.0);
+        }
+        let mut gross = 0.0;
+        let fbar = self.settings.fbar;
+        for (e, conn) in self.mesh.elements.iter().enumerate() {
+            let mut ue = [0.0; 8];
+            for k in 0..8 {
+                ue[k] = self.u[2 * conn[k / 2] + k % 2];
+            }
+            let (committed, trial) = self.history.element(e);
+            fbar_element(
+                &self.material,
+                &self.geometry[e],
+                &ue,
+                committed,
+                trial,
+                dt,
+                fbar,
+                tangent,
+                &mut self.element_out,
+            )
+            .map_err(|(point, source)| FemError::Material {
+                element: e,
+                point,
+                source,
+            })?;
+            let out = &self.element_out;
+            let slots = &self.elem_slots[64 * e..64 * e + 64];
+            for a in 0..8 {
+                self.residual[2 * conn[a / 2] + a % 2] += out.r[a];
+                gross += out.r[a] * out.r[a];
+                if tangent {
+                    for b in 0..8 {
+                        let s = slots[8 * a + b];
+                        if s != NO_SLOT {
+                            self.system.values[s] += out.k[a][b];
+                        }
+                    }
+                }
+            }
+        }
+        let mut asm = Assembly {
+            scale: gross.sqrt(),
+            ..Assembly::default()
+        };
+        let nn = self.mesh.nodes.len();
+        let wdof = 2 * nn;
+        let w_free = !matches!(ctl.probe, ProbeDrive::Displacement(_));
+        if let Some((probe, set)) = &self.probe {
+            let cz = probe.centre_z + self.u[wdof];
+            for (k, &a) in set.nodes.iter().enumerate() {
+                let x = [
+                    self.mesh.nodes[a][0] + self.u[2 * a],
+                    self.mesh.nodes[a][1] + self.u[2 * a + 1],
+                ];
+                let d = [x[0], x[1] - cz];
+                let dist = (d[0] * d[0] + d[1] * d[1]).sqrt();
+                let g = dist - probe.radius;
+                if g > 0.0 || dist <= 0.0 {
+                    continue;
+                }
+                let n = [d[0] / dist, d[1] / dist];
+                let eps = set.eps[k];
+                let f = eps * g;
+                self.residual[2 * a] += f * n[0];
+                self.residual[2 * a + 1] += f * n[1];
+                self.residual[wdof] -= f * n[1];
+                asm.contact_force += f * n[1];
+                asm.penetration = asm.penetration.max(-g);
+                if tangent {
+                    let dg = [n[0], n[1], -n[1]];
+                    // ∂²g = Bᵀ (I − n nᵀ)/|d| B, B = [[1,0,0],[0,1,−1]].
+                    let p = [
+                        [1.0 - n[0] * n[0], -n[0] * n[1]],
+                        [-n[0] * n[1], 1.0 - n[1] * n[1]],
+                    ];
+                    let bmat = [[1.0, 0.0, 0.0], [0.0, 1.0, -1.0]];
+                    for i in 0..3 {
+                        if i == 2 && !w_free {
+                            continue;
+                        }
+                        for j in 0..3 {
+                            if j == 2 && !w_free {
+                                continue;
+                            }
+                            let s = set.slots[k][3 * i + j];
+                            if s == NO_SLOT {
+                                continue;
+                            }
+                            let mut h = 0.0;
+                            for r in 0..2 {
+                                for c in 0..2 {
+                                    h += bmat[r][i] * p[r][c] * bmat[c][j];
+                                }
+                            }
+                            self.system.values[s] += eps * (dg[i] * dg[j] + g * h / dist);
+                        }
+                    }
+                }
+            }
+            asm.scale = asm.scale.max(asm.contact_force.abs());
+        }
+        if let Some(set) = &self.plane {
+            for (k, &a) in set.nodes.iter().enumerate() {
+                let z = self.mesh.nodes[a][1] + self.u[2 * a + 1];
+                let g = ctl.plane_z - z;
+                if g > 0.0 {
+                    continue;
+                }
+                let eps = set.eps[k];
+                self.residual[2 * a + 1] -= eps * g;
+                asm.plane_force -= eps * g;
+                if tangent {
+                    let s = set.slots[k][4];
+                    if s != NO_SLOT {
+                        self.system.values[s] += eps;
+                    }
+                }
+            }
+            asm.scale = asm.scale.max(asm.plane_force.abs());
+        }
+        if self.probe.is_some() {
+            let weq = self.dof_eq[wdof];
+            let diag = self.system.slot(weq, weq)?;
+            match ctl.probe {
+                ProbeDrive::Displacement(_) => {
+                    if tangent {
+                        self.system.values[diag] = self.probe_diag;
+                    }
+                }
+                ProbeDrive::Force(force) => {
+                    self.residual[wdof] += force;
+                    asm.scale = asm.scale.max(force.abs());
+                }
+                ProbeDrive::Spring {
+                    stiffness,
+                    free_end,
+                } => {
+                    self.residual[wdof] += stiffness * (self.u[wdof] - free_end);
+                    if tangent {
+                        self.system.values[diag] += stiffness;
+                    }
+                }
+            }
+        }
+        for (d, &eq) in self.dof_eq.iter().enumerate() {
+            if eq != NO_SLOT {
+                self.rhs[eq] = -self.residual[d];
+            }
+        }
+        if !w_free && self.probe.is_some() {
+            self.rhs[self.dof_eq[wdof]] = 0.0;
+        }
+        Ok(asm)
+    }
+
+    fn rhs_norm(&self) -> f64 {
+        self.rhs.iter().map(|x| x * x).sum::<f64>().sqrt()
+    }
+
+    fn apply_prescribed(&mut self, ctl: &Control) {
+        for &(dof, v) in &self.prescribed {
+            self.u[dof] = v * ctl.support_scale;
+        }
+        if let (Some(_), ProbeDrive::Displacement(w)) = (&self.probe, ctl.probe) {
+            self.u[2 * self.mesh.nodes.len()] = w;
+        }
+    }
+
+    fn add_increment(&mut self, du: &[f64], alpha: f64, base: &[f64]) {
+        for (d, &eq) in self.dof_eq.iter().enumerate() {
+            if eq != NO_SLOT {
+                self.u[d] = base[d] + alpha * du[eq];
+            }
+        }
+    }
+
+    /// Newton iterations for one step; Ok((iterations, assembly)) or the
+    /// failure (residual, tolerance, iterations, cause).
+    fn newton(
+        &mut self,
+        ctl: &Control,
+        dt: f64,
+    ) -> std::result::Result<(usize, Assembly), (f64, f64, usize, String)> {
+        self.apply_prescribed(ctl);
+        let mut asm = match self.assemble(ctl, dt, true) {
+            Ok(a) => a,
+            Err(e) => return Err((f64::NAN, 0.0, 0, e.to_string())),
+        };
+        let mut norm = self.rhs_norm();
+        let mut du = vec![0.0; self.rhs.len()];
+        let mut base = self.u.clone();
+        let mut last_du = f64::INFINITY;
+        for it in 0..=self.settings.max_iterations {
+            let tol = self.settings.rtol * asm.scale.max(f64::MIN_POSITIVE);
+            // Near-incompressible pressures leave a round-off floor in the
+            // residual far above rtol·scale when the forces are tiny: a
+            // correction at the round-off level of the coordinates also
+            // counts as converged.
+            let stalled = it > 0 && last_du <= 1e-12 * self.length && norm <= 1e-4 * asm.scale;
+            if norm <= tol && it > 0 || norm == 0.0 || stalled {
+                return Ok((it, asm));
+            }
+            if !norm.is_finite() {
+                return Err((norm, tol, it, "non-finite residual".into()));
+            }
+            if it == self.settings.max_iterations {
+                return Err((norm, tol, it, "iteration limit".into()));
+            }
+            du.copy_from_slice(&self.rhs);
+            if let Err(e) = self.system.solve(&mut du) {
+                return Err((norm, tol, it, e.to_string()));
+            }
+            self.counters.iterations += 1;
+            last_du = du.iter().fold(0.0, |m: f64, x| m.max(x.abs()));
+            base.copy_from_slice(&self.u);
+            let mut alpha = 1.0;
+            let mut accepted = false;
+            let mut last_err = String::new();
+            for _ in 0..=self.settings.line_search {
+                self.add_increment(&du, alpha, &base);
+                match self.assemble(ctl, dt, true) {
+                    Ok(a) => {
+                        let n = self.rhs_norm();
+                        // A full Newton step may raise the residual while the
+                        // contact set settles; only a large rise is cut.
+                        let limit = if alpha == 1.0 { 10.0 * norm } else { norm };
+                        if n.is_finite() && n <= limit {
+                            asm = a;
+                            norm = n;
+                            accepted = true;
+                            break;
+                        }
+                        last_err = format!("line search: residual {n:.3e} ≥ {norm:.3e}");
+                    }
+                    Err(e) => last_err = e.to_string(),
+                }
+                alpha *= 0.5;
+            }
+            if !accepted {
+                return Err((norm, tol, it + 1, last_err));
+            }
+        }
+        Err((
+            norm,
+            0.0,
+            self.settings.max_iterations,
+            "iteration limit".into(),
+        ))
+    }
+
+    /// Advances through `stage` with adaptive steps: a failed attempt is
+    /// cut back by `Settings::cutback`, easy steps grow by
+    /// `Settings::growth` up to `stage.dt_max`.
+    ///
+    /// # Errors
+    /// [`FemError::NonConvergence`] when the step falls below
+    /// `min_step_fraction × stage duration` without converging; the model
+    /// keeps the last converged state.
+    pub fn run_stage(&mut self, stage: &Stage<'_>) -> Result<()> {
+        let duration = stage.end - self.time;
+        if !(duration >= 0.0) || !(stage.dt_max > 0.0) || !(stage.dt_initial > 0.0) {
+            return Err(FemError::Setting {
+                name: "stage",
+                value: duration,
+                reason: "stage must end after the current time with positive steps",
+            });
+        }
+        if duration == 0.0 {
+            return Ok(());
+        }
+        let dt_min = self.settings.min_step_fraction * duration;
+        let mut dt = stage.dt_initial.min(stage.dt_max);
+        let mut first = true;
+        while self.time < stage.end - 1e-12 * duration {
+            let remaining = stage.end - self.time;
+            if dt > remaining || remaining - dt < 0.01 * dt {
+                dt = remaining;
+            }
+            let t_new = self.time + dt;
+            let ctl = (stage.control)(t_new);
+            // Predictor.
+            if self.settings.extrapolate && !first && self.last_dt > 0.0 {
+                let s = dt / self.last_dt;
+                for d in 0..self.u.len() {
+                    self.u[d] =
+                        self.u_committed[d] + s * (self.u_committed[d] - self.u_previous[d]);
+                }
+            } else {
+                self.u.copy_from_slice(&self.u_committed);
+            }
+            match self.newton(&ctl, dt) {
+                Ok((iterations, asm)) => {
+                    self.history.commit();
+                    self.u_previous.copy_from_slice(&self.u_committed);
+                    self.u_committed.copy_from_slice(&self.u);
+                    self.time = t_new;
+                    self.last_dt = dt;
+                    first = false;
+                    self.counters.steps += 1;
+                    let (free_end, contact_force) = match ctl.probe {
+                        ProbeDrive::Spring { free_end, .. } => (free_end, asm.contact_force),
+                        _ => (f64::NAN, asm.contact_force),
+                    };
+                    self.records.push(StepRecord {
+                        time: t_new,
+                        probe_w: self.u[2 * self.mesh.nodes.len()],
+                        free_end,
+                        contact_force,
+                        plane_force: asm.plane_force,
+                        penetration: asm.penetration,
+                        iterations,
+                    });
+                    if iterations <= self.settings.easy_iterations {
+                        dt = (dt * self.settings.growth).min(stage.dt_max);
+                    }
+                }
+                Err((residual, tolerance, iterations, cause)) => {
+                    self.counters.cutbacks += 1;
+                    self.u.copy_from_slice(&self.u_committed);
+                    if dt <= dt_min * (1.0 + 1e-9) {
+                        // Leave the residual vector of the converged state.
+                        let _ = self.assemble(&(stage.control)(self.time), 0.0, false);
+                        return Err(FemError::NonConvergence(Box::new(NonConvergence {
+                            time: self.time,
+                            dt,
+                            residual,
+                            tolerance,
+                            iterations,
+                            cause: format!("stage `{}`: {cause}", stage.name),
+                        })));
+                    }
+                    dt = (dt * self.settings.cutback).max(dt_min);
+                    first = true;
+                }
+            }
+        }
+        Ok(())
+    }
+}

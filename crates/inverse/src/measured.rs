@@ -1,0 +1,508 @@
+//! Measured curves in: CSV files of an AFM run or a plate-compression run,
+//! converted to SI, checked against the expected loading protocol and
+//! resampled onto a model's time grid.
+//!
+//! Headers carry units: `name [unit]`, `name (unit)` or nlvid's own output
+//! form `name_unit` (e.g. `time_s`), e.g. `time [s]`, `height (um)`,
+//! `vDeflection [V]`. Columns are chosen by `name` (case-sensitive,
+//! surrounding spaces ignored).
+//!
+//! AFM (§5.2.2): the deflection column may be in volts (× deflection
+//! sensitivity → metres), in metres, or already a force; then F = k·d and
+//! the indentation is δ = Z − d (Z piezo travel towards the sample, d
+//! deflection away from it, both positive in loading).
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::error::{InverseError, Result};
+
+/// Physical dimension of a column.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Dimension {
+    /// s.
+    Time,
+    /// m.
+    Length,
+    /// N.
+    Force,
+    /// V.
+    Voltage,
+    /// m².
+    Area,
+}
+
+/// SI factor of a unit string for a dimension; None if the unit does not
+/// belong to it.
+fn unit_factor(unit: &str, dim: Dimension) -> Option<f64> {
+    let u = unit.trim().replace(['µ', 'μ'], "u");
+    let f = match dim {
+        Dimension::Time => match u.as_str() {
+            "s" => 1.0,
+            "ms" => 1e-3,
+            "us" => 1e-6,
+            "min" => 60.0,
+            _ => return None,
+        },
+        Dimension::Length => match u.as_str() {
+            "m" => 1.0,
+            "mm" => 1e-3,
+            "um" => 1e-6,
+            "nm" => 1e-9,
+            _ => return None,
+        },
+        Dimension::Force => match u.as_str() {
+            "N" => 1.0,
+            "mN" => 1e-3,
+            "uN" => 1e-6,
+            "nN" => 1e-9,
+            "pN" => 1e-12,
+            _ => return None,
+        },
+        Dimension::Voltage => match u.as_str() {
+            "V" => 1.0,
+            "mV" => 1e-3,
+            _ => return None,
+        },
+        Dimension::Area => match u.as_str() {
+            "m^2" | "m2" => 1.0,
+            "mm^2" | "mm2" => 1e-6,
+            "um^2" | "um2" => 1e-12,
+            _ => return None,
+        },
+    };
+    Some(f)
+}
+
+/// Splits `name [unit]` / `name (unit)` into (name, Some(unit)).
+fn split_header(h: &str) -> (String, Option<String>) {
+    let h = h.trim();
+    for (open, close) in [('[', ']'), ('(', ')')] {
+        if h.ends_with(close) {
+            if let Some(i) = h.rfind(open) {
+                let unit = h[i + 1..h.len() - 1].trim().to_string();
+                return (h[..i].trim().to_string(), Some(unit));
+            }
+        }
+    }
+    (h.to_string(), None)
+}
+
+/// A CSV table with unit-carrying headers, kept with file line numbers.
+struct Table {
+    path: PathBuf,
+    headers: Vec<(String, Option<String>)>,
+    rows: Vec<(usize, Vec<String>)>,
+}
+
+impl Table {
+    fn read(path: &Path) -> Result<Self> {
+        let io = |message: String| InverseError::Io {
+            path: path.to_path_buf(),
+            message,
+        };
+        let mut reader = csv::ReaderBuilder::new()
+            .trim(csv::Trim::All)
+            .comment(Some(b'#'))
+            .from_path(path)
+            .map_err(|e| io(e.to_string()))?;
+        let headers = reader
+            .headers()
+            .map_err(|e| io(e.to_string()))?
+            .iter()
+            .map(split_header)
+            .collect();
+        let mut rows = Vec::new();
+        for rec in reader.records() {
+            let rec = rec.map_err(|e| io(e.to_string()))?;
+            let line = rec.position().map_or(0, |p| p.line() as usize);
+            rows.push((line, rec.iter().map(str::to_string).collect()));
+        }
+        if rows.is_empty() {
+            return Err(InverseError::Data {
+                path: path.to_path_buf(),
+                row: 0,
+                column: String::new(),
+                message: "no data rows".into(),
+            });
+        }
+        Ok(Self {
+            path: path.to_path_buf(),
+            headers,
+            rows,
+        })
+    }
+
+    fn err(&self, row: usize, column: &str, message: String) -> InverseError {
+        InverseError::Data {
+            path: self.path.clone(),
+            row,
+            column: column.to_string(),
+            message,
+        }
+    }
+
+    /// Column `name` converted to SI; returns the values and the matched
+    /// dimension (first of `dims` the header's unit belongs to).
+    fn column(&self, name: &str, dims: &[Dimension]) -> Result<(Vec<f64>, Dimension)> {
+        let suffixed = |h: &(String, Option<String>)| {
+            h.1.is_none()
+                && h.0
+                    .strip_prefix(name)
+                    .and_then(|r| r.strip_prefix('_'))
+                    .is_some_and(|u| {
+                        let u = u.replace("_per_", "/");
+                        dims.iter().any(|&d| unit_factor(&u, d).is_some())
+                    })
+        };
+        let i = self
+            .headers
+            .iter()
+            .position(|h| h.0 == name || suffixed(h))
+            .ok_or_else(|| {
+                let available: Vec<String> = self.headers.iter().map(|(n, _)| n.clone()).collect();
+                self.err(
+                    1,
+                    name,
+                    format!("column not found; the header has {available:?}"),
+                )
+            })?;
+        let from_suffix = self.headers[i]
+            .0
+            .strip_prefix(name)
+            .and_then(|r| r.strip_prefix('_'));
+        let unit = self.headers[i]
+            .1
+            .as_deref()
+            .or(from_suffix)
+            .ok_or_else(|| {
+                self.err(
+                    1,
+                    name,
+                    format!("header has no unit; write it as '{name} [unit]' (expected {dims:?})"),
+                )
+            })?;
+        let (factor, dim) = dims
+            .iter()
+            .find_map(|&d| unit_factor(unit, d).map(|f| (f, d)))
+            .ok_or_else(|| self.err(1, name, format!("unit '{unit}' is not a unit of {dims:?}")))?;
+        let mut values = Vec::with_capacity(self.rows.len());
+        for (line, rec) in &self.rows {
+            let cell = rec
+                .get(i)
+                .ok_or_else(|| self.err(*line, name, "row is shorter than the header".into()))?;
+            let v: f64 = cell
+                .parse()
+                .map_err(|_| self.err(*line, name, format!("'{cell}' is not a number")))?;
+            if !v.is_finite() {
+                return Err(self.err(*line, name, format!("value '{cell}' is not finite")));
+            }
+            values.push(v * factor);
+        }
+        Ok((values, dim))
+    }
+
+    fn check_time(&self, name: &str, t: &[f64]) -> Result<()> {
+        for j in 1..t.len() {
+            if t[j] <= t[j - 1] {
+                return Err(self.err(
+                    self.rows[j].0,
+                    name,
+                    format!(
+                        "time must increase strictly: {} s follows {} s",
+                        t[j],
+                        t[j - 1]
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// AFM calibration (§5.2.2).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Calibration {
+    /// Deflection sensitivity (m/V); needed only for a deflection in volts.
+    pub deflection_sensitivity: Option<f64>,
+    /// Cantilever spring constant k (N/m).
+    pub spring_constant: f64,
+}
+
+/// Column names of an AFM CSV.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct AfmColumns {
+    /// Time column.
+    pub time: String,
+    /// Piezo travel Z column (length).
+    pub piezo: String,
+    /// Deflection column (volts, length, or force).
+    pub deflection: String,
+}
+
+/// Column names of a plate-compression CSV.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CompressionColumns {
+    /// Time column.
+    pub time: String,
+    /// Plate displacement column (length).
+    pub displacement: String,
+    /// Force column.
+    pub force: String,
+    /// Optional contact-area column.
+    pub contact_area: Option<String>,
+}
+
+/// A measured curve in SI units.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MeasuredCurve {
+    /// Source file.
+    pub path: PathBuf,
+    /// 1-based file line of each sample.
+    pub lines: Vec<usize>,
+    /// t (s).
+    pub time: Vec<f64>,
+    /// Controlled displacement (m): piezo Z (AFM) or plate displacement.
+    pub displacement: Vec<f64>,
+    /// Force (N).
+    pub force: Vec<f64>,
+    /// Indentation δ = Z − d (m), AFM only.
+    pub indentation: Option<Vec<f64>>,
+    /// Contact area (m²), if measured.
+    pub contact_area: Option<Vec<f64>>,
+}
+
+/// Reads an AFM run: F = k·d, δ = Z − d (§5.2.2).
+///
+/// # Errors
+/// [`InverseError::Data`] naming file, row and column for a missing column,
+/// a missing or wrong unit, a non-number or NaN, non-increasing time, or a
+/// deflection in volts without a deflection sensitivity;
+/// [`InverseError::InvalidSetting`] for a non-positive calibration.
+pub fn read_afm_csv(path: &Path, cols: &AfmColumns, cal: &Calibration) -> Result<MeasuredCurve> {
+    if !(cal.spring_constant > 0.0 && cal.spring_constant.is_finite()) {
+        return Err(InverseError::InvalidSetting(format!(
+            "spring constant must be > 0 N/m, got {}",
+            cal.spring_constant
+        )));
+    }
+    let table = Table::read(path)?;
+    let (time, _) = table.column(&cols.time, &[Dimension::Time])?;
+    table.check_time(&cols.time, &time)?;
+    let (z, _) = table.column(&cols.piezo, &[Dimension::Length])?;
+    let (raw, dim) = table.column(
+        &cols.deflection,
+        &[Dimension::Voltage, Dimension::Length, Dimension::Force],
+    )?;
+    let k = cal.spring_constant;
+    let d: Vec<f64> = match dim {
+        Dimension::Voltage => {
+            let s = cal
+                .deflection_sensitivity
+                .filter(|s| *s > 0.0 && s.is_finite())
+                .ok_or_else(|| {
+                    table.err(
+                        1,
+                        &cols.deflection,
+                        "deflection is in volts: give a positive deflection sensitivity (nm/V)"
+                            .into(),
+                    )
+                })?;
+            raw.iter().map(|v| v * s).collect()
+        }
+        Dimension::Length => raw,
+        _ => raw.iter().map(|f| f / k).collect(),
+    };
+    Ok(MeasuredCurve {
+        path: path.to_path_buf(),
+        lines: table.rows.iter().map(|(l, _)| *l).collect(),
+        force: d.iter().map(|d| k * d).collect(),
+        indentation: Some(z.iter().zip(&d).map(|(z, d)| z - d).collect()),
+        time,
+        displacement: z,
+        contact_area: None,
+    })
+}
+
+/// Reads a plate-compression run.
+///
+/// # Errors
+/// As [`read_afm_csv`].
+pub fn read_compression_csv(path: &Path, cols: &CompressionColumns) -> Result<MeasuredCurve> {
+    let table = Table::read(path)?;
+    let (time, _) = table.column(&cols.time, &[Dimension::Time])?;
+    table.check_time(&cols.time, &time)?;
+    let (displacement, _) = table.column(&cols.displacement, &[Dimension::Length])?;
+    let (force, _) = table.column(&cols.force, &[Dimension::Force])?;
+    let contact_area = match &cols.contact_area {
+        Some(name) => Some(table.column(name, &[Dimension::Area])?.0),
+        None => None,
+    };
+    Ok(MeasuredCurve {
+        path: path.to_path_buf(),
+        lines: table.rows.iter().map(|(l, _)| *l).collect(),
+        time,
+        displacement,
+        force,
+        indentation: None,
+        contact_area,
+    })
+}
+
+/// Tolerances of [`MeasuredCurve::check_protocol`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ProtocolTolerance {
+    /// Allowed duration difference, as a fraction of the expected duration.
+    pub duration: f64,
+    /// Allowed displacement deviation at any sample, as a fraction of the
+    /// expected amplitude (max |displacement|); catches wrong rates and
+    /// amplitudes.
+    pub displacement: f64,
+}
+
+impl Default for ProtocolTolerance {
+    fn default() -> Self {
+        Self {
+            duration: 0.02,
+            displacement: 0.05,
+        }
+    }
+}
+
+/// Linear interpolation of (ts, ys) at t; ts strictly increasing, t inside.
+fn interp(ts: &[f64], ys: &[f64], t: f64) -> f64 {
+    let i = ts.partition_point(|&s| s <= t).clamp(1, ts.len() - 1);
+    let (t0, t1) = (ts[i - 1], ts[i]);
+    let w = (t - t0) / (t1 - t0);
+    ys[i - 1] * (1.0 - w) + ys[i] * w
+}
+
+impl MeasuredCurve {
+    /// Checks the controlled displacement against the expected history
+    /// (`expected_times`, `expected_displacement`, piecewise linear), both
+    /// measured from their first sample (time and displacement offsets
+    /// removed).
+    ///
+    /// # Errors
+    /// [`InverseError::ProtocolMismatch`] naming the file, row and time of
+    /// the duration, amplitude or first displacement mismatch;
+    /// [`InverseError::InvalidSetting`] for a malformed expected history.
+    pub fn check_protocol(
+        &self,
+        expected_times: &[f64],
+        expected_displacement: &[f64],
+        tol: ProtocolTolerance,
+    ) -> Result<()> {
+        let n = expected_times.len();
+        if n < 2
+            || n != expected_displacement.len()
+            || expected_times.windows(2).any(|w| w[1] <= w[0])
+        {
+            return Err(InverseError::InvalidSetting(
+                "expected protocol needs >= 2 strictly increasing times with one displacement each"
+                    .into(),
+            ));
+        }
+        let te: Vec<f64> = expected_times
+            .iter()
+            .map(|t| t - expected_times[0])
+            .collect();
+        let ze: Vec<f64> = expected_displacement
+            .iter()
+            .map(|z| z - expected_displacement[0])
+            .collect();
+        let tm: Vec<f64> = self.time.iter().map(|t| t - self.time[0]).collect();
+        let zm: Vec<f64> = self
+            .displacement
+            .iter()
+            .map(|z| z - self.displacement[0])
+            .collect();
+        let last = tm.len() - 1;
+        let mismatch = |j: usize, message: String| InverseError::ProtocolMismatch {
+            path: self.path.clone(),
+            row: self.lines[j],
+            time: self.time[j],
+            message,
+        };
+        let (dur_e, dur_m) = (te[n - 1], tm[last]);
+        if (dur_m - dur_e).abs() > tol.duration * dur_e {
+            return Err(mismatch(
+                last,
+                format!(
+                    "duration {dur_m:.4} s, expected {dur_e:.4} s (tolerance {:.1} %)",
+                    100.0 * tol.duration
+                ),
+            ));
+        }
+        let amp_e = ze.iter().fold(0.0f64, |a, z| a.max(z.abs()));
+        let (j_max, amp_m) = zm.iter().enumerate().fold((0, 0.0f64), |(jm, a), (j, z)| {
+            if z.abs() > a { (j, z.abs()) } else { (jm, a) }
+        });
+        if amp_e <= 0.0 {
+            return Err(InverseError::InvalidSetting(
+                "expected protocol has zero amplitude".into(),
+            ));
+        }
+        if (amp_m - amp_e).abs() > tol.displacement * amp_e {
+            return Err(mismatch(
+                j_max,
+                format!(
+                    "amplitude {:.4e} m, expected {amp_e:.4e} m (tolerance {:.1} %)",
+                    amp_m,
+                    100.0 * tol.displacement
+                ),
+            ));
+        }
+        for j in 0..=last {
+            if tm[j] > te[n - 1] {
+                break;
+            }
+            let z_exp = interp(&te, &ze, tm[j]);
+            if (zm[j] - z_exp).abs() > tol.displacement * amp_e {
+                return Err(mismatch(
+                    j,
+                    format!(
+                        "displacement {:.4e} m, expected {z_exp:.4e} m: deviation {:.1} % of the \
+                         amplitude (tolerance {:.1} %); different rate or amplitude?",
+                        zm[j],
+                        100.0 * (zm[j] - z_exp).abs() / amp_e,
+                        100.0 * tol.displacement
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Linear resampling of `values` (one per sample, e.g. `self.force`)
+    /// onto a model time grid given relative to the first sample.
+    ///
+    /// # Errors
+    /// [`InverseError::ProtocolMismatch`] if the grid runs beyond the data
+    /// (by more than 1e-9 of the duration); [`InverseError::LengthMismatch`].
+    pub fn resample(&self, values: &[f64], grid: &[f64]) -> Result<Vec<f64>> {
+        crate::model::check_len("values to resample", self.time.len(), values.len())?;
+        let tm: Vec<f64> = self.time.iter().map(|t| t - self.time[0]).collect();
+        let end = tm[tm.len() - 1];
+        let slack = 1e-9 * end.max(f64::MIN_POSITIVE);
+        if let Some(&bad) = grid.iter().find(|&&t| t < -slack || t > end + slack) {
+            let last = self.time.len() - 1;
+            return Err(InverseError::ProtocolMismatch {
+                path: self.path.clone(),
+                row: self.lines[last],
+                time: self.time[last],
+                message: format!(
+                    "the model grid needs t = {bad} s but the data cover 0 ... {end} s"
+                ),
+            });
+        }
+        if tm.len() == 1 {
+            return Ok(vec![values[0]; grid.len()]);
+        }
+        Ok(grid
+            .iter()
+            .map(|&t| interp(&tm, values, t.clamp(0.0, end)))
+            .collect())
+    }
+}

@@ -1,0 +1,504 @@
+//! The fitting error of eq. 5.3 — RMSE divided by the *range of the
+//! measured curve* — with optional per-point (per-segment) weights, summed
+//! over several experiments fitted with one parameter set (§4.4.2).
+//!
+//! For one experiment with data d_j, model y_j(x) and weights w_j ≥ 0:
+//! e(x) = √(Σ w_j (y_j − d_j)² / Σ w_j) / range(d),
+//! which is eq. 5.3 when all w_j = 1. The objective is Σ_e e_e(x).
+//! Its gradient is ∂e/∂x_k = Σ w_j r_j J_jk / (W · R · √S) with
+//! S = Σ w_j r_j² / W, computed from the model Jacobian J.
+
+use nalgebra::DMatrix;
+
+use crate::domain::Domain;
+use crate::error::{InverseError, Result};
+use crate::measured::MeasuredCurve;
+use crate::model::{Model, check_finite, check_jacobian, check_len};
+
+/// Range-normalised RMSE (eq. 5.3) of `model` against `reference`
+/// (the measured curve, whose range normalises), with optional weights.
+///
+/// # Errors
+/// [`InverseError::LengthMismatch`], [`InverseError::ZeroRange`], or
+/// [`InverseError::InvalidSetting`] for negative or all-zero weights.
+pub fn range_normalised_rmse(
+    model: &[f64],
+    reference: &[f64],
+    weights: Option<&[f64]>,
+) -> Result<f64> {
+    check_len("model curve vs reference", reference.len(), model.len())?;
+    let range = curve_range(reference, "reference")?;
+    let (sum_w, sum_wr2): (f64, f64) = match weights {
+        None => (
+            reference.len() as f64,
+            model
+                .iter()
+                .zip(reference)
+                .map(|(y, d)| (y - d) * (y - d))
+                .sum(),
+        ),
+        Some(w) => {
+            check_weights(w, reference.len())?;
+            (
+                w.iter().sum::<f64>(),
+                model
+                    .iter()
+                    .zip(reference)
+                    .zip(w)
+                    .map(|((y, d), w)| w * (y - d) * (y - d))
+                    .sum(),
+            )
+        }
+    };
+    Ok((sum_wr2 / sum_w).sqrt() / range)
+}
+
+fn curve_range(reference: &[f64], what: &str) -> Result<f64> {
+    let (lo, hi) = reference
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+            (lo.min(v), hi.max(v))
+        });
+    let range = hi - lo;
+    if range > 0.0 && range.is_finite() {
+        Ok(range)
+    } else {
+        Err(InverseError::ZeroRange {
+            what: what.to_string(),
+        })
+    }
+}
+
+fn check_weights(w: &[f64], m: usize) -> Result<()> {
+    check_len("weights", m, w.len())?;
+    if let Some(j) = w.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+        return Err(InverseError::InvalidSetting(format!(
+            "weight {j} is {} (weights must be finite and >= 0)",
+            w[j]
+        )));
+    }
+    if w.iter().sum::<f64>() <= 0.0 {
+        return Err(InverseError::InvalidSetting(
+            "all weights are zero".to_string(),
+        ));
+    }
+    Ok(())
+}
+
+/// One weighted time segment [start, end) (s) for [`segment_weights`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Segment {
+    /// Start time (s), inclusive.
+    pub start: f64,
+    /// End time (s), exclusive (the last segment may use `f64::INFINITY`).
+    pub end: f64,
+    /// Weight of the points inside.
+    pub weight: f64,
+}
+
+/// Per-point weights from time segments (e.g. ramp-reverse cycles vs hold);
+/// points in no segment get `default`; where segments overlap the last wins.
+pub fn segment_weights(times: &[f64], segments: &[Segment], default: f64) -> Vec<f64> {
+    times
+        .iter()
+        .map(|&t| {
+            segments
+                .iter()
+                .rev()
+                .find(|s| t >= s.start && t < s.end)
+                .map_or(default, |s| s.weight)
+        })
+        .collect()
+}
+
+/// A measured curve on a model's time grid, with the model that predicts it.
+#[derive(Debug, Clone)]
+pub struct Experiment<M> {
+    /// Label for reports ("RH d = 1.5 mm").
+    pub label: String,
+    /// Forward model (surrogate or real) on the same grid as `data`.
+    pub model: M,
+    /// Measured curve resampled onto `model.times()`.
+    pub data: Vec<f64>,
+    /// Optional per-point weights (see [`segment_weights`]).
+    pub weights: Option<Vec<f64>>,
+    range: f64,
+}
+
+impl<M: Model> Experiment<M> {
+    /// Pairs data with a model, checking lengths, finiteness and range.
+    ///
+    /// # Errors
+    /// [`InverseError::LengthMismatch`], [`InverseError::ZeroRange`],
+    /// [`InverseError::InvalidSetting`] (NaN in data, bad weights).
+    pub fn new(label: &str, model: M, data: Vec<f64>, weights: Option<Vec<f64>>) -> Result<Self> {
+        check_len(
+            &format!("data of experiment '{label}'"),
+            model.times().len(),
+            data.len(),
+        )?;
+        if let Some(j) = data.iter().position(|v| !v.is_finite()) {
+            return Err(InverseError::InvalidSetting(format!(
+                "data of experiment '{label}' is not finite at index {j}"
+            )));
+        }
+        if let Some(w) = &weights {
+            check_weights(w, data.len())?;
+        }
+        let range = curve_range(&data, &format!("data of experiment '{label}'"))?;
+        Ok(Self {
+            label: label.to_string(),
+            model,
+            data,
+            weights,
+            range,
+        })
+    }
+
+    /// Pairs a measured curve with a model: `values` (one per sample of
+    /// `curve`, e.g. `curve.force`) are resampled onto `model.times()`,
+    /// which count from the curve's first sample.
+    ///
+    /// # Errors
+    /// As [`MeasuredCurve::resample`] and [`Experiment::new`].
+    pub fn from_measured(
+        label: &str,
+        model: M,
+        curve: &MeasuredCurve,
+        values: &[f64],
+        weights: Option<Vec<f64>>,
+    ) -> Result<Self> {
+        let data = curve.resample(values, model.times())?;
+        Self::new(label, model, data, weights)
+    }
+
+    /// Range of the data (max − min), the eq. 5.3 normaliser.
+    pub fn data_range(&self) -> f64 {
+        self.range
+    }
+
+    fn weight(&self, j: usize) -> f64 {
+        self.weights.as_ref().map_or(1.0, |w| w[j])
+    }
+
+    fn sum_weights(&self) -> f64 {
+        self.weights
+            .as_ref()
+            .map_or(self.data.len() as f64, |w| w.iter().sum())
+    }
+
+    /// e(x) of eq. 5.3 for this experiment.
+    ///
+    /// # Errors
+    /// Model errors; non-finite model output.
+    pub fn misfit(&self, x: &[f64]) -> Result<f64> {
+        let y = self.model.response(x)?;
+        self.misfit_of_curve(&y, x)
+    }
+
+    fn misfit_of_curve(&self, y: &[f64], x: &[f64]) -> Result<f64> {
+        check_len(
+            &format!("model curve of '{}'", self.label),
+            self.data.len(),
+            y.len(),
+        )?;
+        check_finite(y, self.model.times(), x)?;
+        let s: f64 = (0..y.len())
+            .map(|j| self.weight(j) * (y[j] - self.data[j]).powi(2))
+            .sum::<f64>()
+            / self.sum_weights();
+        Ok(s.sqrt() / self.range)
+    }
+
+    /// e(x) and ∂e/∂x from the model Jacobian.
+    ///
+    /// # Errors
+    /// Model errors; non-finite model output.
+    pub fn misfit_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
+        let (y, jac) = self.model.response_and_jacobian(x)?;
+        let e = self.misfit_of_curve(&y, x)?;
+        check_jacobian(&jac, y.len(), x.len())?;
+        Ok((e, self.gradient_from(&y, &jac, e)))
+    }
+
+    fn gradient_from(&self, y: &[f64], jac: &DMatrix<f64>, e: f64) -> Vec<f64> {
+        let n = jac.ncols();
+        let sqrt_s = e * self.range;
+        if sqrt_s == 0.0 {
+            return vec![0.0; n];
+        }
+        let denom = self.sum_weights() * self.range * sqrt_s;
+        (0..n)
+            .map(|k| {
+                (0..y.len())
+                    .map(|j| self.weight(j) * (y[j] - self.data[j]) * jac[(j, k)])
+                    .sum::<f64>()
+                    / denom
+            })
+            .collect()
+    }
+}
+
+/// What [`crate::MultiStart`] minimises: a scalar misfit over a [`Domain`]
+/// with its gradient (argmin's cost + gradient traits in one).
+pub trait Objective {
+    /// The parameter domain.
+    fn domain(&self) -> &Domain;
+
+    /// Objective value at physical parameters x.
+    ///
+    /// # Errors
+    /// Model errors.
+    fn value(&self, x: &[f64]) -> Result<f64>;
+
+    /// Value and gradient (physical units).
+    ///
+    /// # Errors
+    /// Model errors.
+    fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)>;
+
+    /// Eq. 5.3 misfit of each experiment (for reports).
+    ///
+    /// # Errors
+    /// Model errors.
+    fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>>;
+}
+
+impl<M: Model> Objective for Misfit<M> {
+    fn domain(&self) -> &Domain {
+        Misfit::domain(self)
+    }
+    fn value(&self, x: &[f64]) -> Result<f64> {
+        Misfit::value(self, x)
+    }
+    fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
+        Misfit::value_and_gradient(self, x)
+    }
+    fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>> {
+        Misfit::per_experiment(self, x)
+    }
+}
+
+/// Sum of eq. 5.3 misfits of several experiments sharing one parameter set.
+#[derive(Debug, Clone)]
+pub struct Misfit<M> {
+    experiments: Vec<Experiment<M>>,
+}
+
+impl<M: Model> Misfit<M> {
+    /// Combines experiments; their domains must have the same parameter names.
+    ///
+    /// # Errors
+    /// [`InverseError::InvalidSetting`] for no experiments or differing domains.
+    pub fn new(experiments: Vec<Experiment<M>>) -> Result<Self> {
+        let first = experiments.first().ok_or_else(|| {
+            InverseError::InvalidSetting("a fit needs at least one experiment".into())
+        })?;
+        let names: Vec<&str> = first
+            .model
+            .domain()
+            .params()
+            .iter()
+            .map(|p| p.name.as_str())
+            .collect();
+        for e in &experiments[1..] {
+            let other: Vec<&str> = e
+                .model
+                .domain()
+                .params()
+                .iter()
+                .map(|p| p.name.as_str())
+                .collect();
+            if other != names {
+                return Err(InverseError::InvalidSetting(format!(
+                    "experiment '{}' has parameters {:?}, the first has {:?}: \
+                     experiments fitted together must share one parameter set",
+                    e.label, other, names
+                )));
+            }
+        }
+        Ok(Self { experiments })
+    }
+
+    /// The experiments.
+    pub fn experiments(&self) -> &[Experiment<M>] {
+        &self.experiments
+    }
+
+    /// The shared domain (that of the first experiment).
+    pub fn domain(&self) -> &Domain {
+        self.experiments[0].model.domain()
+    }
+
+    /// Σ_e e_e(x).
+    ///
+    /// # Errors
+    /// As [`Experiment::misfit`].
+    pub fn value(&self, x: &[f64]) -> Result<f64> {
+        Ok(self.per_experiment(x)?.iter().sum())
+    }
+
+    /// e_e(x) for each experiment.
+    ///
+    /// # Errors
+    /// As [`Experiment::misfit`].
+    pub fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>> {
+        self.experiments.iter().map(|e| e.misfit(x)).collect()
+    }
+
+    /// Σ_e e_e(x) and its gradient.
+    ///
+    /// # Errors
+    /// As [`Experiment::misfit_and_gradient`].
+    pub fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
+        let mut total = 0.0;
+        let mut grad = vec![0.0; x.len()];
+        for e in &self.experiments {
+            let (v, g) = e.misfit_and_gradient(x)?;
+            total += v;
+            for (a, b) in grad.iter_mut().zip(g) {
+                *a += b;
+            }
+        }
+        Ok((total, grad))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::domain::Domain;
+    use crate::hertz::{LeeRadokHertz, ramp_hold_grid, ramp_hold_indentation};
+
+    #[test]
+    fn rmse_is_range_normalised_as_in_eq_5_3() {
+        // residuals (1, -1, 1, -1): RMSE = 1; range of reference = 10.
+        let reference = [0.0, 10.0, 5.0, 2.0];
+        let model = [1.0, 9.0, 6.0, 1.0];
+        let e = range_normalised_rmse(&model, &reference, None).expect("e");
+        assert!((e - 0.1).abs() < 1e-15);
+        // weights (1, 0, 0, 0) keep only the first residual, still /range.
+        let e = range_normalised_rmse(&model, &reference, Some(&[1.0, 0.0, 0.0, 0.0])).expect("e");
+        assert!((e - 0.1).abs() < 1e-15);
+        let e = range_normalised_rmse(
+            &[0.0, 10.0, 5.0, 5.0],
+            &reference,
+            Some(&[0.0, 0.0, 1.0, 3.0]),
+        )
+        .expect("e");
+        assert!((e - (27.0f64 / 4.0).sqrt() / 10.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn flat_reference_and_bad_weights_are_errors() {
+        assert!(matches!(
+            range_normalised_rmse(&[1.0, 2.0], &[3.0, 3.0], None),
+            Err(InverseError::ZeroRange { .. })
+        ));
+        assert!(range_normalised_rmse(&[1.0, 2.0], &[0.0, 3.0], Some(&[0.0, 0.0])).is_err());
+        assert!(range_normalised_rmse(&[1.0, 2.0], &[0.0, 3.0], Some(&[-1.0, 1.0])).is_err());
+        assert!(range_normalised_rmse(&[1.0], &[0.0, 3.0], None).is_err());
+    }
+
+    #[test]
+    fn segment_weights_pick_the_segment_containing_each_time() {
+        let w = segment_weights(
+            &[0.0, 0.5, 1.0, 2.0, 9.0],
+            &[
+                Segment {
+                    start: 0.0,
+                    end: 1.0,
+                    weight: 3.0,
+                },
+                Segment {
+                    start: 1.5,
+                    end: f64::INFINITY,
+                    weight: 0.5,
+                },
+            ],
+            1.0,
+        );
+        assert_eq!(w, vec![3.0, 3.0, 1.0, 0.5, 0.5]);
+    }
+
+    fn experiment(depth: f64, x_true: &[f64], label: &str) -> Experiment<LeeRadokHertz> {
+        let d = Domain::prony2_table_5_3(0.01).expect("domain");
+        let t = ramp_hold_grid(0.2, 40, 52.0, 120, 1e-3).expect("grid");
+        let delta = ramp_hold_indentation(&t, 10e-6, depth);
+        let m = LeeRadokHertz::new(d, t.clone(), &delta, 2.5e-6, 0.5).expect("model");
+        let mut data = m.response(x_true).expect("data");
+        // deterministic perturbation so the misfit is not zero at x_true
+        for (j, v) in data.iter_mut().enumerate() {
+            *v *= 1.0 + 0.03 * ((j as f64) * 0.7).sin();
+        }
+        let w = segment_weights(
+            &t,
+            &[Segment {
+                start: 0.0,
+                end: 0.25,
+                weight: 2.0,
+            }],
+            1.0,
+        );
+        Experiment::new(label, m, data, Some(w)).expect("experiment")
+    }
+
+    #[test]
+    fn gradient_of_summed_misfit_matches_central_differences() {
+        let x_true = [900.0, 0.5, 0.05, 0.3, 12.0];
+        let misfit = Misfit::new(vec![
+            experiment(2e-6, &x_true, "RH 2 um"),
+            experiment(1e-6, &x_true, "RH 1 um"),
+        ])
+        .expect("misfit");
+        let x = [700.0, 0.4, 0.1, 0.35, 8.0];
+        let (v, g) = misfit.value_and_gradient(&x).expect("grad");
+        assert!((v - misfit.value(&x).expect("value")).abs() < 1e-15);
+        for k in 0..5 {
+            let h = 1e-6 * x[k];
+            let mut xp = x;
+            let mut xm = x;
+            xp[k] += h;
+            xm[k] -= h;
+            let fd = (misfit.value(&xp).expect("v") - misfit.value(&xm).expect("v")) / (2.0 * h);
+            assert!(
+                (fd - g[k]).abs() <= 1e-6 * fd.abs().max(1e-12),
+                "k = {k}: {fd} vs {}",
+                g[k]
+            );
+        }
+    }
+
+    #[test]
+    fn experiments_with_different_parameter_sets_cannot_be_combined() {
+        let x_true = [900.0, 0.5, 0.05, 0.3, 12.0];
+        let mut other = experiment(1e-6, &x_true, "b");
+        let renamed = Domain::new(
+            other
+                .model
+                .domain()
+                .params()
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let mut p = p.clone();
+                    if i == 0 {
+                        p.name = "C1".into();
+                    }
+                    p
+                })
+                .collect(),
+        )
+        .expect("domain");
+        other.model = LeeRadokHertz::new(
+            renamed,
+            other.model.times().to_vec(),
+            &vec![1e-6; other.data.len()],
+            2.5e-6,
+            0.5,
+        )
+        .expect("model");
+        let e = Misfit::new(vec![experiment(2e-6, &x_true, "a"), other]).expect_err("differ");
+        assert!(e.to_string().contains("'b'"));
+    }
+}

@@ -1,0 +1,100 @@
+//! Checking RMSE (thesis eq. 4.4) against the number of training runs N on
+//! the analytic Hertz–Prony ramp-hold model over a 5-parameter cell domain
+//! shaped like thesis Table 5.3 (G0, g1, g2, τ1, τ2; g1 + g2 < 1).
+//!
+//! `cargo run --release -p nlvid-surrogate --example rmse_vs_n [-- N1 N2 …]`
+
+use nlvid_surrogate::check::summarise;
+use nlvid_surrogate::doe::{Axis, Domain, LinearConstraint, training_and_checking};
+use nlvid_surrogate::faer::Mat;
+use nlvid_surrogate::{
+    Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, Regression,
+};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let ns: Vec<usize> = std::env::args()
+        .skip(1)
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    let ns = if ns.is_empty() {
+        vec![50, 100, 200, 300]
+    } else {
+        ns
+    };
+    let ax = |name: &str, unit: &str, lower: f64, upper: f64, log: bool| Axis {
+        name: name.into(),
+        unit: unit.into(),
+        lower,
+        upper,
+        log,
+    };
+    let domain = Domain {
+        axes: vec![
+            ax("G0", "Pa", 100.0, 5000.0, true),
+            ax("g1", "1", 0.0, 0.9, false),
+            ax("g2", "1", 0.0, 0.9, false),
+            ax("tau1", "s", 0.01, 1.0, true),
+            ax("tau2", "s", 1.0, 100.0, true),
+        ],
+        constraints: vec![LinearConstraint {
+            coeffs: vec![0.0, 1.0, 1.0, 0.0, 0.0],
+            bound: 0.99,
+        }],
+    };
+    let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, 200);
+    let n_check = 200;
+    println!("model: {}", model.identity());
+    println!(
+        "N, correlation, regression, inputs, pcs, theta_search_s, rmse_min_%, rmse_median_%, rmse_max_%"
+    );
+    for &n in &ns {
+        let (train, check) = training_and_checking(&domain, n, n_check, 42, 30, 1e-6)?;
+        // Kriging on log-scaled inputs for the log axes (as the design).
+        let tr = |x: &Vec<f64>| -> Vec<f64> {
+            x.iter()
+                .zip(&domain.axes)
+                .map(|(v, a)| if a.log { v.ln() } else { *v })
+                .collect()
+        };
+        let yt: Vec<Vec<f64>> = train
+            .iter()
+            .map(|x| model.run(x))
+            .collect::<Result<_, _>>()?;
+        let yc: Vec<Vec<f64>> = check
+            .iter()
+            .map(|x| model.run(x))
+            .collect::<Result<_, _>>()?;
+        let xt: Vec<Vec<f64>> = train.iter().map(tr).collect();
+        let xm = Mat::from_fn(n, 5, |i, k| xt[i][k]);
+        let ym = Mat::from_fn(n, 200, |i, j| yt[i][j]);
+        for (corr, reg) in [
+            (Correlation::Gauss, Regression::Poly1),
+            (Correlation::Expg, Regression::Poly1),
+            (Correlation::Expg, Regression::Poly2),
+        ] {
+            if reg.n_terms(5) >= n {
+                continue;
+            }
+            let mut s = KrigingSettings::new(reg, corr, 5);
+            s.pca_energy = Some(1.0 - 1e-10);
+            let t0 = std::time::Instant::now();
+            let km = KrigingModel::fit(xm.as_ref(), ym.as_ref(), &s)?;
+            let secs = t0.elapsed().as_secs_f64();
+            let preds: Vec<Vec<f64>> = check
+                .iter()
+                .map(|x| km.predict(&tr(x)))
+                .collect::<Result<_, _>>()?;
+            let sm = summarise(&yc, &preds)?;
+            println!(
+                "{n}, {}, {}, log-axes, {}, {secs:.2}, {:.4}, {:.4}, {:.4}",
+                corr.name(),
+                reg.name(),
+                km.report.kriged_outputs,
+                100.0 * sm.min,
+                100.0 * sm.median,
+                100.0 * sm.max
+            );
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,97 @@
+//! One-shot timing of the full-size training problem of the issue:
+//! N = 1000 sites, d = 5, m = 5095 outputs (Hertz–Prony responses), with
+//! and without principal-component reduction, plus the cost of predicting
+//! one curve.
+//!
+//! `cargo run --release -p nlvid-surrogate --example train_timing [-- N M]`
+
+use std::time::Instant;
+
+use nlvid_surrogate::doe::{Axis, Domain, LinearConstraint, SampleSettings, sample};
+use nlvid_surrogate::faer::Mat;
+use nlvid_surrogate::{
+    Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, Regression,
+};
+use rayon::prelude::*;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<usize> = std::env::args()
+        .skip(1)
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    let n = args.first().copied().unwrap_or(1000);
+    let m = args.get(1).copied().unwrap_or(5095);
+    let ax = |name: &str, lower: f64, upper: f64, log: bool| Axis {
+        name: name.into(),
+        unit: String::new(),
+        lower,
+        upper,
+        log,
+    };
+    let domain = Domain {
+        axes: vec![
+            ax("G0", 100.0, 5000.0, true),
+            ax("g1", 0.0, 0.9, false),
+            ax("g2", 0.0, 0.9, false),
+            ax("tau1", 0.01, 1.0, true),
+            ax("tau2", 1.0, 100.0, true),
+        ],
+        constraints: vec![LinearConstraint {
+            coeffs: vec![0.0, 1.0, 1.0, 0.0, 0.0],
+            bound: 0.99,
+        }],
+    };
+    let t0 = Instant::now();
+    let design = sample(
+        &domain,
+        &SampleSettings {
+            n,
+            seed: 1,
+            optimise_iterations: 5,
+        },
+    )?;
+    let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, m);
+    let ys: Vec<Vec<f64>> = design
+        .par_iter()
+        .map(|x| model.run(x))
+        .collect::<Result<_, _>>()?;
+    println!(
+        "design + {n} analytic runs (m = {m}): {:.2} s",
+        t0.elapsed().as_secs_f64()
+    );
+    let xs: Vec<Vec<f64>> = design
+        .iter()
+        .map(|x| {
+            x.iter()
+                .zip(&domain.axes)
+                .map(|(v, a)| if a.log { v.ln() } else { *v })
+                .collect()
+        })
+        .collect();
+    let xm = Mat::from_fn(n, 5, |i, k| xs[i][k]);
+    let ym = Mat::from_fn(n, m, |i, j| ys[i][j]);
+    for pca in [Some(1.0 - 1e-8), None] {
+        let mut s = KrigingSettings::new(Regression::Poly1, Correlation::Expg, 5);
+        s.pca_energy = pca;
+        let t0 = Instant::now();
+        let km = KrigingModel::fit(xm.as_ref(), ym.as_ref(), &s)?;
+        let fit = t0.elapsed().as_secs_f64();
+        let reps = 200;
+        let t1 = Instant::now();
+        let mut acc = 0.0;
+        for i in 0..reps {
+            acc += km.predict(&xs[i % n])?[m / 2];
+        }
+        let per = t1.elapsed().as_secs_f64() / reps as f64;
+        println!(
+            "pca {:?}: fit {fit:.2} s ({} evaluations, {} kriged outputs, ψ = {:.4e}, θ = {:?}); predict one curve {:.3} ms [{acc:.3e}]",
+            pca,
+            km.report.evaluations,
+            km.report.kriged_outputs,
+            km.report.psi,
+            km.theta,
+            per * 1e3
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,661 @@
+//! Design of experiments: Latin hypercubes in a bounded box with linear or
+//! logarithmic axes, an optimised (ESE, φ_p) variant, linear constraints
+//! such as g1 + g2 < 1 (thesis Tables 4.1, 5.3, A.2), and separate,
+//! non-overlapping training and checking sets (thesis §4.4.1 steps 1–2).
+//!
+//! All designs are built in the unit cube and mapped to the box; every
+//! random choice comes from a seeded ChaCha8 generator.
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Result, SurrogateError};
+
+/// One parameter axis of the design box.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Axis {
+    /// Parameter name (e.g. `tau1`).
+    pub name: String,
+    /// Unit of the bounds (SI, informative).
+    #[serde(default)]
+    pub unit: String,
+    /// Lower bound.
+    pub lower: f64,
+    /// Upper bound.
+    pub upper: f64,
+    /// Sample ln(x) uniformly (for parameters spanning decades).
+    #[serde(default)]
+    pub log: bool,
+}
+
+/// Linear constraint `Σ_k coeffs[k]·x_k ≤ bound` on the parameters
+/// (original, not log, units).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LinearConstraint {
+    /// One coefficient per axis.
+    pub coeffs: Vec<f64>,
+    /// Right-hand side.
+    pub bound: f64,
+}
+
+/// The parameter domain: a box with optional linear constraints.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Domain {
+    /// Axes, in parameter order.
+    pub axes: Vec<Axis>,
+    /// Constraints (all must hold).
+    #[serde(default)]
+    pub constraints: Vec<LinearConstraint>,
+}
+
+/// A design: rows of parameter values (original units).
+pub type Design = Vec<Vec<f64>>;
+
+impl Domain {
+    /// Check bounds and constraint shapes.
+    ///
+    /// # Errors
+    /// Names the axis or constraint at fault.
+    pub fn validate(&self) -> Result<()> {
+        if self.axes.is_empty() {
+            return Err(SurrogateError::InvalidSettings("domain has no axes".into()));
+        }
+        for a in &self.axes {
+            if !(a.lower.is_finite() && a.upper.is_finite() && a.lower < a.upper) {
+                return Err(SurrogateError::InvalidSettings(format!(
+                    "axis {}: need finite lower < upper (got {} … {})",
+                    a.name, a.lower, a.upper
+                )));
+            }
+            if a.log && a.lower <= 0.0 {
+                return Err(SurrogateError::InvalidSettings(format!(
+                    "axis {}: a logarithmic axis needs lower > 0 (got {})",
+                    a.name, a.lower
+                )));
+            }
+        }
+        for (i, c) in self.constraints.iter().enumerate() {
+            if c.coeffs.len() != self.axes.len() {
+                return Err(SurrogateError::InvalidSettings(format!(
+                    "constraint {i} has {} coefficients for {} axes",
+                    c.coeffs.len(),
+                    self.axes.len()
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// Dimension.
+    pub fn dim(&self) -> usize {
+        self.axes.len()
+    }
+
+    /// Unit-cube point → parameters.
+    pub fn map(&self, u: &[f64]) -> Vec<f64> {
+        self.axes
+            .iter()
+            .zip(u)
+            .map(|(a, &t)| {
+                if a.log {
+                    (a.lower.ln() + t * (a.upper.ln() - a.lower.ln())).exp()
+                } else {
+                    a.lower + t * (a.upper - a.lower)
+                }
+            })
+            .collect()
+    }
+
+    /// Parameters → unit cube.
+    pub fn unmap(&self, x: &[f64]) -> Vec<f64> {
+        self.axes
+            .iter()
+            .zip(x)
+            .map(|(a, &v)| {
+                if a.log {
+                    (v.ln() - a.lower.ln()) / (a.upper.ln() - a.lower.ln())
+                } else {
+                    (v - a.lower) / (a.upper - a.lower)
+                }
+            })
+            .collect()
+    }
+
+    /// Whether parameters satisfy every constraint.
+    pub fn feasible(&self, x: &[f64]) -> bool {
+        self.constraints
+            .iter()
+            .all(|c| c.coeffs.iter().zip(x).map(|(a, b)| a * b).sum::<f64>() <= c.bound)
+    }
+}
+
+/// Random Latin hypercube of n points in [0,1]^d: each axis split into n
+/// strata, each stratum hit once, jittered within it.
+pub fn latin_hypercube_unit(n: usize, d: usize, rng: &mut ChaCha8Rng) -> Vec<Vec<f64>> {
+    let mut pts = vec![vec![0.0; d]; n];
+    for k in 0..d {
+        let perm = permutation(n, rng);
+        for i in 0..n {
+            pts[i][k] = (perm[i] as f64 + rng.random::<f64>()) / n as f64;
+        }
+    }
+    pts
+}
+
+fn permutation(n: usize, rng: &mut ChaCha8Rng) -> Vec<usize> {
+    let mut v: Vec<usize> = (0..n).collect();
+    for i in (1..n).rev() {
+        let j = rng.random_range(0..=i);
+        v.swap(i, j);
+    }
+    v
+}
+
+/// φ_p space-filling criterion (Morris & Mitchell 1995), p = 50.
+fn phi_p(d2: &[f64], n: usize) -> f64 {
+    let mut s = 0.0;
+    for i in 0..n {
+        for j in i + 1..n {
+            s += d2[i * n + j].max(1e-300).powf(-PHI_P / 2.0);
+        }
+    }
+    s.powf(1.0 / PHI_P)
+}
+
+const PHI_P: f64 = 50.0;
+
+fn dist2(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum()
+}
+
+/// Optimise a unit-cube Latin hypercube in place by the enhanced stochastic
+/// evolutionary algorithm (Jin, Chen & Sudjianto 2005): column-wise swaps
+/// that keep the Latin property, threshold acceptance on φ_p.
+pub fn ese_optimise(pts: &mut [Vec<f64>], outer: usize, rng: &mut ChaCha8Rng) {
+    let n = pts.len();
+    if n < 3 {
+        return;
+    }
+    let d = pts[0].len();
+    let mut d2 = vec![0.0; n * n];
+    for i in 0..n {
+        for j in 0..n {
+            d2[i * n + j] = dist2(&pts[i], &pts[j]);
+        }
+    }
+    // Sum of d^-p over pairs involving rows i1, i2 (helper for updates).
+    let pair_sum = |d2: &[f64]| -> f64 {
+        let mut s = 0.0;
+        for i in 0..n {
+            for j in i + 1..n {
+                s += d2[i * n + j].max(1e-300).powf(-PHI_P / 2.0);
+            }
+        }
+        s
+    };
+    let mut cur = pair_sum(&d2);
+    let mut best = cur;
+    let mut best_pts = pts.to_vec();
+    let mut th = 0.005 * phi_p(&d2, n).powf(PHI_P);
+    let j_trials = (n / 5).clamp(2, 50);
+    let m_inner = (2 * n * d / j_trials).clamp(10, 100);
+    let mut row1 = vec![0.0; n];
+    let mut row2 = vec![0.0; n];
+    for _ in 0..outer {
+        let old_best = best;
+        let mut accepted = 0usize;
+        let mut improved = 0usize;
+        for it in 0..m_inner {
+            let k = it % d;
+            // Try J swaps in column k, keep the best.
+            let mut cand: Option<(f64, usize, usize)> = None;
+            for _ in 0..j_trials {
+                let i1 = rng.random_range(0..n);
+                let mut i2 = rng.random_range(0..n - 1);
+                if i2 >= i1 {
+                    i2 += 1;
+                }
+                let delta = swap_delta(pts, &d2, n, k, i1, i2, &mut row1, &mut row2);
+                if cand.is_none_or(|c| delta < c.0) {
+                    cand = Some((delta, i1, i2));
+                }
+            }
+            let Some((delta, i1, i2)) = cand else {
+                continue;
+            };
+            if delta <= th * rng.random::<f64>() {
+                swap_delta(pts, &d2, n, k, i1, i2, &mut row1, &mut row2);
+                let (a, b) = (pts[i1][k], pts[i2][k]);
+                pts[i1][k] = b;
+                pts[i2][k] = a;
+                for l in 0..n {
+                    d2[i1 * n + l] = row1[l];
+                    d2[l * n + i1] = row1[l];
+                    d2[i2 * n + l] = row2[l];
+                    d2[l * n + i2] = row2[l];
+                }
+                cur += delta;
+                accepted += 1;
+                if cur < best {
+                    best = cur;
+                    best_pts.clone_from_slice(pts);
+                    improved += 1;
+                }
+            }
+        }
+        // Threshold control (exploration vs improvement).
+        let ratio = accepted as f64 / m_inner as f64;
+        if best < old_best {
+            if ratio > 0.1 && improved < accepted {
+                th *= 0.8;
+            } else if ratio < 0.1 {
+                th /= 0.9;
+            }
+        } else if ratio < 0.1 {
+            th /= 0.7;
+        } else if ratio > 0.8 {
+            th *= 0.9;
+        }
+        // Periodic exact refresh avoids drift of the running sum.
+        cur = pair_sum(&d2);
+    }
+    pts.clone_from_slice(&best_pts);
+}
+
+/// Change of Σ d^-p if column k of rows i1, i2 were swapped; new distance
+/// rows of i1, i2 are left in row1, row2.
+#[allow(clippy::too_many_arguments)]
+fn swap_delta(
+    pts: &[Vec<f64>],
+    d2: &[f64],
+    n: usize,
+    k: usize,
+    i1: usize,
+    i2: usize,
+    row1: &mut [f64],
+    row2: &mut [f64],
+) -> f64 {
+    let (a, b) = (pts[i1][k], pts[i2][k]);
+    let e = -PHI_P / 2.0;
+    let mut delta = 0.0;
+    for l in 0..n {
+        if l == i1 || l == i2 {
+            continue;
+        }
+        let c = pts[l][k];
+        let n1 = d2[i1 * n + l] - (a - c).powi(2) + (b - c).powi(2);
+        let n2 = d2[i2 * n + l] - (b - c).powi(2) + (a - c).powi(2);
+        delta += n1.max(1e-300).powf(e) + n2.max(1e-300).powf(e)
+            - d2[i1 * n + l].max(1e-300).powf(e)
+            - d2[i2 * n + l].max(1e-300).powf(e);
+        row1[l] = n1;
+        row2[l] = n2;
+    }
+    row1[i1] = 0.0;
+    row2[i2] = 0.0;
+    row1[i2] = d2[i1 * n + i2];
+    row2[i1] = d2[i1 * n + i2];
+    delta
+}
+
+/// Settings for [`sample`].
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SampleSettings {
+    /// Number of points.
+    pub n: usize,
+    /// Seed.
+    pub seed: u64,
+    /// ESE outer iterations (0: plain random Latin hypercube).
+    #[serde(default = "default_outer")]
+    pub optimise_iterations: usize,
+}
+
+fn default_outer() -> usize {
+    30
+}
+
+/// Minimum pairwise distance of unit-cube points.
+pub fn min_distance(pts: &[Vec<f64>]) -> f64 {
+    let mut m = f64::INFINITY;
+    for i in 0..pts.len() {
+        for j in i + 1..pts.len() {
+            m = m.min(dist2(&pts[i], &pts[j]));
+        }
+    }
+    m.sqrt()
+}
+
+/// A space-filling design of `n` points in the domain (parameters).
+///
+/// Without constraints: an (optionally ESE-optimised) Latin hypercube.
+/// With constraints: a Latin hypercube over the box large enough that
+/// ≈ n of its points are feasible (size from the feasible fraction,
+/// estimated with 20 000 seeded points), restricted to the feasible region;
+/// surplus points are removed one at a time, always one of the closest
+/// pair (greedy maximin pruning), so the design stays stratified and
+/// space-filling inside the region instead of merely rejected.
+///
+/// # Errors
+/// Invalid domain, n = 0, or a feasible region too small to find
+/// (< 1e-4 of the box).
+pub fn sample(domain: &Domain, s: &SampleSettings) -> Result<Design> {
+    Ok(sample_unit(domain, s)?
+        .iter()
+        .map(|u| domain.map(u))
+        .collect())
+}
+
+fn sample_unit(domain: &Domain, s: &SampleSettings) -> Result<Vec<Vec<f64>>> {
+    domain.validate()?;
+    if s.n == 0 {
+        return Err(SurrogateError::InvalidSettings(
+            "number of design points must be > 0".into(),
+        ));
+    }
+    let d = domain.dim();
+    let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
+    if domain.constraints.is_empty() {
+        let mut pts = latin_hypercube_unit(s.n, d, &mut rng);
+        ese_optimise(&mut pts, s.optimise_iterations, &mut rng);
+        return Ok(pts);
+    }
+    let trials = 20_000;
+    let hits = (0..trials)
+        .filter(|_| {
+            let u: Vec<f64> = (0..d).map(|_| rng.random::<f64>()).collect();
+            domain.feasible(&domain.map(&u))
+        })
+        .count();
+    if hits < 2 {
+        return Err(SurrogateError::InvalidSettings(format!(
+            "the constraints leave almost no feasible region ({hits} of {trials} random points)"
+        )));
+    }
+    let frac = hits as f64 / trials as f64;
+    let mut big = ((s.n as f64 / frac) * 1.15).ceil() as usize + 2;
+    for _ in 0..20 {
+        let mut pts = latin_hypercube_unit(big, d, &mut rng);
+        ese_optimise(&mut pts, s.optimise_iterations.min(10), &mut rng);
+        let mut feas: Vec<Vec<f64>> = pts
+            .into_iter()
+            .filter(|u| domain.feasible(&domain.map(u)))
+            .collect();
+        if feas.len() >= s.n {
+            prune_to(&mut feas, s.n);
+            return Ok(feas);
+        }
+        big = (big as f64 * 1.3).ceil() as usize;
+    }
+    Err(SurrogateError::InvalidSettings(
+        "could not fill the feasible region; check the constraints".into(),
+    ))
+}
+
+/// Remove points until n remain, each time the member of the closest pair
+/// with the smaller distance to its second-nearest neighbour.
+fn prune_to(pts: &mut Vec<Vec<f64>>, n: usize) {
+    while pts.len() > n {
+        let m = pts.len();
+        let mut best = (f64::INFINITY, 0, 0);
+        for i in 0..m {
+            for j in i + 1..m {
+                let dd = dist2(&pts[i], &pts[j]);
+                if dd < best.0 {
+                    best = (dd, i, j);
+                }
+            }
+        }
+        let nn2 = |i: usize, other: usize| {
+            (0..m)
+                .filter(|&l| l != i && l != other)
+                .map(|l| dist2(&pts[i], &pts[l]))
+                .fold(f64::INFINITY, f64::min)
+        };
+        let (_, i, j) = best;
+        let drop = if nn2(i, j) < nn2(j, i) { i } else { j };
+        pts.swap_remove(drop);
+    }
+}
+
+/// Training and checking designs for one domain (thesis §4.4.1): two
+/// independent designs from separate seed streams, the checking points
+/// kept at least `min_gap` (unit-cube distance, e.g. 1e-6) away from every
+/// training point (offending checking points are replaced).
+///
+/// # Errors
+/// As [`sample`].
+pub fn training_and_checking(
+    domain: &Domain,
+    n_train: usize,
+    n_check: usize,
+    seed: u64,
+    optimise_iterations: usize,
+    min_gap: f64,
+) -> Result<(Design, Design)> {
+    let train = sample_unit(
+        domain,
+        &SampleSettings {
+            n: n_train,
+            seed,
+            optimise_iterations,
+        },
+    )?;
+    let check_seed = seed ^ 0x9E37_79B9_7F4A_7C15;
+    let mut check = sample_unit(
+        domain,
+        &SampleSettings {
+            n: n_check,
+            seed: check_seed,
+            optimise_iterations,
+        },
+    )?;
+    let mut rng = ChaCha8Rng::seed_from_u64(check_seed.wrapping_add(1));
+    let d = domain.dim();
+    for c in check.iter_mut() {
+        let mut tries = 0;
+        while train.iter().any(|t| dist2(t, c) < min_gap * min_gap) {
+            tries += 1;
+            if tries > 1000 {
+                return Err(SurrogateError::InvalidSettings(
+                    "could not place a checking point away from the training set".into(),
+                ));
+            }
+            let u: Vec<f64> = (0..d).map(|_| rng.random::<f64>()).collect();
+            if domain.feasible(&domain.map(&u)) {
+                *c = u;
+            }
+        }
+    }
+    Ok((
+        train.iter().map(|u| domain.map(u)).collect(),
+        check.iter().map(|u| domain.map(u)).collect(),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn box3(log: bool) -> Domain {
+        Domain {
+            axes: vec![
+                Axis {
+                    name: "a".into(),
+                    unit: String::new(),
+                    lower: 1.0,
+                    upper: 2.0,
+                    log: false,
+                },
+                Axis {
+                    name: "tau".into(),
+                    unit: "s".into(),
+                    lower: 1e-2,
+                    upper: 1e2,
+                    log,
+                },
+                Axis {
+                    name: "g".into(),
+                    unit: String::new(),
+                    lower: 0.0,
+                    upper: 1.0,
+                    log: false,
+                },
+            ],
+            constraints: vec![],
+        }
+    }
+
+    fn assert_latin(domain: &Domain, design: &Design) {
+        let n = design.len();
+        for k in 0..domain.dim() {
+            let mut seen = vec![false; n];
+            for x in design {
+                let u = domain.unmap(x)[k];
+                let s = ((u * n as f64).floor() as usize).min(n - 1);
+                assert!(!seen[s], "axis {k}: stratum {s} hit twice");
+                seen[s] = true;
+            }
+        }
+    }
+
+    #[test]
+    fn latin_property_holds_for_plain_and_optimised_designs_on_log_axes() {
+        let d = box3(true);
+        for it in [0, 20] {
+            let design = sample(
+                &d,
+                &SampleSettings {
+                    n: 40,
+                    seed: 7,
+                    optimise_iterations: it,
+                },
+            )
+            .unwrap();
+            assert_eq!(design.len(), 40);
+            assert_latin(&d, &design);
+            for x in &design {
+                assert!(x[1] >= 1e-2 && x[1] <= 1e2);
+            }
+        }
+    }
+
+    #[test]
+    fn log_axis_spreads_points_evenly_over_decades() {
+        let d = box3(true);
+        let design = sample(
+            &d,
+            &SampleSettings {
+                n: 40,
+                seed: 3,
+                optimise_iterations: 0,
+            },
+        )
+        .unwrap();
+        // 4 decades, 40 strata: exactly 10 points per decade.
+        for dec in 0..4 {
+            let lo = 1e-2 * 10f64.powi(dec);
+            let c = design
+                .iter()
+                .filter(|x| x[1] >= lo && x[1] < lo * 10.0)
+                .count();
+            assert_eq!(c, 10);
+        }
+    }
+
+    #[test]
+    fn ese_improves_the_maximin_distance() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut pts = latin_hypercube_unit(30, 3, &mut rng);
+        let before = min_distance(&pts);
+        ese_optimise(&mut pts, 30, &mut rng);
+        assert!(
+            min_distance(&pts) > before,
+            "{} vs {before}",
+            min_distance(&pts)
+        );
+    }
+
+    #[test]
+    fn same_seed_same_design() {
+        let d = box3(false);
+        let s = SampleSettings {
+            n: 20,
+            seed: 5,
+            optimise_iterations: 5,
+        };
+        assert_eq!(sample(&d, &s).unwrap(), sample(&d, &s).unwrap());
+    }
+
+    #[test]
+    fn constrained_design_is_feasible_and_more_space_filling_than_rejection() {
+        let mut d = box3(false);
+        d.axes[0].lower = 0.0;
+        d.axes[0].upper = 1.0;
+        // g1 + g2 ≤ 1 on axes 0 and 2.
+        d.constraints.push(LinearConstraint {
+            coeffs: vec![1.0, 0.0, 1.0],
+            bound: 1.0,
+        });
+        let n = 60;
+        let design = sample(
+            &d,
+            &SampleSettings {
+                n,
+                seed: 2,
+                optimise_iterations: 20,
+            },
+        )
+        .unwrap();
+        assert_eq!(design.len(), n);
+        assert!(design.iter().all(|x| x[0] + x[2] <= 1.0));
+        // Rejection sampling of plain random points, same size.
+        let mut rng = ChaCha8Rng::seed_from_u64(2);
+        let mut rej = Vec::new();
+        while rej.len() < n {
+            let u: Vec<f64> = (0..3).map(|_| rng.random::<f64>()).collect();
+            if d.feasible(&d.map(&u)) {
+                rej.push(u);
+            }
+        }
+        let ours: Vec<Vec<f64>> = design.iter().map(|x| d.unmap(x)).collect();
+        assert!(
+            min_distance(&ours) > 1.5 * min_distance(&rej),
+            "{} vs {}",
+            min_distance(&ours),
+            min_distance(&rej)
+        );
+        // Both halves of the triangle are populated in proportion to area.
+        let low = design.iter().filter(|x| x[0] < 0.5).count() as f64 / n as f64;
+        assert!((low - 0.75).abs() < 0.1, "fraction with g1 < 0.5: {low}");
+    }
+
+    #[test]
+    fn training_and_checking_sets_do_not_overlap() {
+        let d = box3(true);
+        let (t, c) = training_and_checking(&d, 50, 20, 9, 5, 1e-3).unwrap();
+        assert_eq!((t.len(), c.len()), (50, 20));
+        for x in &c {
+            let ux = d.unmap(x);
+            for y in &t {
+                assert!(dist2(&ux, &d.unmap(y)).sqrt() >= 1e-3);
+            }
+        }
+    }
+
+    #[test]
+    fn bad_domains_are_rejected_with_the_axis_name() {
+        let mut d = box3(true);
+        d.axes[1].lower = 0.0;
+        let e = sample(
+            &d,
+            &SampleSettings {
+                n: 5,
+                seed: 1,
+                optimise_iterations: 0,
+            },
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("tau"), "{e}");
+    }
+}

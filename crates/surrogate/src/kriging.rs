@@ -1,0 +1,811 @@
+//! DACE-equivalent Kriging with many outputs sharing one correlation model
+//! (Lophaven, Nielsen & Søndergaard 2002, ch. 2–3; thesis App. A.2).
+//!
+//! Fit: normalise sites and outputs (mean, n−1 standard deviation),
+//! optionally rotate the outputs to their leading principal components,
+//! choose θ by maximum likelihood (min ψ, eq. 2.25 of the report), then
+//! factorise R once and solve for all outputs at once.
+//!
+//! Predict at x (eq. 2.16, 2.19–2.20 of the report):
+//! `ŷ = f(x)ᵀβ + r(x)ᵀγ`, `γ = R⁻¹(Y − Fβ)`,
+//! `MSE = σ²(1 + uᵀ(FᵀR⁻¹F)⁻¹u − rᵀR⁻¹r)`, `u = FᵀR⁻¹r − f`,
+//! and their gradients with respect to x.
+
+use faer::linalg::triangular_solve::{
+    solve_lower_triangular_in_place, solve_upper_triangular_in_place,
+};
+use faer::{Accum, Mat, MatRef, Par, Side};
+use serde::{Deserialize, Serialize};
+
+use crate::boxmin::{SearchResult, boxmin};
+use crate::correlation::Correlation;
+use crate::error::{Result, SurrogateError};
+use crate::likelihood::{Eval, Factors, Problem};
+use crate::optimise::{OptimiserSettings, minimise};
+use crate::regression::Regression;
+
+/// How θ is chosen.
+#[derive(Debug, Clone)]
+pub enum ThetaSearch {
+    /// Use this θ (no likelihood optimisation).
+    Fixed(Vec<f64>),
+    /// DACE's `boxmin` from θ0 in `[lower, upper]` (reproduces published fits).
+    Boxmin {
+        /// Start.
+        theta0: Vec<f64>,
+        /// Lower bounds (> 0).
+        lower: Vec<f64>,
+        /// Upper bounds.
+        upper: Vec<f64>,
+    },
+    /// Multistart projected BFGS on ln ψ(ln θ) (the default; see [`crate::optimise`]).
+    Optimise {
+        /// First start.
+        theta0: Vec<f64>,
+        /// Lower bounds (> 0).
+        lower: Vec<f64>,
+        /// Upper bounds.
+        upper: Vec<f64>,
+        /// Starts, iterations, seed.
+        settings: OptimiserSettings,
+    },
+}
+
+impl ThetaSearch {
+    /// Default search for `dim` inputs: optimiser in `[1e-3, 1e2]` (per
+    /// normalised unit) from θ = 1, and `p ∈ [0.1, 2]` from 1.9 for `expg`.
+    pub fn default_for(correlation: Correlation, dim: usize) -> Self {
+        let mut theta0 = vec![1.0; dim];
+        let mut lower = vec![1e-3; dim];
+        let mut upper = vec![1e2; dim];
+        if correlation == Correlation::Expg {
+            theta0.push(1.9);
+            lower.push(0.1);
+            upper.push(2.0);
+        }
+        ThetaSearch::Optimise {
+            theta0,
+            lower,
+            upper,
+            settings: OptimiserSettings::default(),
+        }
+    }
+}
+
+/// Settings of a Kriging fit.
+#[derive(Debug, Clone)]
+pub struct KrigingSettings {
+    /// Regression polynomial.
+    pub regression: Regression,
+    /// Correlation family.
+    pub correlation: Correlation,
+    /// θ choice.
+    pub theta: ThetaSearch,
+    /// Nugget added to the diagonal of R on top of DACE's (10+n)·eps.
+    pub nugget: f64,
+    /// If R is not positive definite anywhere the search went, retry with
+    /// nugget 1e-10, 1e-8, 1e-6, 1e-4 (the value used is reported).
+    pub auto_nugget: bool,
+    /// Reduce the outputs to the leading principal components holding this
+    /// fraction of the variance of the standardised outputs (e.g. 0.99999).
+    pub pca_energy: Option<f64>,
+}
+
+impl KrigingSettings {
+    /// DACE-like defaults: given families, default optimiser, no nugget
+    /// beyond DACE's, automatic nugget on failure, no output reduction.
+    pub fn new(regression: Regression, correlation: Correlation, dim: usize) -> Self {
+        KrigingSettings {
+            regression,
+            correlation,
+            theta: ThetaSearch::default_for(correlation, dim),
+            nugget: 0.0,
+            auto_nugget: true,
+            pca_energy: None,
+        }
+    }
+}
+
+/// Principal-component reduction of the standardised outputs.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Pca {
+    /// Kept components k.
+    pub n_components: usize,
+    /// Fraction of variance of the standardised outputs they hold.
+    pub energy: f64,
+    /// Orthonormal basis V_k, m × k, column-major.
+    pub basis: Vec<f64>,
+}
+
+/// What the fit did, for reports.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FitReport {
+    /// Final θ.
+    pub theta: Vec<f64>,
+    /// ψ(θ) on the kriged outputs (normalised, or PC scores).
+    pub psi: f64,
+    /// Likelihood evaluations used by the θ search.
+    pub evaluations: usize,
+    /// Search used (`fixed`, `boxmin`, `optimise`).
+    pub search: String,
+    /// Nugget added on top of DACE's (10+n)·eps.
+    pub nugget: f64,
+    /// Number of kriged outputs (m, or k principal components).
+    pub kriged_outputs: usize,
+    /// Variance fraction kept by the PCA (1 without reduction).
+    pub energy: f64,
+}
+
+/// A fitted Kriging model (serialisable; all matrices column-major).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct KrigingModel {
+    /// Regression polynomial.
+    pub regression: Regression,
+    /// Correlation family.
+    pub correlation: Correlation,
+    /// θ (normalised inputs; for `expg` the last entry is the power).
+    pub theta: Vec<f64>,
+    /// Input dimension d.
+    pub dim: usize,
+    /// Number of design sites n.
+    pub n_sites: usize,
+    /// Number of original outputs m.
+    pub n_outputs: usize,
+    /// Input means.
+    pub x_mean: Vec<f64>,
+    /// Input standard deviations (n−1; 1 for constant columns).
+    pub x_std: Vec<f64>,
+    /// Output means.
+    pub y_mean: Vec<f64>,
+    /// Output standard deviations (n−1; 1 for constant columns).
+    pub y_std: Vec<f64>,
+    /// Normalised sites, n × d.
+    sites: Vec<f64>,
+    /// β, p × q (normalised units / PC scores).
+    pub beta: Vec<f64>,
+    /// γ = C⁻ᵀρ, n × q.
+    gamma: Vec<f64>,
+    /// σ² of the kriged outputs (normalised units / PC scores), q.
+    pub sigma2: Vec<f64>,
+    /// Lower Cholesky factor C of R, n × n.
+    c: Vec<f64>,
+    /// F̃ = C⁻¹F, n × p.
+    ft: Vec<f64>,
+    /// G (upper, F̃ = QG), p × p.
+    g: Vec<f64>,
+    /// Output reduction, if any.
+    pub pca: Option<Pca>,
+    /// How the model was obtained.
+    pub report: FitReport,
+}
+
+/// Full prediction at one point.
+#[derive(Debug, Clone)]
+pub struct PointPrediction {
+    /// ŷ(x), m values.
+    pub y: Vec<f64>,
+    /// ∂ŷ_j/∂x_k, row-major m × d.
+    pub dy: Vec<f64>,
+    /// MSE_j(x), m values.
+    pub mse: Vec<f64>,
+    /// ∂MSE_j/∂x_k, row-major m × d.
+    pub dmse: Vec<f64>,
+}
+
+fn mean_std(col: impl Iterator<Item = f64>, n: usize) -> (f64, f64) {
+    let col: Vec<f64> = col.collect();
+    let mean = col.iter().sum::<f64>() / n as f64;
+    let var = col.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n as f64 - 1.0);
+    let sd = var.sqrt();
+    (
+        mean,
+        if sd == 0.0 || !sd.is_finite() {
+            1.0
+        } else {
+            sd
+        },
+    )
+}
+
+fn to_vec(m: MatRef<'_, f64>) -> Vec<f64> {
+    let mut v = Vec::with_capacity(m.nrows() * m.ncols());
+    for j in 0..m.ncols() {
+        v.extend(m.col(j).iter().copied());
+    }
+    v
+}
+
+fn view(v: &[f64], r: usize, c: usize) -> MatRef<'_, f64> {
+    MatRef::from_column_major_slice(v, r, c)
+}
+
+fn check_theta(name: &str, t: &[f64], nt: usize) -> Result<()> {
+    if t.len() != nt {
+        return Err(SurrogateError::InvalidSettings(format!(
+            "{name} has {} entries, the correlation model needs {nt}",
+            t.len()
+        )));
+    }
+    if t.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+        return Err(SurrogateError::InvalidSettings(format!(
+            "{name} = {t:?}: every entry must be finite and > 0"
+        )));
+    }
+    Ok(())
+}
+
+impl KrigingModel {
+    /// Fit to sites `x` (n × d) and outputs `y` (n × m).
+    ///
+    /// # Errors
+    /// Shape mismatches, non-finite data, fewer than 2 sites, θ settings of
+    /// the wrong length or sign, a regression matrix too ill conditioned
+    /// for the sites, or R not positive definite at every θ tried (with
+    /// the largest nugget allowed).
+    pub fn fit(x: MatRef<'_, f64>, y: MatRef<'_, f64>, settings: &KrigingSettings) -> Result<Self> {
+        let (n, d, m) = (x.nrows(), x.ncols(), y.ncols());
+        if y.nrows() != n {
+            return Err(SurrogateError::InvalidInput(format!(
+                "{n} design sites but {} rows of outputs",
+                y.nrows()
+            )));
+        }
+        if n < 2 || d == 0 || m == 0 {
+            return Err(SurrogateError::InvalidInput(format!(
+                "need ≥ 2 sites, ≥ 1 input and ≥ 1 output (got n = {n}, d = {d}, m = {m})"
+            )));
+        }
+        for (name, a) in [("x", x), ("y", y)] {
+            for j in 0..a.ncols() {
+                if let Some(i) = (0..n).find(|&i| !a[(i, j)].is_finite()) {
+                    return Err(SurrogateError::InvalidInput(format!(
+                        "{name} row {i}, column {j} is not finite ({})",
+                        a[(i, j)]
+                    )));
+                }
+            }
+        }
+        let p = settings.regression.n_terms(d);
+        if p > n {
+            return Err(SurrogateError::InvalidInput(format!(
+                "{} regression needs at least {p} sites, got {n}",
+                settings.regression.name()
+            )));
+        }
+        let nt = settings.correlation.n_theta(d);
+        match &settings.theta {
+            ThetaSearch::Fixed(t) => check_theta("theta", t, nt)?,
+            ThetaSearch::Boxmin {
+                theta0,
+                lower,
+                upper,
+            }
+            | ThetaSearch::Optimise {
+                theta0,
+                lower,
+                upper,
+                ..
+            } => {
+                check_theta("theta0", theta0, nt)?;
+                check_theta("lower bound of theta", lower, nt)?;
+                check_theta("upper bound of theta", upper, nt)?;
+                if let Some(k) = (0..nt).find(|&k| lower[k] > upper[k]) {
+                    return Err(SurrogateError::InvalidSettings(format!(
+                        "theta bound {k}: lower {} > upper {}",
+                        lower[k], upper[k]
+                    )));
+                }
+            }
+        }
+        if let Some(e) = settings.pca_energy {
+            if !(e > 0.0 && e <= 1.0) {
+                return Err(SurrogateError::InvalidSettings(format!(
+                    "PCA energy fraction {e} must be in (0, 1]"
+                )));
+            }
+        }
+
+        let (x_mean, x_std): (Vec<f64>, Vec<f64>) = (0..d)
+            .map(|k| mean_std(x.col(k).iter().copied(), n))
+            .unzip();
+        let (y_mean, y_std): (Vec<f64>, Vec<f64>) = (0..m)
+            .map(|j| mean_std(y.col(j).iter().copied(), n))
+            .unzip();
+        let s = Mat::from_fn(n, d, |i, k| (x[(i, k)] - x_mean[k]) / x_std[k]);
+        let ys = Mat::from_fn(n, m, |i, j| (y[(i, j)] - y_mean[j]) / y_std[j]);
+
+        // Output rotation: PCA (truncated) or, for θ only, the exact
+        // full-rank rotation when m > n (ψ is invariant under it).
+        let need_rotation = settings.pca_energy.is_some() || m > n;
+        let rot = if need_rotation {
+            Some(principal_components(ys.as_ref())?)
+        } else {
+            None
+        };
+        let (kriged, pca, energy) = match (&rot, settings.pca_energy) {
+            (Some(r), Some(e)) => {
+                let k = r.components_for(e);
+                let z = r.scores(k);
+                let energy = r.energy(k);
+                let basis = r.basis(ys.as_ref(), k);
+                (
+                    z,
+                    Some(Pca {
+                        n_components: k,
+                        energy,
+                        basis: to_vec(basis.as_ref()),
+                    }),
+                    energy,
+                )
+            }
+            _ => (ys.clone(), None, 1.0),
+        };
+        let theta_outputs = match (&rot, &pca) {
+            (Some(r), None) => r.scores(r.rank()),
+            _ => kriged.clone(),
+        };
+
+        let nuggets: Vec<f64> = if settings.auto_nugget {
+            std::iter::once(settings.nugget)
+                .chain(
+                    [1e-10, 1e-8, 1e-6, 1e-4]
+                        .into_iter()
+                        .filter(|&v| v > settings.nugget),
+                )
+                .collect()
+        } else {
+            vec![settings.nugget]
+        };
+        let mut last_theta = Vec::new();
+        for &nugget in &nuggets {
+            let prob = Problem::new(
+                s.as_ref(),
+                theta_outputs.as_ref(),
+                settings.regression,
+                settings.correlation,
+                nugget,
+            );
+            let (res, search) = search_theta(&prob, &settings.theta)?;
+            last_theta = res.theta.clone();
+            if !res.psi.is_finite() {
+                continue;
+            }
+            let prob = Problem::new(
+                s.as_ref(),
+                kriged.as_ref(),
+                settings.regression,
+                settings.correlation,
+                nugget,
+            );
+            let Eval::Ok(fac) = prob.eval(&res.theta)? else {
+                continue;
+            };
+            let Factors {
+                c,
+                ft,
+                g,
+                beta,
+                rho,
+                sigma2,
+                psi,
+            } = *fac;
+            let mut gamma = rho;
+            solve_upper_triangular_in_place(c.transpose(), gamma.as_mut(), Par::rayon(0));
+            let report = FitReport {
+                theta: res.theta.clone(),
+                psi,
+                evaluations: res.evaluations,
+                search: search.to_string(),
+                nugget,
+                kriged_outputs: kriged.ncols(),
+                energy,
+            };
+            return Ok(KrigingModel {
+                regression: settings.regression,
+                correlation: settings.correlation,
+                theta: res.theta,
+                dim: d,
+                n_sites: n,
+                n_outputs: m,
+                x_mean,
+                x_std,
+                y_mean,
+                y_std,
+                sites: to_vec(s.as_ref()),
+                beta: to_vec(beta.as_ref()),
+                gamma: to_vec(gamma.as_ref()),
+                sigma2,
+                c: to_vec(c.as_ref()),
+                ft: to_vec(ft.as_ref()),
+                g: to_vec(g.as_ref()),
+                pca,
+                report,
+            });
+        }
+        Err(SurrogateError::NotPositiveDefinite {
+            theta: last_theta,
+            nugget: nuggets.last().copied().unwrap_or(0.0),
+        })
+    }
+
+    /// Number of kriged outputs q (m, or the number of kept components).
+    pub fn n_kriged(&self) -> usize {
+        self.sigma2.len()
+    }
+
+    fn p(&self) -> usize {
+        self.regression.n_terms(self.dim)
+    }
+
+    fn check_x(&self, x: &[f64]) -> Result<()> {
+        if x.len() != self.dim {
+            return Err(SurrogateError::InvalidInput(format!(
+                "point has {} coordinates, the model has {} inputs",
+                x.len(),
+                self.dim
+            )));
+        }
+        if let Some(k) = x.iter().position(|v| !v.is_finite()) {
+            return Err(SurrogateError::InvalidInput(format!(
+                "coordinate {k} is not finite"
+            )));
+        }
+        Ok(())
+    }
+
+    /// Scaled kriged prediction (f, r, z) at normalised point xn.
+    fn scaled(&self, xn: &[f64], r: &mut [f64], f: &mut [f64], z: &mut [f64]) {
+        let (n, d, q, p) = (self.n_sites, self.dim, self.n_kriged(), self.p());
+        self.regression.eval(xn, f);
+        let mut dx = vec![0.0; d];
+        for i in 0..n {
+            for k in 0..d {
+                dx[k] = xn[k] - self.sites[k * n + i];
+            }
+            r[i] = self.correlation.value(&self.theta, &dx);
+        }
+        for j in 0..q {
+            let b = &self.beta[j * p..(j + 1) * p];
+            let gm = &self.gamma[j * n..(j + 1) * n];
+            z[j] = dot(f, b) + dot(r, gm);
+        }
+    }
+
+    /// Map kriged values z (normalised outputs or PC scores) to outputs.
+    fn unscale(&self, z: &[f64], out: &mut [f64], add_mean: bool) {
+        let m = self.n_outputs;
+        match &self.pca {
+            None => out.copy_from_slice(z),
+            Some(pca) => {
+                out.iter_mut().for_each(|v| *v = 0.0);
+                for (k, zk) in z.iter().enumerate() {
+                    let col = &pca.basis[k * m..(k + 1) * m];
+                    for j in 0..m {
+                        out[j] += col[j] * zk;
+                    }
+                }
+            }
+        }
+        for j in 0..m {
+            out[j] *= self.y_std[j];
+            if add_mean {
+                out[j] += self.y_mean[j];
+            }
+        }
+    }
+
+    /// Predictor ŷ(x) (report eq. 2.16), m values.
+    ///
+    /// # Errors
+    /// `x` of the wrong length or not finite.
+    pub fn predict(&self, x: &[f64]) -> Result<Vec<f64>> {
+        self.check_x(x)?;
+        let xn: Vec<f64> = (0..self.dim)
+            .map(|k| (x[k] - self.x_mean[k]) / self.x_std[k])
+            .collect();
+        let mut r = vec![0.0; self.n_sites];
+        let mut f = vec![0.0; self.p()];
+        let mut z = vec![0.0; self.n_kriged()];
+        self.scaled(&xn, &mut r, &mut f, &mut z);
+        let mut y = vec![0.0; self.n_outputs];
+        self.unscale(&z, &mut y, true);
+        Ok(y)
+    }
+
+    /// Predictor at many points (rows of `x`, n_points × d) → n_points × m.
+    pub fn predict_many(&self, x: MatRef<'_, f64>) -> Result<Mat<f64>> {
+        use rayon::prelude::*;
+        let rows: Vec<Vec<f64>> = (0..x.nrows())
+            .into_par_iter()
+            .map(|i| {
+                let xi: Vec<f64> = (0..x.ncols()).map(|k| x[(i, k)]).collect();
+                self.predict(&xi)
+            })
+            .collect::<Result<_>>()?;
+        Ok(Mat::from_fn(rows.len(), self.n_outputs, |i, j| rows[i][j]))
+    }
+
+    /// Process variance σ² of each original output in its own units
+    /// (DACE's `dmodel.sigma2`).
+    pub fn process_variance(&self) -> Vec<f64> {
+        let m = self.n_outputs;
+        match &self.pca {
+            None => (0..m)
+                .map(|j| self.sigma2[j] * self.y_std[j].powi(2))
+                .collect(),
+            Some(pca) => (0..m)
+                .map(|j| {
+                    let s: f64 = (0..pca.n_components)
+                        .map(|k| pca.basis[k * m + j].powi(2) * self.sigma2[k])
+                        .sum();
+                    s * self.y_std[j].powi(2)
+                })
+                .collect(),
+        }
+    }
+
+    /// Predictor, its gradient, MSE and MSE gradient at x (report eqs.
+    /// 2.16, 2.19–2.20; DACE `predictor` with four outputs).
+    ///
+    /// # Errors
+    /// `x` of the wrong length or not finite.
+    pub fn predict_full(&self, x: &[f64]) -> Result<PointPrediction> {
+        self.check_x(x)?;
+        let (n, d, q, p, m) = (
+            self.n_sites,
+            self.dim,
+            self.n_kriged(),
+            self.p(),
+            self.n_outputs,
+        );
+        let xn: Vec<f64> = (0..d)
+            .map(|k| (x[k] - self.x_mean[k]) / self.x_std[k])
+            .collect();
+        let mut f = vec![0.0; p];
+        self.regression.eval(&xn, &mut f);
+        let mut df = vec![0.0; d * p];
+        self.regression.jacobian(&xn, &mut df);
+        let mut r = Mat::<f64>::zeros(n, 1);
+        let mut dr = Mat::<f64>::zeros(n, d);
+        let mut dx = vec![0.0; d];
+        let mut g = vec![0.0; d];
+        for i in 0..n {
+            for k in 0..d {
+                dx[k] = xn[k] - self.sites[k * n + i];
+            }
+            r[(i, 0)] = self.correlation.value_and_grad_d(&self.theta, &dx, &mut g);
+            for k in 0..d {
+                dr[(i, k)] = g[k];
+            }
+        }
+        // Scaled predictor and Jacobian dz (q × d).
+        let mut z = vec![0.0; q];
+        let mut dz = vec![0.0; q * d];
+        for j in 0..q {
+            let b = &self.beta[j * p..(j + 1) * p];
+            let gm = &self.gamma[j * n..(j + 1) * n];
+            z[j] = dot(&f, b) + (0..n).map(|i| r[(i, 0)] * gm[i]).sum::<f64>();
+            for k in 0..d {
+                dz[j * d + k] = dot(&df[k * p..(k + 1) * p], b)
+                    + (0..n).map(|i| dr[(i, k)] * gm[i]).sum::<f64>();
+            }
+        }
+        // MSE factor φ = 1 + |v|² − |rt|², rt = C⁻¹r, v = G⁻ᵀ(F̃ᵀrt − f).
+        let c = view(&self.c, n, n);
+        let ft = view(&self.ft, n, p);
+        let gmat = view(&self.g, p, p);
+        let mut rt = r.clone();
+        solve_lower_triangular_in_place(c, rt.as_mut(), Par::Seq);
+        let mut v = ft.transpose() * &rt;
+        for k in 0..p {
+            v[(k, 0)] -= f[k];
+        }
+        solve_lower_triangular_in_place(gmat.transpose(), v.as_mut(), Par::Seq);
+        let phi = 1.0 + v.col(0).iter().map(|a| a * a).sum::<f64>()
+            - rt.col(0).iter().map(|a| a * a).sum::<f64>();
+        // ∂φ/2 = (F̃ Gv − rt)ᵀ C⁻¹ dr − (df Gv)ᵀ, Gv = G⁻¹v.
+        let mut gv = v.clone();
+        solve_upper_triangular_in_place(gmat, gv.as_mut(), Par::Seq);
+        let mut w = Mat::<f64>::zeros(n, 1);
+        faer::linalg::matmul::matmul(w.as_mut(), Accum::Replace, ft, gv.as_ref(), 1.0, Par::Seq);
+        for i in 0..n {
+            w[(i, 0)] -= rt[(i, 0)];
+        }
+        // (C⁻¹dr)ᵀ w = drᵀ (C⁻ᵀ w)
+        solve_upper_triangular_in_place(c.transpose(), w.as_mut(), Par::Seq);
+        let half_dphi: Vec<f64> = (0..d)
+            .map(|k| {
+                (0..n).map(|i| dr[(i, k)] * w[(i, 0)]).sum::<f64>()
+                    - (0..p).map(|l| df[k * p + l] * gv[(l, 0)]).sum::<f64>()
+            })
+            .collect();
+
+        let mut y = vec![0.0; m];
+        self.unscale(&z, &mut y, true);
+        let mut dy = vec![0.0; m * d];
+        let mut col = vec![0.0; q];
+        let mut out = vec![0.0; m];
+        for k in 0..d {
+            for j in 0..q {
+                col[j] = dz[j * d + k];
+            }
+            self.unscale(&col, &mut out, false);
+            for j in 0..m {
+                dy[j * d + k] = out[j] / self.x_std[k];
+            }
+        }
+        let pv = self.process_variance();
+        let mse: Vec<f64> = pv.iter().map(|s| s * phi).collect();
+        let mut dmse = vec![0.0; m * d];
+        for j in 0..m {
+            for k in 0..d {
+                dmse[j * d + k] = 2.0 * pv[j] * half_dphi[k] / self.x_std[k];
+            }
+        }
+        Ok(PointPrediction { y, dy, mse, dmse })
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Eigen-decomposition of the Gram matrix Ys Ysᵀ (n × n), eigenvalues
+/// descending: Ys = U Λ^{1/2} Vᵀ.
+struct Rotation {
+    lambda: Vec<f64>,
+    u: Mat<f64>,
+}
+
+fn principal_components(ys: MatRef<'_, f64>) -> Result<Rotation> {
+    let n = ys.nrows();
+    let mut gram = Mat::<f64>::zeros(n, n);
+    faer::linalg::matmul::matmul(
+        gram.as_mut(),
+        Accum::Replace,
+        ys,
+        ys.transpose(),
+        1.0,
+        Par::rayon(0),
+    );
+    let evd = gram.self_adjoint_eigen(Side::Lower).map_err(|e| {
+        SurrogateError::InvalidInput(format!(
+            "eigen-decomposition of the output Gram matrix failed: {e:?}"
+        ))
+    })?;
+    let s = evd.S();
+    let uu = evd.U();
+    // faer sorts ascending; reverse.
+    let lambda: Vec<f64> = (0..n).rev().map(|i| s[i].max(0.0)).collect();
+    let u = Mat::from_fn(n, n, |i, j| uu[(i, n - 1 - j)]);
+    Ok(Rotation { lambda, u })
+}
+
+impl Rotation {
+    fn total(&self) -> f64 {
+        self.lambda.iter().sum()
+    }
+    fn rank(&self) -> usize {
+        let tol = self.lambda.first().copied().unwrap_or(0.0) * 1e-13;
+        self.lambda.iter().take_while(|&&l| l > tol).count().max(1)
+    }
+    fn components_for(&self, energy: f64) -> usize {
+        let tot = self.total();
+        if tot <= 0.0 {
+            return 1;
+        }
+        let mut acc = 0.0;
+        for (k, l) in self.lambda.iter().enumerate() {
+            acc += l;
+            if acc >= energy * tot {
+                return (k + 1).min(self.rank());
+            }
+        }
+        self.rank()
+    }
+    fn energy(&self, k: usize) -> f64 {
+        let tot = self.total();
+        if tot <= 0.0 {
+            1.0
+        } else {
+            self.lambda[..k].iter().sum::<f64>() / tot
+        }
+    }
+    /// Scores Z = U_k Λ_k^{1/2} (n × k).
+    fn scores(&self, k: usize) -> Mat<f64> {
+        Mat::from_fn(self.u.nrows(), k, |i, j| {
+            self.u[(i, j)] * self.lambda[j].sqrt()
+        })
+    }
+    /// Basis V_k = Ysᵀ U_k Λ_k^{−1/2} (m × k).
+    fn basis(&self, ys: MatRef<'_, f64>, k: usize) -> Mat<f64> {
+        let uk = Mat::from_fn(self.u.nrows(), k, |i, j| {
+            self.u[(i, j)] / self.lambda[j].sqrt()
+        });
+        let mut v = Mat::<f64>::zeros(ys.ncols(), k);
+        faer::linalg::matmul::matmul(
+            v.as_mut(),
+            Accum::Replace,
+            ys.transpose(),
+            uk.as_ref(),
+            1.0,
+            Par::rayon(0),
+        );
+        v
+    }
+}
+
+/// Run the configured θ search on a problem.
+fn search_theta(prob: &Problem<'_>, search: &ThetaSearch) -> Result<(SearchResult, &'static str)> {
+    match search {
+        ThetaSearch::Fixed(t) => {
+            let psi = match prob.eval(t)? {
+                Eval::Ok(f) => f.psi,
+                Eval::Infeasible => f64::INFINITY,
+            };
+            Ok((
+                SearchResult {
+                    theta: t.clone(),
+                    psi,
+                    evaluations: 1,
+                },
+                "fixed",
+            ))
+        }
+        ThetaSearch::Boxmin {
+            theta0,
+            lower,
+            upper,
+        } => {
+            let mut obj = |t: &[f64]| -> Result<f64> {
+                Ok(match prob.eval(t)? {
+                    Eval::Ok(f) => f.psi,
+                    Eval::Infeasible => f64::INFINITY,
+                })
+            };
+            Ok((boxmin(theta0, lower, upper, &mut obj)?, "boxmin"))
+        }
+        ThetaSearch::Optimise {
+            theta0,
+            lower,
+            upper,
+            settings,
+        } => {
+            let mut obj = |t: &[f64]| -> Result<Option<(f64, Vec<f64>)>> {
+                Ok(match prob.eval(t)? {
+                    Eval::Ok(f) => Some((f.psi.ln(), prob.grad_log_psi(t, &f))),
+                    Eval::Infeasible => None,
+                })
+            };
+            Ok((
+                minimise(theta0, lower, upper, settings, &mut obj)?,
+                "optimise",
+            ))
+        }
+    }
+}
+
+/// ψ(θ) for sites and outputs as given (normalised as in a fit, no PCA),
+/// for reports and tests; `f64::INFINITY` where R is not positive definite.
+pub fn likelihood_psi(
+    x: MatRef<'_, f64>,
+    y: MatRef<'_, f64>,
+    regression: Regression,
+    correlation: Correlation,
+    theta: &[f64],
+) -> Result<f64> {
+    let (n, d, m) = (x.nrows(), x.ncols(), y.ncols());
+    let (xm, xs): (Vec<f64>, Vec<f64>) = (0..d)
+        .map(|k| mean_std(x.col(k).iter().copied(), n))
+        .unzip();
+    let (ymn, ysd): (Vec<f64>, Vec<f64>) = (0..m)
+        .map(|j| mean_std(y.col(j).iter().copied(), n))
+        .unzip();
+    let s = Mat::from_fn(n, d, |i, k| (x[(i, k)] - xm[k]) / xs[k]);
+    let ys = Mat::from_fn(n, m, |i, j| (y[(i, j)] - ymn[j]) / ysd[j]);
+    let prob = Problem::new(s.as_ref(), ys.as_ref(), regression, correlation, 0.0);
+    Ok(match prob.eval(theta)? {
+        Eval::Ok(f) => f.psi,
+        Eval::Infeasible => f64::INFINITY,
+    })
+}
