@@ -308,6 +308,7 @@ impl MembraneMaterial for PipkinRogersMembrane {
 }
 
 #[cfg(test)]
+#[allow(clippy::unwrap_used)]
 mod tests {
     use super::*;
 

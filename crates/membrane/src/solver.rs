@@ -95,7 +95,8 @@ impl std::fmt::Display for Control {
 pub struct Solution {
     /// Time (material time units; t0 = t/τ1 when τ1 = 1).
     pub time: f64,
-    /// Plate displacement D/r0 = r_s − H1/r0.
+    /// Plate displacement D/r0: r_s − H1/r0 in contact; the prescribed plate
+    /// position when the plates have lost contact (then H1 < r_s − D, F = 0).
     pub displacement: f64,
     /// Half-height H1/r0.
     pub h1: f64,
@@ -180,6 +181,8 @@ pub struct MembraneSolver<M: MembraneMaterial> {
     /// Previous committed unknowns and the time step that led to `x`.
     x_prev: Option<([f64; 3], f64)>,
     predicted: Option<[f64; 3]>,
+    /// Plate displacement of a step in which the plates have lost contact.
+    detached: Option<f64>,
     last_control: Control,
     jac: Option<[[f64; 3]; 3]>,
     /// Newton settings (public to tune).
@@ -249,6 +252,7 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
             x: [geometry.rs, 0.0, 0.0],
             x_prev: None,
             predicted: None,
+            detached: None,
             last_control: Control::Displacement(0.0),
             jac: None,
             newton: NewtonSettings::default(),
@@ -338,9 +342,6 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         let mut fresh = false;
         let mut last_shot = None;
         for it in 0..self.newton.max_iter {
-            if std::env::var("NLVID_DEBUG").is_ok() {
-                eprintln!("it {it} x {x:?} r {r:?} ctl {control}");
-            }
             if norm(&r) <= self.newton.tol {
                 self.jac = jac;
                 return Ok((x, it));
@@ -433,12 +434,7 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                         break;
                     }
                     Ok(_) => {}
-                    Err(e) => {
-                        if std::env::var("NLVID_DEBUG").is_ok() {
-                            eprintln!("   fail at {xt:?}: {e:?}");
-                        }
-                        last_shot = Some(e)
-                    }
+                    Err(e) => last_shot = Some(e),
                 }
                 alpha *= 0.5;
             }
@@ -566,6 +562,64 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         dt: f64,
         control: Control,
     ) -> Result<([f64; 3], usize, Control)> {
+        self.detached = None;
+        if let Control::Displacement(d) = control {
+            if d > 0.0 && self.x[1] <= 0.0 {
+                // Not in contact: does the free membrane (relaxing at this dt) reach the plate?
+                if let Some(x) = self.detached_solution(dt, d) {
+                    return Ok((x, 0, Control::Displacement(0.0)));
+                }
+            }
+        }
+        match self.solve_in_contact(time, dt, control) {
+            Ok(v) => {
+                if let Control::Displacement(d) = control {
+                    if d <= 0.0 {
+                        self.detached = Some(d);
+                    }
+                }
+                Ok(v)
+            }
+            Err(e) => match control {
+                // Fast unloading: the membrane recovers more slowly than the plates retreat.
+                Control::Displacement(d) if d > 0.0 => match self.detached_solution(dt, d) {
+                    Some(x) => Ok((x, 0, Control::Displacement(0.0))),
+                    None => Err(e),
+                },
+                _ => Err(e),
+            },
+        }
+    }
+
+    /// The free (no-contact) equilibrium at this dt if its height lies below
+    /// the plate at displacement `d`.
+    fn detached_solution(&mut self, dt: f64, d: f64) -> Option<[f64; 3]> {
+        let saved = (self.x, self.jac);
+        let free = self.sweep_psi(dt, 0.0, |_, _| false).ok().map(|(_, x)| x);
+        let free = free.and_then(|x| {
+            self.newton(dt, Control::Displacement(0.0), x)
+                .ok()
+                .map(|(x, _)| x)
+        });
+        self.x = saved.0;
+        self.jac = None;
+        let x = free?;
+        let mut sh = Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale);
+        let end = sh.shoot(x[0], 0.0, x[2], None).ok()?;
+        if self.geometry.rs - end.h1 >= d - 1e-12 {
+            self.detached = Some(d);
+            Some(x)
+        } else {
+            None
+        }
+    }
+
+    fn solve_in_contact(
+        &mut self,
+        time: f64,
+        dt: f64,
+        control: Control,
+    ) -> Result<([f64; 3], usize, Control)> {
         let saved = self.x;
         // From no contact to contact the direct Newton has no usable guess for
         // ψc (and the shot is very sensitive): go straight to the ψc sweep.
@@ -593,11 +647,14 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                 let (_, cur) = self.sweep_psi(dt, 0.0, |_, _| false)?;
                 return self.newton(dt, control, cur);
             }
+            // Equilibrium at this dt and the current contact angle decides the direction.
             let q0 = if self.x[1] > 0.0 {
+                let (_, x0) = self.sweep_psi(dt, self.x[1], |_, _| false)?;
+                self.x = x0;
                 let mut sh =
                     Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale);
-                match sh.shoot(self.x[0], self.x[1], self.x[2], None) {
-                    Ok(end) => self.control_value(control, &self.x, &end),
+                match sh.shoot(x0[0], x0[1], x0[2], None) {
+                    Ok(end) => self.control_value(control, &x0, &end),
                     Err(_) => 0.0,
                 }
             } else {
@@ -626,7 +683,55 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                 guess[k] = prev[k] + f * (cur[k] - prev[k]);
             }
             self.jac = None;
-            self.newton(dt, control, guess)
+            match self.newton(dt, control, guess) {
+                Ok(v) => Ok(v),
+                // Near first contact D, F ∝ ψc² and the 3×3 Jacobian is nearly
+                // singular: solve q(ψc) = target by the Illinois method with the
+                // well-conditioned fixed-ψc problem inside.
+                Err(e) => {
+                    let eval = |s: &mut Self, psi: f64, g: [f64; 3]| -> Option<([f64; 3], f64)> {
+                        s.jac = None;
+                        let (x, _) = s.newton(dt, Control::ContactAngle(psi), g).ok()?;
+                        let mut sh = Shooter::new(&s.material, &s.states, s.uniform, dt, s.scale);
+                        let end = sh.shoot(x[0], x[1], x[2], None).ok()?;
+                        Some((x, s.control_value(control, &x, &end) - target))
+                    };
+                    let (Some((mut xa, mut fa)), Some((mut xb, mut fb))) =
+                        (eval(self, prev[1], prev), eval(self, cur[1], cur))
+                    else {
+                        return Err(e);
+                    };
+                    if fa * fb > 0.0 {
+                        return Err(e);
+                    }
+                    let tol = 1e-11 * target.abs().max(1.0);
+                    let mut side = 0;
+                    for it in 0..100 {
+                        let psi = (xa[1] * fb - xb[1] * fa) / (fb - fa);
+                        let w = (psi - xa[1]) / (xb[1] - xa[1]);
+                        let g = [0, 1, 2].map(|k| xa[k] + w * (xb[k] - xa[k]));
+                        let Some((x, fx)) = eval(self, psi, g) else {
+                            return Err(e);
+                        };
+                        if fx.abs() <= tol || (xb[1] - xa[1]).abs() < 1e-14 {
+                            return Ok((x, it + 1));
+                        }
+                        if fx * fb < 0.0 {
+                            xa = xb;
+                            fa = fb;
+                            side = 0;
+                        } else {
+                            side += 1;
+                            if side >= 2 {
+                                fa *= 0.5;
+                            }
+                        }
+                        xb = x;
+                        fb = fx;
+                    }
+                    Err(e)
+                }
+            }
         })();
         self.x = saved;
         match result {
@@ -635,6 +740,8 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                 let err = self.fail_to_error(time, control, e);
                 match err {
                     MembraneError::Wrinkling { .. } => Err(err),
+                    // No direct attempt was made at first contact: report the sweep's failure.
+                    _ if first_contact => Err(err),
                     _ => Err(self.fail_to_error(time, control, first)),
                 }
             }
@@ -763,7 +870,7 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         };
         Ok(Solution {
             time,
-            displacement: self.geometry.rs - end.h1,
+            displacement: self.detached.unwrap_or(self.geometry.rs - end.h1),
             h1: end.h1,
             force,
             pressure: x[2],
@@ -860,70 +967,5 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         self.x = x;
         self.last_control = c;
         Ok(sol)
-    }
-}
-
-#[cfg(test)]
-mod debug_tests {
-    use super::*;
-    use crate::MooneyRivlinMembrane;
-
-    #[test]
-    #[ignore]
-    fn debug_profile() {
-        let m = MooneyRivlinMembrane::new(1.0, 0.1).unwrap();
-        let s = MembraneSolver::new(
-            m,
-            Geometry {
-                rs: 1.03,
-                nodes: 32,
-            },
-            1.0,
-        )
-        .unwrap();
-        let mut sh = Shooter::new(&s.material, &s.states, true, 0.0, 1.0);
-        let mut prof = Vec::new();
-        let e = sh.shoot(1.03, 0.444, 0.698, Some(&mut prof));
-        for v in &prof {
-            eprintln!(
-                "{:.3} l1 {:.4} l2 {:.4} T1 {:.4} T2 {:.4} th {:.4} rho {:.4} eta {:.4}",
-                v.psi, v.lambda1, v.lambda2, v.t1, v.t2, v.theta, v.rho, v.eta
-            );
-        }
-        eprintln!("{e:?}");
-    }
-}
-
-#[cfg(test)]
-mod sweep_tests {
-    use super::*;
-    use crate::MooneyRivlinMembrane;
-
-    #[test]
-    #[ignore]
-    fn debug_sweep() {
-        let m = MooneyRivlinMembrane::new(1.0, 0.1).unwrap();
-        let mut s = MembraneSolver::new(
-            m,
-            Geometry {
-                rs: 1.03,
-                nodes: 96,
-            },
-            1.0,
-        )
-        .unwrap();
-        let rs = 1.03;
-        let r = s.sweep_psi(0.0, 1.45, |x, e| {
-            eprintln!(
-                "psi {:.4} l0 {:.5} p {:.5} D {:.5} F {:.5}",
-                x[1],
-                x[0],
-                x[2],
-                rs - e.h1,
-                std::f64::consts::PI * e.contact_radius.powi(2) * x[2]
-            );
-            false
-        });
-        eprintln!("{:?}", r.map(|_| ()));
     }
 }

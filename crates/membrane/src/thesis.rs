@@ -113,7 +113,7 @@ fn load_unload(
     p: Option<&PipkinRogersParams>,
     d_max: f64,
     su: f64,
-) -> Result<(MembraneRun, usize)> {
+) -> Result<(MembraneRun, usize, Option<String>)> {
     let prog =
         programs::load_unload(Quantity::Dimensionless, d_max, 1.0, su, 0.0).map_err(proto)?;
     let t_peak = d_max;
@@ -127,23 +127,41 @@ fn load_unload(
         g2: 1.0,
         ..pr(1.0, 1.0, 1.0)
     });
-    // Loss of contact near the end of a fast unloading is reported by the
-    // solver; keep what was computed up to there.
-    let run = simulate(&params, &Geometry::default(), &l)?;
+    // A step that fails (e.g. wrinkling late in a slow unloading) ends the
+    // curve there; the failure is returned as a note.
+    let mut solver = MembraneSolver::new(params.check()?, Geometry::default(), params.c1)?;
+    let mut history = Vec::new();
+    let mut note = None;
+    for &t in &l.times {
+        match solver.advance(t, Control::Displacement(l.program.value(t))) {
+            Ok(sol) => history.push(crate::StepRecord::from(&sol)),
+            Err(e) => {
+                note = Some(e.to_string());
+                break;
+            }
+        }
+    }
+    let run = MembraneRun {
+        history,
+        profiles: Vec::new(),
+    };
     let i = run
         .history
         .iter()
         .position(|r| (r.time - t_peak).abs() < 1e-12)
         .unwrap_or(0);
-    Ok((run, i))
+    Ok((run, i, note))
 }
 
-/// Regenerate the data of Figs. 2.3–2.14 and Table 2.1 (a few seconds in release builds).
+/// Regenerate the data of Figs. 2.3–2.14 and Table 2.1 (a few seconds in
+/// release builds). Returns figures, Table 2.1 rows and notes on curves that
+/// ended early.
 ///
 /// # Errors
 /// Any solver error, with the case in the message.
-pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
+pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
     let mut figs = Vec::new();
+    let mut notes = Vec::new();
 
     // Fig. 2.3: NLE profiles, γ = 0.1.
     let mut s = mr(0.1)?;
@@ -412,8 +430,14 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
                 if m == "NLE" && su < 0.5 {
                     continue;
                 }
-                let (run, i) = load_unload(p, d_max, su)?;
+                let (run, i, note) = load_unload(p, d_max, su)?;
+                if let Some(n) = note {
+                    notes.push(format!("{id} {m} s_u = {su}: curve ends early: {n}"));
+                }
                 let h = &run.history;
+                if h.len() < i + 2 {
+                    continue;
+                }
                 let slope =
                     (h[i].force - h[i + 1].force) / (h[i].displacement - h[i + 1].displacement);
                 rows.push(SlopeRow {
@@ -443,5 +467,5 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>)> {
             series,
         ));
     }
-    Ok((figs, rows))
+    Ok((figs, rows, notes))
 }

@@ -1,5 +1,6 @@
 //! Viscoelastic time marching: QLV step identities, the Fig. 2.12 case,
 //! the ψc(t) trends of Fig. 2.9 and force control.
+#![allow(clippy::unwrap_used)]
 
 use nlvid_membrane::{
     Control, ControlKind, Geometry, Loading, MembraneSolver, PipkinRogersParams, simulate,

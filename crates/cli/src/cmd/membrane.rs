@@ -275,10 +275,10 @@ fn svg_plot(f: &Figure) -> String {
             y1 = y1.max(*y);
         }
     }
-    if !(x1 > x0) {
+    if x1.partial_cmp(&x0) != Some(std::cmp::Ordering::Greater) {
         x1 = x0 + 1.0;
     }
-    if !(y1 > y0) {
+    if y1.partial_cmp(&y0) != Some(std::cmp::Ordering::Greater) {
         y1 = y0 + 1.0;
     }
     let px = |x: f64| ml + (x - x0) / (x1 - x0) * (w - ml - mr);
@@ -394,7 +394,7 @@ fn figure_csv(f: &Figure) -> String {
 }
 
 fn run_reproduce(args: &MembraneArgs) -> anyhow::Result<ExitCode> {
-    let (figs, rows): (Vec<Figure>, Vec<SlopeRow>) =
+    let (figs, rows, notes): (Vec<Figure>, Vec<SlopeRow>, Vec<String>) =
         nlvid_membrane::thesis::reproduce().context("reproducing ch. II")?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
@@ -419,11 +419,17 @@ fn run_reproduce(args: &MembraneArgs) -> anyhow::Result<ExitCode> {
     }
     write_atomic(&args.out.join("table2_1.csv"), &t)?;
     files.push("table2_1.csv".into());
+    let notes_text: String = notes.iter().map(|n| format!("{n}\n")).collect();
+    write_atomic(&args.out.join("notes.txt"), &notes_text)?;
+    files.push("notes.txt".into());
+    for n in &notes {
+        eprintln!("note: {n}");
+    }
     if args.json {
         println!(
             "{}",
             serde_json::to_string_pretty(
-                &serde_json::json!({ "files": files, "table2_1": rows, "out": args.out.display().to_string() })
+                &serde_json::json!({ "files": files, "table2_1": rows, "notes": notes, "out": args.out.display().to_string() })
             )?
         );
     } else {
