@@ -15,6 +15,7 @@ use clap::{Parser, Subcommand};
 
 mod check;
 mod compare;
+mod simulate;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
@@ -77,6 +78,8 @@ pub enum Command {
     Check(check::Args),
     /// Group G(t) (mean ± sd) and rank-sum p(t) between two groups of cells.
     Compare(compare::Args),
+    /// One finite-element run of the AFM cell-indentation model (force, deflection, indentation vs time).
+    Simulate(simulate::Args),
 }
 
 impl Command {
@@ -95,6 +98,7 @@ impl Command {
                 Ok(ExitCode::SUCCESS)
             }
             Command::Check(a) => a.run(ctx),
+            Command::Simulate(a) => a.run(ctx),
             Command::Compare(mut a) => {
                 a.json = ctx.json;
                 a.run()
