@@ -3,6 +3,7 @@
 //!
 //! ```text
 //! cargo run -p nlvid-fem --release --example afm_setup1            # default mesh, timing (median of 5)
+//! cargo run -p nlvid-fem --release --example afm_setup1 -- once    # one run
 //! cargo run -p nlvid-fem --release --example afm_setup1 -- study   # n = 35, 65, 129 (≈1200/4200/16600 elements)
 //! ```
 
@@ -20,6 +21,9 @@ fn params() -> AfmParams {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mode = std::env::args().nth(1).unwrap_or_default();
+    if std::env::var_os("NLVID_FEM_PAR").is_none() {
+        faer::set_global_parallelism(faer::Par::Seq);
+    }
     if mode == "study" {
         let mut results = Vec::new();
         for n in [35usize, 65, 129] {
@@ -29,14 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
             println!(
                 "n = {n:4} elements = {:6}  peak = {:.5e} N  final = {:.5e} N  min = {:.3e} N  steps = {} cutbacks = {} iterations = {}  wall = {:.2} s",
-                run.elements,
-                run.peak_force,
-                run.final_force,
-                min_force,
-                run.steps,
-                run.cutbacks,
-                run.iterations,
-                run.wall_seconds
+                run.elements, run.peak_force, run.final_force, min_force, run.steps, run.cutbacks, run.iterations, run.wall_seconds
             );
             results.push(run);
         }
@@ -52,10 +49,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         return Ok(());
     }
-    let setup = AfmSetup::thesis_setup1();
+    let mut setup = AfmSetup::thesis_setup1();
+    if let Ok(n) = std::env::var("NLVID_FEM_N") {
+        setup.mesh.elements_per_side = n.parse()?;
+    }
+    if mode == "info" {
+        let model = afm::build(afm::cell_material(&params(), setup.bulk_ratio)?, &setup)?;
+        println!("{model:?}");
+        return Ok(());
+    }
     let mut walls = Vec::new();
     let mut last = None;
-    for _ in 0..5 {
+    let repeats = if mode == "once" { 1 } else { 5 };
+    for _ in 0..repeats {
         let run = afm::run(&params(), &setup)?;
         walls.push(run.wall_seconds);
         last = Some(run);
@@ -65,18 +71,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
         println!(
             "setup 1, {} elements: peak {:.5e} N, final {:.5e} N, min {:.3e} N, steps {}, cutbacks {}, iterations {}",
-            run.elements,
-            run.peak_force,
-            run.final_force,
-            min_force,
-            run.steps,
-            run.cutbacks,
-            run.iterations
+            run.elements, run.peak_force, run.final_force, min_force, run.steps, run.cutbacks, run.iterations
+        );
+        println!(
+            "last run: wall {:.3} s = assembly {:.3} s + LU {:.3} s + other {:.3} s",
+            run.wall_seconds,
+            run.assembly_seconds,
+            run.solve_seconds,
+            run.wall_seconds - run.assembly_seconds - run.solve_seconds
         );
     }
-    println!(
-        "wall time: median of 5 = {:.3} s (all: {walls:.3?})",
-        walls[2]
-    );
+    println!("wall time: median of {repeats} = {:.3} s (all: {walls:.3?})", walls[repeats / 2]);
     Ok(())
 }

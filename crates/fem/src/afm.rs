@@ -225,6 +225,16 @@ pub struct AfmRun {
     pub elements: usize,
     /// Wall time of the run (s).
     pub wall_seconds: f64,
+    /// Part of the wall time in assembly (s).
+    pub assembly_seconds: f64,
+    /// Part of the wall time in sparse LU factorisation and solves (s).
+    pub solve_seconds: f64,
+    /// Deformed node positions (r, z) at the end of the run (m).
+    #[serde(skip)]
+    pub deformed_nodes: Vec<[f64; 2]>,
+    /// Element connectivity of the mesh (counter-clockwise).
+    #[serde(skip)]
+    pub elements_connectivity: Vec<[usize; 4]>,
 }
 
 /// The cell material of eq. 5.1 from the `material` crate (ABAQUS-form
@@ -457,6 +467,16 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
         iterations: model.counters().iterations,
         elements: model.mesh().elements.len(),
         wall_seconds: 0.0,
+        assembly_seconds: model.counters().assembly_seconds,
+        solve_seconds: model.counters().solve_seconds,
+        deformed_nodes: model
+            .mesh()
+            .nodes
+            .iter()
+            .zip(model.displacements())
+            .map(|(x, u)| [x[0] + u[0], x[1] + u[1]])
+            .collect(),
+        elements_connectivity: model.mesh().elements.clone(),
     };
     for &t in &setup.output_times {
         let f = interpolate(&ts, &fs, t);

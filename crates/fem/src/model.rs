@@ -135,6 +135,9 @@ pub struct Settings {
     pub min_step_fraction: f64,
     /// Extrapolate the last increment as the Newton predictor.
     pub extrapolate: bool,
+    /// The material tangent is symmetric: factorise with Cholesky (LU
+    /// fallback); false forces LU.
+    pub symmetric: bool,
 }
 
 impl Default for Settings {
@@ -150,6 +153,7 @@ impl Default for Settings {
             cutback: 0.25,
             min_step_fraction: 1e-6,
             extrapolate: true,
+            symmetric: true,
         }
     }
 }
@@ -188,8 +192,12 @@ pub struct StepRecord {
 }
 
 /// Counters of a run.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Counters {
+    /// Wall time spent in assembly (element loop, contact), s.
+    pub assembly_seconds: f64,
+    /// Wall time spent in numeric factorisation and solves, s.
+    pub solve_seconds: f64,
     /// Converged steps.
     pub steps: usize,
     /// Failed attempts that were cut back.
@@ -347,7 +355,8 @@ impl<M: Material3> Model<M> {
             }
             blocks.push(vec![dof_eq[wdof]]);
         }
-        let system = SparseSystem::new(neq, &blocks)?;
+        let mut system = SparseSystem::new(neq, &blocks)?;
+        system.symmetric = settings.symmetric;
         let mut elem_slots = Vec::with_capacity(64 * mesh.elements.len());
         let mut tmp = Vec::with_capacity(64);
         for conn in &mesh.elements {
@@ -494,6 +503,13 @@ impl<M: Material3> Model<M> {
     }
 
     fn assemble(&mut self, ctl: &Control, dt: f64, tangent: bool) -> Result<Assembly> {
+        let clock = std::time::Instant::now();
+        let out = self.assemble_inner(ctl, dt, tangent);
+        self.counters.assembly_seconds += clock.elapsed().as_secs_f64();
+        out
+    }
+
+    fn assemble_inner(&mut self, ctl: &Control, dt: f64, tangent: bool) -> Result<Assembly> {
         self.counters.assemblies += 1;
         self.residual.fill(0.0);
         if tangent {
@@ -696,6 +712,9 @@ impl<M: Material3> Model<M> {
             // residual far above rtol·scale when the forces are tiny: a
             // correction at the round-off level of the coordinates also
             // counts as converged.
+            if trace() {
+                eprintln!("    it {it} |R| {norm:.3e} tol {tol:.3e} |du| {last_du:.3e}");
+            }
             let stalled = it > 0 && last_du <= 1e-12 * self.length && norm <= 1e-4 * asm.scale;
             if norm <= tol && it > 0 || norm == 0.0 || stalled {
                 return Ok((it, asm));
@@ -707,7 +726,10 @@ impl<M: Material3> Model<M> {
                 return Err((norm, tol, it, "iteration limit".into()));
             }
             du.copy_from_slice(&self.rhs);
-            if let Err(e) = self.system.solve(&mut du) {
+            let clock = std::time::Instant::now();
+            let solved = self.system.solve(&mut du);
+            self.counters.solve_seconds += clock.elapsed().as_secs_f64();
+            if let Err(e) = solved {
                 return Err((norm, tol, it, e.to_string()));
             }
             self.counters.iterations += 1;
@@ -790,6 +812,9 @@ impl<M: Material3> Model<M> {
             }
             match self.newton(&ctl, dt) {
                 Ok((iterations, asm)) => {
+                    if trace() {
+                        eprintln!("step t={t_new:.5} dt={dt:.3e} its={iterations} F={:.4e}", asm.contact_force);
+                    }
                     self.history.commit();
                     self.u_previous.copy_from_slice(&self.u_committed);
                     self.u_committed.copy_from_slice(&self.u);
@@ -815,6 +840,9 @@ impl<M: Material3> Model<M> {
                     }
                 }
                 Err((residual, tolerance, iterations, cause)) => {
+                    if trace() {
+                        eprintln!("cutback t={:.5} dt={dt:.3e} {cause}", self.time);
+                    }
                     self.counters.cutbacks += 1;
                     self.u.copy_from_slice(&self.u_committed);
                     if dt <= dt_min * (1.0 + 1e-9) {
@@ -836,4 +864,8 @@ impl<M: Material3> Model<M> {
         }
         Ok(())
     }
+}
+
+fn trace() -> bool {
+    std::env::var_os("NLVID_FEM_TRACE").is_some()
 }

@@ -4,14 +4,17 @@
 //! elimination structure) is computed once and reused at every Newton
 //! iteration (faer 0.24).
 //!
-//! LU rather than Cholesky: the tangent of a Newton iterate is not
-//! guaranteed positive definite (the probe dof has no stiffness before it
-//! touches, softening materials, F-bar with a non-symmetric material
-//! tangent), and LU with partial pivoting handles all of these.
+//! Cholesky first, LU as the fallback: the tangent is the Hessian of one
+//! potential (symmetric) and near equilibrium of a stable body positive
+//! definite, where sparse Cholesky is 10–50× faster than sparse LU in
+//! faer 0.24 (measured, `lu_timing`). A Newton iterate whose tangent is not
+//! positive definite (probe without contact, softening) falls back to LU
+//! with partial pivoting; a material with a non-symmetric tangent should
+//! set `Settings::symmetric = false`.
 
 use crate::{FemError, Result};
 use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::linalg::solvers::{Llt, Lu, SymbolicLlt, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 
 /// Slot marking an entry that belongs to an eliminated (prescribed) dof.
@@ -23,16 +26,13 @@ pub(crate) struct SparseSystem {
     symbolic: SymbolicSparseColMat<usize>,
     pub(crate) values: Vec<f64>,
     lu_symbolic: SymbolicLu<usize>,
+    llt_symbolic: SymbolicLlt<usize>,
+    pub(crate) symmetric: bool,
 }
 
 impl std::fmt::Debug for SparseSystem {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "SparseSystem(n = {}, nnz = {})",
-            self.n,
-            self.values.len()
-        )
+        write!(f, "SparseSystem(n = {}, nnz = {})", self.n, self.values.len())
     }
 }
 
@@ -62,13 +62,17 @@ impl SparseSystem {
         }
         let nnz = row_idx.len();
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let lu_symbolic = SymbolicLu::try_new(symbolic.as_ref())
-            .map_err(|e| FemError::Solver(format!("symbolic LU: {e:?}")))?;
+        let lu_symbolic =
+            SymbolicLu::try_new(symbolic.as_ref()).map_err(|e| FemError::Solver(format!("symbolic LU: {e:?}")))?;
+        let llt_symbolic = SymbolicLlt::try_new(symbolic.as_ref(), faer::Side::Lower)
+            .map_err(|e| FemError::Solver(format!("symbolic Cholesky: {e:?}")))?;
         Ok(Self {
             n,
             symbolic,
             values: vec![0.0; nnz],
             lu_symbolic,
+            llt_symbolic,
+            symmetric: true,
         })
     }
 
@@ -104,19 +108,101 @@ impl SparseSystem {
         self.n
     }
 
-    /// Factorises the current values and solves `K x = rhs` in place.
+    /// Factorises the current values and solves `K x = rhs` in place:
+    /// Cholesky of the lower triangle when the tangent is symmetric and it
+    /// succeeds (positive definite), LU otherwise.
     pub(crate) fn solve(&self, rhs: &mut [f64]) -> Result<()> {
         let mat = SparseColMatRef::new(self.symbolic.as_ref(), &self.values);
-        let lu = Lu::try_new_with_symbolic(self.lu_symbolic.clone(), mat)
-            .map_err(|e| FemError::Solver(format!("numeric LU: {e:?}")))?;
+        let llt = if self.symmetric {
+            Llt::try_new_with_symbolic(self.llt_symbolic.clone(), mat, faer::Side::Lower).ok()
+        } else {
+            None
+        };
         let col = faer::ColMut::from_slice_mut(rhs);
-        lu.solve_in_place(col.as_mat_mut());
+        if let Some(llt) = llt {
+            llt.solve_in_place(col.as_mat_mut());
+        } else {
+            let lu = Lu::try_new_with_symbolic(self.lu_symbolic.clone(), mat)
+                .map_err(|e| FemError::Solver(format!("numeric LU: {e:?}")))?;
+            lu.solve_in_place(col.as_mat_mut());
+        }
         if rhs.iter().all(|x| x.is_finite()) {
             Ok(())
         } else {
-            Err(FemError::Solver(
-                "singular tangent (non-finite solution)".into(),
-            ))
+            Err(FemError::Solver("singular tangent (non-finite solution)".into()))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 5-point Laplacian on an m×m grid (plus a tiny shift).
+    fn laplacian(m: usize) -> SparseSystem {
+        let id = |i: usize, j: usize| j * m + i;
+        let mut blocks = Vec::new();
+        for j in 0..m {
+            for i in 0..m {
+                if i + 1 < m {
+                    blocks.push(vec![id(i, j), id(i + 1, j)]);
+                }
+                if j + 1 < m {
+                    blocks.push(vec![id(i, j), id(i, j + 1)]);
+                }
+            }
+        }
+        let mut s = SparseSystem::new(m * m, &blocks).unwrap();
+        for c in 0..m * m {
+            for r in 0..m * m {
+                if let Ok(k) = s.slot(r, c) {
+                    s.values[k] = if r == c { 4.01 } else { -1.0 };
+                }
+            }
+        }
+        s
+    }
+
+    #[test]
+    fn lu_solves_laplacian() {
+        let s = laplacian(6);
+        let x: Vec<f64> = (0..36).map(|i| (i as f64).sin()).collect();
+        // b = K x
+        let mut b = vec![0.0; 36];
+        for c in 0..36 {
+            for r in 0..36 {
+                if let Ok(k) = s.slot(r, c) {
+                    b[r] += s.values[k] * x[c];
+                }
+            }
+        }
+        s.solve(&mut b).unwrap();
+        for i in 0..36 {
+            assert!((b[i] - x[i]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    #[ignore = "timing probe: cargo test -p nlvid-fem --release --lib lu_timing -- --ignored --nocapture"]
+    fn lu_timing() {
+        for m in [24, 48] {
+            let s = laplacian(m);
+            let mut b = vec![1.0; m * m];
+            let t = std::time::Instant::now();
+            for _ in 0..20 {
+                b.fill(1.0);
+                s.solve(&mut b).unwrap();
+            }
+            eprintln!("n = {}: {:.3} ms per factorise+solve", m * m, t.elapsed().as_secs_f64() / 20.0 * 1e3);
+            let sym = faer::sparse::linalg::solvers::SymbolicLlt::try_new(s.symbolic.as_ref(), faer::Side::Lower).unwrap();
+            let t = std::time::Instant::now();
+            for _ in 0..20 {
+                let mat = SparseColMatRef::new(s.symbolic.as_ref(), &s.values);
+                let llt = faer::sparse::linalg::solvers::Llt::try_new_with_symbolic(sym.clone(), mat, faer::Side::Lower).unwrap();
+                b.fill(1.0);
+                llt.solve_in_place(faer::ColMut::from_slice_mut(&mut b).as_mat_mut());
+            }
+            eprintln!("n = {}: LLT {:.3} ms per factorise+solve", m * m, t.elapsed().as_secs_f64() / 20.0 * 1e3);
         }
     }
 }

@@ -21,6 +21,7 @@ mod material;
 pub mod membrane;
 pub mod sample;
 pub mod surrogate;
+mod simulate;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
@@ -98,6 +99,8 @@ pub enum Command {
     Membrane(membrane::MembraneArgs),
     /// Show what an AFM instrument file holds (segments, channels, calibration); export CSV, plot, quick fits.
     Inspect(inspect::Args),
+    /// One finite-element run of the AFM cell-indentation model (force, deflection, indentation vs time).
+    Simulate(simulate::Args),
 }
 
 impl Command {
@@ -123,6 +126,10 @@ impl Command {
             Command::Membrane(mut args) => {
                 args.json = ctx.json;
                 membrane::run(args)
+            Command::Simulate(a) => a.run(ctx),
+            Command::Compare(mut a) => {
+                a.json = ctx.json;
+                a.run()
             }
             Command::Compare(a) => a.run(ctx),
             Command::Inspect(mut args) => {
