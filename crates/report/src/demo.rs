@@ -179,7 +179,8 @@ pub fn study_toml(spec: &DemoSpec) -> String {
         n = spec.cells_per_group,
         r = spec.radius * 1e6,
         k = spec.spring_constant,
-        ramp = spec.depth / spec.rate,
+        // Rounded to 1 ns so the study file reads `0.2 s`, not `0.19999999999999998 s`.
+        ramp = (spec.depth / spec.rate * 1e9).round() / 1e9,
         end = spec.hold_end,
         starts = spec.starts,
     )

@@ -238,3 +238,67 @@ fn the_committed_demo_is_what_the_generator_writes() {
     }
     assert_eq!(checked, 18);
 }
+
+/// Loads the page in headless Chromium: the rendered DOM must hold every
+/// figure's SVG, and a full-page screenshot is written to
+/// `target/tmp/report-chromium/report.png` (looked at by hand, see
+/// docs/theory/report.md). Skipped (with a message) without Chromium.
+#[test]
+fn report_opens_in_headless_chromium() {
+    let chromium = Path::new("/usr/bin/chromium");
+    if !chromium.exists() {
+        eprintln!("SKIPPED: /usr/bin/chromium not installed (apt-get install -y chromium)");
+        return;
+    }
+    let f = fixture();
+    let dir = scratch("chromium");
+    let files = write_report(
+        &f.out,
+        &ReportOptions {
+            out: Some(dir.join("page")),
+            ..ReportOptions::default()
+        },
+    )
+    .expect("report");
+    let url = format!(
+        "file://{}",
+        files.html.canonicalize().expect("abs path").display()
+    );
+    let run = |extra: &[String]| {
+        let profile = dir.join(format!("profile-{}", extra.len()));
+        let out = std::process::Command::new(chromium)
+            .args([
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
+                "--no-first-run",
+                "--hide-scrollbars",
+            ])
+            .arg(format!("--user-data-dir={}", profile.display()))
+            .args(extra)
+            .arg(&url)
+            .output()
+            .expect("chromium runs");
+        assert!(out.status.success(), "chromium: {}", String::from_utf8_lossy(&out.stderr));
+        out
+    };
+    let dom = String::from_utf8_lossy(&run(&["--dump-dom".to_string()]).stdout).into_owned();
+    for id in &files.figure_ids {
+        let at = dom
+            .find(&format!("id=\"{id}\""))
+            .unwrap_or_else(|| panic!("rendered DOM lacks {id}"));
+        assert!(dom[at..].contains("<svg"), "{id} has no SVG in the DOM");
+    }
+    assert_eq!(dom.matches("<svg").count(), files.figure_ids.len());
+    let png = dir.join("report.png");
+    run(&[
+        format!("--screenshot={}", png.display()),
+        "--window-size=1200,5200".to_string(),
+    ]);
+    let bytes = std::fs::read(&png).expect("screenshot written");
+    assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"), "not a PNG");
+    assert!(bytes.len() > 50_000, "screenshot suspiciously small: {} bytes", bytes.len());
+}

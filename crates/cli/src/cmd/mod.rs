@@ -14,7 +14,10 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod check;
+mod cohort;
 mod compare;
+mod demo;
+mod report;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
@@ -77,6 +80,12 @@ pub enum Command {
     Check(check::Args),
     /// Group G(t) (mean ± sd) and rank-sum p(t) between two groups of cells.
     Compare(compare::Args),
+    /// Fit every cell of a cohort (parallel, resumable) into a results table.
+    Cohort(cohort::Args),
+    /// Self-contained HTML report (SVG figures) of a cohort output directory.
+    Report(report::Args),
+    /// Run the bundled synthetic two-group example end to end.
+    Demo(demo::Args),
 }
 
 impl Command {
@@ -99,6 +108,9 @@ impl Command {
                 a.json = ctx.json;
                 a.run()
             }
+            Command::Cohort(a) => a.run(ctx),
+            Command::Report(a) => a.run(ctx),
+            Command::Demo(a) => a.run(ctx),
         }
     }
 }
