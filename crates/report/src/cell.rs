@@ -198,7 +198,7 @@ pub fn fit_cell(settings: &CohortSettings, group: &str, file: &str, path: &Path)
     let mut base = fail(String::new());
     base.times = grid.clone();
     base.data = force.clone();
-    if !(peak > 0.0) {
+    if peak.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         base.reason = "no positive force in the fitted window".into();
         return base;
     }
@@ -256,8 +256,10 @@ pub fn fit_cell(settings: &CohortSettings, group: &str, file: &str, path: &Path)
             BoundSide::Lower => "lower",
             BoundSide::Upper => "upper",
         };
-        base.flags
-            .push(format!("{} at its {side} bound (widen the domain)", hit.name));
+        base.flags.push(format!(
+            "{} at its {side} bound (widen the domain)",
+            hit.name
+        ));
     }
     if !fit.alternatives.is_empty() {
         base.flags.push(format!(

@@ -55,7 +55,10 @@ pub fn discover(input: &Path) -> Result<Vec<CellInput>> {
         return Err(ReportError::Data {
             path: input.to_path_buf(),
             line: 0,
-            message: format!("cell `{}` of group `{}` is listed twice", w[0].file, w[0].group),
+            message: format!(
+                "cell `{}` of group `{}` is listed twice",
+                w[0].file, w[0].group
+            ),
         });
     }
     if cells.is_empty() {

@@ -198,9 +198,7 @@ pub fn write_demo(spec: &DemoSpec, dir: &Path) -> Result<DemoFiles> {
     let model = LeeRadokHertz::new(domain.clone(), t.clone(), &delta, spec.radius, 0.5)?;
     let data = dir.join("data");
     let mut cells = Vec::new();
-    let mut truth = String::from(
-        "group,cell,G0_Pa,g1,tau1_s,g2,tau2_s,G_end_Pa,relaxation_end\n",
-    );
+    let mut truth = String::from("group,cell,G0_Pa,g1,tau1_s,g2,tau2_s,G_end_Pa,relaxation_end\n");
     for g in &spec.groups {
         for i in 0..spec.cells_per_group {
             let x = draw(g, &domain, &mut rng)?;
@@ -214,7 +212,10 @@ pub fn write_demo(spec: &DemoSpec, dir: &Path) -> Result<DemoFiles> {
                 let _ = writeln!(csv, "{tj:.4},{:.6},{:.4}", z * 1e6, d_meas * 1e9);
             }
             let cell = format!("{}-{:02}", g.name.to_lowercase(), i + 1);
-            write_atomic(&data.join(&g.name).join(format!("{cell}.csv")), csv.as_bytes())?;
+            write_atomic(
+                &data.join(&g.name).join(format!("{cell}.csv")),
+                csv.as_bytes(),
+            )?;
             let ginf = 1.0 - x[1] - x[3];
             let g_end = x[0]
                 * (ginf

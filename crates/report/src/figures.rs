@@ -85,12 +85,11 @@ pub(crate) fn band_chart(
             .map_err(|x| e(&x))?;
         for (i, b) in bands.iter().enumerate() {
             let c = PALETTE[i % PALETTE.len()];
-            let mut poly: Vec<(f64, f64)> = b
-                .x
-                .iter()
-                .zip(b.mean.iter().zip(&b.sd))
-                .map(|(&x, (m, s))| (x, m + s))
-                .collect();
+            let mut poly: Vec<(f64, f64)> =
+                b.x.iter()
+                    .zip(b.mean.iter().zip(&b.sd))
+                    .map(|(&x, (m, s))| (x, m + s))
+                    .collect();
             poly.extend(
                 b.x.iter()
                     .zip(b.mean.iter().zip(&b.sd))
@@ -201,7 +200,12 @@ pub(crate) struct FitPanel {
 }
 
 /// Small multiples of data vs fit, `cols` panels per row.
-pub(crate) fn fits_chart(figure: &str, y_desc: &str, panels: &[FitPanel], cols: usize) -> Result<String> {
+pub(crate) fn fits_chart(
+    figure: &str,
+    y_desc: &str,
+    panels: &[FitPanel],
+    cols: usize,
+) -> Result<String> {
     let e = plot_err(figure);
     let cols = cols.max(1);
     let rows = panels.len().div_ceil(cols).max(1);
@@ -212,12 +216,11 @@ pub(crate) fn fits_chart(figure: &str, y_desc: &str, panels: &[FitPanel], cols: 
         root.fill(&WHITE).map_err(|x| e(&x))?;
         let areas = root.split_evenly((rows, cols));
         for (p, area) in panels.iter().zip(areas.iter()) {
-            let (x0, x1) = p
-                .x
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                    (a.min(v), b.max(v))
-                });
+            let (x0, x1) =
+                p.x.iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                        (a.min(v), b.max(v))
+                    });
             let y1 = p
                 .data
                 .iter()

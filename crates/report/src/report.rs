@@ -87,7 +87,11 @@ fn sig(v: f64, digits: usize) -> String {
 }
 
 /// Mean ± sd over cells of per-grid-point values (cells with data only).
-fn data_band(name: &str, cells: &[&CellResult], f: impl Fn(&CellResult, usize) -> f64) -> Option<Band> {
+fn data_band(
+    name: &str,
+    cells: &[&CellResult],
+    f: impl Fn(&CellResult, usize) -> f64,
+) -> Option<Band> {
     let with: Vec<&&CellResult> = cells.iter().filter(|c| !c.data.is_empty()).collect();
     let first = with.first()?;
     let m = first.times.len();
@@ -200,7 +204,8 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
         g.dedup();
         g
     };
-    let by_group = |g: &str| -> Vec<&CellResult> { cells.iter().filter(|c| c.group == g).collect() };
+    let by_group =
+        |g: &str| -> Vec<&CellResult> { cells.iter().filter(|c| c.group == g).collect() };
     let mut figures = Vec::new();
 
     // Data overview (Figs. 5.3–5.8): measured force and peak-normalised force.
@@ -221,7 +226,13 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
             id: "fig-force".into(),
             file: "force.svg".into(),
             caption: "Measured force–time curves, mean ± sd per group (cf. Figs. 5.3–5.5).".into(),
-            svg: band_chart("force.svg", "Force vs time", "t (s)", "F (nN)", &force_bands)?,
+            svg: band_chart(
+                "force.svg",
+                "Force vs time",
+                "t (s)",
+                "F (nN)",
+                &force_bands,
+            )?,
         });
         figures.push(Figure {
             id: "fig-force-normalised".into(),
@@ -349,9 +360,16 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
             )?,
         });
         let g = |cells: &[Prony], t: f64| cells.iter().map(|p| p.shear(t)).collect::<Vec<_>>();
-        let quantities: [(String, Vec<f64>, Vec<f64>, f64, &str); 3] = [
+        type Quantity<'a> = (String, Vec<f64>, Vec<f64>, f64, &'a str);
+        let quantities: [Quantity; 3] = [
             ("G(0)".into(), g(&ca, 0.0), g(&cb, 0.0), 1.0, "Pa"),
-            (format!("G({t_end} s)"), g(&ca, t_end), g(&cb, t_end), 1.0, "Pa"),
+            (
+                format!("G({t_end} s)"),
+                g(&ca, t_end),
+                g(&cb, t_end),
+                1.0,
+                "Pa",
+            ),
             (
                 format!("relaxation 1 − G({t_end} s)/G(0)"),
                 relaxation_amounts(&ca, t_end),
@@ -367,8 +385,16 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
             let ef = effect(&va, &vb)?;
             tests_rows.push(vec![
                 what,
-                format!("{} ± {} {unit}", sig(scale * ma.mean, 4), sig(scale * ma.sd, 3)),
-                format!("{} ± {} {unit}", sig(scale * mb.mean, 4), sig(scale * mb.sd, 3)),
+                format!(
+                    "{} ± {} {unit}",
+                    sig(scale * ma.mean, 4),
+                    sig(scale * ma.sd, 3)
+                ),
+                format!(
+                    "{} ± {} {unit}",
+                    sig(scale * mb.mean, 4),
+                    sig(scale * mb.sd, 3)
+                ),
                 sig(t.p, 4),
                 t.used.to_string(),
                 format!("{:+.3}", ef.rank_biserial),
@@ -406,12 +432,12 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
         escape(&s.study_hash),
     );
     h.push_str("<h2 id=\"study\">Study</h2>\n");
-    let _ = write!(
+    let _ = writeln!(
         h,
         "<p>Sphere radius R = {} µm, ν = {}, cantilever k = {} N/m; fitted window: \
          ramp to {} s, hold to {} s; {} multistart SLSQP starts per cell (seed {}), \
          Table 5.3 parameter domain with g1 + g2 ≤ 1 − {}; misfit of eq. 5.3; a cell \
-         whose misfit exceeds {} is marked suspicious.</p>\n",
+         whose misfit exceeds {} is marked suspicious.</p>",
         sig(s.radius * 1e6, 4),
         s.poisson,
         s.spring_constant,
@@ -423,18 +449,18 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
         s.suspicious_misfit
     );
     if let Ok(text) = fs::read_to_string(&record.study) {
-        let _ = write!(
+        let _ = writeln!(
             h,
-            "<details><summary>study file</summary><pre>{}</pre></details>\n",
+            "<details><summary>study file</summary><pre>{}</pre></details>",
             escape(&text)
         );
     }
     let section = |h: &mut String, id: &str, title: &str, figs: &[&str]| {
         let _ = writeln!(h, "<h2 id=\"{id}\">{title}</h2>");
         for f in figures.iter().filter(|f| figs.contains(&f.id.as_str())) {
-            let _ = write!(
+            let _ = writeln!(
                 h,
-                "<figure id=\"{}\">{}<figcaption>{} (<a href=\"{}\">{}</a>)</figcaption></figure>\n",
+                "<figure id=\"{}\">{}<figcaption>{} (<a href=\"{}\">{}</a>)</figcaption></figure>",
                 f.id,
                 strip_xml_decl(&f.svg),
                 escape(&f.caption),
@@ -503,7 +529,8 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
         let _ = write!(h, "<th>{}</th>", escape(c));
     }
     h.push_str("</tr></thead>\n<tbody>\n");
-    let opt = |v: Option<f64>, scale: f64, d: usize| v.map_or_else(String::new, |x| sig(x * scale, d));
+    let opt =
+        |v: Option<f64>, scale: f64, d: usize| v.map_or_else(String::new, |x| sig(x * scale, d));
     for c in &cells {
         let class = match c.status {
             CellStatus::Ok => "",
@@ -531,9 +558,9 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
         h.push_str("</tr>\n");
     }
     h.push_str("</tbody></table>\n");
-    let _ = write!(
+    let _ = writeln!(
         h,
-        "<p>Machine-readable: <code>{}</code> (format of docs/cli/compare.md).</p>\n",
+        "<p>Machine-readable: <code>{}</code> (format of docs/cli/compare.md).</p>",
         escape(&results_path.display().to_string())
     );
 
@@ -545,20 +572,20 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
     match check {
         Some(p) => {
             let (hd, rows) = read_csv_table(&p)?;
-            let _ = write!(
+            let _ = writeln!(
                 h,
-                "<p>From <code>{}</code>.</p>\n",
+                "<p>From <code>{}</code>.</p>",
                 escape(&p.display().to_string())
             );
             html_table(&mut h, &hd, &rows);
         }
         None => {
-            let _ = write!(
+            let _ = writeln!(
                 h,
                 "<p>No surrogate was used: every cell was fitted with the forward model \
                  itself ({}), so there are no checking errors to show. Give the surrogate's \
                  checking-error CSV with <code>--surrogate-check FILE</code> (or place it as \
-                 <code>surrogate_check.csv</code> in the cohort directory).</p>\n",
+                 <code>surrogate_check.csv</code> in the cohort directory).</p>",
                 escape(s.model.describe())
             );
         }
@@ -588,7 +615,7 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
 
 /// Uniform grid 0 … t_end with `points` points.
 fn uniform_grid(t_end: f64, points: usize) -> Result<Vec<f64>> {
-    if points < 2 || !(t_end > 0.0) {
+    if points < 2 || t_end.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Err(ReportError::InvalidSetting(format!(
             "the G(t) grid needs >= 2 points and t_end > 0 (got {points}, {t_end} s)"
         )));

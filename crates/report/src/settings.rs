@@ -171,7 +171,9 @@ impl FromSection for Fit {
                 &[("lee-radok", ForwardModel::LeeRadok)],
                 ForwardModel::LeeRadok,
             )?,
-            starts: s.opt_usize("starts", Bounds::closed(1.0, 1000.0))?.unwrap_or(8),
+            starts: s
+                .opt_usize("starts", Bounds::closed(1.0, 1000.0))?
+                .unwrap_or(8),
             ramp_points: s
                 .opt_usize("ramp_points", Bounds::closed(1.0, 10000.0))?
                 .unwrap_or(40),

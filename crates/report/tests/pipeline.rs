@@ -67,8 +67,16 @@ fn demo_recovers_its_group_ordering_with_p_below_0_05() {
     let f = fixture();
     let table = read_results(&f.out.join("results.csv")).expect("results");
     assert_eq!(table.cells.len(), 16, "16 usable cells");
-    assert_eq!(table.excluded.len(), 1, "the short recording is listed, not dropped");
-    assert!(table.excluded[0].reason.contains("covers"), "{}", table.excluded[0].reason);
+    assert_eq!(
+        table.excluded.len(),
+        1,
+        "the short recording is listed, not dropped"
+    );
+    assert!(
+        table.excluded[0].reason.contains("covers"),
+        "{}",
+        table.excluded[0].reason
+    );
     let a: Vec<Prony> = table.group("A-stiff");
     let b: Vec<Prony> = table.group("B-soft");
     let t_end = 52.0;
@@ -76,12 +84,24 @@ fn demo_recovers_its_group_ordering_with_p_below_0_05() {
     let m = Method::MATLAB_RANKSUM;
     // Known ordering (DemoSpec::default): A stiffer at 0 and 52 s, relaxes less.
     let tests = [
-        ("G(0)", rank_sum(&g(&a, 0.0), &g(&b, 0.0), m).expect("test"), 1.0),
-        ("G(52 s)", rank_sum(&g(&a, t_end), &g(&b, t_end), m).expect("test"), 1.0),
+        (
+            "G(0)",
+            rank_sum(&g(&a, 0.0), &g(&b, 0.0), m).expect("test"),
+            1.0,
+        ),
+        (
+            "G(52 s)",
+            rank_sum(&g(&a, t_end), &g(&b, t_end), m).expect("test"),
+            1.0,
+        ),
         (
             "relaxation",
-            rank_sum(&relaxation_amounts(&a, t_end), &relaxation_amounts(&b, t_end), m)
-                .expect("test"),
+            rank_sum(
+                &relaxation_amounts(&a, t_end),
+                &relaxation_amounts(&b, t_end),
+                m,
+            )
+            .expect("test"),
             -1.0,
         ),
     ];
@@ -89,7 +109,11 @@ fn demo_recovers_its_group_ordering_with_p_below_0_05() {
         assert!(t.p < 0.05, "{what}: p = {}", t.p);
         // Direction: U1 above its mean n1 n2 / 2 means A ranks higher.
         let centre = 0.5 * (a.len() * b.len()) as f64;
-        assert!(sign * (t.u1 - centre) > 0.0, "{what}: wrong direction, U1 = {}", t.u1);
+        assert!(
+            sign * (t.u1 - centre) > 0.0,
+            "{what}: wrong direction, U1 = {}",
+            t.u1
+        );
     }
 }
 
@@ -143,7 +167,10 @@ fn interrupted_then_resumed_run_gives_the_same_table_as_an_uninterrupted_one() {
     .expect("first part");
     assert_eq!(first.fitted, 5);
     assert_eq!(first.pending, 12);
-    assert!(!out.join("results.csv").exists(), "no table from an unfinished run");
+    assert!(
+        !out.join("results.csv").exists(),
+        "no table from an unfinished run"
+    );
     // What a kill can leave behind: a stray temporary file (the rename
     // never happened) and a damaged result file; both must be ignored.
     let pending = cells
@@ -154,8 +181,15 @@ fn interrupted_then_resumed_run_gives_the_same_table_as_an_uninterrupted_one() {
     std::fs::write(&p, b"{\"group\": \"B-so").expect("damaged file");
     std::fs::write(p.with_file_name(".x.json.999.tmp"), b"partial").expect("tmp");
 
-    let second = cohort::run_cohort(&settings, &study, &data, &cells, &out, &RunOptions::default())
-        .expect("resume");
+    let second = cohort::run_cohort(
+        &settings,
+        &study,
+        &data,
+        &cells,
+        &out,
+        &RunOptions::default(),
+    )
+    .expect("resume");
     assert_eq!((second.reused, second.fitted, second.pending), (5, 12, 0));
     let resumed = std::fs::read(out.join("results.csv")).expect("resumed table");
     let straight = std::fs::read(f.out.join("results.csv")).expect("table");
@@ -164,8 +198,15 @@ fn interrupted_then_resumed_run_gives_the_same_table_as_an_uninterrupted_one() {
         String::from_utf8_lossy(&straight)
     );
     // A third run fits nothing.
-    let third = cohort::run_cohort(&settings, &study, &data, &cells, &out, &RunOptions::default())
-        .expect("again");
+    let third = cohort::run_cohort(
+        &settings,
+        &study,
+        &data,
+        &cells,
+        &out,
+        &RunOptions::default(),
+    )
+    .expect("again");
     assert_eq!((third.reused, third.fitted), (17, 0));
 }
 
@@ -198,7 +239,10 @@ fn report_page_contains_every_figure_and_every_cell() {
         let rest = &html[at..];
         let end = rest.find("</figure>").expect("closed figure");
         let fig = &rest[..end];
-        assert!(fig.contains("<svg") && fig.contains("</svg>"), "{id} has no inline SVG");
+        assert!(
+            fig.contains("<svg") && fig.contains("</svg>"),
+            "{id} has no inline SVG"
+        );
         // Plotted data: at least one polyline/path with many points.
         assert!(fig.matches(' ').count() > 200, "{id} looks empty");
     }
@@ -208,7 +252,11 @@ fn report_page_contains_every_figure_and_every_cell() {
         assert!(s.contains("<svg"), "{}", p.display());
     }
     for t in &f.truth {
-        assert!(html.contains(&format!("<td>{}</td>", t.cell)), "{} not in the table", t.cell);
+        assert!(
+            html.contains(&format!("<td>{}</td>", t.cell)),
+            "{} not in the table",
+            t.cell
+        );
     }
     assert!(html.contains("b-soft-short") && html.contains("failed"));
     assert!(html.contains("Lee–Radok"), "the forward model is stated");
@@ -282,7 +330,11 @@ fn report_opens_in_headless_chromium() {
             .arg(&url)
             .output()
             .expect("chromium runs");
-        assert!(out.status.success(), "chromium: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "chromium: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         out
     };
     let dom = String::from_utf8_lossy(&run(&["--dump-dom".to_string()]).stdout).into_owned();
@@ -300,5 +352,9 @@ fn report_opens_in_headless_chromium() {
     ]);
     let bytes = std::fs::read(&png).expect("screenshot written");
     assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"), "not a PNG");
-    assert!(bytes.len() > 50_000, "screenshot suspiciously small: {} bytes", bytes.len());
+    assert!(
+        bytes.len() > 50_000,
+        "screenshot suspiciously small: {} bytes",
+        bytes.len()
+    );
 }

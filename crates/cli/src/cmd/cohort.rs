@@ -113,10 +113,7 @@ pub fn print_outcome(
         .iter()
         .filter(|c| c.status != CellStatus::Ok)
         .collect();
-    let results = run
-        .results_csv
-        .as_ref()
-        .map(|p| p.display().to_string());
+    let results = run.results_csv.as_ref().map(|p| p.display().to_string());
     if json {
         crate::output::print_json(&json!({
             "study_sha256": settings.study_hash,
