@@ -15,13 +15,16 @@ use clap::{Parser, Subcommand};
 
 pub mod build;
 mod check;
+mod cohort;
 mod compare;
+mod demo;
 mod inspect;
 mod material;
 pub mod membrane;
+mod report;
 pub mod sample;
-pub mod surrogate;
 mod simulate;
+pub mod surrogate;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
 /// force–time experiments.
@@ -101,6 +104,12 @@ pub enum Command {
     Inspect(inspect::Args),
     /// One finite-element run of the AFM cell-indentation model (force, deflection, indentation vs time).
     Simulate(simulate::Args),
+    /// Fit every cell of a cohort (parallel, resumable) into a results table.
+    Cohort(cohort::Args),
+    /// Self-contained HTML report (SVG figures) of a cohort output directory.
+    Report(report::Args),
+    /// Run the bundled synthetic two-group example end to end.
+    Demo(demo::Args),
 }
 
 impl Command {
@@ -119,24 +128,24 @@ impl Command {
                 Ok(ExitCode::SUCCESS)
             }
             Command::Check(a) => a.run(ctx),
-            Command::Sample(a) => a.run(),
-            Command::Build(a) => a.run(),
-            Command::Merge(a) => a.run(),
-            Command::Surrogate(c) => c.run(ctx.json),
+            Command::Material(a) => a.run(ctx),
             Command::Membrane(mut args) => {
                 args.json = ctx.json;
                 membrane::run(args)
-            Command::Simulate(a) => a.run(ctx),
-            Command::Compare(mut a) => {
-                a.json = ctx.json;
-                a.run()
             }
-            Command::Compare(a) => a.run(ctx),
+            Command::Simulate(a) => a.run(ctx),
             Command::Inspect(mut args) => {
                 args.json = ctx.json;
                 args.run()
             }
-            Command::Material(a) => a.run(ctx),
+            Command::Sample(a) => a.run(),
+            Command::Build(a) => a.run(),
+            Command::Merge(a) => a.run(),
+            Command::Surrogate(c) => c.run(ctx.json),
+            Command::Cohort(a) => a.run(ctx),
+            Command::Compare(a) => a.run(ctx),
+            Command::Report(a) => a.run(ctx),
+            Command::Demo(a) => a.run(ctx),
         }
     }
 }

@@ -1,0 +1,626 @@
+//! The report: one self-contained HTML page (figures inline as SVG, also
+//! written next to it as files) for a cohort output directory.
+//!
+//! Sections: study (title, hash, forward model, the study file), data
+//! overview (mean ± sd of the measured force and of the peak-normalised
+//! force per group, as Figs. 5.3–5.8), per-cell fits (data vs fit), group
+//! G(t) and G(t)/G(0) mean ± sd with the rank-sum p(t) (Figs. 5.14–5.19),
+//! tables (per-cell parameters with units, misfits, flags, status; group
+//! summary and tests), and the surrogate's checking errors when given.
+
+use std::fmt::Write as _;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use nlvid_stats::{
+    Method, Prony, ResultsTable, compare_over_time, effect, group_curves, mean_sd, rank_sum,
+    read_results, relaxation_amounts,
+};
+
+use crate::cell::{CellResult, CellStatus};
+use crate::cohort::{read_cells, read_record, write_atomic};
+use crate::error::{ReportError, Result};
+use crate::figures::{Band, FitPanel, Line, band_chart, fits_chart, pvalue_chart};
+
+/// Options of [`write_report`].
+#[derive(Debug, Clone)]
+pub struct ReportOptions {
+    /// Output directory (default: `<cohort dir>/report`).
+    pub out: Option<PathBuf>,
+    /// CSV of the surrogate's checking errors (default:
+    /// `<cohort dir>/surrogate_check.csv` if it exists).
+    pub surrogate_check: Option<PathBuf>,
+    /// Points of the uniform G(t) grid from 0 to the end of the hold.
+    pub points: usize,
+    /// p-value method (default: MATLAB `ranksum`, the thesis's tool).
+    pub method: Method,
+}
+
+impl Default for ReportOptions {
+    fn default() -> Self {
+        Self {
+            out: None,
+            surrogate_check: None,
+            points: 53,
+            method: Method::MATLAB_RANKSUM,
+        }
+    }
+}
+
+/// The files written.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReportFiles {
+    /// The HTML page.
+    pub html: PathBuf,
+    /// Figure ids (`fig-…`) present on the page, in order.
+    pub figure_ids: Vec<String>,
+    /// The SVG files written next to the page.
+    pub svgs: Vec<PathBuf>,
+}
+
+/// HTML-escapes text.
+pub fn escape(s: &str) -> String {
+    let mut o = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => o.push_str("&amp;"),
+            '<' => o.push_str("&lt;"),
+            '>' => o.push_str("&gt;"),
+            '"' => o.push_str("&quot;"),
+            '\'' => o.push_str("&#39;"),
+            _ => o.push(c),
+        }
+    }
+    o
+}
+
+fn sig(v: f64, digits: usize) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let mag = v.abs().log10().floor() as i32;
+    if !(-3..6).contains(&mag) {
+        return format!("{v:.prec$e}", prec = digits.saturating_sub(1));
+    }
+    let dec = (digits as i32 - 1 - mag).max(0) as usize;
+    format!("{v:.dec$}")
+}
+
+/// Mean ± sd over cells of per-grid-point values (cells with data only).
+fn data_band(
+    name: &str,
+    cells: &[&CellResult],
+    f: impl Fn(&CellResult, usize) -> f64,
+) -> Option<Band> {
+    let with: Vec<&&CellResult> = cells.iter().filter(|c| !c.data.is_empty()).collect();
+    let first = with.first()?;
+    let m = first.times.len();
+    if with.len() < 2 || with.iter().any(|c| c.times.len() != m) {
+        return None;
+    }
+    let mut mean = Vec::with_capacity(m);
+    let mut sd = Vec::with_capacity(m);
+    for j in 0..m {
+        let v: Vec<f64> = with.iter().map(|c| f(c, j)).collect();
+        let ms = mean_sd(name, &v).ok()?;
+        mean.push(ms.mean);
+        sd.push(ms.sd);
+    }
+    Some(Band {
+        name: format!("{name} (n = {})", with.len()),
+        x: first.times.clone(),
+        mean,
+        sd,
+    })
+}
+
+struct Figure {
+    id: String,
+    file: String,
+    caption: String,
+    svg: String,
+}
+
+fn strip_xml_decl(svg: &str) -> &str {
+    match svg.find("<svg") {
+        Some(i) => &svg[i..],
+        None => svg,
+    }
+}
+
+fn read_csv_table(path: &Path) -> Result<(Vec<String>, Vec<Vec<String>>)> {
+    let mut r = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_path(path)
+        .map_err(|e| ReportError::io(path, e))?;
+    let h = r
+        .headers()
+        .map_err(|e| ReportError::io(path, e))?
+        .iter()
+        .map(str::to_string)
+        .collect();
+    let mut rows = Vec::new();
+    for rec in r.records() {
+        let rec = rec.map_err(|e| ReportError::io(path, e))?;
+        rows.push(rec.iter().map(str::to_string).collect());
+    }
+    Ok((h, rows))
+}
+
+fn html_table(out: &mut String, headers: &[String], rows: &[Vec<String>]) {
+    out.push_str("<table>\n<thead><tr>");
+    for h in headers {
+        let _ = write!(out, "<th>{}</th>", escape(h));
+    }
+    out.push_str("</tr></thead>\n<tbody>\n");
+    for r in rows {
+        out.push_str("<tr>");
+        for c in r {
+            let _ = write!(out, "<td>{}</td>", escape(c));
+        }
+        out.push_str("</tr>\n");
+    }
+    out.push_str("</tbody></table>\n");
+}
+
+const STYLE: &str = "body{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;color:#222}\
+h1{font-size:1.6em}h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:2em}\
+table{border-collapse:collapse;font-size:.85em;margin:1em 0}th,td{border:1px solid #ddd;padding:3px 6px;text-align:right}\
+th{background:#f3f3f3}td:first-child,td:nth-child(2){text-align:left}\
+figure{margin:1.5em 0}figcaption{font-size:.9em;color:#444;max-width:720px}\
+.note{background:#fff8e1;border-left:4px solid #f0b400;padding:.5em 1em}\
+.bad{background:#fdecea}.warn{background:#fff8e1}pre{background:#f6f6f6;padding:1em;overflow-x:auto;font-size:.85em}";
+
+/// Writes the report of the cohort in `cohort_dir`.
+///
+/// # Errors
+/// The directory is not a finished cohort output (no `cohort.json` or
+/// `results.csv`), the results table is invalid, a figure cannot be drawn,
+/// the output cannot be written.
+pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFiles> {
+    let record = read_record(cohort_dir)?;
+    let cells = read_cells(cohort_dir)?;
+    let results_path = cohort_dir.join("results.csv");
+    if !results_path.is_file() {
+        return Err(ReportError::io(
+            &results_path,
+            "missing: the cohort run is not finished; run `nlvid cohort` again to complete it",
+        ));
+    }
+    let table: ResultsTable = read_results(&results_path)?;
+    let s = &record.settings;
+    let out_dir = opts
+        .out
+        .clone()
+        .unwrap_or_else(|| cohort_dir.join("report"));
+    fs::create_dir_all(&out_dir).map_err(|e| ReportError::io(&out_dir, e))?;
+    let t_end = s.hold_end;
+    let times = uniform_grid(t_end, opts.points)?;
+
+    // Group order: as in the results table (sorted names).
+    let groups: Vec<String> = {
+        let mut g: Vec<String> = cells.iter().map(|c| c.group.clone()).collect();
+        g.dedup();
+        g
+    };
+    let by_group =
+        |g: &str| -> Vec<&CellResult> { cells.iter().filter(|c| c.group == g).collect() };
+    let mut figures = Vec::new();
+
+    // Data overview (Figs. 5.3–5.8): measured force and peak-normalised force.
+    let force_bands: Vec<Band> = groups
+        .iter()
+        .filter_map(|g| data_band(g, &by_group(g), |c, j| c.data[j] * 1e9))
+        .collect();
+    let norm_bands: Vec<Band> = groups
+        .iter()
+        .filter_map(|g| {
+            data_band(g, &by_group(g), |c, j| {
+                c.data[j] / c.peak_force.unwrap_or(f64::NAN)
+            })
+        })
+        .collect();
+    if !force_bands.is_empty() {
+        figures.push(Figure {
+            id: "fig-force".into(),
+            file: "force.svg".into(),
+            caption: "Measured force–time curves, mean ± sd per group (cf. Figs. 5.3–5.5).".into(),
+            svg: band_chart(
+                "force.svg",
+                "Force vs time",
+                "t (s)",
+                "F (nN)",
+                &force_bands,
+            )?,
+        });
+        figures.push(Figure {
+            id: "fig-force-normalised".into(),
+            file: "force_normalised.svg".into(),
+            caption: format!(
+                "Peak-normalised force F/F_peak, mean ± sd per group (cf. Figs. 5.6–5.8); \
+                 1 − F(t_end)/F_peak at t_end = {t_end} s is the relaxation column of the tables."
+            ),
+            svg: band_chart(
+                "force_normalised.svg",
+                "Peak-normalised force",
+                "t (s)",
+                "F / F_peak",
+                &norm_bands,
+            )?,
+        });
+    }
+
+    // Per-cell fits.
+    let panels: Vec<FitPanel> = cells
+        .iter()
+        .filter(|c| !c.data.is_empty())
+        .map(|c| FitPanel {
+            title: format!(
+                "{} / {}{}",
+                c.group,
+                c.cell,
+                match c.status {
+                    CellStatus::Ok => String::new(),
+                    st => format!(" [{}]", st.as_str()),
+                }
+            ),
+            group_index: groups.iter().position(|g| *g == c.group).unwrap_or(0),
+            x: c.times.clone(),
+            data: c.data.iter().map(|f| f * 1e9).collect(),
+            fit: c.fit.iter().map(|f| f * 1e9).collect(),
+        })
+        .collect();
+    if !panels.is_empty() {
+        figures.push(Figure {
+            id: "fig-fits".into(),
+            file: "fits.svg".into(),
+            caption: "Each cell: measured force (grey) and the fitted model (colour), F in nN \
+                      against t in s."
+                .into(),
+            svg: fits_chart("fits.svg", "F (nN)", &panels, 4)?,
+        });
+    }
+
+    // Group G(t) (Figs. 5.14–5.19).
+    let usable: Vec<String> = table
+        .groups()
+        .into_iter()
+        .filter(|g| table.group(g).len() >= 2)
+        .collect();
+    let mut g_bands = Vec::new();
+    let mut n_bands = Vec::new();
+    for g in &usable {
+        let gc = group_curves(g, &table.group(g), &times)?;
+        let label = format!("{g} (n = {})", gc.n);
+        g_bands.push(Band {
+            name: label.clone(),
+            x: times.clone(),
+            mean: gc.shear.iter().map(|m| m.mean).collect(),
+            sd: gc.shear.iter().map(|m| m.sd).collect(),
+        });
+        n_bands.push(Band {
+            name: label,
+            x: times.clone(),
+            mean: gc.normalised.iter().map(|m| m.mean).collect(),
+            sd: gc.normalised.iter().map(|m| m.sd).collect(),
+        });
+    }
+    if !g_bands.is_empty() {
+        figures.push(Figure {
+            id: "fig-modulus".into(),
+            file: "modulus.svg".into(),
+            caption: "Relaxation modulus G(t) of eq. 5.1 from the fitted parameters, mean ± sd \
+                      per group (cf. Figs. 5.14–5.19); E(t) = 3G(t)."
+                .into(),
+            svg: band_chart("modulus.svg", "G(t)", "t (s)", "G (Pa)", &g_bands)?,
+        });
+        figures.push(Figure {
+            id: "fig-modulus-normalised".into(),
+            file: "modulus_normalised.svg".into(),
+            caption: "Normalised relaxation modulus G(t)/G(0), mean ± sd per group.".into(),
+            svg: band_chart(
+                "modulus_normalised.svg",
+                "G(t) / G(0)",
+                "t (s)",
+                "G(t)/G(0)",
+                &n_bands,
+            )?,
+        });
+    }
+    let mut tests_rows = Vec::new();
+    if usable.len() >= 2 {
+        let (a, b) = (&usable[0], &usable[1]);
+        let (ca, cb): (Vec<Prony>, Vec<Prony>) = (table.group(a), table.group(b));
+        let cmp = compare_over_time(&ca, &cb, &times, opts.method)?;
+        let x: Vec<f64> = cmp.iter().map(|r| r.t).collect();
+        figures.push(Figure {
+            id: "fig-pvalues".into(),
+            file: "pvalues.svg".into(),
+            caption: format!(
+                "Two-sided Wilcoxon rank-sum p-value between {a} and {b} at each time \
+                 (MATLAB ranksum rules), on G(t) (= on E(t)) and on G(t)/G(0) (= on the \
+                 relaxation amount)."
+            ),
+            svg: pvalue_chart(
+                "pvalues.svg",
+                &format!("p(t): {a} vs {b}"),
+                &[
+                    Line {
+                        name: "p on G(t)".into(),
+                        x: x.clone(),
+                        y: cmp.iter().map(|r| r.shear.p).collect(),
+                    },
+                    Line {
+                        name: "p on G(t)/G(0)".into(),
+                        x,
+                        y: cmp.iter().map(|r| r.normalised.p).collect(),
+                    },
+                ],
+            )?,
+        });
+        let g = |cells: &[Prony], t: f64| cells.iter().map(|p| p.shear(t)).collect::<Vec<_>>();
+        type Quantity<'a> = (String, Vec<f64>, Vec<f64>, f64, &'a str);
+        let quantities: [Quantity; 3] = [
+            ("G(0)".into(), g(&ca, 0.0), g(&cb, 0.0), 1.0, "Pa"),
+            (
+                format!("G({t_end} s)"),
+                g(&ca, t_end),
+                g(&cb, t_end),
+                1.0,
+                "Pa",
+            ),
+            (
+                format!("relaxation 1 − G({t_end} s)/G(0)"),
+                relaxation_amounts(&ca, t_end),
+                relaxation_amounts(&cb, t_end),
+                100.0,
+                "%",
+            ),
+        ];
+        for (what, va, vb, scale, unit) in quantities {
+            let ma = mean_sd(a, &va)?;
+            let mb = mean_sd(b, &vb)?;
+            let t = rank_sum(&va, &vb, opts.method)?;
+            let ef = effect(&va, &vb)?;
+            tests_rows.push(vec![
+                what,
+                format!(
+                    "{} ± {} {unit}",
+                    sig(scale * ma.mean, 4),
+                    sig(scale * ma.sd, 3)
+                ),
+                format!(
+                    "{} ± {} {unit}",
+                    sig(scale * mb.mean, 4),
+                    sig(scale * mb.sd, 3)
+                ),
+                sig(t.p, 4),
+                t.used.to_string(),
+                format!("{:+.3}", ef.rank_biserial),
+            ]);
+        }
+    }
+
+    // ---- page ------------------------------------------------------------
+    let mut h = String::new();
+    let title = escape(&s.title);
+    let _ = write!(
+        h,
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
+         <title>{title} — nlvid report</title><style>{STYLE}</style></head><body>\n\
+         <h1>{title}</h1>\n"
+    );
+    let n_ok = cells.iter().filter(|c| c.status == CellStatus::Ok).count();
+    let n_sus = cells
+        .iter()
+        .filter(|c| c.status == CellStatus::Suspicious)
+        .count();
+    let n_fail = cells
+        .iter()
+        .filter(|c| c.status == CellStatus::Failed)
+        .count();
+    let _ = write!(
+        h,
+        "<p class=\"note\"><b>Forward model:</b> {}.</p>\n\
+         <p>{} cells in {} group(s): {n_ok} fitted, {n_sus} suspicious, {n_fail} failed. \
+         Study <code>{}</code>, sha256 <code>{}</code>.</p>\n",
+        escape(s.model.describe()),
+        cells.len(),
+        groups.len(),
+        escape(&record.study.display().to_string()),
+        escape(&s.study_hash),
+    );
+    h.push_str("<h2 id=\"study\">Study</h2>\n");
+    let _ = writeln!(
+        h,
+        "<p>Sphere radius R = {} µm, ν = {}, cantilever k = {} N/m; fitted window: \
+         ramp to {} s, hold to {} s; {} multistart SLSQP starts per cell (seed {}), \
+         Table 5.3 parameter domain with g1 + g2 ≤ 1 − {}; misfit of eq. 5.3; a cell \
+         whose misfit exceeds {} is marked suspicious.</p>",
+        sig(s.radius * 1e6, 4),
+        s.poisson,
+        s.spring_constant,
+        s.ramp,
+        s.hold_end,
+        s.starts,
+        s.seed,
+        s.constraint_epsilon,
+        s.suspicious_misfit
+    );
+    if let Ok(text) = fs::read_to_string(&record.study) {
+        let _ = writeln!(
+            h,
+            "<details><summary>study file</summary><pre>{}</pre></details>",
+            escape(&text)
+        );
+    }
+    let section = |h: &mut String, id: &str, title: &str, figs: &[&str]| {
+        let _ = writeln!(h, "<h2 id=\"{id}\">{title}</h2>");
+        for f in figures.iter().filter(|f| figs.contains(&f.id.as_str())) {
+            let _ = writeln!(
+                h,
+                "<figure id=\"{}\">{}<figcaption>{} (<a href=\"{}\">{}</a>)</figcaption></figure>",
+                f.id,
+                strip_xml_decl(&f.svg),
+                escape(&f.caption),
+                f.file,
+                f.file
+            );
+        }
+    };
+    section(
+        &mut h,
+        "data",
+        "Data overview",
+        &["fig-force", "fig-force-normalised"],
+    );
+    section(&mut h, "fits", "Per-cell fits", &["fig-fits"]);
+    section(
+        &mut h,
+        "groups",
+        "Group relaxation modulus",
+        &["fig-modulus", "fig-modulus-normalised", "fig-pvalues"],
+    );
+    if !tests_rows.is_empty() {
+        let head = [
+            "quantity".to_string(),
+            usable[0].clone(),
+            usable[1].clone(),
+            "p".into(),
+            "p method".into(),
+            "rank-biserial".into(),
+        ];
+        h.push_str("<h3>Group comparison (Wilcoxon rank-sum, two-sided)</h3>\n");
+        html_table(&mut h, &head, &tests_rows);
+    }
+
+    h.push_str("<h2 id=\"tables\">Per-cell results</h2>\n");
+    let mut head = vec!["group".to_string(), "cell".into()];
+    let pnames: Vec<(String, String)> = cells
+        .iter()
+        .find(|c| !c.parameters.is_empty())
+        .map(|c| {
+            c.parameters
+                .iter()
+                .map(|p| (p.name.clone(), p.unit.clone()))
+                .collect()
+        })
+        .unwrap_or_default();
+    for (n, u) in &pnames {
+        head.push(if u.is_empty() {
+            n.clone()
+        } else {
+            format!("{n} ({u})")
+        });
+    }
+    head.extend(
+        [
+            "misfit",
+            "peak force (nN)",
+            "relaxation (%)",
+            "status",
+            "reason / flags",
+        ]
+        .map(String::from),
+    );
+    h.push_str("<table>\n<thead><tr>");
+    for c in &head {
+        let _ = write!(h, "<th>{}</th>", escape(c));
+    }
+    h.push_str("</tr></thead>\n<tbody>\n");
+    let opt =
+        |v: Option<f64>, scale: f64, d: usize| v.map_or_else(String::new, |x| sig(x * scale, d));
+    for c in &cells {
+        let class = match c.status {
+            CellStatus::Ok => "",
+            CellStatus::Suspicious => " class=\"warn\"",
+            CellStatus::Failed => " class=\"bad\"",
+        };
+        let mut row = vec![c.group.clone(), c.cell.clone()];
+        for (n, _) in &pnames {
+            row.push(opt(c.parameter(n), 1.0, 4));
+        }
+        row.push(opt(c.misfit, 1.0, 3));
+        row.push(opt(c.peak_force, 1e9, 4));
+        row.push(opt(c.relaxation, 100.0, 3));
+        row.push(c.status.as_str().into());
+        let mut notes = Vec::new();
+        if !c.reason.is_empty() {
+            notes.push(c.reason.clone());
+        }
+        notes.extend(c.flags.iter().cloned());
+        row.push(notes.join("; "));
+        let _ = write!(h, "<tr{class}>");
+        for v in row {
+            let _ = write!(h, "<td>{}</td>", escape(&v));
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</tbody></table>\n");
+    let _ = writeln!(
+        h,
+        "<p>Machine-readable: <code>{}</code> (format of docs/cli/compare.md).</p>",
+        escape(&results_path.display().to_string())
+    );
+
+    h.push_str("<h2 id=\"surrogate\">Surrogate checking errors</h2>\n");
+    let check = opts.surrogate_check.clone().or_else(|| {
+        let p = cohort_dir.join("surrogate_check.csv");
+        p.is_file().then_some(p)
+    });
+    match check {
+        Some(p) => {
+            let (hd, rows) = read_csv_table(&p)?;
+            let _ = writeln!(
+                h,
+                "<p>From <code>{}</code>.</p>",
+                escape(&p.display().to_string())
+            );
+            html_table(&mut h, &hd, &rows);
+        }
+        None => {
+            let _ = writeln!(
+                h,
+                "<p>No surrogate was used: every cell was fitted with the forward model \
+                 itself ({}), so there are no checking errors to show. Give the surrogate's \
+                 checking-error CSV with <code>--surrogate-check FILE</code> (or place it as \
+                 <code>surrogate_check.csv</code> in the cohort directory).</p>",
+                escape(s.model.describe())
+            );
+        }
+    }
+    let _ = write!(
+        h,
+        "<hr><p style=\"font-size:.8em;color:#666\">nlvid {} — report of <code>{}</code></p>\n\
+         </body></html>\n",
+        env!("CARGO_PKG_VERSION"),
+        escape(&cohort_dir.display().to_string())
+    );
+
+    let mut svgs = Vec::new();
+    for f in &figures {
+        let p = out_dir.join(&f.file);
+        write_atomic(&p, f.svg.as_bytes())?;
+        svgs.push(p);
+    }
+    let html = out_dir.join("index.html");
+    write_atomic(&html, h.as_bytes())?;
+    Ok(ReportFiles {
+        html,
+        figure_ids: figures.iter().map(|f| f.id.clone()).collect(),
+        svgs,
+    })
+}
+
+/// Uniform grid 0 … t_end with `points` points.
+fn uniform_grid(t_end: f64, points: usize) -> Result<Vec<f64>> {
+    if points < 2 || t_end.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return Err(ReportError::InvalidSetting(format!(
+            "the G(t) grid needs >= 2 points and t_end > 0 (got {points}, {t_end} s)"
+        )));
+    }
+    Ok((0..points)
+        .map(|i| t_end * i as f64 / (points - 1) as f64)
+        .collect())
+}
