@@ -1,0 +1,81 @@
+//! A real interruption: `nlvid cohort` is killed (SIGKILL) while it fits,
+//! then re-run into the same directory; the results table must equal the
+//! one of an uninterrupted run byte for byte.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use nlvid_report::demo::{DemoSpec, write_demo};
+
+fn scratch(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-{name}"));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("scratch");
+    d
+}
+
+fn count_cells(out: &Path) -> usize {
+    let Ok(groups) = std::fs::read_dir(out.join("cells")) else {
+        return 0;
+    };
+    groups
+        .filter_map(|g| g.ok())
+        .filter_map(|g| std::fs::read_dir(g.path()).ok())
+        .flat_map(|d| d.filter_map(|e| e.ok()))
+        .filter(|e| e.path().extension().is_some_and(|x| x == "json"))
+        .count()
+}
+
+#[test]
+fn killed_cohort_resumes_to_the_same_table() {
+    let root = scratch("kill");
+    // 2 × 30 cells with 24 starts each: long enough to be killed mid-way.
+    let spec = DemoSpec {
+        cells_per_group: 30,
+        starts: 24,
+        ..DemoSpec::default()
+    };
+    let files = write_demo(&spec, &root.join("study")).expect("demo");
+    let nlvid = env!("CARGO_BIN_EXE_nlvid");
+    let cohort = |out: &Path| {
+        let mut c = Command::new(nlvid);
+        c.arg("cohort")
+            .arg(&files.study)
+            .arg(&files.data)
+            .arg("--out")
+            .arg(out)
+            .env("NLVID_NO_PROGRESS", "1");
+        c
+    };
+
+    let killed = root.join("killed");
+    let mut child = cohort(&killed).spawn().expect("spawn");
+    let start = Instant::now();
+    while count_cells(&killed) < 5 && start.elapsed() < Duration::from_secs(120) {
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    child.kill().expect("kill");
+    let _ = child.wait();
+    let done = count_cells(&killed);
+    assert!(
+        !killed.join("results.csv").exists() && done < 60,
+        "the run finished before it could be killed ({done} cells); make the cohort larger"
+    );
+
+    let rerun = cohort(&killed).output().expect("re-run");
+    assert!(rerun.status.success(), "{}", String::from_utf8_lossy(&rerun.stderr));
+    let text = String::from_utf8_lossy(&rerun.stdout);
+    assert!(
+        text.contains(&format!("{} fitted now, {done} reused", 60 - done)),
+        "{text}"
+    );
+
+    let straight = root.join("straight");
+    let once = cohort(&straight).output().expect("uninterrupted run");
+    assert!(once.status.success());
+    let a = std::fs::read_to_string(killed.join("results.csv")).expect("table");
+    let b = std::fs::read_to_string(straight.join("results.csv")).expect("table");
+    assert_eq!(a.lines().count(), 61);
+    assert_eq!(a, b);
+}
