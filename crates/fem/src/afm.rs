@@ -10,7 +10,9 @@
 //! the undeformed cell with zero force), so after engagement Z(0) = δ₀ + d₀;
 //! time t = 0 at the start of step 2, step 1 runs at negative times.
 
-use crate::model::{Component, Control, ProbeDrive, Settings, SphereProbe, Stage, StepRecord, Support};
+use crate::model::{
+    Component, Control, ProbeDrive, Settings, SphereProbe, Stage, StepRecord, Support,
+};
 use crate::reference::PronyNeoHookean;
 use crate::{FemError, Mesh, Model, Result};
 use nlvid_material::Material3;
@@ -245,7 +247,10 @@ pub struct AfmRun {
 ///
 /// # Errors
 /// [`FemError::Material`] naming the offending parameter.
-pub fn cell_material(params: &AfmParams, bulk_ratio: f64) -> Result<nlvid_material::PronyViscoelastic> {
+pub fn cell_material(
+    params: &AfmParams,
+    bulk_ratio: f64,
+) -> Result<nlvid_material::PronyViscoelastic> {
     nlvid_material::PronyViscoelastic::cell(
         0.5 * params.g0,
         params.g1,
@@ -316,7 +321,12 @@ pub fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
 /// As [`Model::new`].
 pub fn build<M: Material3>(material: M, setup: &AfmSetup) -> Result<Model<M>> {
     setup.check()?;
-    let mesh = Mesh::oblate_cell(setup.height, setup.diameter, setup.mesh.elements_per_side, setup.mesh.bias)?;
+    let mesh = Mesh::oblate_cell(
+        setup.height,
+        setup.diameter,
+        setup.mesh.elements_per_side,
+        setup.mesh.bias,
+    )?;
     let supports = [
         Support::fixed("axis", Component::R),
         Support::fixed("base", Component::R),
@@ -327,7 +337,14 @@ pub fn build<M: Material3>(material: M, setup: &AfmSetup) -> Result<Model<M>> {
         centre_z: setup.height + setup.probe_radius,
         surface: "surface".into(),
     };
-    Model::new(mesh, material, &supports, Some(probe), None, setup.settings.clone())
+    Model::new(
+        mesh,
+        material,
+        &supports,
+        Some(probe),
+        None,
+        setup.settings.clone(),
+    )
 }
 
 /// [`run`] with any material.
@@ -338,7 +355,11 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
     let start = std::time::Instant::now();
     let mut model = build(material, setup)?;
     let eng = setup.engagement;
-    let t_engage = if eng.force > 0.0 { eng.ramp + eng.hold } else { 0.0 };
+    let t_engage = if eng.force > 0.0 {
+        eng.ramp + eng.hold
+    } else {
+        0.0
+    };
     model.set_time(-t_engage);
     if eng.force > 0.0 {
         let ramp_end = -eng.hold;
@@ -393,7 +414,10 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
         };
         let duration = t1 - t0;
         let (dt_initial, dt_max) = if z1 == z0 {
-            ((0.002 * duration).min(0.01), setup.hold_step_max.min(duration))
+            (
+                (0.002 * duration).min(0.01),
+                setup.hold_step_max.min(duration),
+            )
         } else {
             let h = setup.ramp_step_fraction * duration;
             (h, h)
@@ -414,7 +438,11 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
     let mut fs = vec![eng.force];
     let mut ws = vec![w0];
     for r in &recs[n_engage_records..] {
-        let z_piezo = interpolate(&piezo.iter().map(|p| p.0).collect::<Vec<_>>(), &piezo.iter().map(|p| p.1).collect::<Vec<_>>(), r.time);
+        let z_piezo = interpolate(
+            &piezo.iter().map(|p| p.0).collect::<Vec<_>>(),
+            &piezo.iter().map(|p| p.1).collect::<Vec<_>>(),
+            r.time,
+        );
         ts.push(r.time);
         zs.push(z_piezo);
         let f = match setup.cantilever {

@@ -208,7 +208,10 @@ mod tests {
     }
 
     fn tangent_fd(fbar: bool) {
-        let mat = crate::reference::NeoHookean { mu: 1.0, kappa: 30.0 };
+        let mat = crate::reference::NeoHookean {
+            mu: 1.0,
+            kappa: 30.0,
+        };
         let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
         let geo = element_geometry(&x);
         let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
@@ -228,7 +231,11 @@ mod tests {
             fbar_element(&mat, &geo, &um, &sn, &mut tr, 0.1, fbar, false, &mut om).unwrap();
             for r in 0..8 {
                 let fd = (op.r[r] - om.r[r]) / (2.0 * h);
-                assert!((fd - out.k[r][c]).abs() < 1e-5 * (1.0 + fd.abs()), "K[{r}][{c}] = {} vs fd {fd}", out.k[r][c]);
+                assert!(
+                    (fd - out.k[r][c]).abs() < 1e-5 * (1.0 + fd.abs()),
+                    "K[{r}][{c}] = {} vs fd {fd}",
+                    out.k[r][c]
+                );
             }
         }
     }

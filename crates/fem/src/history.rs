@@ -23,7 +23,10 @@ impl<S: Clone> History<S> {
 
     /// Converged and trial states of element `e` (four points).
     pub fn element(&mut self, e: usize) -> (&[S], &mut [S]) {
-        (&self.committed[4 * e..4 * e + 4], &mut self.trial[4 * e..4 * e + 4])
+        (
+            &self.committed[4 * e..4 * e + 4],
+            &mut self.trial[4 * e..4 * e + 4],
+        )
     }
 
     /// Accepts the trial states of a converged step.

@@ -26,6 +26,10 @@
 //! ```
 
 #![warn(missing_docs)]
+// `!(x > 0.0)` is deliberate: it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// Small fixed-size kernels read best with explicit indices.
+#![allow(clippy::needless_range_loop)]
 
 pub mod afm;
 pub mod element;
@@ -40,5 +44,6 @@ pub use error::{FemError, NonConvergence, Result};
 pub use history::History;
 pub use mesh::Mesh;
 pub use model::{
-    Component, Control, Counters, Model, ProbeDrive, RigidPlane, Settings, Stage, StepRecord, SphereProbe, Support,
+    Component, Control, Counters, Model, ProbeDrive, RigidPlane, Settings, SphereProbe, Stage,
+    StepRecord, Support,
 };

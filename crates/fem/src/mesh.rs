@@ -67,7 +67,9 @@ impl Mesh {
         }
         for (e, conn) in self.elements.iter().enumerate() {
             if conn.iter().any(|&a| a >= self.nodes.len()) {
-                return Err(FemError::Mesh(format!("element {e} refers to a missing node")));
+                return Err(FemError::Mesh(format!(
+                    "element {e} refers to a missing node"
+                )));
             }
             let x = conn.map(|a| self.nodes[a]);
             for &(xi, eta) in &crate::element::GAUSS {
@@ -200,7 +202,9 @@ impl Mesh {
                 let bottom = [a * u, 0.0];
                 let top = ellipse(theta_p * u);
                 let left = [0.0, h * v];
-                let right = ellipse(std::f64::consts::FRAC_PI_2 - (std::f64::consts::FRAC_PI_2 - theta_p) * v);
+                let right = ellipse(
+                    std::f64::consts::FRAC_PI_2 - (std::f64::consts::FRAC_PI_2 - theta_p) * v,
+                );
                 let mut x = [0.0; 2];
                 for k in 0..2 {
                     x[k] = (1.0 - v) * bottom[k] + v * top[k] + (1.0 - u) * left[k] + u * right[k]
@@ -273,7 +277,10 @@ mod tests {
         let coarse = (area(&Mesh::oblate_cell(h, d, 16, 4.0).unwrap()) - exact).abs();
         let fine = (area(&Mesh::oblate_cell(h, d, 32, 4.0).unwrap()) - exact).abs();
         assert!(fine / exact < 2e-3, "relative area error {}", fine / exact);
-        assert!(fine < coarse / 3.0, "polygon error should fall ~4× per halving");
+        assert!(
+            fine < coarse / 3.0,
+            "polygon error should fall ~4× per halving"
+        );
     }
 
     #[test]

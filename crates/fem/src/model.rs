@@ -332,7 +332,12 @@ impl<M: Material3> Model<M> {
         };
         let mut blocks: Vec<Vec<usize>> = Vec::with_capacity(mesh.elements.len() + 1);
         for conn in &mesh.elements {
-            blocks.push(elem_eqs(conn).into_iter().filter(|&e| e != NO_SLOT).collect());
+            blocks.push(
+                elem_eqs(conn)
+                    .into_iter()
+                    .filter(|&e| e != NO_SLOT)
+                    .collect(),
+            );
         }
         let probe_nodes = match &probe {
             Some(p) => mesh.nodes_in(&p.surface)?.to_vec(),
@@ -489,7 +494,12 @@ impl<M: Material3> Model<M> {
     /// [`FemError::Mesh`] for a missing set.
     pub fn reaction(&self, set: &str, component: Component) -> Result<f64> {
         let c = usize::from(component == Component::Z);
-        Ok(self.mesh.nodes_in(set)?.iter().map(|&a| self.residual[2 * a + c]).sum())
+        Ok(self
+            .mesh
+            .nodes_in(set)?
+            .iter()
+            .map(|&a| self.residual[2 * a + c])
+            .sum())
     }
 
     fn assemble(&mut self, ctl: &Control, dt: f64, tangent: bool) -> Result<Assembly> {
@@ -637,7 +647,10 @@ impl<M: Material3> Model<M> {
                     self.residual[wdof] += force;
                     asm.scale = asm.scale.max(force.abs());
                 }
-                ProbeDrive::Spring { stiffness, free_end } => {
+                ProbeDrive::Spring {
+                    stiffness,
+                    free_end,
+                } => {
                     self.residual[wdof] += stiffness * (self.u[wdof] - free_end);
                     if tangent {
                         self.system.values[diag] += stiffness;
@@ -679,7 +692,11 @@ impl<M: Material3> Model<M> {
 
     /// Newton iterations for one step; Ok((iterations, assembly)) or the
     /// failure (residual, tolerance, iterations, cause).
-    fn newton(&mut self, ctl: &Control, dt: f64) -> std::result::Result<(usize, Assembly), (f64, f64, usize, String)> {
+    fn newton(
+        &mut self,
+        ctl: &Control,
+        dt: f64,
+    ) -> std::result::Result<(usize, Assembly), (f64, f64, usize, String)> {
         self.apply_prescribed(ctl);
         let mut asm = match self.assemble(ctl, dt, true) {
             Ok(a) => a,
@@ -745,7 +762,12 @@ impl<M: Material3> Model<M> {
                 return Err((norm, tol, it + 1, last_err));
             }
         }
-        Err((norm, 0.0, self.settings.max_iterations, "iteration limit".into()))
+        Err((
+            norm,
+            0.0,
+            self.settings.max_iterations,
+            "iteration limit".into(),
+        ))
     }
 
     /// Advances through `stage` with adaptive steps: a failed attempt is
@@ -782,7 +804,8 @@ impl<M: Material3> Model<M> {
             if self.settings.extrapolate && !first && self.last_dt > 0.0 {
                 let s = dt / self.last_dt;
                 for d in 0..self.u.len() {
-                    self.u[d] = self.u_committed[d] + s * (self.u_committed[d] - self.u_previous[d]);
+                    self.u[d] =
+                        self.u_committed[d] + s * (self.u_committed[d] - self.u_previous[d]);
                 }
             } else {
                 self.u.copy_from_slice(&self.u_committed);
@@ -790,7 +813,10 @@ impl<M: Material3> Model<M> {
             match self.newton(&ctl, dt) {
                 Ok((iterations, asm)) => {
                     if trace() {
-                        eprintln!("step t={t_new:.5} dt={dt:.3e} its={iterations} F={:.4e}", asm.contact_force);
+                        eprintln!(
+                            "step t={t_new:.5} dt={dt:.3e} its={iterations} F={:.4e}",
+                            asm.contact_force
+                        );
                     }
                     self.history.commit();
                     self.u_previous.copy_from_slice(&self.u_committed);

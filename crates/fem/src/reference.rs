@@ -51,10 +51,12 @@ fn split(f: &Mat3) -> Result<Split, MaterialError> {
                     let d = if i == k && jj == l { 1.0 } else { 0.0 };
                     // ∂F⁻¹_Ji/∂F_kL = −F⁻¹_Jk F⁻¹_Li
                     let a = c
-                        * (d - 2.0 / 3.0 * f[(i, jj)] * fi[(l, k)] - 2.0 / 3.0 * fi[(jj, i)] * f[(k, l)]
+                        * (d - 2.0 / 3.0 * f[(i, jj)] * fi[(l, k)]
+                            - 2.0 / 3.0 * fi[(jj, i)] * f[(k, l)]
                             + 2.0 / 9.0 * i1 * fi[(jj, i)] * fi[(l, k)]
                             + i1 / 3.0 * fi[(jj, k)] * fi[(l, i)]);
-                    let v = (2.0 * j * j - j) * fi[(jj, i)] * fi[(l, k)] - (j * j - j) * fi[(jj, k)] * fi[(l, i)];
+                    let v = (2.0 * j * j - j) * fi[(jj, i)] * fi[(l, k)]
+                        - (j * j - j) * fi[(jj, k)] * fi[(l, i)];
                     a_iso[(3 * i + jj, 3 * k + l)] = a;
                     a_vol[(3 * i + jj, 3 * k + l)] = v;
                 }
@@ -83,7 +85,13 @@ impl Material3 for NeoHookean {
 
     fn initial_state(&self) {}
 
-    fn update(&self, _: &(), f: &Mat3, _dt: f64, _: &mut ()) -> nlvid_material::Result<PointResponse3> {
+    fn update(
+        &self,
+        _: &(),
+        f: &Mat3,
+        _dt: f64,
+        _: &mut (),
+    ) -> nlvid_material::Result<PointResponse3> {
         let s = split(f)?;
         Ok(response(
             f,
@@ -124,7 +132,13 @@ impl PronyNeoHookean {
     /// [`MaterialError::Parameter`] for non-positive moduli or times, more
     /// than [`MAX_TERMS`] terms, or Σ g_k ≥ 1.
     pub fn new(mu: f64, kappa: f64, terms: Vec<(f64, f64)>) -> nlvid_material::Result<Self> {
-        let bad = |name, value, reason| Err(MaterialError::Parameter { name, value, reason });
+        let bad = |name, value, reason| {
+            Err(MaterialError::Parameter {
+                name,
+                value,
+                reason,
+            })
+        };
         if !(mu > 0.0) {
             return bad("G0", mu, "must be positive");
         }
@@ -153,7 +167,13 @@ impl PronyNeoHookean {
     /// Relaxation modulus G(t) = μ (g_∞ + Σ g_k e^{−t/τ_k}) (eq. 5.1).
     pub fn relaxation_modulus(&self, t: f64) -> f64 {
         let ginf = 1.0 - self.terms.iter().map(|t| t.0).sum::<f64>();
-        self.mu * (ginf + self.terms.iter().map(|&(g, tau)| g * (-t / tau).exp()).sum::<f64>())
+        self.mu
+            * (ginf
+                + self
+                    .terms
+                    .iter()
+                    .map(|&(g, tau)| g * (-t / tau).exp())
+                    .sum::<f64>())
     }
 }
 
@@ -230,7 +250,10 @@ mod tests {
                     for j in 0..3 {
                         let fd = (pp[(i, j)] - pm[(i, j)]) / (2.0 * h);
                         let an = r.tangent[(3 * i + j, 3 * k + l)];
-                        assert!((fd - an).abs() < 1e-6 * (1.0 + an.abs()), "A[{i}{j}{k}{l}] {an} vs fd {fd}");
+                        assert!(
+                            (fd - an).abs() < 1e-6 * (1.0 + an.abs()),
+                            "A[{i}{j}{k}{l}] {an} vs fd {fd}"
+                        );
                     }
                 }
             }
@@ -239,7 +262,14 @@ mod tests {
 
     #[test]
     fn neo_hookean_tangent_matches_finite_differences() {
-        fd_check(&NeoHookean { mu: 1.3, kappa: 40.0 }, &(), 0.1);
+        fd_check(
+            &NeoHookean {
+                mu: 1.3,
+                kappa: 40.0,
+            },
+            &(),
+            0.1,
+        );
     }
 
     #[test]
@@ -270,7 +300,10 @@ mod tests {
             let r = m.update(&s, &f, dt, &mut trial).unwrap();
             s = trial.clone();
             let g = r.cauchy[(0, 1)] / gamma;
-            assert!((g - m.relaxation_modulus(t)).abs() < 1e-5 * m.mu, "t={t} {g}");
+            assert!(
+                (g - m.relaxation_modulus(t)).abs() < 1e-5 * m.mu,
+                "t={t} {g}"
+            );
         }
     }
 }

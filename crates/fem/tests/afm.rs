@@ -1,5 +1,7 @@
 //! The AFM cell model end to end on a coarse mesh and a short protocol.
 
+#![allow(clippy::needless_range_loop, clippy::unwrap_used)]
+
 use nlvid_fem::afm::{self, AfmParams, AfmSetup, Cantilever};
 use nlvid_fem::{FemError, Settings};
 
@@ -18,7 +20,13 @@ fn short_setup(cantilever: Cantilever) -> AfmSetup {
     setup.cantilever = cantilever;
     setup.mesh.elements_per_side = 14;
     // 0 → 1 µm at 10 µm/s, back 0.5 µm, to 1 µm, hold 5 s.
-    setup.piezo = vec![(0.0, 0.0), (0.1, 1e-6), (0.15, 0.5e-6), (0.2, 1e-6), (5.2, 1e-6)];
+    setup.piezo = vec![
+        (0.0, 0.0),
+        (0.1, 1e-6),
+        (0.15, 0.5e-6),
+        (0.2, 1e-6),
+        (5.2, 1e-6),
+    ];
     setup.output_times = (0..=104).map(|i| 0.05 * i as f64).collect();
     setup
 }
@@ -29,7 +37,11 @@ fn coarse_afm_run_finishes_repulsive_and_relaxes() {
     let run = afm::run(&params(), &setup).unwrap();
     assert_eq!(run.force.len(), setup.output_times.len());
     // Engaged at 0.48 nN, then repulsive throughout.
-    assert!((run.force[0] - 0.48e-9).abs() < 1e-6 * 0.48e-9, "F(0) = {}", run.force[0]);
+    assert!(
+        (run.force[0] - 0.48e-9).abs() < 1e-6 * 0.48e-9,
+        "F(0) = {}",
+        run.force[0]
+    );
     assert!(run.force.iter().all(|&f| f > 0.0));
     // δ = Z − d and F = k d on every output point.
     for i in 0..run.time.len() {
@@ -50,7 +62,11 @@ fn rigid_cantilever_indentation_equals_piezo_travel() {
     for i in 0..run.time.len() {
         assert_eq!(run.deflection[i], 0.0);
         assert!((run.indentation[i] - run.piezo[i]).abs() < 1e-15);
-        let program = afm::interpolate(&[0.0, 0.1, 0.15, 0.2, 5.2], &[0.0, 1e-6, 0.5e-6, 1e-6, 1e-6], run.time[i]);
+        let program = afm::interpolate(
+            &[0.0, 0.1, 0.15, 0.2, 5.2],
+            &[0.0, 1e-6, 0.5e-6, 1e-6, 1e-6],
+            run.time[i],
+        );
         assert!((run.piezo[i] - z0 - program).abs() < 1e-12);
     }
 }
@@ -81,7 +97,10 @@ fn material_crate_cell_model_agrees_with_reference_prony_solid() {
     let a = afm::run(&params(), &setup).unwrap();
     let b = afm::run_reference(&params(), &setup).unwrap();
     let rel = (a.peak_force / b.peak_force - 1.0).abs();
-    eprintln!("peak: material crate {:.4e} N, reference {:.4e} N ({rel:.4})", a.peak_force, b.peak_force);
+    eprintln!(
+        "peak: material crate {:.4e} N, reference {:.4e} N ({rel:.4})",
+        a.peak_force, b.peak_force
+    );
     assert!(rel < 0.01, "peak forces differ by {rel}");
     let relf = (a.final_force / b.final_force - 1.0).abs();
     assert!(relf < 0.01, "final forces differ by {relf}");

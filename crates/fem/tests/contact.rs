@@ -2,6 +2,8 @@
 //! ν = ½), Lee–Radok for a Prony solid, frictionless plate compression of
 //! a cylinder, and the cantilever spring (δ = Z − d, F = k d).
 
+#![allow(clippy::needless_range_loop, clippy::unwrap_used)]
+
 use nlvid_fem::reference::{NeoHookean, PronyNeoHookean};
 use nlvid_fem::{
     Component, Control, Mesh, Model, ProbeDrive, RigidPlane, Settings, SphereProbe, Stage, Support,
@@ -20,8 +22,19 @@ fn block<M: Material3>(material: M, n: usize, size_over_r: f64, bias: f64) -> Mo
         centre_z: l + R,
         surface: "top".into(),
     };
-    let supports = [Support::fixed("axis", Component::R), Support::fixed("base", Component::Z)];
-    Model::new(mesh, material, &supports, Some(probe), None, Settings::default()).unwrap()
+    let supports = [
+        Support::fixed("axis", Component::R),
+        Support::fixed("base", Component::Z),
+    ];
+    Model::new(
+        mesh,
+        material,
+        &supports,
+        Some(probe),
+        None,
+        Settings::default(),
+    )
+    .unwrap()
 }
 
 fn hertz(g: f64, delta: f64) -> f64 {
@@ -30,7 +43,15 @@ fn hertz(g: f64, delta: f64) -> f64 {
 
 fn hertz_errors(n: usize, size_over_r: f64, bias: f64) -> Vec<(f64, f64)> {
     let g = 1e3;
-    let mut model = block(NeoHookean { mu: g, kappa: 1e4 * g }, n, size_over_r, bias);
+    let mut model = block(
+        NeoHookean {
+            mu: g,
+            kappa: 1e4 * g,
+        },
+        n,
+        size_over_r,
+        bias,
+    );
     let depth = 0.05 * R;
     let control = |t: f64| Control {
         probe: ProbeDrive::Displacement(-depth * t),
@@ -53,9 +74,18 @@ fn hertz_errors(n: usize, size_over_r: f64, bias: f64) -> Vec<(f64, f64)> {
         errors.push((delta / R, rec.contact_force / hertz(g, delta) - 1.0));
         // Global equilibrium: the base carries the probe force.
         let base = model.reaction("base", Component::Z).unwrap();
-        assert!((base - rec.contact_force).abs() < 1e-6 * rec.contact_force, "{base} vs {}", rec.contact_force);
+        assert!(
+            (base - rec.contact_force).abs() < 1e-6 * rec.contact_force,
+            "{base} vs {}",
+            rec.contact_force
+        );
         // The penalty lets the probe sink in only a little.
-        assert!(rec.penetration < 0.01 * delta, "penetration {} of δ {}", rec.penetration, delta);
+        assert!(
+            rec.penetration < 0.01 * delta,
+            "penetration {} of δ {}",
+            rec.penetration,
+            delta
+        );
     }
     errors
 }
@@ -141,11 +171,19 @@ fn frictionless_plate_compression_matches_homogeneous_neo_hookean() {
     // homogeneous uniaxial stress, |F| = μ (λ⁻² − λ) π a² (incompressible).
     let (a, h, mu) = (5e-6, 4e-6, 1e3);
     let mesh = Mesh::graded_block(a, h, 4, 4, 1.0).unwrap();
-    let supports = [Support::fixed("axis", Component::R), Support::fixed("base", Component::Z)];
-    let plane = RigidPlane { surface: "top".into() };
+    let supports = [
+        Support::fixed("axis", Component::R),
+        Support::fixed("base", Component::Z),
+    ];
+    let plane = RigidPlane {
+        surface: "top".into(),
+    };
     let mut model = Model::new(
         mesh,
-        NeoHookean { mu, kappa: 1e5 * mu },
+        NeoHookean {
+            mu,
+            kappa: 1e5 * mu,
+        },
         &supports,
         None,
         Some(plane),
@@ -173,15 +211,29 @@ fn frictionless_plate_compression_matches_homogeneous_neo_hookean() {
     let lambda = top_z / h;
     let exact = mu * (1.0 / (lambda * lambda) - lambda) * std::f64::consts::PI * a * a;
     let fe = model.records().last().unwrap().plane_force;
-    assert!((fe / exact - 1.0).abs() < 2e-3, "FE {fe} vs {exact} at λ = {lambda}");
-    assert!(lambda < 0.81, "plate should have compressed the cylinder by ≈ 20 %: λ = {lambda}");
+    assert!(
+        (fe / exact - 1.0).abs() < 2e-3,
+        "FE {fe} vs {exact} at λ = {lambda}"
+    );
+    assert!(
+        lambda < 0.81,
+        "plate should have compressed the cylinder by ≈ 20 %: λ = {lambda}"
+    );
 }
 
 /// Runs the block under a piezo ramp with a spring, or with the probe
 /// displacement prescribed; returns (time, w, free end, force) per step.
 fn ramp_run(spring: Option<f64>, depth: f64, dt: f64) -> (Vec<(f64, f64, f64, f64)>, f64) {
     let g = 1e3;
-    let mut model = block(NeoHookean { mu: g, kappa: 1e3 * g }, 16, 20.0, 60.0);
+    let mut model = block(
+        NeoHookean {
+            mu: g,
+            kappa: 1e3 * g,
+        },
+        16,
+        20.0,
+        60.0,
+    );
     let control = |t: f64| Control {
         probe: match spring {
             Some(k) => ProbeDrive::Spring {
@@ -222,19 +274,37 @@ fn soft_cantilever_force_follows_rigid_curve_at_delta_z_minus_d() {
     // Equilibrium of the probe: spring force = contact reaction, and the
     // base carries it (global equilibrium), to 1e-6.
     let f_spring = k * (last.1 - last.2);
-    assert!((f_spring - last.3).abs() < 1e-6 * last.3, "{f_spring} vs {}", last.3);
-    assert!((base - last.3).abs() < 1e-6 * last.3, "{base} vs {}", last.3);
+    assert!(
+        (f_spring - last.3).abs() < 1e-6 * last.3,
+        "{f_spring} vs {}",
+        last.3
+    );
+    assert!(
+        (base - last.3).abs() < 1e-6 * last.3,
+        "{base} vs {}",
+        last.3
+    );
     // The spring run indents less than the piezo travel by d = F/k …
     let d = f_spring / k;
     let z = -last.2;
-    assert!(d > 0.2 * z, "the spring should take a sizeable share: d = {d}, Z = {z}");
+    assert!(
+        d > 0.2 * z,
+        "the spring should take a sizeable share: d = {d}, Z = {z}"
+    );
     // … and its force at δ = Z − d equals the rigid run's force at that δ.
     let rigid_delta: Vec<f64> = rigid.iter().map(|r| -r.1).collect();
     let rigid_force: Vec<f64> = rigid.iter().map(|r| r.3).collect();
     for s in spring.iter().skip(5) {
         let delta = -s.2 - k.recip() * s.3;
         let f_rigid = nlvid_fem::afm::interpolate(&rigid_delta, &rigid_force, delta);
-        assert!((s.3 / f_rigid - 1.0).abs() < 0.01, "δ = {delta}: spring {} vs rigid {f_rigid}", s.3);
-        assert!((delta + s.1).abs() < 1e-6 * delta, "δ = Z − d must equal the probe travel");
+        assert!(
+            (s.3 / f_rigid - 1.0).abs() < 0.01,
+            "δ = {delta}: spring {} vs rigid {f_rigid}",
+            s.3
+        );
+        assert!(
+            (delta + s.1).abs() < 1e-6 * delta,
+            "δ = Z − d must equal the probe travel"
+        );
     }
 }

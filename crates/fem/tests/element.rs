@@ -1,6 +1,8 @@
 //! Element verification: patch test (uniform stretch reproduced exactly on
 //! a distorted mesh) and volumetric locking (thick-walled cylinder, Lamé).
 
+#![allow(clippy::needless_range_loop, clippy::unwrap_used)]
+
 use nlvid_fem::reference::NeoHookean;
 use nlvid_fem::{Component, Control, Mesh, Model, Settings, Stage, Support};
 use nlvid_material::{Mat3, Material3};
@@ -48,7 +50,10 @@ fn uniform_stretch_is_exact(fbar: bool) {
         });
     }
     let interior = mesh.nodes[4];
-    let material = NeoHookean { mu: 1e3, kappa: 5e4 };
+    let material = NeoHookean {
+        mu: 1e3,
+        kappa: 5e4,
+    };
     let settings = Settings {
         fbar,
         ..Settings::default()
@@ -68,15 +73,27 @@ fn uniform_stretch_is_exact(fbar: bool) {
         })
         .unwrap();
     let u: Vec<[f64; 2]> = model.displacements().collect();
-    assert!((u[4][0] - a * interior[0]).abs() < 1e-12 * r0, "u_r {:e}", u[4][0] - a * interior[0]);
-    assert!((u[4][1] - b * interior[1]).abs() < 1e-12 * r0, "u_z {:e}", u[4][1] - b * interior[1]);
+    assert!(
+        (u[4][0] - a * interior[0]).abs() < 1e-12 * r0,
+        "u_r {:e}",
+        u[4][0] - a * interior[0]
+    );
+    assert!(
+        (u[4][1] - b * interior[1]).abs() < 1e-12 * r0,
+        "u_z {:e}",
+        u[4][1] - b * interior[1]
+    );
     // Axial force on the top face = P_zZ × π((r0+w)² − r0²), P from the
     // material evaluated directly at the uniform F.
     let f = Mat3::new(1.0 + a, 0.0, 0.0, 0.0, 1.0 + b, 0.0, 0.0, 0.0, 1.0 + a);
     let p = material.update(&(), &f, 0.0, &mut ()).unwrap().first_piola;
     let area = std::f64::consts::PI * ((r0 + w).powi(2) - r0 * r0);
     let top = model.reaction("top", Component::Z).unwrap();
-    assert!((top - p[(1, 1)] * area).abs() < 1e-9 * (p[(1, 1)] * area).abs(), "{top} vs {}", p[(1, 1)] * area);
+    assert!(
+        (top - p[(1, 1)] * area).abs() < 1e-9 * (p[(1, 1)] * area).abs(),
+        "{top} vs {}",
+        p[(1, 1)] * area
+    );
 }
 
 #[test]
@@ -109,7 +126,10 @@ fn thick_cylinder_pressure(fbar: bool, kappa_over_mu: f64) -> (f64, f64) {
     }
     let mut mesh = Mesh::new(nodes, elements).unwrap();
     mesh.set_nodes("inner", (0..=nz).map(|j| id(0, j)).collect());
-    mesh.set_nodes("ends", (0..=nr).flat_map(|i| [id(i, 0), id(i, nz)]).collect());
+    mesh.set_nodes(
+        "ends",
+        (0..=nr).flat_map(|i| [id(i, 0), id(i, nz)]).collect(),
+    );
     let mu = 1e3;
     let kappa = kappa_over_mu * mu;
     let u0 = 1e-5 * a;
@@ -125,7 +145,15 @@ fn thick_cylinder_pressure(fbar: bool, kappa_over_mu: f64) -> (f64, f64) {
         fbar,
         ..Settings::default()
     };
-    let mut model = Model::new(mesh, NeoHookean { mu, kappa }, &supports, None, None, settings).unwrap();
+    let mut model = Model::new(
+        mesh,
+        NeoHookean { mu, kappa },
+        &supports,
+        None,
+        None,
+        settings,
+    )
+    .unwrap();
     let control = |t: f64| Control {
         support_scale: t,
         ..Control::default()
@@ -158,7 +186,10 @@ fn fbar_does_not_lock_in_near_incompressible_thick_cylinder() {
     let err_plain = (fe_plain / exact - 1.0).abs();
     eprintln!("thick cylinder κ/μ = 1e4: F-bar error {err_fbar:.4}, plain error {err_plain:.4}");
     assert!(err_fbar < 0.02, "F-bar error {err_fbar}");
-    assert!(err_plain > 10.0 * err_fbar, "plain {err_plain} vs F-bar {err_fbar}");
+    assert!(
+        err_plain > 10.0 * err_fbar,
+        "plain {err_plain} vs F-bar {err_fbar}"
+    );
 }
 
 #[test]
@@ -167,6 +198,9 @@ fn both_elements_agree_with_lame_when_compressible() {
     let kappa_over_mu = 2.0 * 1.3 / (3.0 * 0.4);
     for fbar in [true, false] {
         let (fe, exact) = thick_cylinder_pressure(fbar, kappa_over_mu);
-        assert!((fe / exact - 1.0).abs() < 0.02, "fbar={fbar}: {fe} vs {exact}");
+        assert!(
+            (fe / exact - 1.0).abs() < 0.02,
+            "fbar={fbar}: {fe} vs {exact}"
+        );
     }
 }
