@@ -81,7 +81,11 @@ fn read(study_path: &PathBuf) -> anyhow::Result<(AfmParams, AfmSetup)> {
     let mut piezo = vec![(program.start(), program.value(program.start()))];
     for s in program.segments() {
         if s.is_jump() {
-            anyhow::bail!("{}: [protocol]: the piezo program jumps at t = {} s; the FE model needs a continuous Z(t)", study.name(), s.t0);
+            anyhow::bail!(
+                "{}: [protocol]: the piezo program jumps at t = {} s; the FE model needs a continuous Z(t)",
+                study.name(),
+                s.t0
+            );
         }
         piezo.push((s.t1, s.v1));
     }
@@ -140,7 +144,10 @@ impl Run for Args {
     fn validate(self, _ctx: &Context) -> anyhow::Result<Config> {
         let (params, setup) = read(&self.study)?;
         let output = self.output.unwrap_or_else(|| {
-            let stem = self.study.file_stem().map_or("study".into(), |s| s.to_string_lossy().to_string());
+            let stem = self
+                .study
+                .file_stem()
+                .map_or("study".into(), |s| s.to_string_lossy().to_string());
             self.study.with_file_name(format!("{stem}.simulate.csv"))
         });
         Ok(Config {
@@ -163,7 +170,13 @@ impl Run for Args {
             Column::new("indentation", "m"),
         ]);
         for i in 0..run.time.len() {
-            table.push_row(&[run.time[i], run.piezo[i], run.deflection[i], run.force[i], run.indentation[i]])?;
+            table.push_row(&[
+                run.time[i],
+                run.piezo[i],
+                run.deflection[i],
+                run.force[i],
+                run.indentation[i],
+            ])?;
         }
         table.write_csv(&c.output)?;
         if let Some(path) = &c.mesh_output {
