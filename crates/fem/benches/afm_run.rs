@@ -3,6 +3,8 @@
 //!
 //! `cargo bench -p nlvid-fem --bench afm_run`
 
+#![allow(clippy::needless_range_loop, clippy::unwrap_used)]
+
 use criterion::{Criterion, criterion_group, criterion_main};
 use nlvid_fem::afm::{self, AfmParams, AfmSetup};
 

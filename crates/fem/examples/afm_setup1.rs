@@ -7,6 +7,8 @@
 //! cargo run -p nlvid-fem --release --example afm_setup1 -- study   # n = 35, 65, 129 (≈1200/4200/16600 elements)
 //! ```
 
+#![allow(clippy::needless_range_loop, clippy::unwrap_used)]
+
 use nlvid_fem::afm::{self, AfmParams, AfmSetup};
 
 fn params() -> AfmParams {
@@ -33,7 +35,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
             println!(
                 "n = {n:4} elements = {:6}  peak = {:.5e} N  final = {:.5e} N  min = {:.3e} N  steps = {} cutbacks = {} iterations = {}  wall = {:.2} s",
-                run.elements, run.peak_force, run.final_force, min_force, run.steps, run.cutbacks, run.iterations, run.wall_seconds
+                run.elements,
+                run.peak_force,
+                run.final_force,
+                min_force,
+                run.steps,
+                run.cutbacks,
+                run.iterations,
+                run.wall_seconds
             );
             results.push(run);
         }
@@ -71,7 +80,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
         println!(
             "setup 1, {} elements: peak {:.5e} N, final {:.5e} N, min {:.3e} N, steps {}, cutbacks {}, iterations {}",
-            run.elements, run.peak_force, run.final_force, min_force, run.steps, run.cutbacks, run.iterations
+            run.elements,
+            run.peak_force,
+            run.final_force,
+            min_force,
+            run.steps,
+            run.cutbacks,
+            run.iterations
         );
         println!(
             "last run: wall {:.3} s = assembly {:.3} s + LU {:.3} s + other {:.3} s",
@@ -81,6 +96,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             run.wall_seconds - run.assembly_seconds - run.solve_seconds
         );
     }
-    println!("wall time: median of {repeats} = {:.3} s (all: {walls:.3?})", walls[repeats / 2]);
+    println!(
+        "wall time: median of {repeats} = {:.3} s (all: {walls:.3?})",
+        walls[repeats / 2]
+    );
     Ok(())
 }

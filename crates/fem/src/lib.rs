@@ -26,6 +26,10 @@
 //! ```
 
 #![warn(missing_docs)]
+// `!(x > 0.0)` is deliberate: it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// Small fixed-size kernels read best with explicit indices.
+#![allow(clippy::needless_range_loop)]
 
 pub mod afm;
 pub mod element;

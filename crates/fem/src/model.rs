@@ -813,7 +813,10 @@ impl<M: Material3> Model<M> {
             match self.newton(&ctl, dt) {
                 Ok((iterations, asm)) => {
                     if trace() {
-                        eprintln!("step t={t_new:.5} dt={dt:.3e} its={iterations} F={:.4e}", asm.contact_force);
+                        eprintln!(
+                            "step t={t_new:.5} dt={dt:.3e} its={iterations} F={:.4e}",
+                            asm.contact_force
+                        );
                     }
                     self.history.commit();
                     self.u_previous.copy_from_slice(&self.u_committed);

@@ -32,7 +32,12 @@ pub(crate) struct SparseSystem {
 
 impl std::fmt::Debug for SparseSystem {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "SparseSystem(n = {}, nnz = {})", self.n, self.values.len())
+        write!(
+            f,
+            "SparseSystem(n = {}, nnz = {})",
+            self.n,
+            self.values.len()
+        )
     }
 }
 
@@ -62,8 +67,8 @@ impl SparseSystem {
         }
         let nnz = row_idx.len();
         let symbolic = SymbolicSparseColMat::new_checked(n, n, col_ptr, None, row_idx);
-        let lu_symbolic =
-            SymbolicLu::try_new(symbolic.as_ref()).map_err(|e| FemError::Solver(format!("symbolic LU: {e:?}")))?;
+        let lu_symbolic = SymbolicLu::try_new(symbolic.as_ref())
+            .map_err(|e| FemError::Solver(format!("symbolic LU: {e:?}")))?;
         let llt_symbolic = SymbolicLlt::try_new(symbolic.as_ref(), faer::Side::Lower)
             .map_err(|e| FemError::Solver(format!("symbolic Cholesky: {e:?}")))?;
         Ok(Self {
@@ -129,7 +134,9 @@ impl SparseSystem {
         if rhs.iter().all(|x| x.is_finite()) {
             Ok(())
         } else {
-            Err(FemError::Solver("singular tangent (non-finite solution)".into()))
+            Err(FemError::Solver(
+                "singular tangent (non-finite solution)".into(),
+            ))
         }
     }
 }
@@ -193,16 +200,33 @@ mod tests {
                 b.fill(1.0);
                 s.solve(&mut b).unwrap();
             }
-            eprintln!("n = {}: {:.3} ms per factorise+solve", m * m, t.elapsed().as_secs_f64() / 20.0 * 1e3);
-            let sym = faer::sparse::linalg::solvers::SymbolicLlt::try_new(s.symbolic.as_ref(), faer::Side::Lower).unwrap();
+            eprintln!(
+                "n = {}: {:.3} ms per factorise+solve",
+                m * m,
+                t.elapsed().as_secs_f64() / 20.0 * 1e3
+            );
+            let sym = faer::sparse::linalg::solvers::SymbolicLlt::try_new(
+                s.symbolic.as_ref(),
+                faer::Side::Lower,
+            )
+            .unwrap();
             let t = std::time::Instant::now();
             for _ in 0..20 {
                 let mat = SparseColMatRef::new(s.symbolic.as_ref(), &s.values);
-                let llt = faer::sparse::linalg::solvers::Llt::try_new_with_symbolic(sym.clone(), mat, faer::Side::Lower).unwrap();
+                let llt = faer::sparse::linalg::solvers::Llt::try_new_with_symbolic(
+                    sym.clone(),
+                    mat,
+                    faer::Side::Lower,
+                )
+                .unwrap();
                 b.fill(1.0);
                 llt.solve_in_place(faer::ColMut::from_slice_mut(&mut b).as_mat_mut());
             }
-            eprintln!("n = {}: LLT {:.3} ms per factorise+solve", m * m, t.elapsed().as_secs_f64() / 20.0 * 1e3);
+            eprintln!(
+                "n = {}: LLT {:.3} ms per factorise+solve",
+                m * m,
+                t.elapsed().as_secs_f64() / 20.0 * 1e3
+            );
         }
     }
 }

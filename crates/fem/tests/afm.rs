@@ -1,5 +1,7 @@
 //! The AFM cell model end to end on a coarse mesh and a short protocol.
 
+#![allow(clippy::needless_range_loop, clippy::unwrap_used)]
+
 use nlvid_fem::afm::{self, AfmParams, AfmSetup, Cantilever};
 use nlvid_fem::{FemError, Settings};
 

@@ -2,6 +2,8 @@
 //! ν = ½), Lee–Radok for a Prony solid, frictionless plate compression of
 //! a cylinder, and the cantilever spring (δ = Z − d, F = k d).
 
+#![allow(clippy::needless_range_loop, clippy::unwrap_used)]
+
 use nlvid_fem::reference::{NeoHookean, PronyNeoHookean};
 use nlvid_fem::{
     Component, Control, Mesh, Model, ProbeDrive, RigidPlane, Settings, SphereProbe, Stage, Support,
@@ -96,16 +98,6 @@ fn hertz_neo_hookean_half_space_within_3_percent() {
     eprintln!("Hertz (δ/R, relative error): {errors:.4?}");
     for &(d, e) in &errors {
         assert!(e.abs() < 0.03, "δ/R = {d}: error {e:+.4}");
-    }
-}
-
-#[test]
-#[ignore = "fine mesh, ~1 min: cargo test -p nlvid-fem --release --test contact -- --ignored"]
-fn hertz_fine_mesh_within_1_5_percent_over_whole_range() {
-    let errors = hertz_errors(80, 60.0, 1500.0);
-    eprintln!("{errors:?}");
-    for &(d, e) in &errors {
-        assert!(e.abs() < 0.015, "δ/R = {d}: error {e:+.4}");
     }
 }
 

@@ -1,6 +1,8 @@
 //! Element verification: patch test (uniform stretch reproduced exactly on
 //! a distorted mesh) and volumetric locking (thick-walled cylinder, Lamé).
 
+#![allow(clippy::needless_range_loop, clippy::unwrap_used)]
+
 use nlvid_fem::reference::NeoHookean;
 use nlvid_fem::{Component, Control, Mesh, Model, Settings, Stage, Support};
 use nlvid_material::{Mat3, Material3};
