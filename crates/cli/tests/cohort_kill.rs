@@ -64,7 +64,11 @@ fn killed_cohort_resumes_to_the_same_table() {
     );
 
     let rerun = cohort(&killed).output().expect("re-run");
-    assert!(rerun.status.success(), "{}", String::from_utf8_lossy(&rerun.stderr));
+    assert!(
+        rerun.status.success(),
+        "{}",
+        String::from_utf8_lossy(&rerun.stderr)
+    );
     let text = String::from_utf8_lossy(&rerun.stdout);
     assert!(
         text.contains(&format!("{} fitted now, {done} reused", 60 - done)),
