@@ -16,6 +16,7 @@ use clap::{Parser, Subcommand};
 pub mod build;
 mod check;
 mod compare;
+mod fit;
 mod inspect;
 mod material;
 pub mod membrane;
@@ -96,6 +97,8 @@ pub enum Command {
     Surrogate(surrogate::SurrogateCmd),
     /// Fluid-filled NLV membrane squeezed between plates (ch. II, semi-analytical).
     Membrane(membrane::MembraneArgs),
+    /// Fit NLV parameters to measured curves on a surrogate; re-check with the real model.
+    Fit(fit::Args),
     /// Show what an AFM instrument file holds (segments, channels, calibration); export CSV, plot, quick fits.
     Inspect(inspect::Args),
 }
@@ -130,6 +133,7 @@ impl Command {
                 args.run()
             }
             Command::Material(a) => a.run(ctx),
+            Command::Fit(a) => a.run(ctx),
         }
     }
 }
