@@ -102,8 +102,6 @@ fn basis_form_equals_the_surrogates_own_predictor_and_gradient() {
 fn surrogate_gradient_matches_central_differences_of_the_predictor() {
     for coords in [Coordinates::Physical, Coordinates::Unit] {
         let (sur, _) = surrogate(coords, None);
-        let domain = sur.kriging().clone();
-        let _ = domain;
         for x in POINTS {
             let (_, jac) = sur.response_and_jacobian(&x).expect("jac");
             for k in 0..5 {
