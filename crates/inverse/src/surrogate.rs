@@ -192,7 +192,10 @@ impl Model for KrigingSurrogate {
     /// Predictor and its analytic gradient (DACE `predictor`, report eq. 2.18).
     fn response_and_jacobian(&self, x: &[f64]) -> Result<(Vec<f64>, DMatrix<f64>)> {
         let (xs, ds) = self.inputs(x)?;
-        let pp = self.kriging.predict_full(&xs).map_err(|e| model_err(x, &e))?;
+        let pp = self
+            .kriging
+            .predict_full(&xs)
+            .map_err(|e| model_err(x, &e))?;
         let (m, d) = (pp.y.len(), xs.len());
         let mut jac = DMatrix::zeros(m, d);
         for j in 0..m {

@@ -58,8 +58,8 @@ fn surrogate(coords: Coordinates, pca: Option<f64>) -> (KrigingSurrogate, LeeRad
     s.theta = ThetaSearch::Fixed(vec![0.5; 5]);
     s.pca_energy = pca;
     let k = KrigingModel::fit(xm.as_ref(), ym.as_ref(), &s).expect("kriging");
-    let sur = KrigingSurrogate::new(k, domain, &names, real.times().to_vec(), coords)
-        .expect("adapter");
+    let sur =
+        KrigingSurrogate::new(k, domain, &names, real.times().to_vec(), coords).expect("adapter");
     (sur, real)
 }
 
@@ -80,7 +80,10 @@ fn basis_form_equals_the_surrogates_own_predictor_and_gradient() {
                 let (y, j) = AsModel(&sur).response_and_jacobian(&x).expect("basis");
                 let scale = y_ref.iter().fold(0.0f64, |a, v| a.max(v.abs()));
                 for (a, b) in y.iter().zip(&y_ref) {
-                    assert!((a - b).abs() <= 1e-10 * scale, "{coords:?} {pca:?}: {a} vs {b}");
+                    assert!(
+                        (a - b).abs() <= 1e-10 * scale,
+                        "{coords:?} {pca:?}: {a} vs {b}"
+                    );
                 }
                 for k in 0..5 {
                     let col = j_ref.column(k).amax().max(1e-300);
@@ -134,8 +137,10 @@ fn fast_misfit_equals_eq_5_3_on_the_predicted_curve() {
         BasisExperiment::new("RH", &sur, g, &data, None).expect("e"),
     ])
     .expect("m");
-    let slow = Misfit::new(vec![Experiment::new("RH", &sur, data.clone(), None).expect("e")])
-        .expect("m");
+    let slow = Misfit::new(vec![
+        Experiment::new("RH", &sur, data.clone(), None).expect("e"),
+    ])
+    .expect("m");
     for x in POINTS {
         let (a, ga) = fast.value_and_gradient(&x).expect("fast");
         let (b, gb) = slow.value_and_gradient(&x).expect("slow");

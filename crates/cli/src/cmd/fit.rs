@@ -10,10 +10,10 @@ use std::process::ExitCode;
 
 use anyhow::{Context as _, bail};
 use nlvid_inverse::{
-    AfmColumns, BasisExperiment, BasisMisfit, Calibration, CompressionColumns, Coordinates,
-    Domain, FitResult, KrigingSurrogate, LeeRadokHertz, MeasuredCurve, Model, MultiStart,
-    Objective, ProtocolTolerance, PronyShear, Segment, gram, ramp_hold_indentation,
-    range_normalised_rmse, read_afm_csv, read_compression_csv, segment_weights,
+    AfmColumns, BasisExperiment, BasisMisfit, Calibration, CompressionColumns, Coordinates, Domain,
+    FitResult, KrigingSurrogate, LeeRadokHertz, MeasuredCurve, Model, MultiStart, Objective,
+    PronyShear, ProtocolTolerance, Segment, gram, ramp_hold_indentation, range_normalised_rmse,
+    read_afm_csv, read_compression_csv, segment_weights,
 };
 use nlvid_study::{Bounds, Dimension, Section, Study};
 use nlvid_surrogate::KrigingModel;
@@ -79,8 +79,13 @@ fn read_meta(path: &Path) -> anyhow::Result<(Vec<String>, Vec<f64>)> {
         std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let v: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
-    let names: Vec<String> = serde_json::from_value(v["parameter_names"].clone())
-        .with_context(|| format!("{}: key `parameter_names` (list of names) missing", path.display()))?;
+    let names: Vec<String> =
+        serde_json::from_value(v["parameter_names"].clone()).with_context(|| {
+            format!(
+                "{}: key `parameter_names` (list of names) missing",
+                path.display()
+            )
+        })?;
     let time: Vec<f64> = serde_json::from_value(v["time_s"].clone())
         .with_context(|| format!("{}: key `time_s` (time grid, s) missing", path.display()))?;
     Ok((names, time))
@@ -111,13 +116,19 @@ impl Run for Args {
         let meta_path = resolve(&base, s.req_path("meta")?);
         let coords = s.enum_or(
             "inputs",
-            &[("physical", Coordinates::Physical), ("unit", Coordinates::Unit)],
+            &[
+                ("physical", Coordinates::Physical),
+                ("unit", Coordinates::Unit),
+            ],
             Coordinates::Physical,
         )?;
         let domain = read_domain(&mut s)?;
         let kind = s.req_enum(
             "data",
-            &[("afm", DataKind::Afm), ("compression", DataKind::Compression)],
+            &[
+                ("afm", DataKind::Afm),
+                ("compression", DataKind::Compression),
+            ],
         )?;
         let starts = match self.starts {
             Some(n) => n,
@@ -222,10 +233,19 @@ impl Run for Args {
         let text = std::fs::read(&model_path)
             .with_context(|| format!("cannot read surrogate {}", model_path.display()))?;
         let kriging: KrigingModel = serde_json::from_slice(&text).with_context(|| {
-            format!("{}: not a model file of `nlvid surrogate fit`", model_path.display())
+            format!(
+                "{}: not a model file of `nlvid surrogate fit`",
+                model_path.display()
+            )
         })?;
         let surrogate = KrigingSurrogate::new(kriging, domain, &names, times.clone(), coords)
-            .with_context(|| format!("surrogate {} with {}", model_path.display(), meta_path.display()))?;
+            .with_context(|| {
+                format!(
+                    "surrogate {} with {}",
+                    model_path.display(),
+                    meta_path.display()
+                )
+            })?;
 
         // Ramp from 0 at `rate` to `amplitude`, then hold to the grid's end.
         let t_end = times.last().copied().unwrap_or(0.0);
@@ -248,9 +268,10 @@ impl Run for Args {
             };
             curve.check_protocol(&expected_t, &expected, tol)?;
             let force = curve.resample(&curve.force, &times)?;
-            let label = path
-                .file_stem()
-                .map_or_else(|| path.display().to_string(), |s| s.to_string_lossy().into());
+            let label = path.file_stem().map_or_else(
+                || path.display().to_string(),
+                |s| s.to_string_lossy().into(),
+            );
             data.push((label, curve, force));
         }
         let weights = (!segments.is_empty()).then(|| segment_weights(&times, &segments, 1.0));
@@ -362,7 +383,10 @@ impl Run for Args {
                 "plots": plots,
             }))?;
         } else {
-            println!("fit of {} curve(s) on the surrogate ({seconds:.3} s):", c.data.len());
+            println!(
+                "fit of {} curve(s) on the surrogate ({seconds:.3} s):",
+                c.data.len()
+            );
             print!("{fit}");
             for (k, (label, _, _)) in c.data.iter().enumerate() {
                 match real_misfits.get(k) {
