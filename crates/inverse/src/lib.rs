@@ -19,6 +19,9 @@
 //!   (real) model;
 //! - [`identifiability`]: scaled sensitivities, their singular values and
 //!   Gauss–Newton confidence intervals;
+//! - [`KrigingSurrogate`]: a `nlvid-surrogate` Kriging model as a [`Model`]
+//!   and [`BasisModel`]; [`ForwardFromModel`] runs any [`Model`] through
+//!   `nlvid_surrogate::build`;
 //! - [`PronyShear`]: G(t) of eq. 5.1 and E(t) = 3G(t);
 //! - [`read_afm_csv`] / [`read_compression_csv`]: measured curves in, with
 //!   protocol checks and resampling onto a model grid.
@@ -59,6 +62,7 @@ mod model;
 mod optimise;
 mod prony;
 mod starts;
+mod surrogate;
 
 pub use basis::{AsModel, BasisExperiment, BasisMisfit, BasisModel, gram};
 pub use domain::{BoundHit, BoundSide, Domain, LinearConstraint, Parameter, Scale};
@@ -74,3 +78,4 @@ pub use model::{FD_STEP_UNIT, Model, check_finite, check_jacobian, check_len, fd
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
 pub use prony::{ModulusPoint, ParameterTable, PronyShear, PronyTerm};
 pub use starts::{feasible_starts, latin_hypercube};
+pub use surrogate::{Coordinates, ForwardFromModel, KrigingSurrogate, design_domain};

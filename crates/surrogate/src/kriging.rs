@@ -599,6 +599,80 @@ impl KrigingModel {
         }
     }
 
+    /// Size of the basis φ(x) = [f(x); r(x)] of [`KrigingModel::basis`]:
+    /// regression terms p plus design sites n.
+    pub fn n_basis(&self) -> usize {
+        self.p() + self.n_sites
+    }
+
+    /// The predictor written as ŷ(x) = μ + Bᵀφ(x) (report eq. 2.16 with the
+    /// output scaling and any PCA rotation folded into B): returns B,
+    /// column-major `n_basis() × m`, and μ (the output means, m values).
+    /// Cost O(n_basis · q · m) once per model; used by the fast eq. 5.3
+    /// misfit of the inverse stage.
+    pub fn basis_coefficients(&self) -> (Vec<f64>, Vec<f64>) {
+        let (n, p, q, m) = (self.n_sites, self.p(), self.n_kriged(), self.n_outputs);
+        let nb = p + n;
+        // C = [β; γ], nb × q (column j holds kriged output j).
+        let c = |a: usize, j: usize| {
+            if a < p {
+                self.beta[j * p + a]
+            } else {
+                self.gamma[j * n + (a - p)]
+            }
+        };
+        let mut b = vec![0.0; nb * m];
+        let mut row = vec![0.0; q];
+        let mut out = vec![0.0; m];
+        for a in 0..nb {
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = c(a, j);
+            }
+            self.unscale(&row, &mut out, false);
+            for j in 0..m {
+                b[j * nb + a] = out[j];
+            }
+        }
+        (b, self.y_mean.clone())
+    }
+
+    /// The basis φ(x) = [f(x); r(x)] (p regression terms, then the n
+    /// correlations with the design sites, at the normalised point) and
+    /// ∂φ/∂x with respect to the *unnormalised* x, row-major
+    /// `n_basis() × d`.
+    ///
+    /// # Errors
+    /// `x` of the wrong length or not finite.
+    pub fn basis(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
+        self.check_x(x)?;
+        let (n, d, p) = (self.n_sites, self.dim, self.p());
+        let xn: Vec<f64> = (0..d)
+            .map(|k| (x[k] - self.x_mean[k]) / self.x_std[k])
+            .collect();
+        let mut phi = vec![0.0; p + n];
+        let mut dphi = vec![0.0; (p + n) * d];
+        self.regression.eval(&xn, &mut phi[..p]);
+        let mut df = vec![0.0; d * p];
+        self.regression.jacobian(&xn, &mut df);
+        for l in 0..p {
+            for k in 0..d {
+                dphi[l * d + k] = df[k * p + l] / self.x_std[k];
+            }
+        }
+        let mut dx = vec![0.0; d];
+        let mut g = vec![0.0; d];
+        for i in 0..n {
+            for k in 0..d {
+                dx[k] = xn[k] - self.sites[k * n + i];
+            }
+            phi[p + i] = self.correlation.value_and_grad_d(&self.theta, &dx, &mut g);
+            for k in 0..d {
+                dphi[(p + i) * d + k] = g[k] / self.x_std[k];
+            }
+        }
+        Ok((phi, dphi))
+    }
+
     /// Predictor, its gradient, MSE and MSE gradient at x (report eqs.
     /// 2.16, 2.19–2.20; DACE `predictor` with four outputs).
     ///

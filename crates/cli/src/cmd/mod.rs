@@ -18,6 +18,7 @@ mod check;
 mod cohort;
 mod compare;
 mod demo;
+mod fit;
 mod inspect;
 mod material;
 pub mod membrane;
@@ -87,8 +88,12 @@ pub enum Command {
     Check(check::Args),
     /// Drive one material through uniaxial, equibiaxial or simple-shear loading; CSV of stresses.
     Material(material::Args),
-    /// Group G(t) (mean ± sd) and rank-sum p(t) between two groups of cells.
-    Compare(compare::Args),
+    /// Fluid-filled NLV membrane squeezed between plates (ch. II, semi-analytical).
+    Membrane(membrane::MembraneArgs),
+    /// One finite-element run of the AFM cell-indentation model (force, deflection, indentation vs time).
+    Simulate(simulate::Args),
+    /// Show what an AFM instrument file holds (segments, channels, calibration); export CSV, plot, quick fits.
+    Inspect(inspect::Args),
     /// Latin-hypercube training and checking designs in a parameter domain.
     Sample(sample::SampleArgs),
     /// Run a forward model over a design: parallel, resumable, shardable.
@@ -98,14 +103,12 @@ pub enum Command {
     /// Kriging surrogates: fit, predict, check.
     #[command(subcommand)]
     Surrogate(surrogate::SurrogateCmd),
-    /// Fluid-filled NLV membrane squeezed between plates (ch. II, semi-analytical).
-    Membrane(membrane::MembraneArgs),
-    /// Show what an AFM instrument file holds (segments, channels, calibration); export CSV, plot, quick fits.
-    Inspect(inspect::Args),
-    /// One finite-element run of the AFM cell-indentation model (force, deflection, indentation vs time).
-    Simulate(simulate::Args),
+    /// Fit NLV parameters to measured curves on a surrogate; re-check with the real model.
+    Fit(fit::Args),
     /// Fit every cell of a cohort (parallel, resumable) into a results table.
     Cohort(cohort::Args),
+    /// Group G(t) (mean ± sd) and rank-sum p(t) between two groups of cells.
+    Compare(compare::Args),
     /// Self-contained HTML report (SVG figures) of a cohort output directory.
     Report(report::Args),
     /// Run the bundled synthetic two-group example end to end.
@@ -146,6 +149,7 @@ impl Command {
             Command::Compare(a) => a.run(ctx),
             Command::Report(a) => a.run(ctx),
             Command::Demo(a) => a.run(ctx),
+            Command::Fit(a) => a.run(ctx),
         }
     }
 }

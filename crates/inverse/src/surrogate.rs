@@ -1,0 +1,280 @@
+//! Adapters between the Kriging surrogate (crate `nlvid-surrogate`) and the
+//! fitter (thesis §4.4.1 steps 4–5, §5.4.1, App. A.2).
+//!
+//! - [`KrigingSurrogate`]: a fitted [`KrigingModel`] on a time grid, seen as
+//!   a [`Model`] (the surrogate's own predictor and analytic gradient) and
+//!   as a [`BasisModel`] (ŷ = μ + Bᵀφ(x) for the O(N²) eq. 5.3 misfit of
+//!   [`crate::BasisMisfit`]). The surrogate's inputs may be in another
+//!   order than the [`Domain`] (matched by name) and either physical
+//!   values or the domain's scaled coordinates u ∈ [0, 1] ([`Coordinates`]).
+//! - [`ForwardFromModel`]: any [`Model`] (e.g. the analytic
+//!   [`crate::LeeRadokHertz`]) as a surrogate-build [`ForwardModel`], so
+//!   `nlvid_surrogate::build` can run it over a design;
+//!   [`design_domain`] gives the matching design box.
+
+use nalgebra::{DMatrix, DVector};
+use nlvid_surrogate::{ForwardModel, KrigingModel, RunFailure, SurrogateError, doe};
+
+use crate::basis::BasisModel;
+use crate::domain::{Domain, Scale};
+use crate::error::{InverseError, Result};
+use crate::model::{Model, check_len};
+
+/// What the surrogate's inputs are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Coordinates {
+    /// Physical (SI) parameter values, as in the run store's design.
+    Physical,
+    /// The domain's scaled coordinates u ∈ [0, 1] (log axes in ln x).
+    Unit,
+}
+
+/// A Kriging surrogate of a forward model on a fixed time grid.
+#[derive(Debug, Clone)]
+pub struct KrigingSurrogate {
+    kriging: KrigingModel,
+    domain: Domain,
+    times: Vec<f64>,
+    /// Surrogate input k is domain parameter `perm[k]`.
+    perm: Vec<usize>,
+    coordinates: Coordinates,
+    b: DMatrix<f64>,
+    mu: Vec<f64>,
+}
+
+fn model_err(x: &[f64], e: &SurrogateError) -> InverseError {
+    InverseError::Model {
+        x: x.to_vec(),
+        message: format!("Kriging surrogate: {e}"),
+    }
+}
+
+impl KrigingSurrogate {
+    /// Wraps a fitted model whose inputs are the parameters `input_names`
+    /// (in the surrogate's order, each a parameter of `domain`) and whose
+    /// outputs are the response at `times` (s).
+    ///
+    /// Cost: O(N · q · m) once, to fold the output scaling into B.
+    ///
+    /// # Errors
+    /// [`InverseError::InvalidSetting`] when the names do not match the
+    /// domain one to one, or the input/output counts do not match.
+    pub fn new(
+        kriging: KrigingModel,
+        domain: Domain,
+        input_names: &[String],
+        times: Vec<f64>,
+        coordinates: Coordinates,
+    ) -> Result<Self> {
+        if kriging.dim != domain.len() || input_names.len() != domain.len() {
+            return Err(InverseError::InvalidSetting(format!(
+                "the surrogate has {} inputs ({} names given), the parameter domain {}",
+                kriging.dim,
+                input_names.len(),
+                domain.len()
+            )));
+        }
+        let mut perm = Vec::with_capacity(input_names.len());
+        for name in input_names {
+            let i = domain.index_of(name).ok_or_else(|| {
+                InverseError::InvalidSetting(format!(
+                    "surrogate input '{name}' is not a parameter of the domain ({:?})",
+                    domain.params().iter().map(|p| &p.name).collect::<Vec<_>>()
+                ))
+            })?;
+            if perm.contains(&i) {
+                return Err(InverseError::InvalidSetting(format!(
+                    "surrogate input '{name}' appears twice"
+                )));
+            }
+            perm.push(i);
+        }
+        if kriging.n_outputs != times.len() {
+            return Err(InverseError::InvalidSetting(format!(
+                "the surrogate predicts {} values, the time grid has {}",
+                kriging.n_outputs,
+                times.len()
+            )));
+        }
+        let (b, mu) = kriging.basis_coefficients();
+        let b = DMatrix::from_column_slice(kriging.n_basis(), kriging.n_outputs, &b);
+        Ok(Self {
+            kriging,
+            domain,
+            times,
+            perm,
+            coordinates,
+            b,
+            mu,
+        })
+    }
+
+    /// The wrapped Kriging model.
+    pub fn kriging(&self) -> &KrigingModel {
+        &self.kriging
+    }
+
+    /// Surrogate inputs at physical x (domain order) and d(input_k)/d(x_perm[k]).
+    fn inputs(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
+        self.domain.check_len(x)?;
+        let params = self.domain.params();
+        let mut xs = Vec::with_capacity(x.len());
+        let mut ds = Vec::with_capacity(x.len());
+        for &i in &self.perm {
+            let p = &params[i];
+            match self.coordinates {
+                Coordinates::Physical => {
+                    xs.push(x[i]);
+                    ds.push(1.0);
+                }
+                Coordinates::Unit => {
+                    if p.scale == Scale::Log && x[i] <= 0.0 {
+                        return Err(InverseError::Model {
+                            x: x.to_vec(),
+                            message: format!(
+                                "log-scaled parameter '{}' must be > 0 for the surrogate",
+                                p.name
+                            ),
+                        });
+                    }
+                    let u = p.to_unit(x[i]);
+                    xs.push(u);
+                    ds.push(1.0 / p.dx_du(u));
+                }
+            }
+        }
+        Ok((xs, ds))
+    }
+}
+
+impl BasisModel for KrigingSurrogate {
+    fn domain(&self) -> &Domain {
+        &self.domain
+    }
+    fn times(&self) -> &[f64] {
+        &self.times
+    }
+    fn basis(&self, x: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>)> {
+        let (xs, ds) = self.inputs(x)?;
+        let (phi, dphi_s) = self.kriging.basis(&xs).map_err(|e| model_err(x, &e))?;
+        let (nb, d) = (phi.len(), xs.len());
+        let mut dphi = DMatrix::zeros(nb, d);
+        for a in 0..nb {
+            for (k, &i) in self.perm.iter().enumerate() {
+                dphi[(a, i)] = dphi_s[a * d + k] * ds[k];
+            }
+        }
+        Ok((DVector::from_vec(phi), dphi))
+    }
+    fn coefficients(&self) -> &DMatrix<f64> {
+        &self.b
+    }
+    fn offset(&self) -> &[f64] {
+        &self.mu
+    }
+}
+
+impl Model for KrigingSurrogate {
+    fn domain(&self) -> &Domain {
+        &self.domain
+    }
+    fn times(&self) -> &[f64] {
+        &self.times
+    }
+    /// The Kriging predictor ŷ(x) (DACE report eq. 2.16).
+    fn response(&self, x: &[f64]) -> Result<Vec<f64>> {
+        let (xs, _) = self.inputs(x)?;
+        self.kriging.predict(&xs).map_err(|e| model_err(x, &e))
+    }
+    fn jacobian(&self, x: &[f64]) -> Result<DMatrix<f64>> {
+        Ok(self.response_and_jacobian(x)?.1)
+    }
+    /// Predictor and its analytic gradient (DACE `predictor`, report eq. 2.18).
+    fn response_and_jacobian(&self, x: &[f64]) -> Result<(Vec<f64>, DMatrix<f64>)> {
+        let (xs, ds) = self.inputs(x)?;
+        let pp = self
+            .kriging
+            .predict_full(&xs)
+            .map_err(|e| model_err(x, &e))?;
+        let (m, d) = (pp.y.len(), xs.len());
+        let mut jac = DMatrix::zeros(m, d);
+        for j in 0..m {
+            for (k, &i) in self.perm.iter().enumerate() {
+                jac[(j, i)] = pp.dy[j * d + k] * ds[k];
+            }
+        }
+        Ok((pp.y, jac))
+    }
+}
+
+/// A [`Model`] run as a surrogate-build [`ForwardModel`]: parameters in the
+/// domain's order and units, response on the model's grid.
+#[derive(Debug, Clone)]
+pub struct ForwardFromModel<M> {
+    /// The model.
+    pub model: M,
+    /// Identity recorded in the run store (model name and settings).
+    pub identity: String,
+}
+
+impl<M: Model + Sync> ForwardModel for ForwardFromModel<M> {
+    fn parameter_names(&self) -> Vec<String> {
+        self.model
+            .domain()
+            .params()
+            .iter()
+            .map(|p| p.name.clone())
+            .collect()
+    }
+    fn parameter_units(&self) -> Vec<String> {
+        self.model
+            .domain()
+            .params()
+            .iter()
+            .map(|p| p.unit.clone())
+            .collect()
+    }
+    fn time_grid(&self) -> &[f64] {
+        self.model.times()
+    }
+    fn identity(&self) -> String {
+        self.identity.clone()
+    }
+    fn run(&self, params: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
+        let fail = |e: InverseError| RunFailure {
+            kind: nlvid_surrogate::FailureKind::Other,
+            time: None,
+            message: e.to_string(),
+        };
+        let y = self.model.response(params).map_err(fail)?;
+        check_len("model response", self.model.times().len(), y.len()).map_err(fail)?;
+        Ok(y)
+    }
+}
+
+/// The design box of `nlvid sample`/`nlvid build` matching a fit domain:
+/// same parameter order, log axes where the domain is log-scaled, the same
+/// linear constraints.
+pub fn design_domain(domain: &Domain) -> doe::Domain {
+    doe::Domain {
+        axes: domain
+            .params()
+            .iter()
+            .map(|p| doe::Axis {
+                name: p.name.clone(),
+                unit: p.unit.clone(),
+                lower: p.lower,
+                upper: p.upper,
+                log: p.scale == Scale::Log,
+            })
+            .collect(),
+        constraints: domain
+            .constraints()
+            .iter()
+            .map(|c| doe::LinearConstraint {
+                coeffs: c.coefficients.clone(),
+                bound: c.rhs,
+            })
+            .collect(),
+    }
+}
