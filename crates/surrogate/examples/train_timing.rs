@@ -10,7 +10,8 @@ use std::time::Instant;
 use nlvid_surrogate::doe::{Axis, Domain, LinearConstraint, SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
-    Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, Regression,
+    Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, OptimiserSettings,
+    Regression, ThetaSearch,
 };
 use rayon::prelude::*;
 
@@ -70,8 +71,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     let xm = Mat::from_fn(n, 5, |i, k| xs[i][k]);
     let ym = Mat::from_fn(n, m, |i, j| ys[i][j]);
-    for pca in [Some(1.0 - 1e-8), None] {
+    let fixed = ThetaSearch::Fixed(vec![1.0, 1.0, 1.0, 1.0, 1.0, 1.9]);
+    let budget = ThetaSearch::Optimise {
+        theta0: vec![1.0, 1.0, 1.0, 1.0, 1.0, 1.9],
+        lower: vec![1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 0.1],
+        upper: vec![1e2, 1e2, 1e2, 1e2, 1e2, 2.0],
+        settings: OptimiserSettings { starts: 1, max_iter: 15, ..Default::default() },
+    };
+    for (pca, search) in [
+        (Some(1.0 - 1e-8), fixed.clone()),
+        (None, fixed),
+        (Some(1.0 - 1e-8), budget.clone()),
+        (None, budget),
+    ] {
         let mut s = KrigingSettings::new(Regression::Poly1, Correlation::Expg, 5);
+        s.theta = search;
         s.pca_energy = pca;
         let t0 = Instant::now();
         let km = KrigingModel::fit(xm.as_ref(), ym.as_ref(), &s)?;
@@ -84,8 +98,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let per = t1.elapsed().as_secs_f64() / reps as f64;
         println!(
-            "pca {:?}: fit {fit:.2} s ({} evaluations, {} kriged outputs, ψ = {:.4e}, θ = {:?}); predict one curve {:.3} ms [{acc:.3e}]",
+            "pca {:?} {}: fit {fit:.2} s ({} evaluations, {} kriged outputs, ψ = {:.4e}, θ = {:?}); predict one curve {:.3} ms [{acc:.3e}]",
             pca,
+            km.report.search,
             km.report.evaluations,
             km.report.kriged_outputs,
             km.report.psi,
