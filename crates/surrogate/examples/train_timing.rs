@@ -76,7 +76,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         theta0: vec![1.0, 1.0, 1.0, 1.0, 1.0, 1.9],
         lower: vec![1e-3, 1e-3, 1e-3, 1e-3, 1e-3, 0.1],
         upper: vec![1e2, 1e2, 1e2, 1e2, 1e2, 2.0],
-        settings: OptimiserSettings { starts: 1, max_iter: 15, ..Default::default() },
+        settings: OptimiserSettings {
+            starts: 1,
+            max_iter: 15,
+            ..Default::default()
+        },
     };
     for (pca, search) in [
         (Some(1.0 - 1e-8), fixed.clone()),

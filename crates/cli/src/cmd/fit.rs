@@ -261,7 +261,11 @@ impl Run for Args {
         let expected = ramp_hold_indentation(&expected_t, rate, amplitude);
         let mut data = Vec::new();
         for path in &self.data {
+            let is_jpk = path
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("jpk-force"));
             let curve = match (&afm_cols, &comp_cols, &calibration) {
+                (_, _, cal) if is_jpk => read_jpk_ramp_hold(path, cal.as_ref())?,
                 (Some(c), _, Some(cal)) => read_afm_csv(path, c, cal)?,
                 (_, Some(c), _) => read_compression_csv(path, c)?,
                 _ => bail!("internal: data kind without columns"),
@@ -422,5 +426,77 @@ impl Run for Args {
             }
         }
         Ok(ExitCode::SUCCESS)
+    }
+}
+
+/// Read a JPK ramp-hold curve (extend, then constant-height pause) as a
+/// measured AFM curve: time from the contact point, F, δ, and the piezo travel
+/// Z = δ + F/k since contact (§5.2.2, δ = Z − d with d = F/k). A calibration in
+/// the study replaces the file's.
+fn read_jpk_ramp_hold(
+    path: &Path,
+    cal: Option<&nlvid_inverse::Calibration>,
+) -> anyhow::Result<MeasuredCurve> {
+    let options = nlvid_afm::ReadOptions {
+        spring_constant: cal.map(|c| c.spring_constant),
+        sensitivity: cal.and_then(|c| c.deflection_sensitivity),
+    };
+    let curve = nlvid_afm::read_force_curve_with(path, &options)
+        .with_context(|| format!("{}: cannot read the JPK file", path.display()))?;
+    let k = curve.calibration.spring_constant;
+    let ramp = nlvid_afm::prepare_ramp_hold(&curve, nlvid_afm::ContactMethod::default())
+        .with_context(|| format!("{}: cannot cut a ramp-hold curve", path.display()))?;
+    let displacement = ramp
+        .indentation
+        .iter()
+        .zip(&ramp.force)
+        .map(|(d, f)| d + f / k)
+        .collect();
+    Ok(MeasuredCurve {
+        path: path.to_path_buf(),
+        lines: (1..=ramp.time.len()).collect(),
+        time: ramp.time,
+        displacement,
+        force: ramp.force,
+        indentation: Some(ramp.indentation),
+        contact_area: None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const RELAXATION: &str = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../afm/tests/data/fmt-jpk-sr_cell1-0008.jpk-force"
+    );
+
+    #[test]
+    fn jpk_ramp_hold_reads_as_a_measured_curve_from_contact() {
+        let curve = read_jpk_ramp_hold(Path::new(RELAXATION), None).unwrap();
+        let n = curve.time.len();
+        assert!(n > 7000, "extend after contact + 7680-point hold, got {n}");
+        assert_eq!(curve.force.len(), n);
+        assert_eq!(curve.displacement.len(), n);
+        assert_eq!(curve.time[0], 0.0);
+        assert!(curve.time.windows(2).all(|w| w[1] > w[0]));
+        let delta = curve.indentation.as_ref().unwrap();
+        // δ starts at the contact point and grows to a few µm on a cell.
+        assert!(delta[0].abs() < 0.1e-6, "δ(0) = {}", delta[0]);
+        let peak = curve.force.iter().copied().fold(f64::MIN, f64::max);
+        assert!(peak > 0.0);
+        // Stress relaxation: the force at the end of the hold is below the peak.
+        assert!(curve.force[n - 1] < 0.9 * peak);
+    }
+
+    #[test]
+    fn a_non_jpk_file_with_the_jpk_extension_is_a_clear_error() {
+        let dir = std::env::temp_dir().join(format!("nlvid-fit-jpk-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("cell.jpk-force");
+        std::fs::write(&path, b"time,force\n0,1\n").unwrap();
+        let err = read_jpk_ramp_hold(&path, None).unwrap_err();
+        assert!(format!("{err:#}").contains("cell.jpk-force"), "{err:#}");
     }
 }
