@@ -194,8 +194,11 @@ fn recovery(name: &str, n_sites: usize, n_ramp: usize, n_hold: usize) -> Outcome
         ));
     }
     out.lines.push(format!(
-        "{name}: recovered {}/10; surrogate vs real misfit within the checking error {}/10; optimiser at or below the truth's surrogate misfit {}/10",
-        out.passed, out.agree, out.reached
+        "{name}: recovered {}/10; surrogate vs real misfit within the checking error {}/10; optimiser at or below the truth's surrogate misfit {}/10; max checking error {:.1} %",
+        out.passed,
+        out.agree,
+        out.reached,
+        100.0 * out.max_checking_error
     ));
     println!("{}", out.lines.join("\n"));
     out
