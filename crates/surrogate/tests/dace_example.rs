@@ -1,5 +1,5 @@
 //! The worked example of the DACE report (Lophaven, Nielsen & Søndergaard
-//! 2002, §6.1), data in /work/shared/data/dace (README holds the
+//! 2002, §6.1), data in tests/data/dace (copied from shared/data/dace) (README holds the
 //! published numbers), and an independent implementation of the DACE
 //! formulas written here with nalgebra (explicit inverses, no Cholesky/QR).
 
@@ -12,15 +12,12 @@ use nlvid_surrogate::{
     likelihood_psi,
 };
 
-const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../../shared/data/dace");
+/// A copy of shared/data/dace (the DACE report's `data1.mat` as CSV), kept in
+/// the repository so the test does not depend on where the checkout sits.
+const DATA: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/dace");
 
 fn read_csv(name: &str) -> Vec<Vec<f64>> {
     let path = std::path::Path::new(DATA).join(name);
-    let path = if path.exists() {
-        path
-    } else {
-        std::path::Path::new("/work/shared/data/dace").join(name)
-    };
     let text = std::fs::read_to_string(&path).unwrap();
     text.lines()
         .skip(1)
