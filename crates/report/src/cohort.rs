@@ -12,7 +12,6 @@
 //! depend on the order, the thread count or an interruption.
 
 use std::fs;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -185,27 +184,10 @@ pub fn cell_result_path(out_dir: &Path, cell: &CellInput) -> PathBuf {
 /// # Errors
 /// [`ReportError::Io`].
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
-    fs::create_dir_all(&dir).map_err(|e| ReportError::io(&dir, e))?;
-    let name = path
-        .file_name()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let r = (|| -> std::io::Result<()> {
-        let mut f = fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        fs::rename(&tmp, path)
-    })();
-    if let Err(e) = r {
-        let _ = fs::remove_file(&tmp);
-        return Err(ReportError::io(path, e));
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        fs::create_dir_all(dir).map_err(|e| ReportError::io(dir, e))?;
     }
-    Ok(())
+    nlvid_study::write_atomic(path, bytes).map_err(|e| ReportError::io(path, e))
 }
 
 /// A finished cell from an earlier run, if its file is complete and was

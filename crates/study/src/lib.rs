@@ -38,6 +38,7 @@
 //! The file format is documented in `docs/study-format.md`.
 #![warn(missing_docs)]
 
+mod atomic;
 mod bounds;
 mod error;
 mod section;
@@ -46,6 +47,7 @@ mod study;
 mod tree;
 mod units;
 
+pub use atomic::write_atomic;
 pub use bounds::Bounds;
 pub use error::{ErrorKind, Location, Result, StudyError};
 pub use section::{FromSection, Section};

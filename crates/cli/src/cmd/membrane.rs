@@ -148,10 +148,7 @@ fn read_study(path: &Path) -> anyhow::Result<MembraneStudy> {
 }
 
 fn write_atomic(path: &Path, text: &str) -> anyhow::Result<()> {
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, text).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("renaming to {}", path.display()))?;
-    Ok(())
+    crate::output::write_atomic(path, text.as_bytes())
 }
 
 fn history_csv(run: &MembraneRun, sc: Option<Scales>) -> String {
