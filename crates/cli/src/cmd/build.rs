@@ -172,9 +172,10 @@ fn run_set(
     shard: Option<Shard>,
     quiet: bool,
 ) -> anyhow::Result<()> {
+    let hide = std::env::var_os("NLVID_NO_PROGRESS").is_some() || std::env::var_os("CI").is_some();
     let opts = BuildOptions {
         shard,
-        progress: !quiet,
+        progress: !quiet && !hide,
         cancel: None,
     };
     let t0 = std::time::Instant::now();
