@@ -72,6 +72,66 @@ impl ThetaSearch {
     }
 }
 
+/// Exact proportionality of every output to a positive function s(x) of
+/// one input: y(x) = s(x)·u(x). The fit krige u = y / s (or ln u with
+/// [`KrigingSettings::log_outputs`]) and the predictor returns s(x)·û(x).
+///
+/// For the Lee–Radok Hertz models F ∝ G0 exactly (the force is linear in
+/// the relaxation modulus, which is G0 times a function of g, τ); for the
+/// FE model with a cantilever spring in series it is only approximately so.
+/// A constant factor in s is irrelevant (outputs are normalised), so only
+/// the shape of s matters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum OutputScale {
+    /// s(x) = x_k (x_k > 0 at every site and prediction point).
+    Linear {
+        /// Input index k.
+        input: usize,
+    },
+    /// s(x) = exp(slope·x_k): input k is a log-coded factor — slope 1 when
+    /// x_k = ln G0, slope ln(hi/lo) when x_k is the unit coordinate of a
+    /// log axis [lo, hi].
+    Exp {
+        /// Input index k.
+        input: usize,
+        /// Slope of ln s in x_k.
+        slope: f64,
+    },
+}
+
+impl OutputScale {
+    /// Input index k.
+    pub fn input(&self) -> usize {
+        match *self {
+            OutputScale::Linear { input } | OutputScale::Exp { input, .. } => input,
+        }
+    }
+
+    /// s(x) and ∂s/∂x_k.
+    pub fn eval(&self, x: &[f64]) -> (f64, f64) {
+        match *self {
+            OutputScale::Linear { input } => (x[input], 1.0),
+            OutputScale::Exp { input, slope } => {
+                let s = (slope * x[input]).exp();
+                (s, slope * s)
+            }
+        }
+    }
+
+    fn check(&self, x: &[f64], what: &str) -> Result<f64> {
+        let (s, _) = self.eval(x);
+        if s > 0.0 && s.is_finite() {
+            Ok(s)
+        } else {
+            Err(SurrogateError::InvalidInput(format!(
+                "output scale s(x) = {s} at {what} (input {} = {}): it must be finite and > 0",
+                self.input(),
+                x[self.input()]
+            )))
+        }
+    }
+}
+
 /// Settings of a Kriging fit.
 #[derive(Debug, Clone)]
 pub struct KrigingSettings {
@@ -96,6 +156,9 @@ pub struct KrigingSettings {
     /// in ln y that factor is an additive term the regression captures,
     /// which keeps the *relative* error of soft and stiff cases alike.
     pub log_outputs: bool,
+    /// Outputs exactly proportional to a function of one input (see
+    /// [`OutputScale`]); `None`: no such structure used.
+    pub output_scale: Option<OutputScale>,
 }
 
 impl KrigingSettings {
@@ -110,6 +173,7 @@ impl KrigingSettings {
             auto_nugget: true,
             pca_energy: None,
             log_outputs: false,
+            output_scale: None,
         }
     }
 }
@@ -190,6 +254,9 @@ pub struct KrigingModel {
     /// The model predicts ln y (see [`KrigingSettings::log_outputs`]).
     #[serde(default)]
     pub log_outputs: bool,
+    /// Outputs are s(x)·(kriged quantity), see [`OutputScale`].
+    #[serde(default)]
+    pub output_scale: Option<OutputScale>,
     /// How the model was obtained.
     pub report: FitReport,
 }
@@ -320,6 +387,27 @@ impl KrigingModel {
             }
         }
 
+        let yscaled;
+        let y = if let Some(sc) = settings.output_scale {
+            if sc.input() >= d {
+                return Err(SurrogateError::InvalidSettings(format!(
+                    "output scale uses input {} but there are {d} inputs",
+                    sc.input()
+                )));
+            }
+            let mut factors = Vec::with_capacity(n);
+            let mut xi = vec![0.0; d];
+            for i in 0..n {
+                for k in 0..d {
+                    xi[k] = x[(i, k)];
+                }
+                factors.push(sc.check(&xi, &format!("x row {i}"))?);
+            }
+            yscaled = Mat::from_fn(n, m, |i, j| y[(i, j)] / factors[i]);
+            yscaled.as_ref()
+        } else {
+            y
+        };
         let ylog;
         let y = if settings.log_outputs {
             for j in 0..m {
@@ -463,6 +551,7 @@ impl KrigingModel {
                 g: to_vec(g.as_ref()),
                 pca,
                 log_outputs: settings.log_outputs,
+                output_scale: settings.output_scale,
                 report,
             });
         }
@@ -556,6 +645,10 @@ impl KrigingModel {
         if self.log_outputs {
             y.iter_mut().for_each(|v| *v = v.exp());
         }
+        if let Some(sc) = self.output_scale {
+            let s = sc.check(x, "the prediction point")?;
+            y.iter_mut().for_each(|v| *v *= s);
+        }
         Ok(y)
     }
 
@@ -602,12 +695,15 @@ impl KrigingModel {
     /// Size of the basis φ(x) = [f(x); r(x)] of [`KrigingModel::basis`]:
     /// regression terms p plus design sites n.
     pub fn n_basis(&self) -> usize {
-        self.p() + self.n_sites
+        self.p() + self.n_sites + usize::from(self.output_scale.is_some())
     }
 
     /// The predictor written as ŷ(x) = μ + Bᵀφ(x) (report eq. 2.16 with the
     /// output scaling and any PCA rotation folded into B): returns B,
     /// column-major `n_basis() × m`, and μ (the output means, m values).
+    /// With an [`OutputScale`] s(x), ŷ = s·(μ + Bᵀφ) = [B; μᵀ]ᵀ[sφ; s]: B
+    /// gets μᵀ as a last row and the returned μ is 0. Not valid for a
+    /// model with `log_outputs` (ŷ is then not linear in any basis).
     /// Cost O(n_basis · q · m) once per model; used by the fast eq. 5.3
     /// misfit of the inverse stage.
     pub fn basis_coefficients(&self) -> (Vec<f64>, Vec<f64>) {
@@ -633,7 +729,16 @@ impl KrigingModel {
                 b[j * nb + a] = out[j];
             }
         }
-        (b, self.y_mean.clone())
+        if self.output_scale.is_none() {
+            return (b, self.y_mean.clone());
+        }
+        let nb1 = nb + 1;
+        let mut b1 = vec![0.0; nb1 * m];
+        for j in 0..m {
+            b1[j * nb1..j * nb1 + nb].copy_from_slice(&b[j * nb..(j + 1) * nb]);
+            b1[j * nb1 + nb] = self.y_mean[j];
+        }
+        (b1, vec![0.0; m])
     }
 
     /// The basis φ(x) = [f(x); r(x)] (p regression terms, then the n
@@ -670,6 +775,20 @@ impl KrigingModel {
                 dphi[(p + i) * d + k] = g[k] / self.x_std[k];
             }
         }
+        if let Some(sc) = self.output_scale {
+            let (sv, ds) = sc.eval(x);
+            sc.check(x, "the basis point")?;
+            let kk = sc.input();
+            for a in 0..p + n {
+                for k in 0..d {
+                    dphi[a * d + k] *= sv;
+                }
+                dphi[a * d + kk] += ds * phi[a];
+                phi[a] *= sv;
+            }
+            phi.push(sv);
+            dphi.extend((0..d).map(|k| if k == kk { ds } else { 0.0 }));
+        }
         Ok((phi, dphi))
     }
 
@@ -680,6 +799,34 @@ impl KrigingModel {
     /// `x` of the wrong length or not finite.
     pub fn predict_full(&self, x: &[f64]) -> Result<PointPrediction> {
         self.check_x(x)?;
+        let pp = self.predict_full_unscaled(x)?;
+        let Some(sc) = self.output_scale else {
+            return Ok(pp);
+        };
+        // y = s·u: ∂y = s∂u + u∂s, MSE_y = s²MSE_u, ∂MSE_y = s²∂MSE_u + 2s∂s MSE_u.
+        let s = sc.check(x, "the prediction point")?;
+        let (_, ds) = sc.eval(x);
+        let (kk, d) = (sc.input(), self.dim);
+        let PointPrediction {
+            mut y,
+            mut dy,
+            mut mse,
+            mut dmse,
+        } = pp;
+        for j in 0..y.len() {
+            for k in 0..d {
+                dy[j * d + k] *= s;
+                dmse[j * d + k] *= s * s;
+            }
+            dy[j * d + kk] += y[j] * ds;
+            dmse[j * d + kk] += 2.0 * s * ds * mse[j];
+            y[j] *= s;
+            mse[j] *= s * s;
+        }
+        Ok(PointPrediction { y, dy, mse, dmse })
+    }
+
+    fn predict_full_unscaled(&self, x: &[f64]) -> Result<PointPrediction> {
         let (n, d, q, p, m) = (
             self.n_sites,
             self.dim,

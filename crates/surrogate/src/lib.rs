@@ -57,7 +57,8 @@ pub use error::{Result, SurrogateError};
 pub use faer;
 pub use forward::{FailureKind, ForwardModel, HertzProny, RunFailure};
 pub use kriging::{
-    FitReport, KrigingModel, KrigingSettings, Pca, PointPrediction, ThetaSearch, likelihood_psi,
+    FitReport, KrigingModel, KrigingSettings, OutputScale, Pca, PointPrediction, ThetaSearch,
+    likelihood_psi,
 };
 pub use optimise::OptimiserSettings;
 pub use regression::Regression;
