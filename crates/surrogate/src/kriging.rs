@@ -14,7 +14,7 @@
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
 };
-use faer::{Accum, Mat, MatRef, Par, Side};
+use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 use serde::{Deserialize, Serialize};
 
 use crate::boxmin::{SearchResult, boxmin};
@@ -23,6 +23,8 @@ use crate::error::{Result, SurrogateError};
 use crate::likelihood::{Eval, Factors, Problem};
 use crate::optimise::{OptimiserSettings, minimise};
 use crate::regression::Regression;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 /// How θ is chosen.
 #[derive(Debug, Clone)]
@@ -597,11 +599,36 @@ impl KrigingModel {
             }
             r[i] = self.correlation.value(&self.theta, &dx);
         }
-        for j in 0..q {
-            let b = &self.beta[j * p..(j + 1) * p];
-            let gm = &self.gamma[j * n..(j + 1) * n];
-            z[j] = dot(f, b) + dot(r, gm);
-        }
+        self.combine(f, r, z);
+    }
+
+    /// z = βᵀf + γᵀr for every kriged output.
+    fn combine(&self, f: &[f64], r: &[f64], z: &mut [f64]) {
+        let (n, q, p) = (self.n_sites, self.n_kriged(), self.p());
+        // z = βᵀf + γᵀr: a gemv over the n × q matrix γ (memory bound when
+        // q = m is large: n·m·8 bytes per curve), parallel above ~1e6 entries.
+        let par = if n * q > 1 << 20 {
+            Par::rayon(0)
+        } else {
+            Par::Seq
+        };
+        let mut zm = MatMut::from_column_major_slice_mut(z, q, 1);
+        faer::linalg::matmul::matmul(
+            zm.as_mut(),
+            Accum::Replace,
+            view(&self.gamma, n, q).transpose(),
+            MatRef::from_column_major_slice(r, n, 1),
+            1.0,
+            par,
+        );
+        faer::linalg::matmul::matmul(
+            zm,
+            Accum::Add,
+            view(&self.beta, p, q).transpose(),
+            MatRef::from_column_major_slice(f, p, 1),
+            1.0,
+            Par::Seq,
+        );
     }
 
     /// Map kriged values z (normalised outputs or PC scores) to outputs.
@@ -857,10 +884,11 @@ impl KrigingModel {
         // Scaled predictor and Jacobian dz (q × d).
         let mut z = vec![0.0; q];
         let mut dz = vec![0.0; q * d];
+        let rv: Vec<f64> = r.col(0).iter().copied().collect();
+        self.combine(&f, &rv, &mut z);
         for j in 0..q {
             let b = &self.beta[j * p..(j + 1) * p];
             let gm = &self.gamma[j * n..(j + 1) * n];
-            z[j] = dot(&f, b) + (0..n).map(|i| r[(i, 0)] * gm[i]).sum::<f64>();
             for k in 0..d {
                 dz[j * d + k] = dot(&df[k * p..(k + 1) * p], b)
                     + (0..n).map(|i| dr[(i, k)] * gm[i]).sum::<f64>();
@@ -1061,17 +1089,72 @@ fn search_theta(prob: &Problem<'_>, search: &ThetaSearch) -> Result<(SearchResul
             upper,
             settings,
         } => {
-            let mut obj = |t: &[f64]| -> Result<Option<(f64, Vec<f64>)>> {
-                Ok(match prob.eval(t)? {
-                    Eval::Ok(f) => Some((f.psi.ln(), prob.grad_log_psi(t, &f))),
-                    Eval::Infeasible => None,
-                })
-            };
+            let n = prob.s.nrows();
+            let ns = settings.screen_sites;
+            if ns > 0 && n > 2 * ns && ns >= prob.f.ncols() + 2 {
+                // Multistart on a seeded random subset, then one start on all sites.
+                let mut rng = ChaCha8Rng::seed_from_u64(settings.seed ^ 0x5EED);
+                let mut idx: Vec<usize> = (0..n).collect();
+                for i in (1..n).rev() {
+                    let j = rng.random_range(0..=i);
+                    idx.swap(i, j);
+                }
+                idx.truncate(ns);
+                idx.sort_unstable();
+                let ss = Mat::from_fn(ns, prob.s.ncols(), |i, k| prob.s[(idx[i], k)]);
+                let ys = Mat::from_fn(ns, prob.y.ncols(), |i, j| prob.y[(idx[i], j)]);
+                let mut sub = Problem::new(
+                    ss.as_ref(),
+                    ys.as_ref(),
+                    prob.regression,
+                    prob.corr,
+                    prob.diag_add - (10.0 + n as f64) * f64::EPSILON,
+                );
+                sub.max_cond = prob.max_cond;
+                let screen = minimise(theta0, lower, upper, settings, &mut lazy_objective(&sub))?;
+                let start = if screen.psi.is_finite() {
+                    screen.theta
+                } else {
+                    theta0.clone()
+                };
+                let one = OptimiserSettings {
+                    starts: 1,
+                    ..settings.clone()
+                };
+                let mut res = minimise(&start, lower, upper, &one, &mut lazy_objective(prob))?;
+                res.evaluations += screen.evaluations;
+                return Ok((res, "optimise (screened)"));
+            }
             Ok((
-                minimise(theta0, lower, upper, settings, &mut obj)?,
+                minimise(theta0, lower, upper, settings, &mut lazy_objective(prob))?,
                 "optimise",
             ))
         }
+    }
+}
+
+/// The optimiser's objective on a problem: ln ψ, and its gradient only
+/// when asked, from the factors of the last evaluation when θ is the same.
+fn lazy_objective<'p>(
+    prob: &'p Problem<'_>,
+) -> impl FnMut(&[f64], bool) -> Result<Option<(f64, Vec<f64>)>> + 'p {
+    let mut last: Option<(Vec<f64>, Box<Factors>)> = None;
+    move |t: &[f64], want_grad: bool| {
+        let fac = match last.take() {
+            Some((lt, f)) if lt == t => f,
+            _ => match prob.eval(t)? {
+                Eval::Ok(f) => f,
+                Eval::Infeasible => return Ok(None),
+            },
+        };
+        let lnpsi = fac.psi.ln();
+        let grad = if want_grad {
+            prob.grad_log_psi(t, &fac)
+        } else {
+            Vec::new()
+        };
+        last = Some((t.to_vec(), fac));
+        Ok(Some((lnpsi, grad)))
     }
 }
 

@@ -27,6 +27,7 @@ pub(crate) struct Problem<'a> {
     /// Regression matrix, n × p.
     pub f: Mat<f64>,
     pub corr: Correlation,
+    pub regression: Regression,
     /// Added to the unit diagonal of R (DACE's (10+n)·eps plus any nugget).
     pub diag_add: f64,
     /// Treat θ as infeasible when the lower bound (max C_ii / min C_ii)² of
@@ -101,6 +102,7 @@ impl<'a> Problem<'a> {
             y,
             f,
             corr,
+            regression,
             diag_add,
             max_cond: f64::INFINITY,
             pairs,
