@@ -590,7 +590,7 @@ impl KrigingModel {
 
     /// Scaled kriged prediction (f, r, z) at normalised point xn.
     fn scaled(&self, xn: &[f64], r: &mut [f64], f: &mut [f64], z: &mut [f64]) {
-        let (n, d, q, p) = (self.n_sites, self.dim, self.n_kriged(), self.p());
+        let (n, d) = (self.n_sites, self.dim);
         self.regression.eval(xn, f);
         let mut dx = vec![0.0; d];
         for i in 0..n {
