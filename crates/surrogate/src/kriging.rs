@@ -202,8 +202,12 @@ pub struct FitReport {
     pub theta: Vec<f64>,
     /// ψ(θ) on the kriged outputs (normalised, or PC scores).
     pub psi: f64,
-    /// Likelihood evaluations used by the θ search.
+    /// Likelihood evaluations used by the θ search (all sites, plus any
+    /// on the screening subset).
     pub evaluations: usize,
+    /// Of those, evaluations on the screening subset (cheap: subset³).
+    #[serde(default)]
+    pub screen_evaluations: usize,
     /// Search used (`fixed`, `boxmin`, `optimise`).
     pub search: String,
     /// Nugget added on top of DACE's (10+n)·eps.
@@ -492,7 +496,7 @@ impl KrigingModel {
                 nugget,
             );
             prob.max_cond = max_cond;
-            let (res, search) = search_theta(&prob, &settings.theta)?;
+            let (res, search, screen_evaluations) = search_theta(&prob, &settings.theta)?;
             last_theta = res.theta.clone();
             if !res.psi.is_finite() {
                 continue;
@@ -528,6 +532,7 @@ impl KrigingModel {
                 theta: res.theta.clone(),
                 psi,
                 evaluations: res.evaluations,
+                screen_evaluations,
                 search: search.to_string(),
                 nugget,
                 kriged_outputs: kriged.ncols(),
@@ -1054,7 +1059,10 @@ impl Rotation {
 }
 
 /// Run the configured θ search on a problem.
-fn search_theta(prob: &Problem<'_>, search: &ThetaSearch) -> Result<(SearchResult, &'static str)> {
+fn search_theta(
+    prob: &Problem<'_>,
+    search: &ThetaSearch,
+) -> Result<(SearchResult, &'static str, usize)> {
     match search {
         ThetaSearch::Fixed(t) => {
             let psi = match prob.eval(t)? {
@@ -1068,6 +1076,7 @@ fn search_theta(prob: &Problem<'_>, search: &ThetaSearch) -> Result<(SearchResul
                     evaluations: 1,
                 },
                 "fixed",
+                0,
             ))
         }
         ThetaSearch::Boxmin {
@@ -1081,7 +1090,7 @@ fn search_theta(prob: &Problem<'_>, search: &ThetaSearch) -> Result<(SearchResul
                     Eval::Infeasible => f64::INFINITY,
                 })
             };
-            Ok((boxmin(theta0, lower, upper, &mut obj)?, "boxmin"))
+            Ok((boxmin(theta0, lower, upper, &mut obj)?, "boxmin", 0))
         }
         ThetaSearch::Optimise {
             theta0,
@@ -1119,15 +1128,17 @@ fn search_theta(prob: &Problem<'_>, search: &ThetaSearch) -> Result<(SearchResul
                 };
                 let one = OptimiserSettings {
                     starts: 1,
+                    max_iter: settings.refine_iter,
                     ..settings.clone()
                 };
                 let mut res = minimise(&start, lower, upper, &one, &mut lazy_objective(prob))?;
                 res.evaluations += screen.evaluations;
-                return Ok((res, "optimise (screened)"));
+                return Ok((res, "optimise (screened)", screen.evaluations));
             }
             Ok((
                 minimise(theta0, lower, upper, settings, &mut lazy_objective(prob))?,
                 "optimise",
+                0,
             ))
         }
     }

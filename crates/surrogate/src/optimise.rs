@@ -41,6 +41,9 @@ pub struct OptimiserSettings {
     /// seeded random subset of this many sites (cost ∝ subset³) and only
     /// its best θ is refined on all sites (one start). 0: never.
     pub screen_sites: usize,
+    /// Maximum quasi-Newton iterations of that refinement on all sites
+    /// (each costs one evaluation with gradient at full size).
+    pub refine_iter: usize,
 }
 
 impl Default for OptimiserSettings {
@@ -51,6 +54,7 @@ impl Default for OptimiserSettings {
             grad_tol: 1e-6,
             seed: 1,
             screen_sites: 300,
+            refine_iter: 20,
         }
     }
 }
