@@ -1,4 +1,13 @@
-//! Scratch experiment (not documented): variants of the rmse_vs_n fit.
+//! Measurement behind docs/theory/surrogate.md, choice 15: one Kriging per
+//! principal component with its own θ (SMT/egobox style, done here by the
+//! caller: PCA of the training outputs, then an independent single-output
+//! `KrigingModel` per component score) against the library's shared-θ
+//! model, on the rmse_vs_n problem (Hertz–Prony, 5-parameter cell domain,
+//! 200 checking cases). Flags: `g0` krige F/G0 (divided by the caller),
+//! `log` krige ln, `pc` one GP per component, `wide` θ ∈ [1e-6, 1e3] and 6
+//! starts, `expg` correlation (default gauss).
+//!
+//! `cargo run --release -p nlvid-surrogate --example per_component -- 300 g0 pc`
 use nlvid_surrogate::check::summarise;
 use nlvid_surrogate::doe::{Axis, Domain, LinearConstraint, training_and_checking};
 use nlvid_surrogate::faer::{Mat, Side};
