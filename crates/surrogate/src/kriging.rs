@@ -21,7 +21,7 @@ use crate::boxmin::{SearchResult, boxmin};
 use crate::correlation::Correlation;
 use crate::error::{Result, SurrogateError};
 use crate::likelihood::{Eval, Factors, Problem};
-use crate::optimise::{OptimiserSettings, minimise};
+use crate::optimise::{LogValue, OptimiserSettings, minimise};
 use crate::regression::Regression;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -1146,9 +1146,7 @@ fn search_theta(
 
 /// The optimiser's objective on a problem: ln ψ, and its gradient only
 /// when asked, from the factors of the last evaluation when θ is the same.
-fn lazy_objective<'p>(
-    prob: &'p Problem<'_>,
-) -> impl FnMut(&[f64], bool) -> Result<Option<(f64, Vec<f64>)>> + 'p {
+fn lazy_objective<'p>(prob: &'p Problem<'_>) -> impl FnMut(&[f64], bool) -> Result<LogValue> + 'p {
     let mut last: Option<(Vec<f64>, Box<Factors>)> = None;
     move |t: &[f64], want_grad: bool| {
         let fac = match last.take() {

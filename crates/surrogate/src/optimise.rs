@@ -23,7 +23,10 @@ use crate::error::Result;
 /// need only the value, and the optimiser asks again with `true` (same θ)
 /// only at accepted points, so an implementation should keep the factors
 /// of its last evaluation.
-pub type LogObjective<'a> = dyn FnMut(&[f64], bool) -> Result<Option<(f64, Vec<f64>)>> + 'a;
+pub type LogObjective<'a> = dyn FnMut(&[f64], bool) -> Result<LogValue> + 'a;
+
+/// `Some((ln ψ, ∇_u ln ψ))`, or `None` where the objective is undefined.
+pub type LogValue = Option<(f64, Vec<f64>)>;
 
 /// Settings of the multistart search.
 #[derive(Debug, Clone)]
