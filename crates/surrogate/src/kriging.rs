@@ -698,7 +698,9 @@ impl KrigingModel {
     }
 
     /// Process variance σ² of each original output in its own units
-    /// (DACE's `dmodel.sigma2`).
+    /// (DACE's `dmodel.sigma2`); with an [`OutputScale`] it is that of the
+    /// kriged u = y/s (the variance of y at x is s(x)²σ²), with ln outputs
+    /// that of ln y (or ln u).
     pub fn process_variance(&self) -> Vec<f64> {
         let m = self.n_outputs;
         match &self.pca {
