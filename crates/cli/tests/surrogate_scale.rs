@@ -90,6 +90,17 @@ fn proportional_to_is_recorded_and_improves_the_checking_error() {
     );
     assert!(scaled < 0.2 * plain, "scaled {scaled} vs plain {plain}");
 
+    // --log-inputs: recorded, and check takes the original values.
+    fit(
+        &["--proportional-to", "G0", "--log-inputs", "G0"],
+        "login.json",
+    );
+    let model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p("login.json")).unwrap()).unwrap();
+    assert_eq!(model["log_inputs"], serde_json::json!([true, false, false]));
+    let login = max_error(&p("login.json"), &p("Xc.csv"), &p("Yc.csv"));
+    assert!(login < 0.2 * plain, "log inputs {login} vs plain {plain}");
+
     let bad = nlvid(&[
         "surrogate",
         "fit",

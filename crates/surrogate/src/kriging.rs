@@ -161,6 +161,10 @@ pub struct KrigingSettings {
     /// Outputs exactly proportional to a function of one input (see
     /// [`OutputScale`]); `None`: no such structure used.
     pub output_scale: Option<OutputScale>,
+    /// Krige in ln x_k for the inputs flagged here (empty: none; else one
+    /// flag per input, flagged inputs must be > 0). Stored in the model,
+    /// so `predict` takes the caller's x unchanged.
+    pub log_inputs: Vec<bool>,
 }
 
 impl KrigingSettings {
@@ -176,6 +180,7 @@ impl KrigingSettings {
             pca_energy: None,
             log_outputs: false,
             output_scale: None,
+            log_inputs: Vec::new(),
         }
     }
 }
@@ -263,6 +268,10 @@ pub struct KrigingModel {
     /// Outputs are s(x)·(kriged quantity), see [`OutputScale`].
     #[serde(default)]
     pub output_scale: Option<OutputScale>,
+    /// Inputs kriged in ln x (see [`KrigingSettings::log_inputs`]); the
+    /// means, deviations and sites above are of ln x for those.
+    #[serde(default)]
+    pub log_inputs: Vec<bool>,
     /// How the model was obtained.
     pub report: FitReport,
 }
@@ -429,6 +438,28 @@ impl KrigingModel {
         } else {
             y
         };
+        let xlog;
+        let x = if settings.log_inputs.is_empty() {
+            x
+        } else {
+            let li = &settings.log_inputs;
+            if li.len() != d {
+                return Err(SurrogateError::InvalidSettings(format!(
+                    "log_inputs has {} flags for {d} inputs",
+                    li.len()
+                )));
+            }
+            for k in (0..d).filter(|&k| li[k]) {
+                if let Some(i) = (0..n).find(|&i| x[(i, k)] <= 0.0) {
+                    return Err(SurrogateError::InvalidInput(format!(
+                        "input {k} is kriged in ln x but x row {i}, column {k} is {}",
+                        x[(i, k)]
+                    )));
+                }
+            }
+            xlog = Mat::from_fn(n, d, |i, k| if li[k] { x[(i, k)].ln() } else { x[(i, k)] });
+            xlog.as_ref()
+        };
         let (x_mean, x_std): (Vec<f64>, Vec<f64>) = (0..d)
             .map(|k| mean_std(x.col(k).iter().copied(), n))
             .unzip();
@@ -559,6 +590,7 @@ impl KrigingModel {
                 pca,
                 log_outputs: settings.log_outputs,
                 output_scale: settings.output_scale,
+                log_inputs: settings.log_inputs.clone(),
                 report,
             });
         }
@@ -591,6 +623,39 @@ impl KrigingModel {
             )));
         }
         Ok(())
+    }
+
+    /// The model's internal coordinates of a caller's point (ln x_k for
+    /// log inputs), after the length/finiteness checks.
+    fn internal_x(&self, x: &[f64]) -> Result<Vec<f64>> {
+        self.check_x(x)?;
+        if self.log_inputs.is_empty() {
+            return Ok(x.to_vec());
+        }
+        x.iter()
+            .zip(&self.log_inputs)
+            .enumerate()
+            .map(|(k, (&v, &lg))| {
+                if !lg {
+                    Ok(v)
+                } else if v > 0.0 {
+                    Ok(v.ln())
+                } else {
+                    Err(SurrogateError::InvalidInput(format!(
+                        "coordinate {k} = {v}: the model krige ln x_{k}, so it must be > 0"
+                    )))
+                }
+            })
+            .collect()
+    }
+
+    /// d(internal x_k)/dx_k (1/x_k for log inputs).
+    fn dinternal(&self, x: &[f64], k: usize) -> f64 {
+        if self.log_inputs.get(k).copied().unwrap_or(false) {
+            1.0 / x[k]
+        } else {
+            1.0
+        }
     }
 
     /// Scaled kriged prediction (f, r, z) at normalised point xn.
@@ -664,9 +729,9 @@ impl KrigingModel {
     /// # Errors
     /// `x` of the wrong length or not finite.
     pub fn predict(&self, x: &[f64]) -> Result<Vec<f64>> {
-        self.check_x(x)?;
+        let xi = self.internal_x(x)?;
         let xn: Vec<f64> = (0..self.dim)
-            .map(|k| (x[k] - self.x_mean[k]) / self.x_std[k])
+            .map(|k| (xi[k] - self.x_mean[k]) / self.x_std[k])
             .collect();
         let mut r = vec![0.0; self.n_sites];
         let mut f = vec![0.0; self.p()];
@@ -783,10 +848,10 @@ impl KrigingModel {
     /// # Errors
     /// `x` of the wrong length or not finite.
     pub fn basis(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
-        self.check_x(x)?;
+        let xi = self.internal_x(x)?;
         let (n, d, p) = (self.n_sites, self.dim, self.p());
         let xn: Vec<f64> = (0..d)
-            .map(|k| (x[k] - self.x_mean[k]) / self.x_std[k])
+            .map(|k| (xi[k] - self.x_mean[k]) / self.x_std[k])
             .collect();
         let mut phi = vec![0.0; p + n];
         let mut dphi = vec![0.0; (p + n) * d];
@@ -807,6 +872,14 @@ impl KrigingModel {
             phi[p + i] = self.correlation.value_and_grad_d(&self.theta, &dx, &mut g);
             for k in 0..d {
                 dphi[(p + i) * d + k] = g[k] / self.x_std[k];
+            }
+        }
+        for k in 0..d {
+            let dk = self.dinternal(x, k);
+            if dk != 1.0 {
+                for a in 0..p + n {
+                    dphi[a * d + k] *= dk;
+                }
             }
         }
         if let Some(sc) = self.output_scale {
@@ -832,15 +905,25 @@ impl KrigingModel {
     /// # Errors
     /// `x` of the wrong length or not finite.
     pub fn predict_full(&self, x: &[f64]) -> Result<PointPrediction> {
-        self.check_x(x)?;
-        let pp = self.predict_full_unscaled(x)?;
+        let xi = self.internal_x(x)?;
+        let mut pp = self.predict_full_unscaled(&xi)?;
+        let d = self.dim;
+        for k in 0..d {
+            let dk = self.dinternal(x, k);
+            if dk != 1.0 {
+                for j in 0..pp.y.len() {
+                    pp.dy[j * d + k] *= dk;
+                    pp.dmse[j * d + k] *= dk;
+                }
+            }
+        }
         let Some(sc) = self.output_scale else {
             return Ok(pp);
         };
         // y = s·u: ∂y = s∂u + u∂s, MSE_y = s²MSE_u, ∂MSE_y = s²∂MSE_u + 2s∂s MSE_u.
         let s = sc.check(x, "the prediction point")?;
         let (_, ds) = sc.eval(x);
-        let (kk, d) = (sc.input(), self.dim);
+        let kk = sc.input();
         let PointPrediction {
             mut y,
             mut dy,

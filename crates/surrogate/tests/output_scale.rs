@@ -184,10 +184,84 @@ fn structure_makes_the_surrogate_far_more_accurate_and_old_files_load() {
     // A model file written before the field existed.
     let mut v: serde_json::Value = serde_json::to_value(&plain).unwrap();
     v.as_object_mut().unwrap().remove("output_scale");
+    v.as_object_mut().unwrap().remove("log_inputs");
     let back: KrigingModel = serde_json::from_value(v).unwrap();
-    assert!(back.output_scale.is_none());
+    assert!(back.output_scale.is_none() && back.log_inputs.is_empty());
     assert_eq!(
         back.predict(&[1.0, 0.2, 0.3]).unwrap(),
         plain.predict(&[1.0, 0.2, 0.3]).unwrap()
     );
+}
+
+#[test]
+fn log_inputs_equal_a_plain_model_on_ln_x_with_matching_gradients() {
+    // Inputs 0 and 2 kriged in ln x (both > 0 in `data`); output scale on
+    // input 0 in the caller's coordinates.
+    let scale = OutputScale::Linear { input: 0 };
+    let (x, y) = data(scale);
+    let n = x.nrows();
+    let mut set = settings(vec![0.3, 1.1, 0.7]);
+    set.log_inputs = vec![true, false, true];
+    set.output_scale = Some(scale);
+    // Shift input 2 away from 0 so that ln is defined.
+    let x = Mat::from_fn(
+        n,
+        3,
+        |i, k| if k == 2 { x[(i, k)] + 0.5 } else { x[(i, k)] },
+    );
+    let model = KrigingModel::fit(x.as_ref(), y.as_ref(), &set).unwrap();
+    // Independent route: the caller takes ln and divides by x0.
+    let xl = Mat::from_fn(n, 3, |i, k| if k == 1 { x[(i, k)] } else { x[(i, k)].ln() });
+    let u = Mat::from_fn(n, 3, |i, j| y[(i, j)] / x[(i, 0)]);
+    let plain = KrigingModel::fit(xl.as_ref(), u.as_ref(), &settings(vec![0.3, 1.1, 0.7])).unwrap();
+    for p in [[1.2, 0.3, 0.9], [2.7, -0.8, 2.2]] {
+        let a = model.predict_full(&p).unwrap();
+        let b = plain.predict(&[p[0].ln(), p[1], p[2].ln()]).unwrap();
+        for j in 0..3 {
+            assert!(
+                (a.y[j] - p[0] * b[j]).abs() < 1e-12 * a.y[j].abs(),
+                "{} vs {}",
+                a.y[j],
+                p[0] * b[j]
+            );
+        }
+        let (phi, dphi) = model.basis(&p).unwrap();
+        let (bm, mu) = model.basis_coefficients();
+        let nb = model.n_basis();
+        for k in 0..3 {
+            let h = 1e-5;
+            let (mut xp, mut xm) = (p, p);
+            xp[k] += h;
+            xm[k] -= h;
+            let (pp, pm) = (
+                model.predict_full(&xp).unwrap(),
+                model.predict_full(&xm).unwrap(),
+            );
+            for j in 0..3 {
+                let fd = (pp.y[j] - pm.y[j]) / (2.0 * h);
+                assert!(
+                    (fd - a.dy[j * 3 + k]).abs() < 1e-6 * (1.0 + fd.abs()),
+                    "dy{j}/dx{k}: {fd} vs {}",
+                    a.dy[j * 3 + k]
+                );
+                let fd = (pp.mse[j] - pm.mse[j]) / (2.0 * h);
+                let an = a.dmse[j * 3 + k];
+                assert!(
+                    (fd - an).abs() < 1e-5 * (fd.abs() + a.mse[j].abs()) + 1e-14,
+                    "dmse{j}/dx{k}: {fd} vs {an}"
+                );
+                let dv: f64 = (0..nb).map(|c| bm[j * nb + c] * dphi[c * 3 + k]).sum();
+                assert!((dv - a.dy[j * 3 + k]).abs() < 1e-9 * (1.0 + dv.abs()));
+            }
+        }
+        for j in 0..3 {
+            let v = mu[j] + (0..nb).map(|c| bm[j * nb + c] * phi[c]).sum::<f64>();
+            assert!((v - a.y[j]).abs() < 1e-10 * a.y[j].abs());
+        }
+    }
+    // Stored in the model file; x ≤ 0 on a log input is a located error.
+    let back: KrigingModel = serde_json::from_str(&serde_json::to_string(&model).unwrap()).unwrap();
+    assert_eq!(back.log_inputs, vec![true, false, true]);
+    let e = model.predict(&[1.0, 0.0, -1.0]).unwrap_err().to_string();
+    assert!(e.contains("coordinate 2"), "{e}");
 }

@@ -15,7 +15,7 @@ use nlvid_surrogate::{
 #[derive(Debug, Subcommand)]
 pub enum SurrogateCmd {
     /// Fit a Kriging model to a table of inputs X and outputs Y.
-    Fit(FitArgs),
+    Fit(Box<FitArgs>),
     /// Predict outputs at the rows of X with a fitted model.
     Predict(PredictArgs),
     /// Range-normalised RMSE (thesis eq. 4.4) of a model on a checking set.
@@ -72,6 +72,10 @@ pub struct FitArgs {
     /// (1 for ln G0, ln(hi/lo) for a unit coordinate on a log axis).
     #[arg(long, value_name = "SLOPE", requires = "proportional_to")]
     pub log_coded: Option<f64>,
+    /// Krige these input columns in ln x (comma separated names; values must
+    /// be > 0). Recorded in the model: predict takes the original values.
+    #[arg(long, value_delimiter = ',', value_name = "COLUMNS")]
+    pub log_inputs: Option<Vec<String>>,
     /// With more than 2× this many sites, screen the optimiser's starts on a
     /// random subset of this size (0: never).
     #[arg(long, default_value_t = 300)]
@@ -213,7 +217,7 @@ impl SurrogateCmd {
         match self {
             SurrogateCmd::Fit(mut a) => {
                 a.json = json;
-                fit(a)
+                fit(*a)
             }
             SurrogateCmd::Predict(a) => predict(a),
             SurrogateCmd::Check(mut a) => {
@@ -253,6 +257,20 @@ fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
     s.nugget = a.nugget;
     s.pca_energy = a.pca;
     s.log_outputs = a.log_outputs;
+    if let Some(cols) = &a.log_inputs {
+        let mut flags = vec![false; d];
+        for col in cols {
+            let k = x.header.iter().position(|h| h == col).with_context(|| {
+                format!(
+                    "--log-inputs {col}: no such column in {} (columns: {:?})",
+                    a.x.display(),
+                    x.header
+                )
+            })?;
+            flags[k] = true;
+        }
+        s.log_inputs = flags;
+    }
     if let Some(col) = &a.proportional_to {
         let input = x.header.iter().position(|h| h == col).with_context(|| {
             format!(
