@@ -79,6 +79,7 @@ fn bench_predict(c: &mut Criterion) {
             settings: OptimiserSettings {
                 starts: 1,
                 max_iter: 3,
+                screen_sites: 0,
                 ..Default::default()
             },
         };

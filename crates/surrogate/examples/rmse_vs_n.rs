@@ -8,7 +8,7 @@ use nlvid_surrogate::check::summarise;
 use nlvid_surrogate::doe::{Axis, Domain, LinearConstraint, training_and_checking};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
-    Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, Regression,
+    Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, OutputScale, Regression,
 };
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -45,7 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n_check = 200;
     println!("model: {}", model.identity());
     println!(
-        "N, correlation, regression, inputs, pcs, theta_search_s, rmse_min_%, rmse_median_%, rmse_max_%"
+        "N, correlation, regression, outputs, pcs, theta_search_s, rmse_min_%, rmse_median_%, rmse_max_%"
     );
     for &n in &ns {
         let (train, check) = training_and_checking(&domain, n, n_check, 42, 30, 1e-6)?;
@@ -67,10 +67,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let xt: Vec<Vec<f64>> = train.iter().map(tr).collect();
         let xm = Mat::from_fn(n, 5, |i, k| xt[i][k]);
         let ym = Mat::from_fn(n, 200, |i, j| yt[i][j]);
-        for (corr, reg, log) in [
-            (Correlation::Gauss, Regression::Poly1, false),
-            (Correlation::Gauss, Regression::Poly1, true),
-            (Correlation::Expg, Regression::Poly1, true),
+        // F ∝ G0 exactly for this model; input 0 is ln G0, so s = exp(x0).
+        let g0 = Some(OutputScale::Exp {
+            input: 0,
+            slope: 1.0,
+        });
+        for (corr, reg, log, scale) in [
+            (Correlation::Gauss, Regression::Poly1, false, None),
+            (Correlation::Gauss, Regression::Poly1, true, None),
+            (Correlation::Gauss, Regression::Poly1, false, g0),
+            (Correlation::Expg, Regression::Poly1, false, g0),
         ] {
             if reg.n_terms(5) >= n {
                 continue;
@@ -78,6 +84,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut s = KrigingSettings::new(reg, corr, 5);
             s.pca_energy = Some(1.0 - 1e-10);
             s.log_outputs = log;
+            s.output_scale = scale;
             let t0 = std::time::Instant::now();
             let km = KrigingModel::fit(xm.as_ref(), ym.as_ref(), &s)?;
             let secs = t0.elapsed().as_secs_f64();
@@ -87,9 +94,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .collect::<Result<_, _>>()?;
             let sm = summarise(&yc, &preds)?;
             println!(
-                "{n}, {}, {}, ln_y={log}, {}, {secs:.2}, {:.4}, {:.4}, {:.4}",
+                "{n}, {}, {}, {}, {}, {secs:.2}, {:.4}, {:.4}, {:.4}",
                 corr.name(),
                 reg.name(),
+                match (log, scale.is_some()) {
+                    (false, false) => "y",
+                    (true, false) => "ln y",
+                    (false, true) => "y/G0",
+                    (true, true) => "ln(y/G0)",
+                },
                 km.report.kriged_outputs,
                 100.0 * sm.min,
                 100.0 * sm.median,

@@ -14,15 +14,17 @@
 use faer::linalg::triangular_solve::{
     solve_lower_triangular_in_place, solve_upper_triangular_in_place,
 };
-use faer::{Accum, Mat, MatRef, Par, Side};
+use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 use serde::{Deserialize, Serialize};
 
 use crate::boxmin::{SearchResult, boxmin};
 use crate::correlation::Correlation;
 use crate::error::{Result, SurrogateError};
 use crate::likelihood::{Eval, Factors, Problem};
-use crate::optimise::{OptimiserSettings, minimise};
+use crate::optimise::{LogValue, OptimiserSettings, minimise};
 use crate::regression::Regression;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 /// How θ is chosen.
 #[derive(Debug, Clone)]
@@ -72,6 +74,66 @@ impl ThetaSearch {
     }
 }
 
+/// Exact proportionality of every output to a positive function s(x) of
+/// one input: y(x) = s(x)·u(x). The fit krige u = y / s (or ln u with
+/// [`KrigingSettings::log_outputs`]) and the predictor returns s(x)·û(x).
+///
+/// For the Lee–Radok Hertz models F ∝ G0 exactly (the force is linear in
+/// the relaxation modulus, which is G0 times a function of g, τ); for the
+/// FE model with a cantilever spring in series it is only approximately so.
+/// A constant factor in s is irrelevant (outputs are normalised), so only
+/// the shape of s matters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum OutputScale {
+    /// s(x) = x_k (x_k > 0 at every site and prediction point).
+    Linear {
+        /// Input index k.
+        input: usize,
+    },
+    /// s(x) = exp(slope·x_k): input k is a log-coded factor — slope 1 when
+    /// x_k = ln G0, slope ln(hi/lo) when x_k is the unit coordinate of a
+    /// log axis [lo, hi].
+    Exp {
+        /// Input index k.
+        input: usize,
+        /// Slope of ln s in x_k.
+        slope: f64,
+    },
+}
+
+impl OutputScale {
+    /// Input index k.
+    pub fn input(&self) -> usize {
+        match *self {
+            OutputScale::Linear { input } | OutputScale::Exp { input, .. } => input,
+        }
+    }
+
+    /// s(x) and ∂s/∂x_k.
+    pub fn eval(&self, x: &[f64]) -> (f64, f64) {
+        match *self {
+            OutputScale::Linear { input } => (x[input], 1.0),
+            OutputScale::Exp { input, slope } => {
+                let s = (slope * x[input]).exp();
+                (s, slope * s)
+            }
+        }
+    }
+
+    fn check(&self, x: &[f64], what: &str) -> Result<f64> {
+        let (s, _) = self.eval(x);
+        if s > 0.0 && s.is_finite() {
+            Ok(s)
+        } else {
+            Err(SurrogateError::InvalidInput(format!(
+                "output scale s(x) = {s} at {what} (input {} = {}): it must be finite and > 0",
+                self.input(),
+                x[self.input()]
+            )))
+        }
+    }
+}
+
 /// Settings of a Kriging fit.
 #[derive(Debug, Clone)]
 pub struct KrigingSettings {
@@ -96,6 +158,13 @@ pub struct KrigingSettings {
     /// in ln y that factor is an additive term the regression captures,
     /// which keeps the *relative* error of soft and stiff cases alike.
     pub log_outputs: bool,
+    /// Outputs exactly proportional to a function of one input (see
+    /// [`OutputScale`]); `None`: no such structure used.
+    pub output_scale: Option<OutputScale>,
+    /// Krige in ln x_k for the inputs flagged here (empty: none; else one
+    /// flag per input, flagged inputs must be > 0). Stored in the model,
+    /// so `predict` takes the caller's x unchanged.
+    pub log_inputs: Vec<bool>,
 }
 
 impl KrigingSettings {
@@ -110,6 +179,8 @@ impl KrigingSettings {
             auto_nugget: true,
             pca_energy: None,
             log_outputs: false,
+            output_scale: None,
+            log_inputs: Vec::new(),
         }
     }
 }
@@ -136,8 +207,12 @@ pub struct FitReport {
     pub theta: Vec<f64>,
     /// ψ(θ) on the kriged outputs (normalised, or PC scores).
     pub psi: f64,
-    /// Likelihood evaluations used by the θ search.
+    /// Likelihood evaluations used by the θ search (all sites, plus any
+    /// on the screening subset).
     pub evaluations: usize,
+    /// Of those, evaluations on the screening subset (cheap: subset³).
+    #[serde(default)]
+    pub screen_evaluations: usize,
     /// Search used (`fixed`, `boxmin`, `optimise`).
     pub search: String,
     /// Nugget added on top of DACE's (10+n)·eps.
@@ -190,6 +265,13 @@ pub struct KrigingModel {
     /// The model predicts ln y (see [`KrigingSettings::log_outputs`]).
     #[serde(default)]
     pub log_outputs: bool,
+    /// Outputs are s(x)·(kriged quantity), see [`OutputScale`].
+    #[serde(default)]
+    pub output_scale: Option<OutputScale>,
+    /// Inputs kriged in ln x (see [`KrigingSettings::log_inputs`]); the
+    /// means, deviations and sites above are of ln x for those.
+    #[serde(default)]
+    pub log_inputs: Vec<bool>,
     /// How the model was obtained.
     pub report: FitReport,
 }
@@ -320,6 +402,27 @@ impl KrigingModel {
             }
         }
 
+        let yscaled;
+        let y = if let Some(sc) = settings.output_scale {
+            if sc.input() >= d {
+                return Err(SurrogateError::InvalidSettings(format!(
+                    "output scale uses input {} but there are {d} inputs",
+                    sc.input()
+                )));
+            }
+            let mut factors = Vec::with_capacity(n);
+            let mut xi = vec![0.0; d];
+            for i in 0..n {
+                for k in 0..d {
+                    xi[k] = x[(i, k)];
+                }
+                factors.push(sc.check(&xi, &format!("x row {i}"))?);
+            }
+            yscaled = Mat::from_fn(n, m, |i, j| y[(i, j)] / factors[i]);
+            yscaled.as_ref()
+        } else {
+            y
+        };
         let ylog;
         let y = if settings.log_outputs {
             for j in 0..m {
@@ -334,6 +437,28 @@ impl KrigingModel {
             ylog.as_ref()
         } else {
             y
+        };
+        let xlog;
+        let x = if settings.log_inputs.is_empty() {
+            x
+        } else {
+            let li = &settings.log_inputs;
+            if li.len() != d {
+                return Err(SurrogateError::InvalidSettings(format!(
+                    "log_inputs has {} flags for {d} inputs",
+                    li.len()
+                )));
+            }
+            for k in (0..d).filter(|&k| li[k]) {
+                if let Some(i) = (0..n).find(|&i| x[(i, k)] <= 0.0) {
+                    return Err(SurrogateError::InvalidInput(format!(
+                        "input {k} is kriged in ln x but x row {i}, column {k} is {}",
+                        x[(i, k)]
+                    )));
+                }
+            }
+            xlog = Mat::from_fn(n, d, |i, k| if li[k] { x[(i, k)].ln() } else { x[(i, k)] });
+            xlog.as_ref()
         };
         let (x_mean, x_std): (Vec<f64>, Vec<f64>) = (0..d)
             .map(|k| mean_std(x.col(k).iter().copied(), n))
@@ -402,7 +527,7 @@ impl KrigingModel {
                 nugget,
             );
             prob.max_cond = max_cond;
-            let (res, search) = search_theta(&prob, &settings.theta)?;
+            let (res, search, screen_evaluations) = search_theta(&prob, &settings.theta)?;
             last_theta = res.theta.clone();
             if !res.psi.is_finite() {
                 continue;
@@ -438,6 +563,7 @@ impl KrigingModel {
                 theta: res.theta.clone(),
                 psi,
                 evaluations: res.evaluations,
+                screen_evaluations,
                 search: search.to_string(),
                 nugget,
                 kriged_outputs: kriged.ncols(),
@@ -463,6 +589,8 @@ impl KrigingModel {
                 g: to_vec(g.as_ref()),
                 pca,
                 log_outputs: settings.log_outputs,
+                output_scale: settings.output_scale,
+                log_inputs: settings.log_inputs.clone(),
                 report,
             });
         }
@@ -497,9 +625,42 @@ impl KrigingModel {
         Ok(())
     }
 
+    /// The model's internal coordinates of a caller's point (ln x_k for
+    /// log inputs), after the length/finiteness checks.
+    fn internal_x(&self, x: &[f64]) -> Result<Vec<f64>> {
+        self.check_x(x)?;
+        if self.log_inputs.is_empty() {
+            return Ok(x.to_vec());
+        }
+        x.iter()
+            .zip(&self.log_inputs)
+            .enumerate()
+            .map(|(k, (&v, &lg))| {
+                if !lg {
+                    Ok(v)
+                } else if v > 0.0 {
+                    Ok(v.ln())
+                } else {
+                    Err(SurrogateError::InvalidInput(format!(
+                        "coordinate {k} = {v}: the model krige ln x_{k}, so it must be > 0"
+                    )))
+                }
+            })
+            .collect()
+    }
+
+    /// d(internal x_k)/dx_k (1/x_k for log inputs).
+    fn dinternal(&self, x: &[f64], k: usize) -> f64 {
+        if self.log_inputs.get(k).copied().unwrap_or(false) {
+            1.0 / x[k]
+        } else {
+            1.0
+        }
+    }
+
     /// Scaled kriged prediction (f, r, z) at normalised point xn.
     fn scaled(&self, xn: &[f64], r: &mut [f64], f: &mut [f64], z: &mut [f64]) {
-        let (n, d, q, p) = (self.n_sites, self.dim, self.n_kriged(), self.p());
+        let (n, d) = (self.n_sites, self.dim);
         self.regression.eval(xn, f);
         let mut dx = vec![0.0; d];
         for i in 0..n {
@@ -508,11 +669,36 @@ impl KrigingModel {
             }
             r[i] = self.correlation.value(&self.theta, &dx);
         }
-        for j in 0..q {
-            let b = &self.beta[j * p..(j + 1) * p];
-            let gm = &self.gamma[j * n..(j + 1) * n];
-            z[j] = dot(f, b) + dot(r, gm);
-        }
+        self.combine(f, r, z);
+    }
+
+    /// z = βᵀf + γᵀr for every kriged output.
+    fn combine(&self, f: &[f64], r: &[f64], z: &mut [f64]) {
+        let (n, q, p) = (self.n_sites, self.n_kriged(), self.p());
+        // z = βᵀf + γᵀr: a gemv over the n × q matrix γ (memory bound when
+        // q = m is large: n·m·8 bytes per curve), parallel above ~1e6 entries.
+        let par = if n * q > 1 << 20 {
+            Par::rayon(0)
+        } else {
+            Par::Seq
+        };
+        let mut zm = MatMut::from_column_major_slice_mut(z, q, 1);
+        faer::linalg::matmul::matmul(
+            zm.as_mut(),
+            Accum::Replace,
+            view(&self.gamma, n, q).transpose(),
+            MatRef::from_column_major_slice(r, n, 1),
+            1.0,
+            par,
+        );
+        faer::linalg::matmul::matmul(
+            zm,
+            Accum::Add,
+            view(&self.beta, p, q).transpose(),
+            MatRef::from_column_major_slice(f, p, 1),
+            1.0,
+            Par::Seq,
+        );
     }
 
     /// Map kriged values z (normalised outputs or PC scores) to outputs.
@@ -543,9 +729,9 @@ impl KrigingModel {
     /// # Errors
     /// `x` of the wrong length or not finite.
     pub fn predict(&self, x: &[f64]) -> Result<Vec<f64>> {
-        self.check_x(x)?;
+        let xi = self.internal_x(x)?;
         let xn: Vec<f64> = (0..self.dim)
-            .map(|k| (x[k] - self.x_mean[k]) / self.x_std[k])
+            .map(|k| (xi[k] - self.x_mean[k]) / self.x_std[k])
             .collect();
         let mut r = vec![0.0; self.n_sites];
         let mut f = vec![0.0; self.p()];
@@ -555,6 +741,10 @@ impl KrigingModel {
         self.unscale(&z, &mut y, true);
         if self.log_outputs {
             y.iter_mut().for_each(|v| *v = v.exp());
+        }
+        if let Some(sc) = self.output_scale {
+            let s = sc.check(x, "the prediction point")?;
+            y.iter_mut().for_each(|v| *v *= s);
         }
         Ok(y)
     }
@@ -573,7 +763,9 @@ impl KrigingModel {
     }
 
     /// Process variance σ² of each original output in its own units
-    /// (DACE's `dmodel.sigma2`).
+    /// (DACE's `dmodel.sigma2`); with an [`OutputScale`] it is that of the
+    /// kriged u = y/s (the variance of y at x is s(x)²σ²), with ln outputs
+    /// that of ln y (or ln u).
     pub fn process_variance(&self) -> Vec<f64> {
         let m = self.n_outputs;
         match &self.pca {
@@ -602,12 +794,15 @@ impl KrigingModel {
     /// Size of the basis φ(x) = [f(x); r(x)] of [`KrigingModel::basis`]:
     /// regression terms p plus design sites n.
     pub fn n_basis(&self) -> usize {
-        self.p() + self.n_sites
+        self.p() + self.n_sites + usize::from(self.output_scale.is_some())
     }
 
     /// The predictor written as ŷ(x) = μ + Bᵀφ(x) (report eq. 2.16 with the
     /// output scaling and any PCA rotation folded into B): returns B,
     /// column-major `n_basis() × m`, and μ (the output means, m values).
+    /// With an [`OutputScale`] s(x), ŷ = s·(μ + Bᵀφ) = [B; μᵀ]ᵀ[sφ; s]: B
+    /// gets μᵀ as a last row and the returned μ is 0. Not valid for a
+    /// model with `log_outputs` (ŷ is then not linear in any basis).
     /// Cost O(n_basis · q · m) once per model; used by the fast eq. 5.3
     /// misfit of the inverse stage.
     pub fn basis_coefficients(&self) -> (Vec<f64>, Vec<f64>) {
@@ -633,7 +828,16 @@ impl KrigingModel {
                 b[j * nb + a] = out[j];
             }
         }
-        (b, self.y_mean.clone())
+        if self.output_scale.is_none() {
+            return (b, self.y_mean.clone());
+        }
+        let nb1 = nb + 1;
+        let mut b1 = vec![0.0; nb1 * m];
+        for j in 0..m {
+            b1[j * nb1..j * nb1 + nb].copy_from_slice(&b[j * nb..(j + 1) * nb]);
+            b1[j * nb1 + nb] = self.y_mean[j];
+        }
+        (b1, vec![0.0; m])
     }
 
     /// The basis φ(x) = [f(x); r(x)] (p regression terms, then the n
@@ -644,10 +848,10 @@ impl KrigingModel {
     /// # Errors
     /// `x` of the wrong length or not finite.
     pub fn basis(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
-        self.check_x(x)?;
+        let xi = self.internal_x(x)?;
         let (n, d, p) = (self.n_sites, self.dim, self.p());
         let xn: Vec<f64> = (0..d)
-            .map(|k| (x[k] - self.x_mean[k]) / self.x_std[k])
+            .map(|k| (xi[k] - self.x_mean[k]) / self.x_std[k])
             .collect();
         let mut phi = vec![0.0; p + n];
         let mut dphi = vec![0.0; (p + n) * d];
@@ -670,6 +874,28 @@ impl KrigingModel {
                 dphi[(p + i) * d + k] = g[k] / self.x_std[k];
             }
         }
+        for k in 0..d {
+            let dk = self.dinternal(x, k);
+            if dk != 1.0 {
+                for a in 0..p + n {
+                    dphi[a * d + k] *= dk;
+                }
+            }
+        }
+        if let Some(sc) = self.output_scale {
+            let (sv, ds) = sc.eval(x);
+            sc.check(x, "the basis point")?;
+            let kk = sc.input();
+            for a in 0..p + n {
+                for k in 0..d {
+                    dphi[a * d + k] *= sv;
+                }
+                dphi[a * d + kk] += ds * phi[a];
+                phi[a] *= sv;
+            }
+            phi.push(sv);
+            dphi.extend((0..d).map(|k| if k == kk { ds } else { 0.0 }));
+        }
         Ok((phi, dphi))
     }
 
@@ -679,7 +905,45 @@ impl KrigingModel {
     /// # Errors
     /// `x` of the wrong length or not finite.
     pub fn predict_full(&self, x: &[f64]) -> Result<PointPrediction> {
-        self.check_x(x)?;
+        let xi = self.internal_x(x)?;
+        let mut pp = self.predict_full_unscaled(&xi)?;
+        let d = self.dim;
+        for k in 0..d {
+            let dk = self.dinternal(x, k);
+            if dk != 1.0 {
+                for j in 0..pp.y.len() {
+                    pp.dy[j * d + k] *= dk;
+                    pp.dmse[j * d + k] *= dk;
+                }
+            }
+        }
+        let Some(sc) = self.output_scale else {
+            return Ok(pp);
+        };
+        // y = s·u: ∂y = s∂u + u∂s, MSE_y = s²MSE_u, ∂MSE_y = s²∂MSE_u + 2s∂s MSE_u.
+        let s = sc.check(x, "the prediction point")?;
+        let (_, ds) = sc.eval(x);
+        let kk = sc.input();
+        let PointPrediction {
+            mut y,
+            mut dy,
+            mut mse,
+            mut dmse,
+        } = pp;
+        for j in 0..y.len() {
+            for k in 0..d {
+                dy[j * d + k] *= s;
+                dmse[j * d + k] *= s * s;
+            }
+            dy[j * d + kk] += y[j] * ds;
+            dmse[j * d + kk] += 2.0 * s * ds * mse[j];
+            y[j] *= s;
+            mse[j] *= s * s;
+        }
+        Ok(PointPrediction { y, dy, mse, dmse })
+    }
+
+    fn predict_full_unscaled(&self, x: &[f64]) -> Result<PointPrediction> {
         let (n, d, q, p, m) = (
             self.n_sites,
             self.dim,
@@ -710,10 +974,11 @@ impl KrigingModel {
         // Scaled predictor and Jacobian dz (q × d).
         let mut z = vec![0.0; q];
         let mut dz = vec![0.0; q * d];
+        let rv: Vec<f64> = r.col(0).iter().copied().collect();
+        self.combine(&f, &rv, &mut z);
         for j in 0..q {
             let b = &self.beta[j * p..(j + 1) * p];
             let gm = &self.gamma[j * n..(j + 1) * n];
-            z[j] = dot(&f, b) + (0..n).map(|i| r[(i, 0)] * gm[i]).sum::<f64>();
             for k in 0..d {
                 dz[j * d + k] = dot(&df[k * p..(k + 1) * p], b)
                     + (0..n).map(|i| dr[(i, k)] * gm[i]).sum::<f64>();
@@ -879,7 +1144,10 @@ impl Rotation {
 }
 
 /// Run the configured θ search on a problem.
-fn search_theta(prob: &Problem<'_>, search: &ThetaSearch) -> Result<(SearchResult, &'static str)> {
+fn search_theta(
+    prob: &Problem<'_>,
+    search: &ThetaSearch,
+) -> Result<(SearchResult, &'static str, usize)> {
     match search {
         ThetaSearch::Fixed(t) => {
             let psi = match prob.eval(t)? {
@@ -893,6 +1161,7 @@ fn search_theta(prob: &Problem<'_>, search: &ThetaSearch) -> Result<(SearchResul
                     evaluations: 1,
                 },
                 "fixed",
+                0,
             ))
         }
         ThetaSearch::Boxmin {
@@ -906,7 +1175,7 @@ fn search_theta(prob: &Problem<'_>, search: &ThetaSearch) -> Result<(SearchResul
                     Eval::Infeasible => f64::INFINITY,
                 })
             };
-            Ok((boxmin(theta0, lower, upper, &mut obj)?, "boxmin"))
+            Ok((boxmin(theta0, lower, upper, &mut obj)?, "boxmin", 0))
         }
         ThetaSearch::Optimise {
             theta0,
@@ -914,17 +1183,72 @@ fn search_theta(prob: &Problem<'_>, search: &ThetaSearch) -> Result<(SearchResul
             upper,
             settings,
         } => {
-            let mut obj = |t: &[f64]| -> Result<Option<(f64, Vec<f64>)>> {
-                Ok(match prob.eval(t)? {
-                    Eval::Ok(f) => Some((f.psi.ln(), prob.grad_log_psi(t, &f))),
-                    Eval::Infeasible => None,
-                })
-            };
+            let n = prob.s.nrows();
+            let ns = settings.screen_sites;
+            if ns > 0 && n > 2 * ns && ns >= prob.f.ncols() + 2 {
+                // Multistart on a seeded random subset, then one start on all sites.
+                let mut rng = ChaCha8Rng::seed_from_u64(settings.seed ^ 0x5EED);
+                let mut idx: Vec<usize> = (0..n).collect();
+                for i in (1..n).rev() {
+                    let j = rng.random_range(0..=i);
+                    idx.swap(i, j);
+                }
+                idx.truncate(ns);
+                idx.sort_unstable();
+                let ss = Mat::from_fn(ns, prob.s.ncols(), |i, k| prob.s[(idx[i], k)]);
+                let ys = Mat::from_fn(ns, prob.y.ncols(), |i, j| prob.y[(idx[i], j)]);
+                let mut sub = Problem::new(
+                    ss.as_ref(),
+                    ys.as_ref(),
+                    prob.regression,
+                    prob.corr,
+                    prob.diag_add - (10.0 + n as f64) * f64::EPSILON,
+                );
+                sub.max_cond = prob.max_cond;
+                let screen = minimise(theta0, lower, upper, settings, &mut lazy_objective(&sub))?;
+                let start = if screen.psi.is_finite() {
+                    screen.theta
+                } else {
+                    theta0.clone()
+                };
+                let one = OptimiserSettings {
+                    starts: 1,
+                    max_iter: settings.refine_iter,
+                    ..settings.clone()
+                };
+                let mut res = minimise(&start, lower, upper, &one, &mut lazy_objective(prob))?;
+                res.evaluations += screen.evaluations;
+                return Ok((res, "optimise (screened)", screen.evaluations));
+            }
             Ok((
-                minimise(theta0, lower, upper, settings, &mut obj)?,
+                minimise(theta0, lower, upper, settings, &mut lazy_objective(prob))?,
                 "optimise",
+                0,
             ))
         }
+    }
+}
+
+/// The optimiser's objective on a problem: ln ψ, and its gradient only
+/// when asked, from the factors of the last evaluation when θ is the same.
+fn lazy_objective<'p>(prob: &'p Problem<'_>) -> impl FnMut(&[f64], bool) -> Result<LogValue> + 'p {
+    let mut last: Option<(Vec<f64>, Box<Factors>)> = None;
+    move |t: &[f64], want_grad: bool| {
+        let fac = match last.take() {
+            Some((lt, f)) if lt == t => f,
+            _ => match prob.eval(t)? {
+                Eval::Ok(f) => f,
+                Eval::Infeasible => return Ok(None),
+            },
+        };
+        let lnpsi = fac.psi.ln();
+        let grad = if want_grad {
+            prob.grad_log_psi(t, &fac)
+        } else {
+            Vec::new()
+        };
+        last = Some((t.to_vec(), fac));
+        Ok(Some((lnpsi, grad)))
     }
 }
 

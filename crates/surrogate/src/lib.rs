@@ -6,8 +6,10 @@
 //!   one Cholesky factorisation of R (n³/3 flops) per likelihood
 //!   evaluation, all outputs as right-hand sides; predictor, MSE and
 //!   their gradients. θ by DACE's `boxmin` or a multistart quasi-Newton
-//!   search with analytic gradient; optional nugget and principal
-//!   component reduction of the outputs.
+//!   search with analytic gradient (screened on a subset of sites for
+//!   large n); optional nugget, principal component reduction of the
+//!   outputs, ln outputs and exact output scaling y = s(x)·u(x)
+//!   ([`OutputScale`], e.g. F ∝ G0).
 //! * [`doe`]: Latin hypercubes (log axes, ESE optimisation, linear
 //!   constraints), separate training and checking sets.
 //! * [`ForwardModel`]: the contract of the membrane and FE models;
@@ -57,7 +59,8 @@ pub use error::{Result, SurrogateError};
 pub use faer;
 pub use forward::{FailureKind, ForwardModel, HertzProny, RunFailure};
 pub use kriging::{
-    FitReport, KrigingModel, KrigingSettings, Pca, PointPrediction, ThetaSearch, likelihood_psi,
+    FitReport, KrigingModel, KrigingSettings, OutputScale, Pca, PointPrediction, ThetaSearch,
+    likelihood_psi,
 };
 pub use optimise::OptimiserSettings;
 pub use regression::Regression;

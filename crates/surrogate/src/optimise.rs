@@ -17,9 +17,16 @@ use rand_chacha::ChaCha8Rng;
 use crate::boxmin::SearchResult;
 use crate::error::Result;
 
-/// Objective for the optimiser: `Some((ln ψ, ∇_u ln ψ))` or `None` if
-/// undefined at θ.
-pub type LogObjective<'a> = dyn FnMut(&[f64]) -> Result<Option<(f64, Vec<f64>)>> + 'a;
+/// Objective for the optimiser: `obj(θ, want_gradient)` returns
+/// `Some((ln ψ, ∇_u ln ψ))` or `None` if undefined at θ. With
+/// `want_gradient = false` the gradient may be empty: line-search trials
+/// need only the value, and the optimiser asks again with `true` (same θ)
+/// only at accepted points, so an implementation should keep the factors
+/// of its last evaluation.
+pub type LogObjective<'a> = dyn FnMut(&[f64], bool) -> Result<LogValue> + 'a;
+
+/// `Some((ln ψ, ∇_u ln ψ))`, or `None` where the objective is undefined.
+pub type LogValue = Option<(f64, Vec<f64>)>;
 
 /// Settings of the multistart search.
 #[derive(Debug, Clone)]
@@ -31,8 +38,15 @@ pub struct OptimiserSettings {
     pub max_iter: usize,
     /// Stop when the projected gradient of ln ψ (wrt ln θ) is below this.
     pub grad_tol: f64,
-    /// Seed of the random starts.
+    /// Seed of the random starts (and of the screening subset).
     pub seed: u64,
+    /// With more than 2× this many sites, the multistart search runs on a
+    /// seeded random subset of this many sites (cost ∝ subset³) and only
+    /// its best θ is refined on all sites (one start). 0: never.
+    pub screen_sites: usize,
+    /// Maximum quasi-Newton iterations of that refinement on all sites
+    /// (each costs one evaluation with gradient at full size).
+    pub refine_iter: usize,
 }
 
 impl Default for OptimiserSettings {
@@ -42,6 +56,8 @@ impl Default for OptimiserSettings {
             max_iter: 60,
             grad_tol: 1e-6,
             seed: 1,
+            screen_sites: 300,
+            refine_iter: 20,
         }
     }
 }
@@ -118,7 +134,7 @@ fn bfgs(
 ) -> Result<(f64, Vec<f64>)> {
     let p = u.len();
     *nv += 1;
-    let Some((mut f, mut g)) = obj(&exp(&u))? else {
+    let Some((mut f, mut g)) = obj(&exp(&u), true)? else {
         return Ok((f64::INFINITY, u));
     };
     let mut h = identity(p);
@@ -163,10 +179,12 @@ fn bfgs(
                 .collect();
             let step: Vec<f64> = (0..p).map(|i| un[i] - u[i]).collect();
             *nv += 1;
-            if let Some((fn_, gn)) = obj(&exp(&un))? {
+            if let Some((fn_, _)) = obj(&exp(&un), false)? {
                 if fn_ <= f + 1e-4 * dot(&g, &step) {
-                    accepted = Some((un, fn_, gn, step));
-                    break;
+                    if let Some((fn_, gn)) = obj(&exp(&un), true)? {
+                        accepted = Some((un, fn_, gn, step));
+                        break;
+                    }
                 }
             }
             alpha *= 0.5;
@@ -218,7 +236,7 @@ mod tests {
     #[test]
     fn finds_the_minimum_of_a_rosenbrock_valley_in_log_space() {
         // f(u) = (1 − u0)² + 10 (u1 − u0²)², minimum at u = (1, 1), θ = (e, e).
-        let mut obj = |t: &[f64]| -> Result<Option<(f64, Vec<f64>)>> {
+        let mut obj = |t: &[f64], _: bool| -> Result<Option<(f64, Vec<f64>)>> {
             let (a, b) = (t[0].ln(), t[1].ln());
             let f = (1.0 - a).powi(2) + 10.0 * (b - a * a).powi(2);
             let g = vec![
@@ -239,7 +257,7 @@ mod tests {
 
     #[test]
     fn respects_the_bounds() {
-        let mut obj = |t: &[f64]| -> Result<Option<(f64, Vec<f64>)>> {
+        let mut obj = |t: &[f64], _: bool| -> Result<Option<(f64, Vec<f64>)>> {
             let a = t[0].ln();
             Ok(Some((a, vec![1.0])))
         };

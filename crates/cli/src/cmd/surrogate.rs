@@ -7,14 +7,15 @@ use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
-    Correlation, KrigingModel, KrigingSettings, OptimiserSettings, Regression, ThetaSearch, check,
+    Correlation, KrigingModel, KrigingSettings, OptimiserSettings, OutputScale, Regression,
+    ThetaSearch, check,
 };
 
 /// Kriging surrogates (DACE-equivalent).
 #[derive(Debug, Subcommand)]
 pub enum SurrogateCmd {
     /// Fit a Kriging model to a table of inputs X and outputs Y.
-    Fit(FitArgs),
+    Fit(Box<FitArgs>),
     /// Predict outputs at the rows of X with a fitted model.
     Predict(PredictArgs),
     /// Range-normalised RMSE (thesis eq. 4.4) of a model on a checking set.
@@ -60,6 +61,25 @@ pub struct FitArgs {
     /// Nugget added to the diagonal of R (on top of DACE's (10+n)·eps).
     #[arg(long, default_value_t = 0.0)]
     pub nugget: f64,
+    /// Krige ln y (every output must be > 0).
+    #[arg(long)]
+    pub log_outputs: bool,
+    /// Every output is exactly proportional to this input column (e.g. the
+    /// force to G0): krige y / x_col, predict x_col · ŷ. Recorded in the model.
+    #[arg(long, value_name = "COLUMN")]
+    pub proportional_to: Option<String>,
+    /// With --proportional-to: the column holds a log-coded factor, y ∝ exp(SLOPE · x_col)
+    /// (1 for ln G0, ln(hi/lo) for a unit coordinate on a log axis).
+    #[arg(long, value_name = "SLOPE", requires = "proportional_to")]
+    pub log_coded: Option<f64>,
+    /// Krige these input columns in ln x (comma separated names; values must
+    /// be > 0). Recorded in the model: predict takes the original values.
+    #[arg(long, value_delimiter = ',', value_name = "COLUMNS")]
+    pub log_inputs: Option<Vec<String>>,
+    /// With more than 2× this many sites, screen the optimiser's starts on a
+    /// random subset of this size (0: never).
+    #[arg(long, default_value_t = 300)]
+    pub screen_sites: usize,
     /// Model file to write (JSON).
     #[arg(long, short)]
     pub out: PathBuf,
@@ -197,7 +217,7 @@ impl SurrogateCmd {
         match self {
             SurrogateCmd::Fit(mut a) => {
                 a.json = json;
-                fit(a)
+                fit(*a)
             }
             SurrogateCmd::Predict(a) => predict(a),
             SurrogateCmd::Check(mut a) => {
@@ -236,6 +256,34 @@ fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
     let mut s = KrigingSettings::new(reg, corr, d);
     s.nugget = a.nugget;
     s.pca_energy = a.pca;
+    s.log_outputs = a.log_outputs;
+    if let Some(cols) = &a.log_inputs {
+        let mut flags = vec![false; d];
+        for col in cols {
+            let k = x.header.iter().position(|h| h == col).with_context(|| {
+                format!(
+                    "--log-inputs {col}: no such column in {} (columns: {:?})",
+                    a.x.display(),
+                    x.header
+                )
+            })?;
+            flags[k] = true;
+        }
+        s.log_inputs = flags;
+    }
+    if let Some(col) = &a.proportional_to {
+        let input = x.header.iter().position(|h| h == col).with_context(|| {
+            format!(
+                "--proportional-to {col}: no such column in {} (columns: {:?})",
+                a.x.display(),
+                x.header
+            )
+        })?;
+        s.output_scale = Some(match a.log_coded {
+            Some(slope) => OutputScale::Exp { input, slope },
+            None => OutputScale::Linear { input },
+        });
+    }
     if let Some(t) = a.theta {
         s.theta = ThetaSearch::Fixed(t);
     } else if let ThetaSearch::Optimise {
@@ -261,6 +309,7 @@ fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
                 upper,
                 settings: OptimiserSettings {
                     starts: a.starts,
+                    screen_sites: a.screen_sites,
                     ..Default::default()
                 },
             }

@@ -1,0 +1,122 @@
+//! Where are the worst checking cases? Trains the N-run surrogate of
+//! `rmse_vs_n` (gauss/poly1, ln y, PCA) and prints the 10 worst checking
+//! cases: parameters, eq. 4.4 error, distance to the nearest training site
+//! (normalised unit cube, log axes) and the margin to the g1 + g2 face.
+//!
+//! `cargo run --release -p nlvid-surrogate --example diagnose_worst [-- N]`
+
+use nlvid_surrogate::check::summarise;
+use nlvid_surrogate::doe::{Axis, Domain, LinearConstraint, training_and_checking};
+use nlvid_surrogate::faer::Mat;
+use nlvid_surrogate::{
+    Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, Regression,
+};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let n: usize = std::env::args()
+        .nth(1)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(300);
+    let ax = |name: &str, lower: f64, upper: f64, log: bool| Axis {
+        name: name.into(),
+        unit: String::new(),
+        lower,
+        upper,
+        log,
+    };
+    let domain = Domain {
+        axes: vec![
+            ax("G0", 100.0, 5000.0, true),
+            ax("g1", 0.0, 0.9, false),
+            ax("g2", 0.0, 0.9, false),
+            ax("tau1", 0.01, 1.0, true),
+            ax("tau2", 1.0, 100.0, true),
+        ],
+        constraints: vec![LinearConstraint {
+            coeffs: vec![0.0, 1.0, 1.0, 0.0, 0.0],
+            bound: 0.99,
+        }],
+    };
+    let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, 200);
+    let (train, check) = training_and_checking(&domain, n, 200, 42, 30, 1e-6)?;
+    let unit = |x: &Vec<f64>| -> Vec<f64> {
+        x.iter()
+            .zip(&domain.axes)
+            .map(|(v, a)| {
+                if a.log {
+                    (v.ln() - a.lower.ln()) / (a.upper.ln() - a.lower.ln())
+                } else {
+                    (v - a.lower) / (a.upper - a.lower)
+                }
+            })
+            .collect()
+    };
+    let tr = |x: &Vec<f64>| -> Vec<f64> {
+        x.iter()
+            .zip(&domain.axes)
+            .map(|(v, a)| if a.log { v.ln() } else { *v })
+            .collect()
+    };
+    let yt: Vec<Vec<f64>> = train
+        .iter()
+        .map(|x| model.run(x))
+        .collect::<Result<_, _>>()?;
+    let yc: Vec<Vec<f64>> = check
+        .iter()
+        .map(|x| model.run(x))
+        .collect::<Result<_, _>>()?;
+    let xm = Mat::from_fn(n, 5, |i, k| tr(&train[i])[k]);
+    let ym = Mat::from_fn(n, 200, |i, j| yt[i][j]);
+    let mut s = KrigingSettings::new(Regression::Poly1, Correlation::Gauss, 5);
+    s.pca_energy = Some(1.0 - 1e-10);
+    s.log_outputs = true;
+    let km = KrigingModel::fit(xm.as_ref(), ym.as_ref(), &s)?;
+    println!("theta = {:?}, pcs = {}", km.theta, km.report.kriged_outputs);
+    let preds: Vec<Vec<f64>> = check
+        .iter()
+        .map(|x| km.predict(&tr(x)))
+        .collect::<Result<_, _>>()?;
+    let sm = summarise(&yc, &preds)?;
+    let ut: Vec<Vec<f64>> = train.iter().map(unit).collect();
+    let mut order: Vec<usize> = (0..check.len()).collect();
+    order.sort_by(|&a, &b| sm.rmse[b].total_cmp(&sm.rmse[a]));
+    println!("rank, rmse_%, G0, g1, g2, tau1, tau2, 1-g1-g2, nearest_train_dist, unit coords");
+    for (r, &i) in order.iter().take(12).enumerate() {
+        let u = unit(&check[i]);
+        let dn = ut
+            .iter()
+            .map(|t| {
+                t.iter()
+                    .zip(&u)
+                    .map(|(a, b)| (a - b).powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .fold(f64::INFINITY, f64::min);
+        let x = &check[i];
+        println!(
+            "{r}, {:.2}, {:.0}, {:.3}, {:.3}, {:.4}, {:.2}, {:.3}, {dn:.3}, {:?}",
+            100.0 * sm.rmse[i],
+            x[0],
+            x[1],
+            x[2],
+            x[3],
+            x[4],
+            1.0 - x[1] - x[2],
+            u.iter()
+                .map(|v| (v * 100.0).round() / 100.0)
+                .collect::<Vec<_>>()
+        );
+        if r < 2 {
+            let k = yc[i].len();
+            let pick = [0, 5, 10, 19, 25, 50, 100, 199];
+            let a: Vec<String> = pick
+                .iter()
+                .filter(|&&j| j < k)
+                .map(|&j| format!("{:.3e}/{:.3e}", yc[i][j], preds[i][j]))
+                .collect();
+            println!("   ref/pred at t-index {pick:?}: {}", a.join(" "));
+        }
+    }
+    Ok(())
+}
