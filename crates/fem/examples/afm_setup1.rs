@@ -34,7 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let run = afm::run(&params(), &setup)?;
             let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
             println!(
-                "n = {n:4} elements = {:6}  peak = {:.5e} N  final = {:.5e} N  min = {:.3e} N  steps = {} cutbacks = {} iterations = {}  wall = {:.2} s",
+                "n = {n:4} elements = {:6}  peak = {:.6e} N  final = {:.6e} N  min = {:.3e} N  steps = {} cutbacks = {} iterations = {}  CPU = {:.2} s",
                 run.elements,
                 run.peak_force,
                 run.final_force,
@@ -42,7 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 run.steps,
                 run.cutbacks,
                 run.iterations,
-                run.wall_seconds
+                run.cpu_seconds
             );
             results.push(run);
         }
@@ -72,14 +72,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeats = if mode == "once" { 1 } else { 5 };
     for _ in 0..repeats {
         let run = afm::run(&params(), &setup)?;
-        walls.push(run.wall_seconds);
+        walls.push(run.cpu_seconds);
         last = Some(run);
     }
     walls.sort_by(f64::total_cmp);
     if let Some(run) = last {
         let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
         println!(
-            "setup 1, {} elements: peak {:.5e} N, final {:.5e} N, min {:.3e} N, steps {}, cutbacks {}, iterations {}",
+            "setup 1, {} elements: peak {:.6e} N, final {:.6e} N, min {:.3e} N, steps {}, cutbacks {}, iterations {}",
             run.elements,
             run.peak_force,
             run.final_force,
@@ -89,15 +89,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             run.iterations
         );
         println!(
-            "last run: wall {:.3} s = assembly {:.3} s + LU {:.3} s + other {:.3} s",
+            "last run: CPU {:.3} s (wall {:.3} s) = assembly {:.3} s (elements {:.3} s, contact+loads {:.3} s) + factorise/solve {:.3} s + other {:.3} s; {} assemblies, {} LU fallbacks",
+            run.cpu_seconds,
             run.wall_seconds,
             run.assembly_seconds,
+            run.element_seconds,
+            run.assembly_seconds - run.element_seconds,
             run.solve_seconds,
-            run.wall_seconds - run.assembly_seconds - run.solve_seconds
+            run.cpu_seconds - run.assembly_seconds - run.solve_seconds,
+            run.assemblies,
+            run.lu_fallbacks
         );
     }
     println!(
-        "wall time: median of {repeats} = {:.3} s (all: {walls:.3?})",
+        "CPU time (thread): median of {repeats} = {:.3} s (all: {walls:.3?})",
         walls[repeats / 2]
     );
     Ok(())

@@ -115,8 +115,9 @@ impl SparseSystem {
 
     /// Factorises the current values and solves `K x = rhs` in place:
     /// Cholesky of the lower triangle when the tangent is symmetric and it
-    /// succeeds (positive definite), LU otherwise.
-    pub(crate) fn solve(&self, rhs: &mut [f64]) -> Result<()> {
+    /// succeeds (positive definite), LU otherwise. Ok(true) if Cholesky
+    /// did it.
+    pub(crate) fn solve(&self, rhs: &mut [f64]) -> Result<bool> {
         let mat = SparseColMatRef::new(self.symbolic.as_ref(), &self.values);
         let llt = if self.symmetric {
             Llt::try_new_with_symbolic(self.llt_symbolic.clone(), mat, faer::Side::Lower).ok()
@@ -124,6 +125,7 @@ impl SparseSystem {
             None
         };
         let col = faer::ColMut::from_slice_mut(rhs);
+        let cholesky = llt.is_some();
         if let Some(llt) = llt {
             llt.solve_in_place(col.as_mat_mut());
         } else {
@@ -132,7 +134,7 @@ impl SparseSystem {
             lu.solve_in_place(col.as_mat_mut());
         }
         if rhs.iter().all(|x| x.is_finite()) {
-            Ok(())
+            Ok(cholesky)
         } else {
             Err(FemError::Solver(
                 "singular tangent (non-finite solution)".into(),
