@@ -28,7 +28,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     if mode == "study" {
         let mut results = Vec::new();
-        for n in [35usize, 65, 129] {
+        let sizes: Vec<usize> = match std::env::var("NLVID_FEM_STUDY_N") {
+            Ok(v) => v.split(',').map(|x| x.trim().parse()).collect::<Result<_, _>>()?,
+            Err(_) => vec![35, 65, 129],
+        };
+        for &n in &sizes {
             let mut setup = AfmSetup::thesis_setup1();
             setup.mesh.elements_per_side = n;
             let run = afm::run(&params(), &setup)?;
@@ -46,8 +50,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
             results.push(run);
         }
-        let finest = &results[2];
-        for r in &results[..2] {
+        let Some(finest) = results.last() else {
+            return Ok(());
+        };
+        for r in &results[..results.len() - 1] {
             println!(
                 "elements {:6}: peak-force error {:+.3} %, final-force error {:+.3} % (vs {} elements)",
                 r.elements,
@@ -62,6 +68,31 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Ok(n) = std::env::var("NLVID_FEM_N") {
         setup.mesh.elements_per_side = n.parse()?;
     }
+    // Experiment knobs (solver settings of the run).
+    if let Ok(v) = std::env::var("NLVID_FEM_RTOL") {
+        setup.settings.rtol = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_GROWTH") {
+        setup.settings.growth = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_CUTBACK") {
+        setup.settings.cutback = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_EASY") {
+        setup.settings.easy_iterations = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_PENALTY") {
+        setup.settings.penalty = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_RAMP_STEPS") {
+        setup.ramp_step_fraction = 1.0 / v.parse::<f64>()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_THREADS") {
+        setup.settings.threads = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_LS") {
+        setup.settings.residual_growth = v.parse()?;
+    }
     if mode == "info" {
         let model = afm::build(afm::cell_material(&params(), setup.bulk_ratio)?, &setup)?;
         println!("{model:?}");
@@ -71,7 +102,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut last = None;
     let repeats = if mode == "once" { 1 } else { 5 };
     for _ in 0..repeats {
-        let run = afm::run(&params(), &setup)?;
+        let run = if std::env::var_os("NLVID_FEM_REFERENCE").is_some() {
+            afm::run_reference(&params(), &setup)?
+        } else {
+            afm::run(&params(), &setup)?
+        };
         walls.push(run.cpu_seconds);
         last = Some(run);
     }
