@@ -29,7 +29,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if mode == "study" {
         let mut results = Vec::new();
         let sizes: Vec<usize> = match std::env::var("NLVID_FEM_STUDY_N") {
-            Ok(v) => v.split(',').map(|x| x.trim().parse()).collect::<Result<_, _>>()?,
+            Ok(v) => v
+                .split(',')
+                .map(|x| x.trim().parse())
+                .collect::<Result<_, _>>()?,
             Err(_) => vec![35, 65, 129],
         };
         for &n in &sizes {

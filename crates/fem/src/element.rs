@@ -263,9 +263,12 @@ mod tests {
         let mut fast = ElementOutput::zero();
         let mut direct = ElementOutput::zero();
         fbar_element(mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut fast).unwrap();
-        fbar_element_reference(mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut direct)
-            .unwrap();
-        let kmax = direct.k.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        fbar_element_reference(mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut direct).unwrap();
+        let kmax = direct
+            .k
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, x| m.max(x.abs()));
         let rmax = direct.r.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         for r in 0..8 {
             assert!((fast.r[r] - direct.r[r]).abs() <= 1e-13 * rmax, "r[{r}]");
@@ -290,7 +293,8 @@ mod tests {
         compare_with_direct_form(&neo, false);
         // A history-dependent material of the `material` crate (the AFM cell
         // model), evaluated with a time step so the viscous terms enter.
-        let cell = nlvid_material::PronyViscoelastic::cell(0.5, 0.3, 0.5, 0.3, 10.0, 1000.0).unwrap();
+        let cell =
+            nlvid_material::PronyViscoelastic::cell(0.5, 0.3, 0.5, 0.3, 10.0, 1000.0).unwrap();
         compare_with_direct_form(&cell, true);
     }
 

@@ -557,7 +557,8 @@ impl<M: Material3> Model<M> {
         let clock = cpu_time::ThreadTime::now();
         if let Some(pool) = &self.pool {
             let (committed, trial) = self.history.split();
-            let (mesh, material, geometry, u) = (&self.mesh, &self.material, &self.geometry, &self.u);
+            let (mesh, material, geometry, u) =
+                (&self.mesh, &self.material, &self.geometry, &self.u);
             let failures: Vec<Option<(usize, crate::element::PointFailure)>> = pool.install(|| {
                 use rayon::prelude::*;
                 self.element_outs
@@ -806,7 +807,12 @@ impl<M: Material3> Model<M> {
                         dmax = d;
                     }
                 }
-                let node = self.mesh.nodes.get(dmax / 2).copied().unwrap_or([f64::NAN; 2]);
+                let node = self
+                    .mesh
+                    .nodes
+                    .get(dmax / 2)
+                    .copied()
+                    .unwrap_or([f64::NAN; 2]);
                 eprintln!(
                     "    it {it} |R| {norm:.3e} tol {tol:.3e} active {} F {:.5e} max |R| {rmax:.2e} at dof {dmax} (node at {:.3e}, {:.3e})",
                     asm.active, asm.contact_force, node[0], node[1]
@@ -882,7 +888,11 @@ impl<M: Material3> Model<M> {
                         // Monotone residual decrease by default: a full step
                         // that raises it is halved (measured: fewer
                         // iterations and cut-backs than accepting 10× rises).
-                        let limit = if alpha == 1.0 { growth_limit * norm } else { norm };
+                        let limit = if alpha == 1.0 {
+                            growth_limit * norm
+                        } else {
+                            norm
+                        };
                         if n.is_finite() && n <= limit {
                             asm = a;
                             norm = n;
