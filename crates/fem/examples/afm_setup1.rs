@@ -93,6 +93,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Ok(v) = std::env::var("NLVID_FEM_THREADS") {
         setup.settings.threads = v.parse()?;
     }
+    if let Ok(v) = std::env::var("NLVID_FEM_BULK") {
+        setup.bulk_ratio = v.parse()?;
+    }
     if let Ok(v) = std::env::var("NLVID_FEM_LS") {
         setup.settings.residual_growth = v.parse()?;
     }

@@ -107,7 +107,7 @@ fn hertz_neo_hookean_half_space_within_3_percent() {
 /// first iteration). 6400 elements: run it in release,
 /// `cargo test -p nlvid-fem --release --test contact -- --ignored hertz_fine`.
 #[test]
-#[ignore = "6400 elements, ≈ 1 min in release"]
+#[ignore = "6400 elements, ≈ 2.5 min in release on the loaded machine"]
 fn hertz_fine_mesh_within_3_percent() {
     let errors = hertz_errors(80, 60.0, 1500.0);
     eprintln!("Hertz, 80×80 (δ/R, relative error): {errors:.4?}");
