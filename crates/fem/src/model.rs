@@ -307,7 +307,7 @@ fn tributary(mesh: &crate::Mesh, nodes: &[usize]) -> (Vec<f64>, Vec<f64>) {
 }
 
 impl<M: Material3> Model<M> {
-    /// Builds the model: dof numbering, sparse pattern, symbolic LU,
+    /// Builds the model: dof numbering, sparse pattern, symbolic LDLᵀ and LU,
     /// contact penalties.
     ///
     /// # Errors
