@@ -242,7 +242,7 @@ pub struct AfmRun {
     pub solve_seconds: f64,
     /// Global assemblies (Newton iterations + line-search trials).
     pub assemblies: usize,
-    /// Factorisations that fell back from Cholesky to LU.
+    /// Factorisations that fell back from LDLᵀ to LU.
     pub lu_fallbacks: usize,
     /// Deformed node positions (r, z) at the end of the run (m).
     #[serde(skip)]

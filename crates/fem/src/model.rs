@@ -142,7 +142,7 @@ pub struct Settings {
     /// (× the previous norm); above it, the line search halves the step
     /// until the residual decreases.
     pub residual_growth: f64,
-    /// Threads for the element loop (material updates); 1 = serial. The
+    /// Threads for the element loop (material updates); 0 or 1 = serial. The
     /// result is bitwise the same for any number (element outputs are
     /// computed in parallel, then added in element order).
     pub threads: usize,
@@ -221,7 +221,7 @@ pub struct Counters {
     pub iterations: usize,
     /// Global assemblies in total (including line-search trials).
     pub assemblies: usize,
-    /// Numeric factorisations that fell back from Cholesky to LU.
+    /// Numeric factorisations that fell back from LDLᵀ to LU.
     pub lu_fallbacks: usize,
 }
 
@@ -404,7 +404,6 @@ impl<M: Material3> Model<M> {
                 .zip(&len)
                 .map(|(a, h)| settings.penalty * g0 * a / h.max(f64::MIN_POSITIVE))
                 .collect();
-
             let mut slots = Vec::with_capacity(nodes.len());
             for &a in &nodes {
                 let w = if with_w { dof_eq[wdof] } else { NO_SLOT };

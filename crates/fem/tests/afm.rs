@@ -85,6 +85,19 @@ fn bulk_ratio_default_is_within_half_a_percent_of_incompressible() {
     assert!(default.peak_force < a.peak_force && a.peak_force < b.peak_force);
 }
 
+/// The element loop on two threads gives bitwise the serial result.
+#[test]
+fn parallel_element_loop_is_bitwise_serial() {
+    let serial = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    let mut parallel = serial.clone();
+    parallel.settings.threads = 2;
+    let a = afm::run(&params(), &serial).unwrap();
+    let b = afm::run(&params(), &parallel).unwrap();
+    assert_eq!(a.force, b.force);
+    assert_eq!(a.indentation, b.indentation);
+    assert_eq!((a.steps, a.iterations), (b.steps, b.iterations));
+}
+
 #[test]
 fn rigid_cantilever_indentation_equals_piezo_travel() {
     let setup = short_setup(Cantilever::Rigid);
