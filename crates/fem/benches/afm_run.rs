@@ -1,5 +1,9 @@
 //! Speed of one thesis-scale AFM run (setup 1, default mesh, full two-step
-//! protocol): the forward model the surrogate stage calls ~1300 times.
+//! protocol): the forward model the surrogate stage calls ~1300 times, on
+//! one core and with the element loop on two threads. Criterion measures
+//! wall time; on a loaded machine use the example
+//! (`cargo run -p nlvid-fem --release --example afm_setup1`), which reports
+//! the median thread-CPU time of 5 runs and the phase breakdown.
 //!
 //! `cargo bench -p nlvid-fem --bench afm_run`
 
@@ -16,11 +20,17 @@ fn bench(c: &mut Criterion) {
         g2: 0.3,
         tau2: 10.0,
     };
+    faer::set_global_parallelism(faer::Par::Seq);
     let setup = AfmSetup::thesis_setup1();
+    let mut two = setup.clone();
+    two.settings.threads = 2;
     let mut group = c.benchmark_group("afm");
     group.sample_size(10);
     group.bench_function("setup1_default_mesh_full_protocol", |b| {
         b.iter(|| afm::run(&params, &setup).map(|r| r.peak_force))
+    });
+    group.bench_function("setup1_default_mesh_full_protocol_2_threads", |b| {
+        b.iter(|| afm::run(&params, &two).map(|r| r.peak_force))
     });
     group.finish();
 }

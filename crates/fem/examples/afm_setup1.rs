@@ -28,13 +28,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     if mode == "study" {
         let mut results = Vec::new();
-        for n in [35usize, 65, 129] {
+        let sizes: Vec<usize> = match std::env::var("NLVID_FEM_STUDY_N") {
+            Ok(v) => v
+                .split(',')
+                .map(|x| x.trim().parse())
+                .collect::<Result<_, _>>()?,
+            Err(_) => vec![35, 65, 129],
+        };
+        for &n in &sizes {
             let mut setup = AfmSetup::thesis_setup1();
             setup.mesh.elements_per_side = n;
             let run = afm::run(&params(), &setup)?;
             let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
             println!(
-                "n = {n:4} elements = {:6}  peak = {:.5e} N  final = {:.5e} N  min = {:.3e} N  steps = {} cutbacks = {} iterations = {}  wall = {:.2} s",
+                "n = {n:4} elements = {:6}  peak = {:.6e} N  final = {:.6e} N  min = {:.3e} N  steps = {} cutbacks = {} iterations = {}  CPU = {:.2} s",
                 run.elements,
                 run.peak_force,
                 run.final_force,
@@ -42,12 +49,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 run.steps,
                 run.cutbacks,
                 run.iterations,
-                run.wall_seconds
+                run.cpu_seconds
             );
             results.push(run);
         }
-        let finest = &results[2];
-        for r in &results[..2] {
+        let Some(finest) = results.last() else {
+            return Ok(());
+        };
+        for r in &results[..results.len() - 1] {
             println!(
                 "elements {:6}: peak-force error {:+.3} %, final-force error {:+.3} % (vs {} elements)",
                 r.elements,
@@ -62,6 +71,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Ok(n) = std::env::var("NLVID_FEM_N") {
         setup.mesh.elements_per_side = n.parse()?;
     }
+    // Experiment knobs (solver settings of the run).
+    if let Ok(v) = std::env::var("NLVID_FEM_RTOL") {
+        setup.settings.rtol = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_GROWTH") {
+        setup.settings.growth = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_CUTBACK") {
+        setup.settings.cutback = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_EASY") {
+        setup.settings.easy_iterations = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_PENALTY") {
+        setup.settings.penalty = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_RAMP_STEPS") {
+        setup.ramp_step_fraction = 1.0 / v.parse::<f64>()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_THREADS") {
+        setup.settings.threads = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_BULK") {
+        setup.bulk_ratio = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_LS") {
+        setup.settings.residual_growth = v.parse()?;
+    }
     if mode == "info" {
         let model = afm::build(afm::cell_material(&params(), setup.bulk_ratio)?, &setup)?;
         println!("{model:?}");
@@ -71,15 +108,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut last = None;
     let repeats = if mode == "once" { 1 } else { 5 };
     for _ in 0..repeats {
-        let run = afm::run(&params(), &setup)?;
-        walls.push(run.wall_seconds);
+        let run = if std::env::var_os("NLVID_FEM_REFERENCE").is_some() {
+            afm::run_reference(&params(), &setup)?
+        } else {
+            afm::run(&params(), &setup)?
+        };
+        walls.push(run.cpu_seconds);
         last = Some(run);
     }
     walls.sort_by(f64::total_cmp);
     if let Some(run) = last {
         let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
         println!(
-            "setup 1, {} elements: peak {:.5e} N, final {:.5e} N, min {:.3e} N, steps {}, cutbacks {}, iterations {}",
+            "setup 1, {} elements: peak {:.6e} N, final {:.6e} N, min {:.3e} N, steps {}, cutbacks {}, iterations {}",
             run.elements,
             run.peak_force,
             run.final_force,
@@ -89,15 +130,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             run.iterations
         );
         println!(
-            "last run: wall {:.3} s = assembly {:.3} s + LU {:.3} s + other {:.3} s",
+            "last run: CPU {:.3} s (wall {:.3} s) = assembly {:.3} s (elements {:.3} s, contact+loads {:.3} s) + factorise/solve {:.3} s + other {:.3} s; {} assemblies, {} LU fallbacks",
+            run.cpu_seconds,
             run.wall_seconds,
             run.assembly_seconds,
+            run.element_seconds,
+            run.assembly_seconds - run.element_seconds,
             run.solve_seconds,
-            run.wall_seconds - run.assembly_seconds - run.solve_seconds
+            run.cpu_seconds - run.assembly_seconds - run.solve_seconds,
+            run.assemblies,
+            run.lu_fallbacks
         );
     }
     println!(
-        "wall time: median of {repeats} = {:.3} s (all: {walls:.3?})",
+        "CPU time (thread): median of {repeats} = {:.3} s (all: {walls:.3?})",
         walls[repeats / 2]
     );
     Ok(())

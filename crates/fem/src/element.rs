@@ -89,6 +89,7 @@ pub fn element_geometry(x: &[[f64; 2]; 4]) -> [PointGeometry; 4] {
     })
 }
 
+#[cfg(test)]
 /// ∂F/∂u at a point: row = stored F component (see `FIDX`), column =
 /// element dof (u_r0, u_z0, u_r1, …). F is linear in u, so this is constant.
 pub(crate) fn grad_operator(g: &PointGeometry) -> [[f64; 8]; 5] {
@@ -103,6 +104,7 @@ pub(crate) fn grad_operator(g: &PointGeometry) -> [[f64; 8]; 5] {
     b
 }
 
+#[cfg(test)]
 /// The stored F components at a point for element displacements `u`.
 pub(crate) fn deformation(b: &[[f64; 8]; 5], u: &[f64; 8]) -> [f64; 5] {
     let mut f = [1.0, 0.0, 0.0, 1.0, 1.0];
@@ -138,6 +140,7 @@ pub(crate) fn to_mat3(f: &[f64; 5]) -> nlvid_material::Mat3 {
     nlvid_material::Mat3::new(f[0], f[1], 0.0, f[2], f[3], 0.0, 0.0, 0.0, f[4])
 }
 
+#[cfg(test)]
 /// Bᵀ v for a 5×8 operator.
 pub(crate) fn bt_v(b: &[[f64; 8]; 5], v: &[f64; 5]) -> [f64; 8] {
     let mut out = [0.0; 8];
@@ -149,6 +152,7 @@ pub(crate) fn bt_v(b: &[[f64; 8]; 5], v: &[f64; 5]) -> [f64; 8] {
     out
 }
 
+#[cfg(test)]
 /// Bᵀ M B for a 5×8 operator and a 5×5 matrix, added to `out` with factor `w`.
 pub(crate) fn add_bt_m_b(out: &mut [[f64; 8]; 8], b: &[[f64; 8]; 5], m: &[[f64; 5]; 5], w: f64) {
     let mut mb = [[0.0; 8]; 5];
@@ -250,6 +254,50 @@ mod tests {
         tangent_fd(false);
     }
 
+    fn compare_with_direct_form<M: nlvid_material::Material3>(mat: &M, fbar: bool) {
+        let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
+        let geo = element_geometry(&x);
+        let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
+        let sn: Vec<M::State> = (0..4).map(|_| mat.initial_state()).collect();
+        let mut tr = sn.clone();
+        let mut fast = ElementOutput::zero();
+        let mut direct = ElementOutput::zero();
+        fbar_element(mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut fast).unwrap();
+        fbar_element_reference(mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut direct).unwrap();
+        let kmax = direct
+            .k
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, x| m.max(x.abs()));
+        let rmax = direct.r.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        for r in 0..8 {
+            assert!((fast.r[r] - direct.r[r]).abs() <= 1e-13 * rmax, "r[{r}]");
+            for c in 0..8 {
+                assert!(
+                    (fast.k[r][c] - direct.k[r][c]).abs() <= 1e-12 * kmax,
+                    "K[{r}][{c}] = {} vs direct {}",
+                    fast.k[r][c],
+                    direct.k[r][c]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn regrouped_tangent_equals_direct_form() {
+        let neo = crate::reference::NeoHookean {
+            mu: 1.0,
+            kappa: 30.0,
+        };
+        compare_with_direct_form(&neo, true);
+        compare_with_direct_form(&neo, false);
+        // A history-dependent material of the `material` crate (the AFM cell
+        // model), evaluated with a time step so the viscous terms enter.
+        let cell =
+            nlvid_material::PronyViscoelastic::cell(0.5, 0.3, 0.5, 0.3, 10.0, 1000.0).unwrap();
+        compare_with_direct_form(&cell, true);
+    }
+
     #[test]
     fn weights_integrate_ring_volume() {
         // Square [1,2]×[0,1]: volume of the ring = π (2² − 1²) · 1.
@@ -283,8 +331,248 @@ pub(crate) type PointFailure = (usize, nlvid_material::MaterialError);
 /// Internal force and tangent of one axisymmetric element (module docs),
 /// F-bar if `fbar`, plain displacement element otherwise (for the locking
 /// comparison). Writes the trial history of the element's four points.
+///
+/// The tangent K = Σ_q w_q ∂²Ψ(F̄_q)/∂u² is assembled in a regrouped form
+/// (one Bᵀ M B product per Gauss point plus rank-one terms) that is
+/// algebraically identical to the direct form; with
+/// ln α = (ln J̄ − ln J_q)/3, F̄ = α F, B̄ = α B + F ⊗ ∂α:
+///
+/// ```text
+/// K = Σ_q Bᵀ [w α² A + c_q H_J] B                     (c_q = S w_q /(3 V J̄) − s_q /(3 J_q))
+///   + Σ_q [v_q ⊗ ∂lnα + ∂lnα ⊗ v'_q + (α² Fᵀ w A F + s_q) ∂lnα ⊗ ∂lnα + s_q/(3J_q²) ∂J ⊗ ∂J]
+///   − (S/3) ∂lnJ̄ ⊗ ∂lnJ̄ ,
+/// v_q = α² Bᵀ w A F + w α Bᵀ P,  v'_q = α² Bᵀ w Aᵀ F + w α Bᵀ P,
+/// s_q = w α P : F,  S = Σ_q s_q ,
+/// ```
+///
+/// A = ∂P/∂F at F̄_q, H_J = ∂²J/∂F², V the element volume. The test
+/// `regrouped_tangent_equals_direct_form` checks it against
+/// [`fbar_element_reference`] and the finite-difference tests against the
+/// residual.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn fbar_element<M: nlvid_material::Material3>(
+    material: &M,
+    geometry: &[PointGeometry; 4],
+    u: &[f64; 8],
+    state_n: &[M::State],
+    trial: &mut [M::State],
+    dt: f64,
+    fbar: bool,
+    tangent: bool,
+    out: &mut ElementOutput,
+) -> std::result::Result<(), PointFailure> {
+    out.r = [0.0; 8];
+    if tangent {
+        out.k = [[0.0; 8]; 8];
+    }
+    let mut f = [[0.0; 5]; 4];
+    let mut jq = [0.0; 4];
+    let mut dj5 = [[0.0; 5]; 4];
+    let mut hj5 = [[[0.0; 5]; 5]; 4];
+    let mut dju = [[0.0; 8]; 4];
+    let mut vol = 0.0;
+    let mut jbar = 0.0;
+    let mut djbar = [0.0; 8];
+    for q in 0..4 {
+        let g = &geometry[q];
+        f[q] = deformation_structured(g, u);
+        let (j, dj, hj) = jacobian_derivatives(&f[q]);
+        if !(j > 0.0) {
+            return Err((
+                q,
+                nlvid_material::MaterialError::Deformation(format!("det F = {j:.3e} ≤ 0")),
+            ));
+        }
+        jq[q] = j;
+        dj5[q] = dj;
+        hj5[q] = hj;
+        if fbar {
+            let w = g.weight;
+            dju[q] = bt_v_structured(g, &dj);
+            vol += w;
+            jbar += w * j;
+            for c in 0..8 {
+                djbar[c] += w * dju[q][c];
+            }
+        }
+    }
+    let mut dlnjbar = [0.0; 8];
+    if fbar {
+        jbar /= vol;
+        for c in 0..8 {
+            dlnjbar[c] = djbar[c] / vol / jbar;
+        }
+    }
+    // Pass 1: material response at every point, residual, per-point terms.
+    let mut m5 = [[[0.0; 5]; 5]; 4];
+    let mut alpha = [1.0; 4];
+    let mut dlnalpha = [[0.0; 8]; 4];
+    let mut p5 = [[0.0; 5]; 4];
+    let mut s_q = [0.0; 4];
+    for q in 0..4 {
+        let g = &geometry[q];
+        let w = g.weight;
+        if fbar {
+            for c in 0..8 {
+                dlnalpha[q][c] = (dlnjbar[c] - dju[q][c] / jq[q]) / 3.0;
+            }
+            alpha[q] = (jbar / jq[q]).cbrt();
+        }
+        let a = alpha[q];
+        let mut fbar_q = f[q];
+        for x in &mut fbar_q {
+            *x *= a;
+        }
+        let resp = material
+            .update(&state_n[q], &to_mat3(&fbar_q), dt, &mut trial[q])
+            .map_err(|e| (q, e))?;
+        for (i, &(i0, j0)) in FIDX.iter().enumerate() {
+            p5[q][i] = resp.first_piola[(i0, j0)];
+            if tangent {
+                for (k, &(k0, l0)) in FIDX.iter().enumerate() {
+                    m5[q][i][k] = w * resp.tangent[(3 * i0 + j0, 3 * k0 + l0)];
+                }
+            }
+        }
+        // r = w B̄ᵀ P = w α Bᵀ P + w (P : F) ∂α.
+        let gp = bt_v_structured(g, &p5[q]);
+        let pf: f64 = (0..5).map(|i| p5[q][i] * f[q][i]).sum();
+        s_q[q] = w * a * pf;
+        for c in 0..8 {
+            out.r[c] += w * a * gp[c] + s_q[q] * dlnalpha[q][c];
+        }
+    }
+    if !tangent {
+        return Ok(());
+    }
+    let s_total: f64 = s_q.iter().sum();
+    for q in 0..4 {
+        let g = &geometry[q];
+        let w = g.weight;
+        let a = alpha[q];
+        let wa = &m5[q];
+        // Fᵀ(wA), (wA)F and Fᵀ(wA)F.
+        let mut af = [0.0; 5];
+        let mut fa = [0.0; 5];
+        let mut faf = 0.0;
+        for i in 0..5 {
+            for k in 0..5 {
+                af[i] += wa[i][k] * f[q][k];
+                fa[k] += f[q][i] * wa[i][k];
+            }
+        }
+        for i in 0..5 {
+            faf += f[q][i] * af[i];
+        }
+        let mut mq = [[0.0; 5]; 5];
+        for i in 0..5 {
+            for k in 0..5 {
+                mq[i][k] = a * a * wa[i][k];
+            }
+        }
+        if fbar {
+            let cq = s_total * w / (3.0 * vol * jbar) - s_q[q] / (3.0 * jq[q]);
+            for i in 0..5 {
+                for k in 0..5 {
+                    mq[i][k] += cq * hj5[q][i][k];
+                }
+            }
+        }
+        add_bt_m_b_structured(&mut out.k, g, &mq);
+        if !fbar {
+            continue;
+        }
+        let bap = bt_v_structured(g, &p5[q]);
+        let baf = bt_v_structured(g, &af);
+        let bfa = bt_v_structured(g, &fa);
+        let mut v = [0.0; 8];
+        let mut vt = [0.0; 8];
+        for c in 0..8 {
+            v[c] = a * a * baf[c] + w * a * bap[c];
+            vt[c] = a * a * bfa[c] + w * a * bap[c];
+        }
+        let dl = &dlnalpha[q];
+        let cc = a * a * faf + s_q[q];
+        let cj = s_q[q] / (3.0 * jq[q] * jq[q]);
+        let dj = &dju[q];
+        for r in 0..8 {
+            let (vr, dlr, cdl, cjr) = (v[r], dl[r], cc * dl[r], cj * dj[r]);
+            let row = &mut out.k[r];
+            for c in 0..8 {
+                row[c] += vr * dl[c] + dlr * vt[c] + cdl * dl[c] + cjr * dj[c];
+            }
+        }
+    }
+    if fbar {
+        add_outer(&mut out.k, &dlnjbar, &dlnjbar, -s_total / 3.0);
+    }
+    Ok(())
+}
+
+/// The stored F components at a point, from the shape functions directly
+/// (same as `deformation(&grad_operator(g), u)`).
+#[inline]
+fn deformation_structured(g: &PointGeometry, u: &[f64; 8]) -> [f64; 5] {
+    let mut f = [1.0, 0.0, 0.0, 1.0, 1.0];
+    for a in 0..4 {
+        let (ur, uz) = (u[2 * a], u[2 * a + 1]);
+        f[0] += g.dn[a][0] * ur;
+        f[1] += g.dn[a][1] * ur;
+        f[2] += g.dn[a][0] * uz;
+        f[3] += g.dn[a][1] * uz;
+        f[4] += g.n[a] / g.r * ur;
+    }
+    f
+}
+
+/// Bᵀ v using the sparsity of B (each column has ≤ 3 non-zeros).
+#[inline]
+fn bt_v_structured(g: &PointGeometry, v: &[f64; 5]) -> [f64; 8] {
+    let mut out = [0.0; 8];
+    for a in 0..4 {
+        out[2 * a] = g.dn[a][0] * v[0] + g.dn[a][1] * v[1] + g.n[a] / g.r * v[4];
+        out[2 * a + 1] = g.dn[a][0] * v[2] + g.dn[a][1] * v[3];
+    }
+    out
+}
+
+/// out += Bᵀ M B using the sparsity of B.
+#[inline]
+fn add_bt_m_b_structured(out: &mut [[f64; 8]; 8], g: &PointGeometry, m: &[[f64; 5]; 5]) {
+    // Column c of B as (row, value) pairs: even c → rows 0, 1, 4; odd c → 2, 3.
+    let mut col = [[0.0; 3]; 4];
+    for a in 0..4 {
+        col[a] = [g.dn[a][0], g.dn[a][1], g.n[a] / g.r];
+    }
+    // MB (5×8).
+    let mut mb = [[0.0; 8]; 5];
+    for i in 0..5 {
+        for a in 0..4 {
+            let c = &col[a];
+            mb[i][2 * a] = m[i][0] * c[0] + m[i][1] * c[1] + m[i][4] * c[2];
+            mb[i][2 * a + 1] = m[i][2] * c[0] + m[i][3] * c[1];
+        }
+    }
+    for a in 0..4 {
+        let c = &col[a];
+        let re = &mut out[2 * a];
+        for k in 0..8 {
+            re[k] += c[0] * mb[0][k] + c[1] * mb[1][k] + c[2] * mb[4][k];
+        }
+        let ro = &mut out[2 * a + 1];
+        for k in 0..8 {
+            ro[k] += c[0] * mb[2][k] + c[1] * mb[3][k];
+        }
+    }
+}
+
+#[cfg(test)]
+/// The direct (unfactored) form of [`fbar_element`], kept as an independent
+/// check of its regrouped tangent: internal force and tangent of one element,
+/// F-bar if `fbar`, plain displacement element otherwise (for the locking
+/// comparison). Writes the trial history of the element's four points.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn fbar_element_reference<M: nlvid_material::Material3>(
     material: &M,
     geometry: &[PointGeometry; 4],
     u: &[f64; 8],

@@ -29,6 +29,11 @@ impl<S: Clone> History<S> {
         )
     }
 
+    /// All converged and all trial states (four per element, in order).
+    pub(crate) fn split(&mut self) -> (&[S], &mut [S]) {
+        (&self.committed, &mut self.trial)
+    }
+
     /// Accepts the trial states of a converged step.
     pub fn commit(&mut self) {
         self.committed.clone_from_slice(&self.trial);

@@ -54,6 +54,50 @@ fn coarse_afm_run_finishes_repulsive_and_relaxes() {
     assert!(run.peak_force >= run.force[start_hold]);
 }
 
+/// The default κ/G₀ against the incompressible limit: the force error of a
+/// near-incompressible solid scales as G/κ, so F(κ) = F∞ − c/κ; F∞ and c
+/// from κ/G₀ = 1000 and 2000 (Richardson), then the default must be within
+/// 0.5 % of F∞ in peak and final force.
+#[test]
+fn bulk_ratio_default_is_within_half_a_percent_of_incompressible() {
+    let base = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    let run_with = |ratio: f64| {
+        let mut s = base.clone();
+        s.bulk_ratio = ratio;
+        afm::run(&params(), &s).unwrap()
+    };
+    let default = afm::run(&params(), &base).unwrap();
+    let (a, b) = (run_with(1000.0), run_with(2000.0));
+    let limit = |fa: f64, fb: f64| 2.0 * fb - fa; // F∞ = F(2κ) + (F(2κ) − F(κ))
+    let peak_inf = limit(a.peak_force, b.peak_force);
+    let final_inf = limit(a.final_force, b.final_force);
+    let e_peak = default.peak_force / peak_inf - 1.0;
+    let e_final = default.final_force / final_inf - 1.0;
+    eprintln!(
+        "κ/G0 = {}: peak {:+.3} %, final {:+.3} % vs incompressible limit",
+        base.bulk_ratio,
+        100.0 * e_peak,
+        100.0 * e_final
+    );
+    assert!(e_peak.abs() < 0.005 && e_final.abs() < 0.005);
+    // The extrapolation is meaningful: the stiffer runs approach F∞
+    // monotonically (softer with more compressibility).
+    assert!(default.peak_force < a.peak_force && a.peak_force < b.peak_force);
+}
+
+/// The element loop on two threads gives bitwise the serial result.
+#[test]
+fn parallel_element_loop_is_bitwise_serial() {
+    let serial = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    let mut parallel = serial.clone();
+    parallel.settings.threads = 2;
+    let a = afm::run(&params(), &serial).unwrap();
+    let b = afm::run(&params(), &parallel).unwrap();
+    assert_eq!(a.force, b.force);
+    assert_eq!(a.indentation, b.indentation);
+    assert_eq!((a.steps, a.iterations), (b.steps, b.iterations));
+}
+
 #[test]
 fn rigid_cantilever_indentation_equals_piezo_travel() {
     let setup = short_setup(Cantilever::Rigid);
