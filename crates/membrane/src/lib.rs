@@ -45,6 +45,7 @@
 
 mod error;
 pub mod models;
+pub mod plot;
 mod shooting;
 mod simulate;
 mod solver;
@@ -55,5 +56,7 @@ pub use models::{
     MooneyRivlinMembrane, PipkinRogersMembrane, PipkinRogersParams, PipkinRogersState,
 };
 pub use shooting::NodeValue;
-pub use simulate::{ControlKind, Loading, MembraneRun, StepRecord, simulate, simulate_with};
+pub use simulate::{
+    ControlKind, Loading, MembraneRun, StepRecord, run_loading, simulate, simulate_with,
+};
 pub use solver::{Control, Geometry, MembraneSolver, NewtonSettings, Solution};

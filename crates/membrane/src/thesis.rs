@@ -13,6 +13,19 @@ use crate::{
     MooneyRivlinMembrane, PipkinRogersParams, Result, Solution, simulate,
 };
 
+/// How a [`Series`] is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SeriesKind {
+    /// Computed curve (line).
+    #[default]
+    Line,
+    /// Computed isolated points (e.g. the contact edge).
+    Points,
+    /// Values quoted in the thesis text or tables, for comparison.
+    Thesis,
+}
+
 /// One curve.
 #[derive(Debug, Clone, Serialize)]
 pub struct Series {
@@ -22,6 +35,34 @@ pub struct Series {
     pub x: Vec<f64>,
     /// Ordinates.
     pub y: Vec<f64>,
+    /// How to draw it.
+    pub kind: SeriesKind,
+}
+
+impl Series {
+    /// A computed curve.
+    pub fn line(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>) -> Self {
+        Self {
+            label: label.into(),
+            x,
+            y,
+            kind: SeriesKind::Line,
+        }
+    }
+    /// Computed isolated points.
+    pub fn points(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>) -> Self {
+        Self {
+            kind: SeriesKind::Points,
+            ..Self::line(label, x, y)
+        }
+    }
+    /// Values quoted by the thesis.
+    pub fn thesis(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>) -> Self {
+        Self {
+            kind: SeriesKind::Thesis,
+            ..Self::line(label, x, y)
+        }
+    }
 }
 
 /// One figure's data.
@@ -168,16 +209,16 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
     let mut series = Vec::new();
     for d in [0.1, 0.28, 0.53, 0.78] {
         let sol = s.equilibrium(0.0, Control::Displacement(d))?;
-        series.push(Series {
-            label: format!("D/r0 = {d}"),
-            x: sol.profile.iter().map(|v| v.rho).collect(),
-            y: sol.profile.iter().map(|v| v.eta).collect(),
-        });
-        series.push(Series {
-            label: format!("contact edge, D/r0 = {d}"),
-            x: vec![sol.contact_radius],
-            y: vec![sol.h1],
-        });
+        series.push(Series::line(
+            format!("D/r0 = {d}"),
+            sol.profile.iter().map(|v| v.rho).collect(),
+            sol.profile.iter().map(|v| v.eta).collect(),
+        ));
+        series.push(Series::points(
+            format!("contact edge, D/r0 = {d}"),
+            vec![sol.contact_radius],
+            vec![sol.h1],
+        ));
     }
     figs.push(fig(
         "fig2_3",
@@ -196,11 +237,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         for &d in &ds {
             f.push(s.equilibrium(0.0, Control::Displacement(d))?.force);
         }
-        series.push(Series {
-            label: format!("γ = {gamma}"),
-            x: ds.clone(),
-            y: f,
-        });
+        series.push(Series::line(format!("γ = {gamma}"), ds.clone(), f));
     }
     figs.push(fig(
         "fig2_4",
@@ -212,11 +249,11 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
 
     // Fig. 2.5: NLE vs QLV at D = 2t, t, t/2.
     let qlv = pr(0.2, 0.2, 1.0);
-    let mut series = vec![Series {
-        label: "NLE γ = 0.1".into(),
-        x: ds.clone(),
-        y: figs[1].series[1].y.clone(),
-    }];
+    let mut series = vec![Series::line(
+        "NLE γ = 0.1",
+        ds.clone(),
+        figs[1].series[1].y.clone(),
+    )];
     for rate in [2.0, 1.0, 0.5] {
         let prog =
             programs::constant_rate(Quantity::Dimensionless, rate, 0.78 / rate).map_err(proto)?;
@@ -226,11 +263,11 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
             &Geometry::default(),
             &Loading::new(ControlKind::Displacement, prog, times)?,
         )?;
-        series.push(Series {
-            label: format!("QLV g1 = g2 = 0.2, D = {rate} t"),
-            x: run.history.iter().map(|r| r.displacement).collect(),
-            y: run.force(),
-        });
+        series.push(Series::line(
+            format!("QLV g1 = g2 = 0.2, D = {rate} t"),
+            run.history.iter().map(|r| r.displacement).collect(),
+            run.force(),
+        ));
     }
     figs.push(fig(
         "fig2_5",
@@ -249,11 +286,11 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
             ("NLV g1=0.2, g2=0.3, c=1/2", &nlv6),
         ] {
             let run = step_run(p, d, false)?;
-            series.push(Series {
-                label: format!("{name}, D/r0 = {d}"),
-                x: run.times(),
-                y: run.force(),
-            });
+            series.push(Series::line(
+                format!("{name}, D/r0 = {d}"),
+                run.times(),
+                run.force(),
+            ));
         }
     }
     figs.push(fig(
@@ -285,11 +322,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
     }
     let force = |runs: &[(&str, MembraneRun)]| {
         runs.iter()
-            .map(|(n, r)| Series {
-                label: n.to_string(),
-                x: r.times(),
-                y: r.force(),
-            })
+            .map(|(n, r)| Series::line(n.to_string(), r.times(), r.force()))
             .collect::<Vec<_>>()
     };
     figs.push(fig(
@@ -309,10 +342,12 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
     let psic = runs_c
         .iter()
         .chain(runs_g.iter().skip(1))
-        .map(|(n, r)| Series {
-            label: n.to_string(),
-            x: r.times(),
-            y: r.history.iter().map(|h| h.psi_c).collect(),
+        .map(|(n, r)| {
+            Series::line(
+                n.to_string(),
+                r.times(),
+                r.history.iter().map(|h| h.psi_c).collect(),
+            )
         })
         .collect();
     figs.push(fig(
@@ -326,14 +361,14 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         let mut v = Vec::new();
         for (n, r) in runs {
             for (k, name) in [(0, "λ1"), (1, "λ2")] {
-                v.push(Series {
-                    label: format!("{name}, {n}"),
-                    x: r.profiles.iter().map(|s| s.time).collect(),
-                    y: r.profiles
+                v.push(Series::line(
+                    format!("{name}, {n}"),
+                    r.profiles.iter().map(|s| s.time).collect(),
+                    r.profiles
                         .iter()
                         .map(|s| at_psi(s, 0.25, |p| if k == 0 { p.lambda1 } else { p.lambda2 }))
                         .collect(),
-                });
+                ));
             }
         }
         v
@@ -371,31 +406,15 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         "ψ (rad)",
         "λ, σ/C1",
         vec![
-            Series {
-                label: "λ1".into(),
-                x: psi.clone(),
-                y: col(|v| v.lambda1),
-            },
-            Series {
-                label: "λ2".into(),
-                x: psi.clone(),
-                y: col(|v| v.lambda2),
-            },
-            Series {
-                label: "σ1/C1".into(),
-                x: psi.clone(),
-                y: col(|v| v.sigma1),
-            },
-            Series {
-                label: "σ2/C1".into(),
-                x: psi.clone(),
-                y: col(|v| v.sigma2),
-            },
-            Series {
-                label: "ψc".into(),
-                x: vec![last.psi_c],
-                y: vec![at_psi(last, last.psi_c, |v| v.lambda2)],
-            },
+            Series::line("λ1", psi.clone(), col(|v| v.lambda1)),
+            Series::line("λ2", psi.clone(), col(|v| v.lambda2)),
+            Series::line("σ1/C1", psi.clone(), col(|v| v.sigma1)),
+            Series::line("σ2/C1", psi.clone(), col(|v| v.sigma2)),
+            Series::points(
+                "ψc",
+                vec![last.psi_c],
+                vec![at_psi(last, last.psi_c, |v| v.lambda2)],
+            ),
         ],
     ));
 
@@ -448,11 +467,11 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
                     slope,
                 });
                 if m != "QLV" && m != "NLV c=1" {
-                    series.push(Series {
-                        label: format!("{m}, s_u = {su}"),
-                        x: h.iter().map(|r| r.displacement).collect(),
-                        y: h.iter().map(|r| r.force).collect(),
-                    });
+                    series.push(Series::line(
+                        format!("{m}, s_u = {su}"),
+                        h.iter().map(|r| r.displacement).collect(),
+                        h.iter().map(|r| r.force).collect(),
+                    ));
                 }
             }
         }
