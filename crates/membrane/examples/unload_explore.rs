@@ -10,6 +10,9 @@ fn main() -> Result<()> {
     let out = std::path::PathBuf::from(args.get(1).map(String::as_str).unwrap_or("unload_out"));
     let nu: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(400);
     let nl: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(200);
+    // "compress": accept compression in the contact region (thesis-like).
+    let compress = args.get(4).map(String::as_str) == Some("compress");
+    let only: Option<&str> = args.get(5).map(String::as_str);
     std::fs::create_dir_all(&out).map_err(|e| MembraneError::Input {
         name: "out",
         value: 0.0,
@@ -59,9 +62,13 @@ fn main() -> Result<()> {
                 if *name == "NLE" && su < 0.5 {
                     continue;
                 }
+                if only.is_some_and(|o| !format!("{name}_D{dmax}_su{su}").contains(o)) {
+                    continue;
+                }
                 let tp = dmax;
                 let te = tp + dmax / su;
                 let mut solver = MembraneSolver::new(p.check()?, Geometry::default(), 1.0)?;
+                solver.allow_compression_in_contact = compress;
                 let mut times: Vec<f64> = (0..=nl).map(|k| tp * k as f64 / nl as f64).collect();
                 times.extend((1..=nu).map(|k| tp + (te - tp) * k as f64 / nu as f64));
                 let fname = out.join(format!("{name}_D{dmax}_su{su}.csv"));

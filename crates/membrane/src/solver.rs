@@ -363,7 +363,9 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                         j[1][1] = 1.0;
                         continue;
                     }
-                    let h = 1e-7 * (1.0 + x[k].abs());
+                    // Small step: near slack states the shot is so sensitive (|∂θ(π/2)/∂λ0| ≈ 2e4)
+                    // that h = 1e-7 lands outside the linear range and gives ascent directions.
+                    let h = 1e-9 * (1.0 + x[k].abs());
                     let mut xp = x;
                     xp[k] += h;
                     let (rp, _) = match self.residual(&mut sh, xp, control) {
