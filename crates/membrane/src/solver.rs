@@ -318,11 +318,32 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         Ok(([end.theta_end - FRAC_PI_2, end.volume / v0 - 1.0, c], end))
     }
 
+    /// Newton with forward-difference Jacobians (step 1e-7 relative); when that
+    /// stalls, once more with step 1e-9: near slack states the shot is so
+    /// sensitive (|∂θ(π/2)/∂λ0| ≈ 2e4) that 1e-7 leaves the linear range and
+    /// gives ascent directions, while near first contact/loss of contact the
+    /// larger step is the robust one.
     fn newton(
         &mut self,
         dt: f64,
         control: Control,
         x0: [f64; 3],
+    ) -> std::result::Result<([f64; 3], usize), NewtonFail> {
+        match self.newton_fd(dt, control, x0, 1e-7) {
+            Err(NewtonFail::Stalled { .. }) => {
+                self.jac = None;
+                self.newton_fd(dt, control, x0, 1e-9)
+            }
+            r => r,
+        }
+    }
+
+    fn newton_fd(
+        &mut self,
+        dt: f64,
+        control: Control,
+        x0: [f64; 3],
+        fd_step: f64,
     ) -> std::result::Result<([f64; 3], usize), NewtonFail> {
         let fixed_psi = match control {
             Control::ContactAngle(v) => Some(v.max(0.0)),
@@ -363,9 +384,7 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                         j[1][1] = 1.0;
                         continue;
                     }
-                    // Small step: near slack states the shot is so sensitive (|∂θ(π/2)/∂λ0| ≈ 2e4)
-                    // that h = 1e-7 lands outside the linear range and gives ascent directions.
-                    let h = 1e-9 * (1.0 + x[k].abs());
+                    let h = fd_step * (1.0 + x[k].abs());
                     let mut xp = x;
                     xp[k] += h;
                     let (rp, _) = match self.residual(&mut sh, xp, control) {
