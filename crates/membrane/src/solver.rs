@@ -330,9 +330,10 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         x0: [f64; 3],
     ) -> std::result::Result<([f64; 3], usize), NewtonFail> {
         match self.newton_fd(dt, control, x0, 1e-7) {
-            Err(NewtonFail::Stalled { .. }) => {
+            Err(first @ NewtonFail::Stalled { .. }) => {
                 self.jac = None;
-                self.newton_fd(dt, control, x0, 1e-9)
+                // If both stall, report the first attempt (the usual step).
+                self.newton_fd(dt, control, x0, 1e-9).map_err(|_| first)
             }
             r => r,
         }

@@ -91,9 +91,19 @@ pub struct SlopeRow {
     pub model: String,
     /// Thesis value (None where the table is blank).
     pub thesis: Option<f64>,
-    /// Tangent dF/dD over the first unloading step (ΔD = s_u·5e-5).
+    /// Tangent dF̄/dD̄ over the first unloading step (ΔD = s_u·5e-5).
     pub slope: f64,
+    /// Secant from the peak over the first ΔD/r0 = 0.01 of unloading,
+    /// [`SECANT_WINDOW`].
+    pub secant: f64,
+    /// `secant / 2 / thesis`: the secant in the App. D force scale
+    /// F/(G10 h0 r0) with G10 = 2 C1 (eq. D.2 drops the 2 of eq. 2.55), over
+    /// the thesis value. The NLE rows give 1.00; see docs/theory/membrane.md.
+    pub ratio: Option<f64>,
 }
+
+/// Unloading window ΔD/r0 of [`SlopeRow::secant`].
+pub const SECANT_WINDOW: f64 = 0.01;
 
 fn fig(id: &str, title: &str, x: &str, y: &str, series: Vec<Series>) -> Figure {
     Figure {
@@ -162,6 +172,8 @@ fn load_unload(
     let mut times: Vec<f64> = (0..=100).map(|k| t_peak * k as f64 / 100.0).collect();
     times.extend((1..=20).map(|k| t_peak + 1e-3 * k as f64 / 20.0));
     times.extend((1..=100).map(|k| t_peak + 1e-3 + (t_end - t_peak - 1e-3) * k as f64 / 100.0));
+    times.push(t_peak + SECANT_WINDOW / su);
+    times.sort_by(f64::total_cmp);
     let l = Loading::new(ControlKind::Displacement, prog, times)?;
     let params = p.copied().unwrap_or(PipkinRogersParams {
         g1: 1.0,
@@ -339,7 +351,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         "F/(C1 h0 r0)",
         force(&runs_g),
     ));
-    let psic = runs_c
+    let mut psic: Vec<Series> = runs_c
         .iter()
         .chain(runs_g.iter().skip(1))
         .map(|(n, r)| {
@@ -350,6 +362,11 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
             )
         })
         .collect();
+    psic.push(Series::thesis(
+        "thesis §2.5.1: QLV ψc = 1.2917, constant",
+        vec![0.0, 2.5, 5.0, 7.5, 10.0],
+        vec![1.2917; 5],
+    ));
     figs.push(fig(
         "fig2_9",
         "Fig. 2.9: contact angle ψc(t), D/r0 = 0.78",
@@ -415,6 +432,11 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
                 vec![last.psi_c],
                 vec![at_psi(last, last.psi_c, |v| v.lambda2)],
             ),
+            Series::thesis(
+                "thesis §2.5.1: λ2 = 1.1551 (crown), 1.7564 (edge, ψc = 73.7°)",
+                vec![0.0, 73.7_f64.to_radians()],
+                vec![1.1551, 1.7564],
+            ),
         ],
     ));
 
@@ -450,7 +472,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
                     continue;
                 }
                 let (run, i, note) = load_unload(p, d_max, su)?;
-                if let Some(n) = note {
+                if let Some(n) = &note {
                     notes.push(format!("{id} {m} s_u = {su}: curve ends early: {n}"));
                 }
                 let h = &run.history;
@@ -459,19 +481,35 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
                 }
                 let slope =
                     (h[i].force - h[i + 1].force) / (h[i].displacement - h[i + 1].displacement);
+                let t_sec = d_max + SECANT_WINDOW / su;
+                let secant = h
+                    .iter()
+                    .find(|r| (r.time - t_sec).abs() < 1e-9)
+                    .map(|r| (h[i].force - r.force) / (h[i].displacement - r.displacement))
+                    .unwrap_or(f64::NAN);
+                let th = thesis(d_max, su, m.split(' ').next().unwrap_or(m));
                 rows.push(SlopeRow {
                     d_max,
                     unload_rate: su,
                     model: m.into(),
-                    thesis: thesis(d_max, su, m.split(' ').next().unwrap_or(m)),
+                    thesis: th,
                     slope,
+                    secant,
+                    ratio: th.map(|v| secant / 2.0 / v),
                 });
                 if m != "QLV" && m != "NLV c=1" {
-                    series.push(Series::line(
-                        format!("{m}, s_u = {su}"),
-                        h.iter().map(|r| r.displacement).collect(),
-                        h.iter().map(|r| r.force).collect(),
-                    ));
+                    let x: Vec<f64> = h.iter().map(|r| r.displacement).collect();
+                    let y: Vec<f64> = h.iter().map(|r| r.force).collect();
+                    if let (Some(true), Some(&xe), Some(&ye)) =
+                        (note.as_ref().map(|_| true), x.last(), y.last())
+                    {
+                        series.push(Series::points(
+                            format!("{m}, s_u = {su}: wrinkling (curve ends)"),
+                            vec![xe],
+                            vec![ye],
+                        ));
+                    }
+                    series.push(Series::line(format!("{m}, s_u = {su}"), x, y));
                 }
             }
         }
@@ -486,5 +524,28 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
             series,
         ));
     }
+    let with_thesis: Vec<&SlopeRow> = rows.iter().filter(|r| r.thesis.is_some()).collect();
+    let idx: Vec<f64> = (1..=with_thesis.len()).map(|k| k as f64).collect();
+    let ratio = |f: &dyn Fn(&SlopeRow) -> f64| -> Vec<f64> {
+        with_thesis
+            .iter()
+            .map(|r| f(r) / 2.0 / r.thesis.unwrap_or(f64::NAN))
+            .collect()
+    };
+    figs.push(fig(
+        "table2_1",
+        "Table 2.1: our slope / 2 over the thesis value, per row (see table2_1.csv)",
+        "row of table2_1.csv (thesis entries only)",
+        "slope/2 ÷ thesis",
+        vec![
+            Series::points("tangent (first step)", idx.clone(), ratio(&|r| r.slope)),
+            Series::points(
+                format!("secant over ΔD/r0 = {SECANT_WINDOW}"),
+                idx.clone(),
+                ratio(&|r| r.secant),
+            ),
+            Series::thesis("thesis (ratio 1)", idx.clone(), vec![1.0; idx.len()]),
+        ],
+    ));
     Ok((figs, rows, notes))
 }
