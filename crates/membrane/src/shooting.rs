@@ -157,7 +157,8 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
         contact: bool,
     ) -> Result<(f64, [f64; 2]), ShotFail> {
         let compression_ok = contact && self.allow_compression_in_contact;
-        if !(t1 > 0.0) && !(compression_ok && t1.is_finite()) {
+        let admissible = t1 > 0.0 || (compression_ok && t1.is_finite());
+        if !admissible {
             return Err(ShotFail::Tension {
                 psi,
                 which: "T1",
@@ -209,7 +210,8 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
         }
         let (l1, s) = self.invert(psi, t1, l2, contact)?;
         let t2 = s[1] / (l1 * l2);
-        if !(t2 > 0.0) && !(contact && self.allow_compression_in_contact) {
+        let admissible = t2 > 0.0 || (contact && self.allow_compression_in_contact);
+        if !admissible {
             return Err(ShotFail::Tension {
                 psi,
                 which: "T2",
