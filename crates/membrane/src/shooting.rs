@@ -173,7 +173,7 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
         for _ in 0..60 {
             let (s, ds1) = self.stress(psi, [l1, l2])?;
             let f = s[0] / (l1 * l2) - t1;
-            if f.abs() <= 1e-15 * t1.abs() {
+            if f.abs() <= 1e-13 * t1.abs() {
                 self.lam1_guess = l1;
                 return Ok((l1, s));
             }
@@ -186,9 +186,9 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
             }
             let step = f / fp;
             // As T1 → 0 the relative test above asks for more than rounding
-            // allows (σ1 is a difference of O(1) terms): a Newton step at
-            // rounding level in λ1 is convergence too.
-            if step.abs() <= 4.0 * f64::EPSILON * l1 {
+            // allows (σ1 is a difference of O(1) terms): a Newton step below
+            // 1e-13 λ1 is convergence too.
+            if step.abs() <= 1e-13 * l1 {
                 self.lam1_guess = l1;
                 return Ok((l1, s));
             }
