@@ -13,12 +13,14 @@
 //!
 //! Any [`nlvid_material::MembraneMaterial`] can be used; [`models`] holds an
 //! incompressible Mooney–Rivlin membrane and the ch. II Pipkin–Rogers
-//! membrane (eqs. 2.53–2.56). Everything is dimensionless (eq. 2.47):
+//! membrane (eqs. 2.53–2.56, a thin adapter over
+//! [`nlvid_material::PipkinRogers`]); [`thesis`] regenerates the data of
+//! Figs. 2.3–2.14 and Table 2.1 and [`plot`] draws them as SVG. Everything is dimensionless (eq. 2.47):
 //! F̄ = F/(C1 h0 r0), p̄ = p r0/(C1 h0), t0 = t/τ1.
 //!
 //! Cost: one shot is O(nodes) material updates (×2 for blended histories);
 //! a time step takes 3–8 shots; the Fig. 2.6 relaxation run (101 steps,
-//! 64 intervals) takes a few tenths of a second on one core (see
+//! 64 intervals) takes ≈ 0.35 s of CPU on one core (see
 //! `benches/relaxation.rs`).
 //!
 //! ```
@@ -45,6 +47,7 @@
 
 mod error;
 pub mod models;
+pub mod plot;
 mod shooting;
 mod simulate;
 mod solver;
@@ -55,5 +58,7 @@ pub use models::{
     MooneyRivlinMembrane, PipkinRogersMembrane, PipkinRogersParams, PipkinRogersState,
 };
 pub use shooting::NodeValue;
-pub use simulate::{ControlKind, Loading, MembraneRun, StepRecord, simulate, simulate_with};
+pub use simulate::{
+    ControlKind, Loading, MembraneRun, StepRecord, run_loading, simulate, simulate_with,
+};
 pub use solver::{Control, Geometry, MembraneSolver, NewtonSettings, Solution};

@@ -1,10 +1,13 @@
-//! Membrane point updates of ch. II used by the solver until (and alongside)
-//! the `nlvid-material` implementations: an incompressible Mooney–Rivlin
-//! membrane and the ch. II Pipkin–Rogers membrane (eqs. 2.53–2.56) with the
-//! trapezoidal hereditary sums of eq. 2.48 written as a recursive update.
+//! Membrane point updates of ch. II: the ch. II Pipkin–Rogers membrane
+//! (eqs. 2.53–2.56, trapezoidal hereditary sums of eq. 2.48) as a thin
+//! adapter over [`nlvid_material::PipkinRogers`] (plane stress with
+//! λ3 = 1/(λ1 λ2)), so the viscoelastic law lives in one place and this module
+//! only holds the ch. II parametrisation (C1, γ0, g1, g2, c, τ1, a) and its
+//! validation; and the closed-form incompressible Mooney–Rivlin membrane
+//! (eq. 2.4) used by the elastic sweeps.
 //!
 //! Both implement [`MembraneMaterial`], so the solver does not know which one
-//! it runs; swap in `nlvid-material`'s types when they land.
+//! it runs.
 
 use nlvid_material::{MaterialError, MembraneMaterial, MembraneResponse};
 use serde::{Deserialize, Serialize};
@@ -24,6 +27,11 @@ fn check_stretches(l: [f64; 2]) -> std::result::Result<(), MaterialError> {
 
 /// Incompressible Mooney–Rivlin membrane, W = C1 (I1 − 3) + C2 (I2 − 3):
 /// σα = 2 (λα² − λ3²)(C1 + C2 λβ²), λ3 = 1/(λ1 λ2) (eq. 2.4 with σ3 = 0).
+///
+/// Kept in closed form (not delegated to `nlvid_material::MooneyRivlin`)
+/// because the elastic sweeps call it millions of times and the 3D kernel
+/// costs ≈ 10× more; `mooney_rivlin_membrane_equals_nlvid_material` checks
+/// that both agree.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MooneyRivlinMembrane {
     /// C1 (stress units).
@@ -163,32 +171,38 @@ impl PipkinRogersParams {
         if !(self.a >= 0.0 && self.a.is_finite()) {
             return Err(bad("a", self.a, "Φ exponent a must be ≥ 0"));
         }
-        Ok(PipkinRogersMembrane { p: *self })
+        let inner = nlvid_material::PipkinRogers::from_eq_2_56(
+            &nlvid_material::Eq256 {
+                c1: self.c1,
+                gamma0: self.gamma0,
+                g1_fraction: self.g1,
+                g2_fraction: self.g2,
+                tau1: self.tau1,
+                c: self.c,
+                a: self.a,
+            },
+            0.0,
+        )
+        .map_err(|e| bad("pipkin_rogers", f64::NAN, &e.to_string()))?
+        .with_rule(nlvid_material::HistoryRule::Trapezoid);
+        Ok(PipkinRogersMembrane { p: *self, inner })
     }
 }
 
-/// The ch. II Pipkin–Rogers membrane point update (see [`PipkinRogersParams`]).
-///
-/// R[C, τ] = G1(τ) A(C) + G2(τ) B(C) with A, B from eq. 2.55:
-/// A = 2(1 − I2Φ) I + 2 I1Φ C − 2Φ C², B = 2(I1 − 2 I2Φ) I + 2(2 I1Φ − 1) C − 4Φ C².
-/// σα = λα² Sα − λ3² S3 (eqs. 2.21–2.24), S = R[C(t), 0] + ∫ ∂τ R[C(s), t − s] ds,
-/// the integral by the trapezoidal rule (eq. 2.48), which for the exponential
-/// kernels of eq. 2.56 is exactly the recursion
-/// Iα(tn+1) = e^{−Δ/τα} Iα(tn) + Δ/2 [kα(Δ) Mα(tn) + kα(0) Mα(tn+1)].
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// The ch. II Pipkin–Rogers membrane point update (see [`PipkinRogersParams`]):
+/// [`nlvid_material::PipkinRogers`] built by `from_eq_2_56` (factor 2 of
+/// eq. 2.55 kept, G1(0) = C1) with the trapezoidal rule of eq. 2.48
+/// ([`nlvid_material::HistoryRule::Trapezoid`]), evaluated in plane stress.
+#[derive(Debug, Clone, PartialEq)]
 pub struct PipkinRogersMembrane {
     p: PipkinRogersParams,
+    inner: nlvid_material::PipkinRogers,
 }
 
-/// History of one Pipkin–Rogers membrane point: the two hereditary integrals
-/// and the last A(C), B(C) (principal components 1, 2, 3).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct PipkinRogersState {
-    i1: [f64; 3],
-    i2: [f64; 3],
-    a_prev: [f64; 3],
-    b_prev: [f64; 3],
-}
+/// History of one Pipkin–Rogers membrane point (the hereditary integrals of
+/// [`nlvid_material::PipkinRogersState`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PipkinRogersState(nlvid_material::PipkinRogersState);
 
 impl PipkinRogersMembrane {
     /// The parameters.
@@ -196,51 +210,9 @@ impl PipkinRogersMembrane {
         &self.p
     }
 
-    /// G1(0), G2(0), G1(∞), G2(∞), τ1, τ2.
-    fn moduli(&self) -> (f64, f64, f64, f64, f64, f64) {
-        let p = &self.p;
-        let g10 = p.c1;
-        let g20 = p.gamma0 * p.c1;
-        (g10, g20, p.g1 * g10, p.g2 * g20, p.tau1, p.tau1 / p.c)
-    }
-
-    /// A(C), B(C) and their derivatives with respect to λ1 and λ2.
-    #[allow(clippy::type_complexity)]
-    fn ab(&self, l1: f64, l2: f64) -> ([f64; 3], [f64; 3], [[f64; 3]; 2], [[f64; 3]; 2]) {
-        let c = [l1 * l1, l2 * l2, 1.0 / (l1 * l1 * l2 * l2)];
-        // dc[β][i] = ∂c_i/∂λβ
-        let dc = [
-            [2.0 * l1, 0.0, -2.0 * c[2] / l1],
-            [0.0, 2.0 * l2, -2.0 * c[2] / l2],
-        ];
-        let i1 = c[0] + c[1] + c[2];
-        let i2 = c[0] * c[1] + c[1] * c[2] + c[2] * c[0];
-        let phi = (-self.p.a * (i1 - 3.0)).exp();
-        let mut a = [0.0; 3];
-        let mut b = [0.0; 3];
-        let mut da = [[0.0; 3]; 2];
-        let mut db = [[0.0; 3]; 2];
-        for i in 0..3 {
-            a[i] = 2.0 * (1.0 - i2 * phi) + 2.0 * i1 * phi * c[i] - 2.0 * phi * c[i] * c[i];
-            b[i] = 2.0 * (i1 - 2.0 * i2 * phi) + 2.0 * (2.0 * i1 * phi - 1.0) * c[i]
-                - 4.0 * phi * c[i] * c[i];
-        }
-        for beta in 0..2 {
-            let d = &dc[beta];
-            let di1 = d[0] + d[1] + d[2];
-            let di2 = d[0] * (i1 - c[0]) + d[1] * (i1 - c[1]) + d[2] * (i1 - c[2]);
-            let dphi = -self.p.a * phi * di1;
-            for i in 0..3 {
-                da[beta][i] = -2.0 * (di2 * phi + i2 * dphi)
-                    + 2.0 * (di1 * phi * c[i] + i1 * dphi * c[i] + i1 * phi * d[i])
-                    - 2.0 * (dphi * c[i] * c[i] + 2.0 * phi * c[i] * d[i]);
-                db[beta][i] = 2.0 * (di1 - 2.0 * di2 * phi - 2.0 * i2 * dphi)
-                    + 2.0 * (2.0 * di1 * phi + 2.0 * i1 * dphi) * c[i]
-                    + 2.0 * (2.0 * i1 * phi - 1.0) * d[i]
-                    - 4.0 * (dphi * c[i] * c[i] + 2.0 * phi * c[i] * d[i]);
-            }
-        }
-        (a, b, da, db)
+    /// The `nlvid-material` model this adapter evaluates.
+    pub fn material(&self) -> &nlvid_material::PipkinRogers {
+        &self.inner
     }
 }
 
@@ -248,8 +220,7 @@ impl MembraneMaterial for PipkinRogersMembrane {
     type State = PipkinRogersState;
 
     fn initial_state(&self) -> Self::State {
-        // A(I) = B(I) = 0 (eq. 2.11 with K = 0): the undeformed history is zero.
-        PipkinRogersState::default()
+        PipkinRogersState(MembraneMaterial::initial_state(&self.inner))
     }
 
     fn update(
@@ -259,51 +230,7 @@ impl MembraneMaterial for PipkinRogersMembrane {
         dt: f64,
         trial: &mut PipkinRogersState,
     ) -> nlvid_material::Result<MembraneResponse> {
-        check_stretches(l)?;
-        if !(dt >= 0.0 && dt.is_finite()) {
-            return Err(MaterialError::Deformation(format!(
-                "time increment must be ≥ 0, got {dt}"
-            )));
-        }
-        let [l1, l2] = l;
-        let (g10, g20, g1i, g2i, tau1, tau2) = self.moduli();
-        // kα(τ) = dGα/dτ = −(Gα0 − Gα∞)/τα e^{−τ/τα}
-        let k1_0 = -(g10 - g1i) / tau1;
-        let k2_0 = -(g20 - g2i) / tau2;
-        let e1 = (-dt / tau1).exp();
-        let e2 = (-dt / tau2).exp();
-        let (a, b, da, db) = self.ab(l1, l2);
-        let w1 = g10 + 0.5 * dt * k1_0; // weight of the current A in S
-        let w2 = g20 + 0.5 * dt * k2_0;
-        let mut s = [0.0; 3];
-        for i in 0..3 {
-            trial.i1[i] =
-                e1 * state_n.i1[i] + 0.5 * dt * (k1_0 * e1 * state_n.a_prev[i] + k1_0 * a[i]);
-            trial.i2[i] =
-                e2 * state_n.i2[i] + 0.5 * dt * (k2_0 * e2 * state_n.b_prev[i] + k2_0 * b[i]);
-            trial.a_prev[i] = a[i];
-            trial.b_prev[i] = b[i];
-            s[i] = g10 * a[i] + g20 * b[i] + trial.i1[i] + trial.i2[i];
-        }
-        let c = [l1 * l1, l2 * l2, 1.0 / (l1 * l1 * l2 * l2)];
-        let dc = [
-            [2.0 * l1, 0.0, -2.0 * c[2] / l1],
-            [0.0, 2.0 * l2, -2.0 * c[2] / l2],
-        ];
-        let sig = [c[0] * s[0] - c[2] * s[2], c[1] * s[1] - c[2] * s[2]];
-        let mut tan = [[0.0; 2]; 2];
-        for alpha in 0..2 {
-            for beta in 0..2 {
-                let ds = |i: usize| w1 * da[beta][i] + w2 * db[beta][i];
-                tan[alpha][beta] = dc[beta][alpha] * s[alpha] + c[alpha] * ds(alpha)
-                    - dc[beta][2] * s[2]
-                    - c[2] * ds(2);
-            }
-        }
-        Ok(MembraneResponse {
-            cauchy: sig,
-            tangent: tan,
-        })
+        MembraneMaterial::update(&self.inner, &state_n.0, l, dt, &mut trial.0)
     }
 }
 
@@ -360,6 +287,26 @@ mod tests {
     }
 
     #[test]
+    fn mooney_rivlin_membrane_equals_nlvid_material() {
+        let m = MooneyRivlinMembrane::new(1.3, 0.2).unwrap();
+        let n = nlvid_material::MooneyRivlin::new(1.3, 0.26, 0.0).unwrap();
+        for l in [[1.1, 1.3], [1.7, 1.05], [0.9, 1.4]] {
+            let a = m.update(&(), l, 0.0, &mut ()).unwrap();
+            let b = MembraneMaterial::update(&n, &(), l, 0.0, &mut ()).unwrap();
+            for i in 0..2 {
+                approx::assert_relative_eq!(a.cauchy[i], b.cauchy[i], max_relative = 1e-12);
+                for j in 0..2 {
+                    approx::assert_relative_eq!(
+                        a.tangent[i][j],
+                        b.tangent[i][j],
+                        max_relative = 1e-10
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn pipkin_rogers_instantaneous_response_is_mooney_rivlin_for_any_phi() {
         for a in [0.0, 0.3] {
             let p = PipkinRogersParams {
@@ -393,7 +340,7 @@ mod tests {
         let mut s0 = m.initial_state();
         let mut s1 = m.initial_state();
         m.update(&s0, [1.2, 1.1], 0.0, &mut s1).unwrap();
-        s0 = s1;
+        s0 = s1.clone();
         m.update(&s0, [1.4, 1.2], 0.3, &mut s1).unwrap();
         let l = [1.5, 1.25];
         let dt = 0.2;
@@ -421,12 +368,12 @@ mod tests {
         let mut st = m.initial_state();
         let mut tr = m.initial_state();
         let s0 = m.update(&st, l, 0.0, &mut tr).unwrap().cauchy;
-        st = tr;
+        st = tr.clone();
         let dt = 0.1;
         let k = |tau: f64| -(1.0 - 0.2) * (-tau).exp();
         for n in 1..=20 {
             let s = m.update(&st, l, dt, &mut tr).unwrap().cauchy;
-            st = tr;
+            st = tr.clone();
             let t = n as f64 * dt;
             let g_trap = 1.0
                 + (0..n)

@@ -77,6 +77,9 @@ pub(crate) struct Shooter<'a, M: MembraneMaterial> {
     pub dt: f64,
     pub scale: f64,
     pub scratch: M::State,
+    /// Accept non-positive tensions in the flat contact region (see
+    /// [`crate::MembraneSolver::allow_compression_in_contact`]).
+    pub allow_compression_in_contact: bool,
     lam1_guess: f64,
 }
 
@@ -91,8 +94,15 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
             dt,
             scale,
             scratch: mat.initial_state(),
+            allow_compression_in_contact: false,
             lam1_guess: 1.0,
         }
+    }
+
+    /// Sets [`Self::allow_compression_in_contact`].
+    pub fn compression(mut self, allow: bool) -> Self {
+        self.allow_compression_in_contact = allow;
+        self
     }
 
     fn intervals(&self) -> usize {
@@ -139,8 +149,16 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
     }
 
     /// λ1 with T1(λ1, λ2) = t1 at ψ; returns (λ1, σ1, σ2).
-    fn invert(&mut self, psi: f64, t1: f64, l2: f64) -> Result<(f64, [f64; 2]), ShotFail> {
-        if !(t1 > 0.0) {
+    fn invert(
+        &mut self,
+        psi: f64,
+        t1: f64,
+        l2: f64,
+        contact: bool,
+    ) -> Result<(f64, [f64; 2]), ShotFail> {
+        let compression_ok = contact && self.allow_compression_in_contact;
+        let admissible = t1 > 0.0 || (compression_ok && t1.is_finite());
+        if !admissible {
             return Err(ShotFail::Tension {
                 psi,
                 which: "T1",
@@ -155,7 +173,7 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
         for _ in 0..60 {
             let (s, ds1) = self.stress(psi, [l1, l2])?;
             let f = s[0] / (l1 * l2) - t1;
-            if f.abs() <= 1e-13 * t1 {
+            if f.abs() <= 1e-13 * t1.abs() {
                 self.lam1_guess = l1;
                 return Ok((l1, s));
             }
@@ -166,7 +184,15 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
                     what: "meridional tension is not increasing with λ1 (cannot recover λ1 from T1)",
                 });
             }
-            l1 = (l1 - f / fp).max(0.5 * l1).min(2.0 * l1);
+            let step = f / fp;
+            // As T1 → 0 the relative test above asks for more than rounding
+            // allows (σ1 is a difference of O(1) terms): a Newton step below
+            // 1e-13 λ1 is convergence too.
+            if step.abs() <= 1e-13 * l1 {
+                self.lam1_guess = l1;
+                return Ok((l1, s));
+            }
+            l1 = (l1 - step).max(0.5 * l1).min(2.0 * l1);
         }
         Err(ShotFail::Breakdown {
             psi,
@@ -182,9 +208,10 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
                 what: "circumferential stretch or state became non-positive/non-finite",
             });
         }
-        let (l1, s) = self.invert(psi, t1, l2)?;
+        let (l1, s) = self.invert(psi, t1, l2, contact)?;
         let t2 = s[1] / (l1 * l2);
-        if !(t2 > 0.0) {
+        let admissible = t2 > 0.0 || (contact && self.allow_compression_in_contact);
+        if !admissible {
             return Err(ShotFail::Tension {
                 psi,
                 which: "T2",
@@ -242,7 +269,7 @@ impl<'a, M: MembraneMaterial> Shooter<'a, M> {
     }
 
     fn node_value(&mut self, psi: f64, y: &[f64; Y], contact: bool) -> Result<NodeValue, ShotFail> {
-        let (l1, s) = self.invert(psi, y[0], y[1])?;
+        let (l1, s) = self.invert(psi, y[0], y[1], contact)?;
         Ok(NodeValue {
             psi,
             lambda1: l1,

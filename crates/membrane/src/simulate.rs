@@ -184,6 +184,27 @@ pub fn simulate_with<M: MembraneMaterial>(
     loading: &Loading,
 ) -> Result<MembraneRun> {
     let mut solver = MembraneSolver::new(material, *geometry, stress_scale)?;
+    run_loading(&mut solver, loading)
+}
+
+/// Runs `loading` on a prepared solver (e.g. with
+/// [`MembraneSolver::allow_compression_in_contact`] or [`MembraneSolver::newton`]
+/// changed); the solver must not have been advanced yet.
+///
+/// # Errors
+/// As [`simulate`]; [`MembraneError::Input`] when the solver was already advanced.
+pub fn run_loading<M: MembraneMaterial>(
+    solver: &mut MembraneSolver<M>,
+    loading: &Loading,
+) -> Result<MembraneRun> {
+    if let Some(t) = solver.time() {
+        return Err(MembraneError::Input {
+            name: "solver",
+            value: t,
+            reason: "run_loading needs a fresh solver (it was already advanced to this time)"
+                .into(),
+        });
+    }
     let mut history = Vec::with_capacity(loading.times.len());
     let mut profiles = Vec::new();
     // Index of the solve time nearest to each requested profile time.

@@ -187,6 +187,14 @@ pub struct MembraneSolver<M: MembraneMaterial> {
     jac: Option<[[f64; 3]; 3]>,
     /// Newton settings (public to tune).
     pub newton: NewtonSettings,
+    /// Accept non-positive principal tensions in the flat contact region
+    /// (default `false`: reported as [`MembraneError::Wrinkling`]). A
+    /// membrane cannot carry compression, so `true` gives the solution of
+    /// the equations of §2.3 without the tension check in 0 ≤ ψ ≤ ψc, i.e.
+    /// what a solver in (λ1, λ2, w) that never looks at the sign of σ (the
+    /// thesis's formulation, eqs. 2.38–2.39) computes; the free region
+    /// must stay in tension either way (eq. 2.37 divides by σ1).
+    pub allow_compression_in_contact: bool,
 }
 
 fn norm(r: &[f64; 3]) -> f64 {
@@ -256,6 +264,7 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
             last_control: Control::Displacement(0.0),
             jac: None,
             newton: NewtonSettings::default(),
+            allow_compression_in_contact: false,
         };
         // Sphere guess: p = 2 T/λs (Laplace), T = σ/λs².
         let rs = geometry.rs;
@@ -309,11 +318,33 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         Ok(([end.theta_end - FRAC_PI_2, end.volume / v0 - 1.0, c], end))
     }
 
+    /// Newton with forward-difference Jacobians (step 1e-7 relative); when that
+    /// stalls, once more with step 1e-9: near slack states the shot is so
+    /// sensitive (|∂θ(π/2)/∂λ0| ≈ 2e4) that 1e-7 leaves the linear range and
+    /// gives ascent directions, while near first contact/loss of contact the
+    /// larger step is the robust one.
     fn newton(
         &mut self,
         dt: f64,
         control: Control,
         x0: [f64; 3],
+    ) -> std::result::Result<([f64; 3], usize), NewtonFail> {
+        match self.newton_fd(dt, control, x0, 1e-7) {
+            Err(first @ NewtonFail::Stalled { .. }) => {
+                self.jac = None;
+                // If both stall, report the first attempt (the usual step).
+                self.newton_fd(dt, control, x0, 1e-9).map_err(|_| first)
+            }
+            r => r,
+        }
+    }
+
+    fn newton_fd(
+        &mut self,
+        dt: f64,
+        control: Control,
+        x0: [f64; 3],
+        fd_step: f64,
     ) -> std::result::Result<([f64; 3], usize), NewtonFail> {
         let fixed_psi = match control {
             Control::ContactAngle(v) => Some(v.max(0.0)),
@@ -322,7 +353,8 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         };
         let touches = fixed_psi.is_none();
         let mat = &self.material;
-        let mut sh = Shooter::new(mat, &self.states, self.uniform, dt, self.scale);
+        let mut sh = Shooter::new(mat, &self.states, self.uniform, dt, self.scale)
+            .compression(self.allow_compression_in_contact);
         let mut x = x0;
         if let Some(v) = fixed_psi {
             x[1] = v;
@@ -353,7 +385,7 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                         j[1][1] = 1.0;
                         continue;
                     }
-                    let h = 1e-7 * (1.0 + x[k].abs());
+                    let h = fd_step * (1.0 + x[k].abs());
                     let mut xp = x;
                     xp[k] += h;
                     let (rp, _) = match self.residual(&mut sh, xp, control) {
@@ -604,7 +636,8 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         self.x = saved.0;
         self.jac = None;
         let x = free?;
-        let mut sh = Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale);
+        let mut sh = Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale)
+            .compression(self.allow_compression_in_contact);
         let end = sh.shoot(x[0], 0.0, x[2], None).ok()?;
         if self.geometry.rs - end.h1 >= d - 1e-12 {
             self.detached = Some(d);
@@ -652,7 +685,8 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                 let (_, x0) = self.sweep_psi(dt, self.x[1], |_, _| false)?;
                 self.x = x0;
                 let mut sh =
-                    Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale);
+                    Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale)
+                        .compression(self.allow_compression_in_contact);
                 match sh.shoot(x0[0], x0[1], x0[2], None) {
                     Ok(end) => self.control_value(control, &x0, &end),
                     Err(_) => 0.0,
@@ -692,7 +726,8 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                     let eval = |s: &mut Self, psi: f64, g: [f64; 3]| -> Option<([f64; 3], f64)> {
                         s.jac = None;
                         let (x, _) = s.newton(dt, Control::ContactAngle(psi), g).ok()?;
-                        let mut sh = Shooter::new(&s.material, &s.states, s.uniform, dt, s.scale);
+                        let mut sh = Shooter::new(&s.material, &s.states, s.uniform, dt, s.scale)
+                            .compression(s.allow_compression_in_contact);
                         let end = sh.shoot(x[0], x[1], x[2], None).ok()?;
                         Some((x, s.control_value(control, &x, &end) - target))
                     };
@@ -830,7 +865,8 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                         h = (h * 1.3).min(0.1);
                     }
                     let mut sh =
-                        Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale);
+                        Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale)
+                            .compression(self.allow_compression_in_contact);
                     if let Ok(end) = sh.shoot(cur[0], cur[1], cur[2], None) {
                         if stop(&cur, &end) {
                             return Ok((prev, cur));
@@ -857,7 +893,8 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         control: Control,
         iterations: usize,
     ) -> Result<Solution> {
-        let mut sh = Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale);
+        let mut sh = Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale)
+            .compression(self.allow_compression_in_contact);
         let psi_c = if control.touches() { x[1] } else { 0.0 };
         let mut prof = Vec::with_capacity(self.geometry.nodes + 1);
         let end = sh

@@ -13,6 +13,19 @@ use crate::{
     MooneyRivlinMembrane, PipkinRogersParams, Result, Solution, simulate,
 };
 
+/// How a [`Series`] is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SeriesKind {
+    /// Computed curve (line).
+    #[default]
+    Line,
+    /// Computed isolated points (e.g. the contact edge).
+    Points,
+    /// Values quoted in the thesis text or tables, for comparison.
+    Thesis,
+}
+
 /// One curve.
 #[derive(Debug, Clone, Serialize)]
 pub struct Series {
@@ -22,6 +35,34 @@ pub struct Series {
     pub x: Vec<f64>,
     /// Ordinates.
     pub y: Vec<f64>,
+    /// How to draw it.
+    pub kind: SeriesKind,
+}
+
+impl Series {
+    /// A computed curve.
+    pub fn line(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>) -> Self {
+        Self {
+            label: label.into(),
+            x,
+            y,
+            kind: SeriesKind::Line,
+        }
+    }
+    /// Computed isolated points.
+    pub fn points(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>) -> Self {
+        Self {
+            kind: SeriesKind::Points,
+            ..Self::line(label, x, y)
+        }
+    }
+    /// Values quoted by the thesis.
+    pub fn thesis(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>) -> Self {
+        Self {
+            kind: SeriesKind::Thesis,
+            ..Self::line(label, x, y)
+        }
+    }
 }
 
 /// One figure's data.
@@ -50,9 +91,19 @@ pub struct SlopeRow {
     pub model: String,
     /// Thesis value (None where the table is blank).
     pub thesis: Option<f64>,
-    /// Tangent dF/dD over the first unloading step (ΔD = s_u·5e-5).
+    /// Tangent dF̄/dD̄ over the first unloading step (ΔD = s_u·5e-5).
     pub slope: f64,
+    /// Secant from the peak over the first ΔD/r0 = 0.01 of unloading,
+    /// [`SECANT_WINDOW`].
+    pub secant: f64,
+    /// `secant / 2 / thesis`: the secant in the App. D force scale
+    /// F/(G10 h0 r0) with G10 = 2 C1 (eq. D.2 drops the 2 of eq. 2.55), over
+    /// the thesis value. The NLE rows give 1.00; see docs/theory/membrane.md.
+    pub ratio: Option<f64>,
 }
+
+/// Unloading window ΔD/r0 of [`SlopeRow::secant`].
+pub const SECANT_WINDOW: f64 = 0.01;
 
 fn fig(id: &str, title: &str, x: &str, y: &str, series: Vec<Series>) -> Figure {
     Figure {
@@ -121,6 +172,8 @@ fn load_unload(
     let mut times: Vec<f64> = (0..=100).map(|k| t_peak * k as f64 / 100.0).collect();
     times.extend((1..=20).map(|k| t_peak + 1e-3 * k as f64 / 20.0));
     times.extend((1..=100).map(|k| t_peak + 1e-3 + (t_end - t_peak - 1e-3) * k as f64 / 100.0));
+    times.push(t_peak + SECANT_WINDOW / su);
+    times.sort_by(f64::total_cmp);
     let l = Loading::new(ControlKind::Displacement, prog, times)?;
     let params = p.copied().unwrap_or(PipkinRogersParams {
         g1: 1.0,
@@ -168,16 +221,16 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
     let mut series = Vec::new();
     for d in [0.1, 0.28, 0.53, 0.78] {
         let sol = s.equilibrium(0.0, Control::Displacement(d))?;
-        series.push(Series {
-            label: format!("D/r0 = {d}"),
-            x: sol.profile.iter().map(|v| v.rho).collect(),
-            y: sol.profile.iter().map(|v| v.eta).collect(),
-        });
-        series.push(Series {
-            label: format!("contact edge, D/r0 = {d}"),
-            x: vec![sol.contact_radius],
-            y: vec![sol.h1],
-        });
+        series.push(Series::line(
+            format!("D/r0 = {d}"),
+            sol.profile.iter().map(|v| v.rho).collect(),
+            sol.profile.iter().map(|v| v.eta).collect(),
+        ));
+        series.push(Series::points(
+            format!("contact edge, D/r0 = {d}"),
+            vec![sol.contact_radius],
+            vec![sol.h1],
+        ));
     }
     figs.push(fig(
         "fig2_3",
@@ -196,11 +249,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         for &d in &ds {
             f.push(s.equilibrium(0.0, Control::Displacement(d))?.force);
         }
-        series.push(Series {
-            label: format!("γ = {gamma}"),
-            x: ds.clone(),
-            y: f,
-        });
+        series.push(Series::line(format!("γ = {gamma}"), ds.clone(), f));
     }
     figs.push(fig(
         "fig2_4",
@@ -212,11 +261,11 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
 
     // Fig. 2.5: NLE vs QLV at D = 2t, t, t/2.
     let qlv = pr(0.2, 0.2, 1.0);
-    let mut series = vec![Series {
-        label: "NLE γ = 0.1".into(),
-        x: ds.clone(),
-        y: figs[1].series[1].y.clone(),
-    }];
+    let mut series = vec![Series::line(
+        "NLE γ = 0.1",
+        ds.clone(),
+        figs[1].series[1].y.clone(),
+    )];
     for rate in [2.0, 1.0, 0.5] {
         let prog =
             programs::constant_rate(Quantity::Dimensionless, rate, 0.78 / rate).map_err(proto)?;
@@ -226,11 +275,11 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
             &Geometry::default(),
             &Loading::new(ControlKind::Displacement, prog, times)?,
         )?;
-        series.push(Series {
-            label: format!("QLV g1 = g2 = 0.2, D = {rate} t"),
-            x: run.history.iter().map(|r| r.displacement).collect(),
-            y: run.force(),
-        });
+        series.push(Series::line(
+            format!("QLV g1 = g2 = 0.2, D = {rate} t"),
+            run.history.iter().map(|r| r.displacement).collect(),
+            run.force(),
+        ));
     }
     figs.push(fig(
         "fig2_5",
@@ -249,11 +298,11 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
             ("NLV g1=0.2, g2=0.3, c=1/2", &nlv6),
         ] {
             let run = step_run(p, d, false)?;
-            series.push(Series {
-                label: format!("{name}, D/r0 = {d}"),
-                x: run.times(),
-                y: run.force(),
-            });
+            series.push(Series::line(
+                format!("{name}, D/r0 = {d}"),
+                run.times(),
+                run.force(),
+            ));
         }
     }
     figs.push(fig(
@@ -285,11 +334,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
     }
     let force = |runs: &[(&str, MembraneRun)]| {
         runs.iter()
-            .map(|(n, r)| Series {
-                label: n.to_string(),
-                x: r.times(),
-                y: r.force(),
-            })
+            .map(|(n, r)| Series::line(n.to_string(), r.times(), r.force()))
             .collect::<Vec<_>>()
     };
     figs.push(fig(
@@ -306,15 +351,22 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         "F/(C1 h0 r0)",
         force(&runs_g),
     ));
-    let psic = runs_c
+    let mut psic: Vec<Series> = runs_c
         .iter()
         .chain(runs_g.iter().skip(1))
-        .map(|(n, r)| Series {
-            label: n.to_string(),
-            x: r.times(),
-            y: r.history.iter().map(|h| h.psi_c).collect(),
+        .map(|(n, r)| {
+            Series::line(
+                n.to_string(),
+                r.times(),
+                r.history.iter().map(|h| h.psi_c).collect(),
+            )
         })
         .collect();
+    psic.push(Series::thesis(
+        "thesis §2.5.1: QLV ψc = 1.2917, constant",
+        vec![0.0, 2.5, 5.0, 7.5, 10.0],
+        vec![1.2917; 5],
+    ));
     figs.push(fig(
         "fig2_9",
         "Fig. 2.9: contact angle ψc(t), D/r0 = 0.78",
@@ -326,14 +378,14 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         let mut v = Vec::new();
         for (n, r) in runs {
             for (k, name) in [(0, "λ1"), (1, "λ2")] {
-                v.push(Series {
-                    label: format!("{name}, {n}"),
-                    x: r.profiles.iter().map(|s| s.time).collect(),
-                    y: r.profiles
+                v.push(Series::line(
+                    format!("{name}, {n}"),
+                    r.profiles.iter().map(|s| s.time).collect(),
+                    r.profiles
                         .iter()
                         .map(|s| at_psi(s, 0.25, |p| if k == 0 { p.lambda1 } else { p.lambda2 }))
                         .collect(),
-                });
+                ));
             }
         }
         v
@@ -371,31 +423,20 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         "ψ (rad)",
         "λ, σ/C1",
         vec![
-            Series {
-                label: "λ1".into(),
-                x: psi.clone(),
-                y: col(|v| v.lambda1),
-            },
-            Series {
-                label: "λ2".into(),
-                x: psi.clone(),
-                y: col(|v| v.lambda2),
-            },
-            Series {
-                label: "σ1/C1".into(),
-                x: psi.clone(),
-                y: col(|v| v.sigma1),
-            },
-            Series {
-                label: "σ2/C1".into(),
-                x: psi.clone(),
-                y: col(|v| v.sigma2),
-            },
-            Series {
-                label: "ψc".into(),
-                x: vec![last.psi_c],
-                y: vec![at_psi(last, last.psi_c, |v| v.lambda2)],
-            },
+            Series::line("λ1", psi.clone(), col(|v| v.lambda1)),
+            Series::line("λ2", psi.clone(), col(|v| v.lambda2)),
+            Series::line("σ1/C1", psi.clone(), col(|v| v.sigma1)),
+            Series::line("σ2/C1", psi.clone(), col(|v| v.sigma2)),
+            Series::points(
+                "ψc",
+                vec![last.psi_c],
+                vec![at_psi(last, last.psi_c, |v| v.lambda2)],
+            ),
+            Series::thesis(
+                "thesis §2.5.1: λ2 = 1.1551 (crown), 1.7564 (edge, ψc = 73.7°)",
+                vec![0.0, 73.7_f64.to_radians()],
+                vec![1.1551, 1.7564],
+            ),
         ],
     ));
 
@@ -431,7 +472,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
                     continue;
                 }
                 let (run, i, note) = load_unload(p, d_max, su)?;
-                if let Some(n) = note {
+                if let Some(n) = &note {
                     notes.push(format!("{id} {m} s_u = {su}: curve ends early: {n}"));
                 }
                 let h = &run.history;
@@ -440,19 +481,35 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
                 }
                 let slope =
                     (h[i].force - h[i + 1].force) / (h[i].displacement - h[i + 1].displacement);
+                let t_sec = d_max + SECANT_WINDOW / su;
+                let secant = h
+                    .iter()
+                    .find(|r| (r.time - t_sec).abs() < 1e-9)
+                    .map(|r| (h[i].force - r.force) / (h[i].displacement - r.displacement))
+                    .unwrap_or(f64::NAN);
+                let th = thesis(d_max, su, m.split(' ').next().unwrap_or(m));
                 rows.push(SlopeRow {
                     d_max,
                     unload_rate: su,
                     model: m.into(),
-                    thesis: thesis(d_max, su, m.split(' ').next().unwrap_or(m)),
+                    thesis: th,
                     slope,
+                    secant,
+                    ratio: th.map(|v| secant / 2.0 / v),
                 });
                 if m != "QLV" && m != "NLV c=1" {
-                    series.push(Series {
-                        label: format!("{m}, s_u = {su}"),
-                        x: h.iter().map(|r| r.displacement).collect(),
-                        y: h.iter().map(|r| r.force).collect(),
-                    });
+                    let x: Vec<f64> = h.iter().map(|r| r.displacement).collect();
+                    let y: Vec<f64> = h.iter().map(|r| r.force).collect();
+                    if let (Some(true), Some(&xe), Some(&ye)) =
+                        (note.as_ref().map(|_| true), x.last(), y.last())
+                    {
+                        series.push(Series::points(
+                            format!("{m}, s_u = {su}: wrinkling (curve ends)"),
+                            vec![xe],
+                            vec![ye],
+                        ));
+                    }
+                    series.push(Series::line(format!("{m}, s_u = {su}"), x, y));
                 }
             }
         }
@@ -467,5 +524,28 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
             series,
         ));
     }
+    let with_thesis: Vec<&SlopeRow> = rows.iter().filter(|r| r.thesis.is_some()).collect();
+    let idx: Vec<f64> = (1..=with_thesis.len()).map(|k| k as f64).collect();
+    let ratio = |f: &dyn Fn(&SlopeRow) -> f64| -> Vec<f64> {
+        with_thesis
+            .iter()
+            .map(|r| f(r) / 2.0 / r.thesis.unwrap_or(f64::NAN))
+            .collect()
+    };
+    figs.push(fig(
+        "table2_1",
+        "Table 2.1: our slope / 2 over the thesis value, per row (see table2_1.csv)",
+        "row of table2_1.csv (thesis entries only)",
+        "slope/2 ÷ thesis",
+        vec![
+            Series::points("tangent (first step)", idx.clone(), ratio(&|r| r.slope)),
+            Series::points(
+                format!("secant over ΔD/r0 = {SECANT_WINDOW}"),
+                idx.clone(),
+                ratio(&|r| r.secant),
+            ),
+            Series::thesis("thesis (ratio 1)", idx.clone(), vec![1.0; idx.len()]),
+        ],
+    ));
     Ok((figs, rows, notes))
 }

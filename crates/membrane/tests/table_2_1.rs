@@ -1,4 +1,8 @@
-//! Table 2.1: initial unloading slopes (tangent over the first unloading step).
+//! Table 2.1: initial unloading slopes. The NLE rows are checked against the
+//! thesis under the convention found in session 2 (docs/theory/membrane.md):
+//! force in the App. D scale (F/(G10 h0 r0), G10 = 2 C1, i.e. our F̄/2) and
+//! the secant over the first ΔD/r0 = 0.01 of unloading. The viscoelastic
+//! rows do not follow any convention (printed by the ignored run below).
 #![allow(clippy::unwrap_used)]
 use nlvid_membrane::*;
 use nlvid_protocol::{Quantity, programs};
@@ -9,6 +13,7 @@ fn run(p: PipkinRogersParams, dmax: f64, su: f64, label: &str) {
     for k in 1..=20 {
         times.push(tm + 1e-3 * k as f64 / 20.0);
     }
+    times.push(tm + 0.01 / su);
     let l = Loading::new(ControlKind::Displacement, prog, times).unwrap();
     let r = simulate(&p, &Geometry::default(), &l).unwrap();
     let h = &r.history;
@@ -16,9 +21,15 @@ fn run(p: PipkinRogersParams, dmax: f64, su: f64, label: &str) {
     let s1 = (h[i].force - h[i + 1].force) / (h[i].displacement - h[i + 1].displacement);
     let s20 = (h[i].force - h[i + 20].force) / (h[i].displacement - h[i + 20].displacement);
     let sl = (h[i].force - h[i - 1].force) / (h[i].displacement - h[i - 1].displacement);
+    let j = h
+        .iter()
+        .position(|x| (x.time - (tm + 0.01 / su)).abs() < 1e-12)
+        .unwrap();
+    let sec = (h[i].force - h[j].force) / (h[i].displacement - h[j].displacement);
     eprintln!(
-        "{label} D={dmax} su={su}: F={:.4} unload slope {s1:.3} / {s20:.3}, load slope {sl:.3}",
-        h[i].force
+        "{label} D={dmax} su={su}: F={:.4} unload slope {s1:.3} / {s20:.3}, secant(ΔD = 0.01)/2 {:.3}, load slope {sl:.3}",
+        h[i].force,
+        sec / 2.0
     );
 }
 /// Table 2.1 exploration (prints slopes; run with `--ignored --nocapture`).
@@ -55,5 +66,31 @@ fn table_2_1_unloading_slopes() {
             run(nlv1, d, su, "NLV c=1");
             run(nlv2, d, su, "NLV c=.5");
         }
+    }
+}
+
+/// NLE rows of Table 2.1 (4.7 at D/r0 = 0.28, 324.5 at 0.78). Elastic
+/// unloading retraces loading, so the secant needs two equilibria.
+#[test]
+fn nle_rows_match_the_thesis_in_the_app_d_force_scale_with_a_001_secant() {
+    let mut s = MembraneSolver::new(
+        MooneyRivlinMembrane::new(1.0, 0.1).unwrap(),
+        Geometry::default(),
+        1.0,
+    )
+    .unwrap();
+    for (d, thesis) in [(0.28, 4.7), (0.78, 324.5)] {
+        let f_hi = s.equilibrium(0.0, Control::Displacement(d)).unwrap().force;
+        let f_lo = s
+            .equilibrium(0.0, Control::Displacement(d - 0.01))
+            .unwrap()
+            .force;
+        let secant = (f_hi - f_lo) / 0.01;
+        let ratio = secant / 2.0 / thesis;
+        assert!(
+            (ratio - 1.0).abs() < 0.01,
+            "D/r0 = {d}: secant/2 = {} vs thesis {thesis} (ratio {ratio})",
+            secant / 2.0
+        );
     }
 }

@@ -8,6 +8,9 @@ use nlvid_membrane::{
 };
 use nlvid_protocol::{Quantity, programs};
 
+#[path = "common/reference_pr.rs"]
+mod reference_pr;
+
 fn step_run(
     p: PipkinRogersParams,
     d: f64,
@@ -184,8 +187,10 @@ fn displacement_and_force_controlled_relaxation_agree() {
 }
 
 #[test]
-fn stand_in_pipkin_rogers_agrees_with_nlvid_material() {
-    // Two separately written point updates of eqs. 2.53–2.56 (trapezoidal rule).
+fn pipkin_rogers_adapter_agrees_with_a_separate_principal_stretch_implementation() {
+    // The crate's PipkinRogersMembrane delegates to nlvid_material::PipkinRogers
+    // (3D kernel in plane stress); the reference is written directly in principal
+    // stretches (tests/common/reference_pr.rs). Both use the trapezoid of eq. 2.48.
     let p = PipkinRogersParams {
         g1: 0.2,
         g2: 0.3,
@@ -193,20 +198,7 @@ fn stand_in_pipkin_rogers_agrees_with_nlvid_material() {
         gamma0: 0.1,
         ..Default::default()
     };
-    let m = nlvid_material::PipkinRogers::from_eq_2_56(
-        &nlvid_material::Eq256 {
-            c1: 1.0,
-            gamma0: 0.1,
-            g1_fraction: 0.2,
-            g2_fraction: 0.3,
-            tau1: 1.0,
-            c: 2.0,
-            a: 0.0,
-        },
-        0.0,
-    )
-    .unwrap()
-    .with_rule(nlvid_material::HistoryRule::Trapezoid);
+    let m = reference_pr::PipkinRogersMembrane { p };
     let prog = programs::ramp_hold(Quantity::Dimensionless, 0.53, 1.0, 1.0).unwrap();
     let times: Vec<f64> = (0..=30).map(|k| 1.53 * k as f64 / 30.0).collect();
     let l = Loading::new(ControlKind::Displacement, prog, times).unwrap();

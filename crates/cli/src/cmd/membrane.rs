@@ -254,132 +254,6 @@ fn run_study(args: &MembraneArgs, path: &Path) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// A minimal SVG line plot (no font or system dependencies).
-fn svg_plot(f: &Figure) -> String {
-    let (w, h, ml, mr, mt, mb) = (720.0, 480.0, 70.0, 200.0, 40.0, 50.0);
-    let pts = f.series.iter().flat_map(|s| s.x.iter().zip(&s.y));
-    let (mut x0, mut x1, mut y0, mut y1) = (
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-        f64::INFINITY,
-        f64::NEG_INFINITY,
-    );
-    for (x, y) in pts {
-        if x.is_finite() && y.is_finite() {
-            x0 = x0.min(*x);
-            x1 = x1.max(*x);
-            y0 = y0.min(*y);
-            y1 = y1.max(*y);
-        }
-    }
-    if x1.partial_cmp(&x0) != Some(std::cmp::Ordering::Greater) {
-        x1 = x0 + 1.0;
-    }
-    if y1.partial_cmp(&y0) != Some(std::cmp::Ordering::Greater) {
-        y1 = y0 + 1.0;
-    }
-    let px = |x: f64| ml + (x - x0) / (x1 - x0) * (w - ml - mr);
-    let py = |y: f64| h - mb - (y - y0) / (y1 - y0) * (h - mt - mb);
-    let colors = [
-        "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
-    ];
-    let mut s = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{w}\" height=\"{h}\" font-family=\"sans-serif\" font-size=\"12\">\n\
-         <rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n\
-         <text x=\"{}\" y=\"20\" text-anchor=\"middle\" font-size=\"14\">{}</text>\n\
-         <rect x=\"{ml}\" y=\"{mt}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"black\"/>\n",
-        w / 2.0,
-        xml(&f.title),
-        w - ml - mr,
-        h - mt - mb
-    );
-    for k in 0..=4 {
-        let fx = x0 + (x1 - x0) * k as f64 / 4.0;
-        let fy = y0 + (y1 - y0) * k as f64 / 4.0;
-        let _ = writeln!(
-            s,
-            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{}</text>",
-            px(fx),
-            h - mb + 16.0,
-            num(fx)
-        );
-        let _ = writeln!(
-            s,
-            "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>",
-            ml - 4.0,
-            py(fy) + 4.0,
-            num(fy)
-        );
-    }
-    let _ = writeln!(
-        s,
-        "<text x=\"{:.1}\" y=\"{:.1}\" text-anchor=\"middle\">{}</text>",
-        (ml + w - mr) / 2.0,
-        h - 10.0,
-        xml(&f.x_label)
-    );
-    let _ = writeln!(
-        s,
-        "<text x=\"14\" y=\"{:.1}\" transform=\"rotate(-90 14 {:.1})\" text-anchor=\"middle\">{}</text>",
-        h / 2.0,
-        h / 2.0,
-        xml(&f.y_label)
-    );
-    for (i, ser) in f.series.iter().enumerate() {
-        let c = colors[i % colors.len()];
-        if ser.x.len() == 1 {
-            let _ = writeln!(
-                s,
-                "<circle cx=\"{:.2}\" cy=\"{:.2}\" r=\"4\" fill=\"{c}\"/>",
-                px(ser.x[0]),
-                py(ser.y[0])
-            );
-        } else {
-            let path: Vec<String> = ser
-                .x
-                .iter()
-                .zip(&ser.y)
-                .map(|(x, y)| format!("{:.2},{:.2}", px(*x), py(*y)))
-                .collect();
-            let _ = writeln!(
-                s,
-                "<polyline fill=\"none\" stroke=\"{c}\" stroke-width=\"1.5\" points=\"{}\"/>",
-                path.join(" ")
-            );
-        }
-        let ly = mt + 14.0 * i as f64 + 10.0;
-        let _ = writeln!(
-            s,
-            "<line x1=\"{}\" y1=\"{ly}\" x2=\"{}\" y2=\"{ly}\" stroke=\"{c}\" stroke-width=\"2\"/>",
-            w - mr + 8.0,
-            w - mr + 28.0
-        );
-        let _ = writeln!(
-            s,
-            "<text x=\"{}\" y=\"{}\" font-size=\"10\">{}</text>",
-            w - mr + 32.0,
-            ly + 4.0,
-            xml(&ser.label)
-        );
-    }
-    s.push_str("</svg>\n");
-    s
-}
-
-fn num(v: f64) -> String {
-    if v != 0.0 && (v.abs() >= 1e4 || v.abs() < 1e-2) {
-        format!("{v:.2e}")
-    } else {
-        format!("{v:.3}")
-    }
-}
-
-fn xml(t: &str) -> String {
-    t.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
-
 fn figure_csv(f: &Figure) -> String {
     let mut s = String::from("series,x,y\n");
     for ser in &f.series {
@@ -398,20 +272,25 @@ fn run_reproduce(args: &MembraneArgs) -> anyhow::Result<ExitCode> {
     let mut files = Vec::new();
     for f in &figs {
         write_atomic(&args.out.join(format!("{}.csv", f.id)), &figure_csv(f))?;
-        write_atomic(&args.out.join(format!("{}.svg", f.id)), &svg_plot(f))?;
+        let svg = nlvid_membrane::plot::svg(f).with_context(|| format!("drawing {}", f.id))?;
+        write_atomic(&args.out.join(format!("{}.svg", f.id)), &svg)?;
         files.push(format!("{}.csv", f.id));
         files.push(format!("{}.svg", f.id));
     }
-    let mut t = String::from("D_over_r0,unloading_rate,model,thesis_slope,slope\n");
+    let mut t = String::from(
+        "D_over_r0,unloading_rate,model,thesis_slope,tangent_slope,secant_slope_dD_0.01,secant_over_2_div_thesis\n",
+    );
     for r in &rows {
         let _ = writeln!(
             t,
-            "{},{},{},{},{}",
+            "{},{},{},{},{},{},{}",
             r.d_max,
             r.unload_rate,
             r.model,
             r.thesis.map(|v| v.to_string()).unwrap_or_default(),
-            r.slope
+            r.slope,
+            r.secant,
+            r.ratio.map(|v| v.to_string()).unwrap_or_default()
         );
     }
     write_atomic(&args.out.join("table2_1.csv"), &t)?;
@@ -430,15 +309,19 @@ fn run_reproduce(args: &MembraneArgs) -> anyhow::Result<ExitCode> {
             )?
         );
     } else {
-        println!("Table 2.1 (initial unloading slope dF/dD over the first unloading step):");
+        println!(
+            "Table 2.1 (initial unloading slope dF̄/dD̄: tangent over the first step, secant over ΔD/r0 = 0.01; ratio = secant/2 ÷ thesis):"
+        );
         for r in &rows {
             println!(
-                "  D/r0 = {:.2}, s_u = {:.1}, {:<10} thesis {:>7}  ours {:8.2}",
+                "  D/r0 = {:.2}, s_u = {:.1}, {:<10} thesis {:>7}  tangent {:8.2}  secant {:8.2}  ratio {}",
                 r.d_max,
                 r.unload_rate,
                 r.model,
                 r.thesis.map(|v| v.to_string()).unwrap_or("-".into()),
-                r.slope
+                r.slope,
+                r.secant,
+                r.ratio.map(|v| format!("{v:.3}")).unwrap_or("-".into())
             );
         }
         println!("wrote {} files to {}", files.len(), args.out.display());
