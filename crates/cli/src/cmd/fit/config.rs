@@ -105,14 +105,10 @@ pub fn read(path: &Path, starts: Option<usize>, seed: Option<u64>) -> anyhow::Re
     )?;
     let domain = read_domain(&mut s)?;
     let columns = read_columns(&mut s)?;
-    let starts = match starts {
-        Some(n) => n,
-        None => s.opt_usize("starts", Bounds::at_least(1.0))?.unwrap_or(8),
-    };
-    let seed = match seed {
-        Some(v) => v,
-        None => s.opt_u64("seed")?.unwrap_or(1),
-    };
+    // Read the keys even when the command line overrides them (so they are
+    // validated and not reported as unknown).
+    let starts = starts.unwrap_or(s.opt_usize("starts", Bounds::at_least(1.0))?.unwrap_or(8));
+    let seed = seed.unwrap_or(s.opt_u64("seed")?.unwrap_or(1));
     if s.has("checking_error") {
         return Err(s
             .invalid(

@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use nlvid_inverse::{
-    FigureCurve, FitFigure, FitResult, Model, ModulusPoint, Rerun, range_normalised_rmse,
+    Experiment, FigureCurve, FitFigure, FitResult, Identifiability, Misfit, Model, ModulusPoint,
+    Rerun, SensitivityScaling, Z95, identifiability, range_normalised_rmse,
 };
 use serde_json::json;
 
@@ -89,6 +90,8 @@ pub struct Outcome {
     fit: FitResult,
     experiments: Vec<ExperimentOutcome>,
     modulus: Vec<ModulusPoint>,
+    /// Local identifiability on the surrogates at the optimum, or why not.
+    identifiability: Result<Identifiability, String>,
     seconds: f64,
 }
 
@@ -148,11 +151,13 @@ impl Outcome {
             });
         }
         let modulus = fit.modulus(&settings.modulus_times)?;
+        let identifiability = local_identifiability(experiments, x).map_err(|e| e.to_string());
         Ok(Self {
             study: settings.study.clone(),
             fit,
             experiments: out,
             modulus,
+            identifiability,
             seconds,
         })
     }
@@ -230,6 +235,17 @@ impl Outcome {
                 "alternatives": self.fit.alternatives.len(),
                 "failed_starts": self.fit.failed_starts.len(),
             },
+            "identifiability": match &self.identifiability {
+                Ok(i) => json!({
+                    "singular_values": i.singular_values,
+                    "condition_number": i.condition_number,
+                    "std_errors": i.std_errors,
+                    "intervals_95": i.intervals,
+                    "relative_half_widths_95": i.relative_half_widths(),
+                    "note": "value-scaled sensitivities on the surrogate; Gauss-Newton, bounds ignored",
+                }),
+                Err(e) => json!({"error": e}),
+            },
             "modulus_units": {"time": "s", "shear": "Pa", "young": "Pa"},
             "modulus": self.modulus,
             "fit": self.fit,
@@ -284,6 +300,36 @@ impl Outcome {
                 (a, None) => writeln!(s, "  agreement: {}", a.word()),
             };
         }
+        match &self.identifiability {
+            Ok(i) => {
+                let sv: Vec<String> = i
+                    .singular_values
+                    .iter()
+                    .map(|v| format!("{v:.3}"))
+                    .collect();
+                let _ = writeln!(
+                    s,
+                    "identifiability (surrogate, value-scaled): singular values {}; condition {:.3e}",
+                    sv.join(", "),
+                    i.condition_number
+                );
+                for ((n, x), (se, (lo, hi))) in i
+                    .names
+                    .iter()
+                    .zip(&i.x)
+                    .zip(i.std_errors.iter().zip(&i.intervals))
+                {
+                    let _ = writeln!(
+                        s,
+                        "  {n:>8}: 95 % interval {lo:.4e} … {hi:.4e} (±{:.1} %)",
+                        100.0 * Z95 * se / x.abs()
+                    );
+                }
+            }
+            Err(e) => {
+                let _ = writeln!(s, "identifiability: not computed ({e})");
+            }
+        }
         let _ = writeln!(
             s,
             "{:>10} {:>14} {:>14}",
@@ -299,6 +345,26 @@ impl Outcome {
         }
         s
     }
+}
+
+/// Identifiability of the stacked experiments on their surrogates at `x`
+/// (analytic surrogate Jacobians, value-scaled).
+fn local_identifiability(
+    experiments: &[LoadedExperiment],
+    x: &[f64],
+) -> nlvid_inverse::Result<Identifiability> {
+    let parts = experiments
+        .iter()
+        .map(|e| {
+            Experiment::new(
+                &e.label,
+                &e.surrogate.model,
+                e.force.clone(),
+                e.weights.clone(),
+            )
+        })
+        .collect::<nlvid_inverse::Result<Vec<_>>>()?;
+    identifiability(&Misfit::new(parts)?, x, SensitivityScaling::Value)
 }
 
 /// A label as a file-name part: anything but letters, digits, `-`, `_`,
