@@ -732,3 +732,70 @@ segment = [{{ start = "0 s", end = "1 s", weight = 4.0 }}]
         "{err}"
     );
 }
+
+#[test]
+fn the_real_model_can_be_the_forward_model_of_a_study_and_its_misfit_is_eq_5_3_of_its_run() {
+    let dir = pipeline();
+    std::fs::write(
+        dir.join("cell-fw.csv"),
+        afm_csv(&TRUTH, 0.02, 9, RATE, RAMP),
+    )
+    .unwrap();
+    // Same protocol as `nlvid build --model hertz-prony --points 100`.
+    let forward = r#"
+[fit.protocol]
+rate = "1 um/s"
+amplitude = "1 um"
+
+[fit.real_model]
+model = "forward"
+
+[forward]
+model = "hertz-prony"
+probe_radius = "5 um"
+rate = "1 um/s"
+ramp = "1 s"
+hold = "9 s"
+points = 100
+"#;
+    let s = study("e2e-forward.toml", "", SENSITIVITY, forward);
+    let doc = json(&nlvid(
+        &[
+            "--json",
+            "fit",
+            s.to_str().unwrap(),
+            "cell-fw.csv",
+            "--starts",
+            "4",
+        ],
+        dir,
+    ));
+    let fitted = [
+        value(&doc, "G0"),
+        value(&doc, "g1"),
+        value(&doc, "g2"),
+        value(&doc, "tau1"),
+        value(&doc, "tau2"),
+    ];
+    // Independently: run HertzProny at the fitted parameters, take the data
+    // on the same grid, eq. 5.3 by hand.
+    let model = HertzProny::new(RADIUS, RATE, RAMP, END, 100);
+    let y = model.run(&fitted).unwrap();
+    let csv = afm_csv(&TRUTH, 0.02, 9, RATE, RAMP);
+    let rows: Vec<(f64, f64)> = csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
+            (f[0], f[2] * SENS * K)
+        })
+        .collect();
+    let data: Vec<f64> = model
+        .time_grid()
+        .iter()
+        .map(|g| rows.iter().find(|(t, _)| (t - g).abs() < 1e-9).unwrap().1)
+        .collect();
+    let want = rmse_over_range(&y, &data);
+    let got = doc["experiments"][0]["misfit_real"].as_f64().unwrap();
+    assert!((got - want).abs() <= 1e-9 * want, "{got} vs {want}");
+}

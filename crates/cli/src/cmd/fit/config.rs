@@ -43,6 +43,13 @@ pub enum RealModelSpec {
         /// Poisson's ratio.
         poisson: f64,
     },
+    /// The model of a study's `[forward]` section (`nlvid_forward`:
+    /// hertz-prony, afm-fe, membrane), run on its own grid and interpolated
+    /// onto the surrogate's.
+    Forward {
+        /// The study file holding `[forward]` (default: the fit study).
+        study: PathBuf,
+    },
 }
 
 /// One experiment: which surrogate predicts it, under which protocol.
@@ -124,11 +131,11 @@ pub fn read(path: &Path, starts: Option<usize>, seed: Option<u64>) -> anyhow::Re
         .unwrap_or_else(|| vec![0.0, 0.1, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 52.0]);
     let tables = s.tables("experiment")?;
     let (experiments, repeat) = if tables.is_empty() {
-        (vec![read_experiment(&mut s)?], true)
+        (vec![read_experiment(&mut s, path)?], true)
     } else {
         let mut out = Vec::with_capacity(tables.len());
         for mut t in tables {
-            out.push(read_experiment(&mut t)?);
+            out.push(read_experiment(&mut t, path)?);
             t.finish()?;
         }
         (out, false)
@@ -209,7 +216,7 @@ fn read_columns(s: &mut Section) -> anyhow::Result<DataColumns> {
 }
 
 /// One experiment's keys, from `[fit]` itself or a `[[fit.experiment]]`.
-fn read_experiment(s: &mut Section) -> anyhow::Result<ExperimentSettings> {
+fn read_experiment(s: &mut Section, study: &Path) -> anyhow::Result<ExperimentSettings> {
     let label = s.opt_str("label")?;
     let surrogate = s.req_path("surrogate")?;
     let meta = s.req_path("meta")?;
@@ -248,11 +255,17 @@ fn read_experiment(s: &mut Section) -> anyhow::Result<ExperimentSettings> {
                     radius: r.req_quantity("radius", Dimension::LENGTH, Bounds::positive())?,
                     poisson: r.f64_or("poisson", Bounds::closed(0.0, 0.5), 0.5)?,
                 },
+                "forward" => RealModelSpec::Forward {
+                    study: r.opt_path("study")?.unwrap_or_else(|| study.to_path_buf()),
+                },
                 other => {
                     return Err(r
                         .invalid(
                             "model",
-                            format!("unknown real model `{other}` (available: lee-radok)"),
+                            format!(
+                                "unknown real model `{other}` (available: lee-radok; forward = \
+                                 the [forward] section of `study`, default this file)"
+                            ),
                         )
                         .into());
                 }

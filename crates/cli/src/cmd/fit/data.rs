@@ -39,7 +39,37 @@ pub struct LoadedExperiment {
     /// Eq. 5.3 weights on the grid (None: all 1).
     pub weights: Option<Vec<f64>>,
     /// Real model for the re-check.
-    pub real: Option<RealModelSpec>,
+    pub real: Option<RealModel>,
+}
+
+/// A real model ready to re-run.
+pub enum RealModel {
+    /// Lee–Radok Hertz with this curve's indentation (built at the re-check).
+    LeeRadok {
+        /// Probe radius (m).
+        radius: f64,
+        /// Poisson's ratio.
+        poisson: f64,
+    },
+    /// A study's forward model.
+    Forward(Box<dyn nlvid_surrogate::ForwardModel>),
+}
+
+/// Sets up the real model named by `spec` (a `[forward]` section is read
+/// and checked now, before any fitting).
+fn real_model(spec: &RealModelSpec) -> anyhow::Result<RealModel> {
+    Ok(match spec {
+        RealModelSpec::LeeRadok { radius, poisson } => RealModel::LeeRadok {
+            radius: *radius,
+            poisson: *poisson,
+        },
+        RealModelSpec::Forward { study } => {
+            let mut st = nlvid_study::Study::load(study)?;
+            let model = nlvid_forward::from_study(&mut st)
+                .with_context(|| format!("{}: real model from [forward]", study.display()))?;
+            RealModel::Forward(model)
+        }
+    })
 }
 
 /// Reads every surrogate and data file named by `settings` and `files`.
@@ -86,7 +116,7 @@ pub fn load(settings: &FitSettings, files: &[PathBuf]) -> anyhow::Result<Vec<Loa
             curve,
             force,
             weights,
-            real: exp.real.clone(),
+            real: exp.real.as_ref().map(real_model).transpose()?,
         });
     }
     Ok(out)
