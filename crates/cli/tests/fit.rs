@@ -799,3 +799,74 @@ points = 100
     let got = doc["experiments"][0]["misfit_real"].as_f64().unwrap();
     assert!((got - want).abs() <= 1e-9 * want, "{got} vs {want}");
 }
+
+/// Issue 6 "Done when" 1 through the CLI: 10 seeded parameter sets inside
+/// Table 5.3 (log-uniform G0, τ1, τ2; uniform g1, g2 with g1 + g2 ≤ 0.99),
+/// 2 % noise, `nlvid fit` on the shared N = 200 surrogate. Criteria of the
+/// issue: G0 within 5 %, |Δ(g1 + g2)| ≤ 0.03, G(52 s) within 5 % — with this
+/// 10-s protocol G(52 s) is an extrapolation, so G(10 s) is counted too.
+/// Ignored: it asserts the issue's ≥ 9 of 10 and does not meet it (counts
+/// in docs/theory/inverse.md). Run:
+/// `cargo test -p nlvid --test fit -- --ignored --nocapture ten_seeded`
+#[test]
+#[ignore = "issue 6 recovery criterion, not met with the small surrogate (see docs/theory/inverse.md)"]
+fn ten_seeded_cases_recover_g0_sum_and_g52_through_the_cli() {
+    let dir = pipeline();
+    let study = study("e2e-ten.toml", "", SENSITIVITY, PROTOCOL);
+    let mut rng = Normal(20261122);
+    let log_uniform = |r: &mut Normal, lo: f64, hi: f64| lo * (hi / lo).powf(r.uniform());
+    let (mut ok_issue, mut ok_g10) = (0, 0);
+    for case in 0..10 {
+        let (g1, g2) = loop {
+            let (a, b) = (0.01 + 0.99 * rng.uniform(), 0.01 + 0.99 * rng.uniform());
+            if a + b <= 0.99 {
+                break (a, b);
+            }
+        };
+        let truth = [
+            log_uniform(&mut rng, 80.0, 4000.0),
+            g1,
+            g2,
+            log_uniform(&mut rng, 0.01, 2.0),
+            log_uniform(&mut rng, 2.0, 40.0),
+        ];
+        let name = format!("ten-{case}.csv");
+        std::fs::write(
+            dir.join(&name),
+            afm_csv(&truth, 0.02, 100 + case, RATE, RAMP),
+        )
+        .unwrap();
+        let doc = json(&nlvid(
+            &["--json", "fit", study.to_str().unwrap(), &name],
+            dir,
+        ));
+        let x = [
+            value(&doc, "G0"),
+            value(&doc, "g1"),
+            value(&doc, "g2"),
+            value(&doc, "tau1"),
+            value(&doc, "tau2"),
+        ];
+        let e_g0 = x[0] / truth[0] - 1.0;
+        let e_sum = x[1] + x[2] - truth[1] - truth[2];
+        let e52 = shear(&x, 52.0) / shear(&truth, 52.0) - 1.0;
+        let e10 = shear(&x, 10.0) / shear(&truth, 10.0) - 1.0;
+        let pass = e_g0.abs() <= 0.05 && e_sum.abs() <= 0.03;
+        ok_issue += usize::from(pass && e52.abs() <= 0.05);
+        ok_g10 += usize::from(pass && e10.abs() <= 0.05);
+        let exp = &doc["experiments"][0];
+        println!(
+            "case {case}: truth {truth:.3?}\n  fit {x:.3?}\n  G0 {:+.1} %, Δsum {e_sum:+.3}, G(52) {:+.1} %, G(10) {:+.1} %; misfit surrogate {:.2} %, real {:.2} %, agree {}",
+            100.0 * e_g0,
+            100.0 * e52,
+            100.0 * e10,
+            100.0 * exp["misfit_surrogate"].as_f64().unwrap(),
+            100.0 * exp["misfit_real"].as_f64().unwrap(),
+            exp["agree"]
+        );
+    }
+    println!(
+        "recovered (issue: G0 5 %, sum 0.03, G(52 s) 5 %): {ok_issue}/10; with G(10 s): {ok_g10}/10"
+    );
+    assert!(ok_issue >= 9, "{ok_issue}/10 recovered");
+}
