@@ -324,6 +324,8 @@ fn fit_recovers_the_truth_and_reports_units_modulus_misfits_flags_and_a_plotters
         let (a, b) = (shear(&fitted, t), shear(&TRUTH, t));
         assert!((a / b - 1.0).abs() <= 0.05, "G({t} s): {a} vs truth {b}");
     }
+    // Holds for this case (the issue's 0.03); not in general with a 10-s
+    // hold — see the ten-case test, |Δ| up to 0.12.
     let sum = fitted[1] + fitted[2];
     assert!((sum - 0.65).abs() <= 0.03, "g1 + g2 = {sum}");
     // G0 is a sanity bound only (measured: −12.8 %): the surrogate's own
@@ -869,4 +871,191 @@ fn ten_seeded_cases_recover_g0_sum_and_g52_through_the_cli() {
         "recovered (issue: G0 5 %, sum 0.03, G(52 s) 5 %): {ok_issue}/10; with G(10 s): {ok_g10}/10"
     );
     assert!(ok_issue >= 9, "{ok_issue}/10 recovered");
+}
+
+/// `src` CSV (header + numbers) with every number multiplied by `factor`.
+fn scaled_csv(src: &Path, dst: &Path, factor: f64) {
+    let text = std::fs::read_to_string(src).unwrap();
+    let mut lines = text.lines();
+    let mut out = format!("{}\n", lines.next().unwrap());
+    for l in lines {
+        let row: Vec<String> = l
+            .split(',')
+            .map(|v| format!("{:e}", v.parse::<f64>().unwrap() * factor))
+            .collect();
+        out.push_str(&row.join(","));
+        out.push('\n');
+    }
+    std::fs::write(dst, out).unwrap();
+}
+
+#[test]
+fn two_ramp_hold_depths_are_fitted_together_with_one_parameter_set() {
+    let dir = pipeline();
+    let w = dir.join("work");
+    // Second depth 1.5 µm (1.5 µm/s for 1 s). Its training runs follow from
+    // the 1-µm ones exactly: Lee–Radok F ∝ ∫ G d(δ^{3/2}), and δ(t) scaled by
+    // s scales δ^{3/2} — hence F — by s^{3/2}. The data below are made
+    // independently by the forward model at 1.5 µm/s, so the scaling is
+    // checked too (through the re-run and the fit).
+    let s: f64 = 1.5;
+    let f = s.powf(1.5);
+    std::fs::create_dir_all(w.join("d15")).unwrap();
+    scaled_csv(&w.join("export/Y.csv"), &w.join("d15/Y.csv"), f);
+    scaled_csv(&w.join("export-check/Y.csv"), &w.join("d15/Ycheck.csv"), f);
+    let d15 = w.join("d15");
+    let run = |args: &[&str]| ok(&nlvid(args, &d15), &args.join(" "));
+    run(&[
+        "surrogate",
+        "fit",
+        "--x",
+        "../export/X.csv",
+        "--y",
+        "Y.csv",
+        "--regression",
+        "poly1",
+        "--correlation",
+        "gauss",
+        "-o",
+        "model.json",
+    ]);
+    let check = run(&[
+        "--json",
+        "surrogate",
+        "check",
+        "model.json",
+        "--x",
+        "../export-check/X.csv",
+        "--y",
+        "Ycheck.csv",
+    ]);
+    std::fs::write(d15.join("model.check.json"), check).unwrap();
+
+    std::fs::write(
+        dir.join("depth-1.csv"),
+        afm_csv(&TRUTH, 0.02, 21, RATE, RAMP),
+    )
+    .unwrap();
+    let deep = {
+        let model = HertzProny::new(RADIUS, s * RATE, RAMP, END, 1000);
+        let mut t = vec![0.0];
+        t.extend_from_slice(model.time_grid());
+        let mut f = vec![0.0];
+        f.extend(model.run(&TRUTH).unwrap());
+        let peak = f.iter().copied().fold(0.0, f64::max);
+        let mut rng = Normal(22);
+        let mut csv = String::from("time [s],piezo [um],deflection [V]\n");
+        for (t, f) in t.iter().zip(&f) {
+            let d = (f + 0.02 * peak * rng.sample()) / K;
+            let z = s * RATE * t.min(RAMP) + d;
+            csv.push_str(&format!("{t:.4},{:.9},{:.9}\n", z * 1e6, d / SENS));
+        }
+        csv
+    };
+    std::fs::write(dir.join("depth-1.5.csv"), deep).unwrap();
+
+    let experiments = format!(
+        r#"
+[[fit.experiment]]
+label = "RH 1 um"
+surrogate = "{w}/model.json"
+meta = "{w}/export/meta.json"
+protocol = {{ rate = "1 um/s", amplitude = "1 um" }}
+real_model = {{ model = "lee-radok", radius = "5 um" }}
+
+[[fit.experiment]]
+label = "RH 1.5 um"
+surrogate = "{w}/d15/model.json"
+meta = "{w}/export/meta.json"
+protocol = {{ rate = "1.5 um/s", amplitude = "1.5 um" }}
+real_model = {{ model = "lee-radok", radius = "5 um" }}
+"#,
+        w = w.display()
+    );
+    let base = std::fs::read_to_string(study("e2e-depths.toml", "", SENSITIVITY, "")).unwrap();
+    let head = format!(
+        "surrogate = \"{0}/model.json\"\nmeta = \"{0}/export/meta.json\"\n",
+        w.display()
+    );
+    assert!(base.contains(&head));
+    let depths = dir.join("e2e-depths.toml");
+    std::fs::write(&depths, base.replace(&head, "") + &experiments).unwrap();
+
+    let doc = json(&nlvid(
+        &[
+            "--json",
+            "fit",
+            depths.to_str().unwrap(),
+            "depth-1.csv",
+            "depth-1.5.csv",
+        ],
+        dir,
+    ));
+    let exps = doc["experiments"].as_array().unwrap();
+    assert_eq!(exps.len(), 2);
+    assert!(
+        exps[1]["checking_file"]
+            .as_str()
+            .unwrap()
+            .ends_with("d15/model.check.json")
+    );
+    let per: Vec<f64> = doc["fit"]["best"]["per_experiment"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let total = doc["fit"]["best"]["misfit"].as_f64().unwrap();
+    assert!((per[0] + per[1] - total).abs() <= 1e-9 * total);
+    // Both curves reproduced by the real model as well as the truth
+    // reproduces them (eq. 5.3 at the truth computed here), within the
+    // single-curve test's 1.25×.
+    for (e, (file, rate)) in exps
+        .iter()
+        .zip([("depth-1.csv", RATE), ("depth-1.5.csv", s * RATE)])
+    {
+        let at_truth = misfit_at_truth(&dir.join(file), rate);
+        let real = e["misfit_real"].as_f64().unwrap();
+        assert!(
+            real <= 1.25 * at_truth,
+            "{}: real misfit {real} vs truth {at_truth}",
+            e["label"]
+        );
+    }
+    let fitted = [
+        value(&doc, "G0"),
+        value(&doc, "g1"),
+        value(&doc, "g2"),
+        value(&doc, "tau1"),
+        value(&doc, "tau2"),
+    ];
+    for t in [1.0, 2.0, 5.0, 10.0] {
+        let (a, b) = (shear(&fitted, t), shear(&TRUTH, t));
+        assert!((a / b - 1.0).abs() <= 0.05, "G({t} s): {a} vs truth {b}");
+    }
+    // g1 + g2 is not asserted: a 10-s hold does not separate g∞ from the
+    // slow mode (measured here 0.608 vs 0.65; the ten-case run shows
+    // |Δ| up to 0.12), see docs/theory/inverse.md.
+}
+
+/// Eq. 5.3 of the forward model at TRUTH (ramp at `rate` for 1 s) against
+/// the force in an AFM CSV, on the surrogate grid (0.1 … 10 s).
+fn misfit_at_truth(csv: &Path, rate: f64) -> f64 {
+    let model = HertzProny::new(RADIUS, rate, RAMP, END, 100);
+    let y = model.run(&TRUTH).unwrap();
+    let text = std::fs::read_to_string(csv).unwrap();
+    let rows: Vec<(f64, f64)> = text
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
+            (f[0], f[2] * SENS * K)
+        })
+        .collect();
+    let data: Vec<f64> = model
+        .time_grid()
+        .iter()
+        .map(|g| rows.iter().find(|(t, _)| (t - g).abs() < 1e-9).unwrap().1)
+        .collect();
+    rmse_over_range(&y, &data)
 }
