@@ -386,6 +386,8 @@ fn fit_recovers_the_truth_and_reports_units_modulus_misfits_flags_and_a_plotters
             .unwrap()
             .ends_with("model.check.json")
     );
+    let diff = exp["misfit_difference"].as_f64().unwrap();
+    assert!((diff - (sur - real).abs()).abs() <= 1e-15, "{diff}");
     let verdict = if (sur - real).abs() <= c { "yes" } else { "no" };
     assert_eq!(exp["agree"], verdict);
     assert_eq!(doc["surrogate_and_real_agree"], verdict);

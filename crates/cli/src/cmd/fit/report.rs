@@ -77,6 +77,7 @@ impl ExperimentOutcome {
             "misfit_real": self.misfit_real,
             "checking_error": self.checking_error,
             "checking_file": self.checking_file,
+            "misfit_difference": self.misfit_real.map(|r| (self.misfit_surrogate - r).abs()),
             "agree": self.agree.word(),
             "agree_note": self.agree_note,
             "plot": self.plot,
@@ -288,14 +289,18 @@ impl Outcome {
                 ),
                 (a, Some(c)) => writeln!(
                     s,
-                    "  surrogate misfit vs real misfit agree within the checking error ({:.4} %): {}{}",
+                    "  surrogate misfit vs real misfit agree within the checking error ({:.4} %): {}{} \
+                     (|difference| {:.4} %)",
                     100.0 * c,
                     a.word(),
                     if a == Agreement::No {
                         " — the surrogate is off near the optimum: refine it there"
                     } else {
                         ""
-                    }
+                    },
+                    100.0
+                        * e.misfit_real
+                            .map_or(f64::NAN, |r| (e.misfit_surrogate - r).abs())
                 ),
                 (a, None) => writeln!(s, "  agreement: {}", a.word()),
             };
