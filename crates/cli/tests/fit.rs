@@ -1061,3 +1061,43 @@ fn misfit_at_truth(csv: &Path, rate: f64) -> f64 {
         .collect();
     rmse_over_range(&y, &data)
 }
+
+/// examples/fit/run.sh itself, as documented (needs `python3` for its
+/// independent data generator; skipped with a message without it).
+#[test]
+fn the_worked_example_script_runs_end_to_end() {
+    if Command::new("python3").arg("--version").output().is_err() {
+        eprintln!("python3 not found: examples/fit/run.sh not run");
+        return;
+    }
+    let src = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/fit"));
+    let dir = std::env::temp_dir().join(format!("nlvid-fit-example-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    for f in ["run.sh", "make_data.py", "domain.toml", "study.toml"] {
+        std::fs::copy(src.join(f), dir.join(f)).unwrap();
+    }
+    let out = Command::new("sh")
+        .arg("run.sh")
+        .current_dir(&dir)
+        .env("NLVID", env!("CARGO_BIN_EXE_nlvid"))
+        .env_remove("NLVID_LOG")
+        .output()
+        .unwrap();
+    let s = ok(&out, "examples/fit/run.sh");
+    assert!(s.contains("wrote cell1.csv"), "{s}");
+    assert!(
+        s.contains("surrogate misfit vs real misfit agree within the checking error ("),
+        "{s}"
+    );
+    assert!(
+        s.contains("plot written to work/plots/fit-cell1.svg"),
+        "{s}"
+    );
+    let svg = std::fs::read_to_string(dir.join("work/plots/fit-cell1.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    let check: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("work/model.check.json")).unwrap())
+            .unwrap();
+    assert!(check["max"].as_f64().unwrap() > 0.0);
+}
