@@ -1101,3 +1101,59 @@ fn the_worked_example_script_runs_end_to_end() {
             .unwrap();
     assert!(check["max"].as_f64().unwrap() > 0.0);
 }
+
+#[test]
+fn a_failing_real_model_is_reported_and_the_fit_still_printed() {
+    let dir = pipeline();
+    std::fs::write(
+        dir.join("cell-fail.csv"),
+        afm_csv(&TRUTH, 0.02, 31, RATE, RAMP),
+    )
+    .unwrap();
+    // A [forward] model whose grid ends at 6 s cannot score a 10-s curve.
+    let forward = r#"
+[fit.protocol]
+rate = "1 um/s"
+amplitude = "1 um"
+
+[fit.real_model]
+model = "forward"
+
+[forward]
+model = "hertz-prony"
+probe_radius = "5 um"
+rate = "1 um/s"
+ramp = "1 s"
+hold = "5 s"
+points = 60
+"#;
+    let s = study("e2e-fail.toml", "", SENSITIVITY, forward);
+    let doc = json(&nlvid(
+        &[
+            "--json",
+            "fit",
+            s.to_str().unwrap(),
+            "cell-fail.csv",
+            "--starts",
+            "2",
+        ],
+        dir,
+    ));
+    let e = &doc["experiments"][0];
+    assert!(e["misfit_real"].is_null());
+    let msg = e["rerun_error"].as_str().unwrap();
+    assert!(
+        msg.contains("cell-fail: re-check with the real model")
+            && msg.contains("the data grid needs t = ")
+            && msg.contains("but the real model covers"),
+        "{msg}"
+    );
+    assert_eq!(e["agree"], "unknown");
+    assert!(
+        e["agree_note"]
+            .as_str()
+            .unwrap()
+            .starts_with("the real model re-run failed: ")
+    );
+    assert!(value(&doc, "G0") > 0.0);
+}

@@ -53,6 +53,8 @@ pub struct ExperimentOutcome {
     pub misfit_surrogate: f64,
     /// Eq. 5.3 misfit of the real model re-run at the optimum.
     pub misfit_real: Option<f64>,
+    /// Why the re-run failed, if it did.
+    pub rerun_error: Option<String>,
     /// Max eq. 4.4 checking error of the surrogate (from `checking_file`).
     pub checking_error: Option<f64>,
     /// Where the checking error came from.
@@ -75,6 +77,7 @@ impl ExperimentOutcome {
             "surrogate": self.surrogate,
             "misfit_surrogate": self.misfit_surrogate,
             "misfit_real": self.misfit_real,
+            "rerun_error": self.rerun_error,
             "checking_error": self.checking_error,
             "checking_file": self.checking_file,
             "misfit_difference": self.misfit_real.map(|r| (self.misfit_surrogate - r).abs()),
@@ -105,12 +108,17 @@ impl Outcome {
         settings: &FitSettings,
         experiments: &[LoadedExperiment],
         fit: FitResult,
-        reruns: Vec<Option<Rerun>>,
+        reruns: Vec<Result<Option<Rerun>, String>>,
         seconds: f64,
     ) -> anyhow::Result<Self> {
         let x = &fit.best.x;
         let mut out = Vec::with_capacity(experiments.len());
-        for (e, rerun) in experiments.iter().zip(reruns) {
+        for (e, result) in experiments.iter().zip(reruns) {
+            // A failed re-run (e.g. FE non-convergence) is reported, not fatal.
+            let (rerun, rerun_error) = match result {
+                Ok(r) => (r, None),
+                Err(msg) => (None, Some(msg)),
+            };
             let fitted = e.surrogate.model.response(x)?;
             let misfit_surrogate = range_normalised_rmse(&fitted, &e.force, e.weights.as_deref())?;
             let checking = e.surrogate.checking.clone();
@@ -124,7 +132,10 @@ impl Outcome {
                 }
                 (None, _) => (
                     Agreement::Unknown,
-                    Some("no [fit.real_model]: the optimum was not re-run".to_string()),
+                    Some(match &rerun_error {
+                        Some(msg) => format!("the real model re-run failed: {msg}"),
+                        None => "no [fit.real_model]: the optimum was not re-run".to_string(),
+                    }),
                 ),
                 (Some(_), None) => (
                     Agreement::Unknown,
@@ -142,6 +153,7 @@ impl Outcome {
                 surrogate: e.surrogate.path.clone(),
                 misfit_surrogate,
                 misfit_real: rerun.as_ref().map(|r| r.misfit),
+                rerun_error,
                 checking_error: checking.as_ref().map(|c| c.0),
                 checking_file: checking.map(|c| c.1),
                 agree,
@@ -276,9 +288,14 @@ impl Outcome {
                 ),
                 None => writeln!(
                     s,
-                    "{}: misfit surrogate {:.4} % (not re-checked)",
+                    "{}: misfit surrogate {:.4} % (not re-checked{})",
                     e.label,
-                    100.0 * e.misfit_surrogate
+                    100.0 * e.misfit_surrogate,
+                    if e.rerun_error.is_some() {
+                        ": the real model failed"
+                    } else {
+                        ""
+                    }
                 ),
             };
             let _ = match (e.agree, e.checking_error) {
