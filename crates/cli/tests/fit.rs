@@ -875,45 +875,60 @@ fn ten_seeded_cases_recover_g0_sum_and_g52_through_the_cli() {
     assert!(ok_issue >= 9, "{ok_issue}/10 recovered");
 }
 
-/// `src` CSV (header + numbers) with every number multiplied by `factor`.
-fn scaled_csv(src: &Path, dst: &Path, factor: f64) {
-    let text = std::fs::read_to_string(src).unwrap();
-    let mut lines = text.lines();
-    let mut out = format!("{}\n", lines.next().unwrap());
-    for l in lines {
-        let row: Vec<String> = l
-            .split(',')
-            .map(|v| format!("{:e}", v.parse::<f64>().unwrap() * factor))
-            .collect();
-        out.push_str(&row.join(","));
-        out.push('\n');
-    }
-    std::fs::write(dst, out).unwrap();
-}
-
 #[test]
 fn two_ramp_hold_depths_are_fitted_together_with_one_parameter_set() {
     let dir = pipeline();
     let w = dir.join("work");
-    // Second depth 1.5 µm (1.5 µm/s for 1 s). Its training runs follow from
-    // the 1-µm ones exactly: Lee–Radok F ∝ ∫ G d(δ^{3/2}), and δ(t) scaled by
-    // s scales δ^{3/2} — hence F — by s^{3/2}. The data below are made
-    // independently by the forward model at 1.5 µm/s, so the scaling is
-    // checked too (through the re-run and the fit).
+    // Second depth 1.5 µm (1.5 µm/s for 1 s): its own surrogate, built from
+    // a study (`nlvid build <study>` with [forward], [design], [build]),
+    // and that study's forward model as the real model of the re-check.
     let s: f64 = 1.5;
-    let f = s.powf(1.5);
-    std::fs::create_dir_all(w.join("d15")).unwrap();
-    scaled_csv(&w.join("export/Y.csv"), &w.join("d15/Y.csv"), f);
-    scaled_csv(&w.join("export-check/Y.csv"), &w.join("d15/Ycheck.csv"), f);
     let d15 = w.join("d15");
+    std::fs::create_dir_all(&d15).unwrap();
+    std::fs::write(
+        d15.join("build.toml"),
+        r#"title = "RH 1.5 um"
+
+[forward]
+model = "hertz-prony"
+probe_radius = "5 um"
+rate = "1.5 um/s"
+ramp = "1 s"
+hold = "9 s"
+points = 100
+
+[design]
+n_train = 200
+n_check = 40
+seed = 1
+ese = true
+
+[design.parameters]
+G0 = { range = ["80 Pa", "4 kPa"], log = true }
+g1 = { range = [0.01, 1.0] }
+g2 = { range = [0.01, 1.0] }
+tau1 = { range = ["0.01 s", "2 s"], log = true }
+tau2 = { range = ["2 s", "40 s"], log = true }
+
+[[design.constraint]]
+coefficients = { g1 = 1, g2 = 1 }
+at_most = 0.99
+
+[build]
+store = "store"
+export = "export"
+"#,
+    )
+    .unwrap();
     let run = |args: &[&str]| ok(&nlvid(args, &d15), &args.join(" "));
+    run(&["build", "build.toml", "--quiet"]);
     run(&[
         "surrogate",
         "fit",
         "--x",
-        "../export/X.csv",
+        "export/train/X.csv",
         "--y",
-        "Y.csv",
+        "export/train/Y.csv",
         "--regression",
         "poly1",
         "--correlation",
@@ -927,9 +942,9 @@ fn two_ramp_hold_depths_are_fitted_together_with_one_parameter_set() {
         "check",
         "model.json",
         "--x",
-        "../export-check/X.csv",
+        "export/check/X.csv",
         "--y",
-        "Ycheck.csv",
+        "export/check/Y.csv",
     ]);
     std::fs::write(d15.join("model.check.json"), check).unwrap();
 
@@ -968,9 +983,9 @@ real_model = {{ model = "lee-radok", radius = "5 um" }}
 [[fit.experiment]]
 label = "RH 1.5 um"
 surrogate = "{w}/d15/model.json"
-meta = "{w}/export/meta.json"
+meta = "{w}/d15/export/train/meta.json"
 protocol = {{ rate = "1.5 um/s", amplitude = "1.5 um" }}
-real_model = {{ model = "lee-radok", radius = "5 um" }}
+real_model = {{ model = "forward", study = "{w}/d15/build.toml" }}
 "#,
         w = w.display()
     );
