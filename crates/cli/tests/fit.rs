@@ -1172,3 +1172,169 @@ points = 60
     );
     assert!(value(&doc, "G0") > 0.0);
 }
+
+/// The ten cases of `ten_seeded_cases_…` with a longer, thesis-like
+/// protocol built from a study: R = 2.5 µm, 1 µm/s for 2 s to 2 µm, hold to
+/// 52 s, 520 points, N = 300 training runs. Measures whether the CLI then
+/// meets the issue's criterion. Ignored (minutes); asserts ≥ 9/10. Run:
+/// `cargo test -p nlvid --test fit -- --ignored --nocapture thesis_like`
+#[test]
+#[ignore = "issue 6 recovery criterion with a 52-s protocol (slow; see docs/theory/inverse.md)"]
+fn thesis_like_protocol_ten_seeded_cases_through_the_cli() {
+    let dir = pipeline().join("long");
+    std::fs::create_dir_all(&dir).unwrap();
+    let (radius, rate, ramp, end, points) = (2.5e-6, 1e-6, 2.0, 52.0, 520);
+    std::fs::write(
+        dir.join("build.toml"),
+        r#"title = "RH 2 um, hold to 52 s"
+
+[forward]
+model = "hertz-prony"
+probe_radius = "2.5 um"
+rate = "1 um/s"
+ramp = "2 s"
+hold = "50 s"
+points = 520
+
+[design]
+n_train = 300
+n_check = 40
+seed = 1
+ese = true
+
+[design.parameters]
+G0 = { range = ["80 Pa", "4 kPa"], log = true }
+g1 = { range = [0.01, 1.0] }
+g2 = { range = [0.01, 1.0] }
+tau1 = { range = ["0.01 s", "2 s"], log = true }
+tau2 = { range = ["2 s", "40 s"], log = true }
+
+[[design.constraint]]
+coefficients = { g1 = 1, g2 = 1 }
+at_most = 0.99
+
+[build]
+store = "store"
+export = "export"
+"#,
+    )
+    .unwrap();
+    // `nlvid build` refuses sections it does not know, so [fit] lives in its
+    // own study and names the build study for the re-check.
+    std::fs::write(
+        dir.join("fit.toml"),
+        r#"[fit]
+surrogate = "model.json"
+meta = "export/train/meta.json"
+domain = "table-5.3"
+data = "afm"
+modulus_times = ["10 s", "52 s"]
+
+[fit.columns]
+time = "time"
+piezo = "piezo"
+deflection = "deflection"
+
+[fit.calibration]
+spring_constant = "1 N/m"
+deflection_sensitivity = "50 nm/V"
+
+[fit.protocol]
+rate = "1 um/s"
+amplitude = "2 um"
+
+[fit.real_model]
+model = "forward"
+study = "build.toml"
+"#,
+    )
+    .unwrap();
+    let run = |args: &[&str]| ok(&nlvid(args, &dir), &args.join(" "));
+    run(&["build", "build.toml", "--quiet"]);
+    run(&[
+        "surrogate",
+        "fit",
+        "--x",
+        "export/train/X.csv",
+        "--y",
+        "export/train/Y.csv",
+        "--regression",
+        "poly1",
+        "--correlation",
+        "gauss",
+        "-o",
+        "model.json",
+    ]);
+    let check = run(&[
+        "--json",
+        "surrogate",
+        "check",
+        "model.json",
+        "--x",
+        "export/check/X.csv",
+        "--y",
+        "export/check/Y.csv",
+    ]);
+    std::fs::write(dir.join("model.check.json"), &check).unwrap();
+    let c: serde_json::Value = serde_json::from_str(&check).unwrap();
+    println!("checking error: max {}, median {}", c["max"], c["median"]);
+
+    let fine = HertzProny::new(radius, rate, ramp, end, 5200);
+    let mut rng = Normal(20261122);
+    let log_uniform = |r: &mut Normal, lo: f64, hi: f64| lo * (hi / lo).powf(r.uniform());
+    let mut ok_issue = 0;
+    for case in 0..10u64 {
+        let (g1, g2) = loop {
+            let (a, b) = (0.01 + 0.99 * rng.uniform(), 0.01 + 0.99 * rng.uniform());
+            if a + b <= 0.99 {
+                break (a, b);
+            }
+        };
+        let truth = [
+            log_uniform(&mut rng, 80.0, 4000.0),
+            g1,
+            g2,
+            log_uniform(&mut rng, 0.01, 2.0),
+            log_uniform(&mut rng, 2.0, 40.0),
+        ];
+        let mut t = vec![0.0];
+        t.extend_from_slice(fine.time_grid());
+        let mut f = vec![0.0];
+        f.extend(fine.run(&truth).unwrap());
+        let peak = f.iter().copied().fold(0.0, f64::max);
+        let mut noise = Normal(100 + case);
+        let mut csv = String::from("time [s],piezo [um],deflection [V]\n");
+        for (t, f) in t.iter().zip(&f) {
+            let d = (f + 0.02 * peak * noise.sample()) / K;
+            let z = rate * t.min(ramp) + d;
+            csv.push_str(&format!("{t:.4},{:.9},{:.9}\n", z * 1e6, d / SENS));
+        }
+        let name = format!("long-{case}.csv");
+        std::fs::write(dir.join(&name), csv).unwrap();
+        let doc = json(&nlvid(&["--json", "fit", "fit.toml", &name], &dir));
+        let x = [
+            value(&doc, "G0"),
+            value(&doc, "g1"),
+            value(&doc, "g2"),
+            value(&doc, "tau1"),
+            value(&doc, "tau2"),
+        ];
+        let e_g0 = x[0] / truth[0] - 1.0;
+        let e_sum = x[1] + x[2] - truth[1] - truth[2];
+        let e52 = shear(&x, 52.0) / shear(&truth, 52.0) - 1.0;
+        let pass = e_g0.abs() <= 0.05 && e_sum.abs() <= 0.03 && e52.abs() <= 0.05;
+        ok_issue += usize::from(pass);
+        let exp = &doc["experiments"][0];
+        println!(
+            "case {case}: G0 {:+.1} %, Δsum {e_sum:+.3}, G(52) {:+.1} %; misfit surrogate {:.2} %, real {:.2} %, agree {} {}",
+            100.0 * e_g0,
+            100.0 * e52,
+            100.0 * exp["misfit_surrogate"].as_f64().unwrap(),
+            100.0 * exp["misfit_real"].as_f64().unwrap(),
+            exp["agree"],
+            if pass { "ok" } else { "FAIL" }
+        );
+    }
+    println!("recovered (G0 5 %, sum 0.03, G(52 s) 5 %): {ok_issue}/10");
+    assert!(ok_issue >= 9, "{ok_issue}/10 recovered");
+}
