@@ -1183,7 +1183,7 @@ points = 60
 fn thesis_like_protocol_ten_seeded_cases_through_the_cli() {
     let dir = pipeline().join("long");
     std::fs::create_dir_all(&dir).unwrap();
-    let (radius, rate, ramp, end, points) = (2.5e-6, 1e-6, 2.0, 52.0, 520);
+    let (radius, rate, ramp, end) = (2.5e-6, 1e-6, 2.0, 52.0);
     std::fs::write(
         dir.join("build.toml"),
         r#"title = "RH 2 um, hold to 52 s"
