@@ -130,7 +130,19 @@ pub struct BasisExperiment<B> {
     k: f64,
     sum_w: f64,
     range: f64,
+    /// Data and weights, for the direct evaluation when the Gram form
+    /// cancels (see [`BasisExperiment::eval`]).
+    data: Vec<f64>,
+    weights: Option<Vec<f64>>,
 }
+
+/// Below this fraction of M = (Σ_a |φ_a| √G_aa + √k)² the Gram sum has
+/// lost too many digits to cancellation: the misfit is then computed
+/// directly, O(N·m). M bounds Σ_ab |φ_a| |B_a|·|B_b| |φ_b| + 2 Σ_a |φ_a|
+/// |B_a|·|μ − d| + k (Cauchy–Schwarz, |B_a| the weighted row norm, √G_aa),
+/// the size of the terms whose rounding (≈ (N + m)·ε·M) ends up in the sum,
+/// including the rounding of G and h themselves.
+const CANCELLATION: f64 = 1e-6;
 
 impl<B: BasisModel> BasisExperiment<B> {
     /// Precomputes h and k for `data` (on the model grid); `gram` must be
@@ -174,15 +186,55 @@ impl<B: BasisModel> BasisExperiment<B> {
             k,
             sum_w,
             range,
+            data: data.to_vec(),
+            weights: weights.map(<[f64]>::to_vec),
         })
     }
 
+    /// Σ w_j r_j² and B W r with r = μ + Bᵀφ − d, computed directly.
+    fn direct(&self, phi: &DVector<f64>) -> (f64, DVector<f64>) {
+        let b = self.model.coefficients();
+        let mut r = b.tr_mul(phi);
+        let mu = self.model.offset();
+        let mut swr2 = 0.0;
+        for j in 0..r.len() {
+            let w = self.weights.as_ref().map_or(1.0, |w| w[j]);
+            r[j] += mu[j] - self.data[j];
+            swr2 += w * r[j] * r[j];
+            r[j] *= w;
+        }
+        (swr2, b * r)
+    }
+
     /// (e, ∂e/∂x) if `with_gradient`, else (e, []).
+    ///
+    /// Σ w r² = φᵀGφ + 2φᵀh + k in O(N²); when that sum is below
+    /// [`CANCELLATION`] of its terms' magnitude (a good fit of data far from
+    /// the mean curve μ: the terms cancel and round-off dominates — it can
+    /// even turn negative) the residual is formed directly instead.
     fn eval(&self, x: &[f64], with_gradient: bool) -> Result<(f64, Vec<f64>)> {
         let (phi, dphi) = self.model.basis(x)?;
         check_len("basis phi", self.h.len(), phi.len())?;
-        let g_phi = &*self.gram * &phi;
-        let swr2 = (phi.dot(&g_phi) + 2.0 * phi.dot(&self.h) + self.k).max(0.0);
+        // The direct residual costs ≈ 2·N·m, the Gram form N²: take the
+        // direct one outright when it is not dearer (it is always exact).
+        let (swr2, v) = if 2 * self.data.len() <= phi.len() {
+            self.direct(&phi)
+        } else {
+            let g_phi = &*self.gram * &phi;
+            let gram_sum = phi.dot(&g_phi) + 2.0 * phi.dot(&self.h) + self.k;
+            let row_norms: f64 = phi
+                .iter()
+                .enumerate()
+                .map(|(a, p)| p.abs() * self.gram[(a, a)].max(0.0).sqrt())
+                .sum();
+            let magnitude = (row_norms + self.k.max(0.0).sqrt()).powi(2);
+            if gram_sum < CANCELLATION * magnitude {
+                self.direct(&phi)
+            } else {
+                (gram_sum, g_phi + &self.h)
+            }
+        };
+        let swr2 = swr2.max(0.0);
         if !swr2.is_finite() {
             return Err(InverseError::NonFinite {
                 index: 0,
@@ -199,7 +251,6 @@ impl<B: BasisModel> BasisExperiment<B> {
         if sqrt_s == 0.0 {
             return Ok((e, vec![0.0; x.len()]));
         }
-        let v = g_phi + &self.h;
         let grad = dphi.tr_mul(&v) / (self.sum_w * sqrt_s * self.range);
         Ok((e, grad.iter().copied().collect()))
     }

@@ -111,4 +111,13 @@ pub enum InverseError {
         /// Which quantity differs and by how much.
         message: String,
     },
+
+    /// Drawing or writing a figure failed.
+    #[error("{path}: cannot draw the figure: {message}")]
+    Plot {
+        /// Figure file.
+        path: PathBuf,
+        /// What happened.
+        message: String,
+    },
 }

@@ -16,7 +16,8 @@
 //! - [`MultiStart`]: seeded feasible Latin-hypercube starts, SLSQP local
 //!   runs, clustering into distinct optima, alternatives within a misfit
 //!   tolerance, bound flags; [`verify`] re-scores the optimum with another
-//!   (real) model;
+//!   (real) model, [`rerun`] with any `nlvid_surrogate::ForwardModel`
+//!   (parameters matched by name, response interpolated onto the data grid);
 //! - [`identifiability`]: scaled sensitivities, their singular values and
 //!   Gauss–Newton confidence intervals;
 //! - [`KrigingSurrogate`]: a `nlvid-surrogate` Kriging model as a [`Model`]
@@ -60,7 +61,9 @@ mod measured;
 mod misfit;
 mod model;
 mod optimise;
+mod plot;
 mod prony;
+mod rerun;
 mod starts;
 mod surrogate;
 
@@ -76,6 +79,8 @@ pub use measured::{
 pub use misfit::{Experiment, Misfit, Objective, Segment, range_normalised_rmse, segment_weights};
 pub use model::{FD_STEP_UNIT, Model, check_finite, check_jacobian, check_len, fd_jacobian};
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
+pub use plot::{FigureCurve, FitFigure};
 pub use prony::{ModulusPoint, ParameterTable, PronyShear, PronyTerm};
+pub use rerun::{Rerun, rerun};
 pub use starts::{feasible_starts, latin_hypercube};
 pub use surrogate::{Coordinates, ForwardFromModel, KrigingSurrogate, design_domain};

@@ -107,12 +107,18 @@ impl Table {
             .comment(Some(b'#'))
             .from_path(path)
             .map_err(|e| io(e.to_string()))?;
-        let headers = reader
+        let headers: Vec<(String, Option<String>)> = reader
             .headers()
             .map_err(|e| io(e.to_string()))?
             .iter()
             .map(split_header)
             .collect();
+        if headers.iter().all(|(name, _)| name.is_empty()) {
+            return Err(io(
+                "row 1: the file is empty (expected a header line naming the columns, then data rows)"
+                    .into(),
+            ));
+        }
         let mut rows = Vec::new();
         for rec in reader.records() {
             let rec = rec.map_err(|e| io(e.to_string()))?;
@@ -120,12 +126,7 @@ impl Table {
             rows.push((line, rec.iter().map(str::to_string).collect()));
         }
         if rows.is_empty() {
-            return Err(InverseError::Data {
-                path: path.to_path_buf(),
-                row: 0,
-                column: String::new(),
-                message: "no data rows".into(),
-            });
+            return Err(io("row 2: no data rows after the header".into()));
         }
         Ok(Self {
             path: path.to_path_buf(),

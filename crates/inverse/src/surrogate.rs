@@ -98,7 +98,7 @@ impl KrigingSurrogate {
         }
         let (b, mu) = kriging.basis_coefficients();
         let b = DMatrix::from_column_slice(kriging.n_basis(), kriging.n_outputs, &b);
-        Ok(Self {
+        let s = Self {
             kriging,
             domain,
             times,
@@ -106,7 +106,37 @@ impl KrigingSurrogate {
             coordinates,
             b,
             mu,
-        })
+        };
+        s.check_basis_form()?;
+        Ok(s)
+    }
+
+    /// The fast misfit (`BasisMisfit`) relies on ŷ(x) = μ + Bᵀφ(x) exactly;
+    /// a predictor that is not linear in its basis (e.g. one kriging ln y)
+    /// would make it silently wrong. Compared once, at u = 0.4 in every
+    /// scaled coordinate (inside the domain, off any symmetry), to 1e-8 of
+    /// the curve's magnitude.
+    fn check_basis_form(&self) -> Result<()> {
+        let x = self.domain.from_unit(&vec![0.4; self.domain.len()]);
+        let direct = Model::response(self, &x)?;
+        let (phi, _) = BasisModel::basis(self, &x)?;
+        let via_basis = self.b.transpose() * &phi;
+        let scale = direct.iter().fold(f64::MIN_POSITIVE, |a, v| a.max(v.abs()));
+        let worst = direct
+            .iter()
+            .zip(via_basis.iter().zip(&self.mu))
+            .map(|(y, (bphi, mu))| (y - (mu + bphi)).abs())
+            .fold(0.0, f64::max);
+        if worst <= 1e-8 * scale {
+            Ok(())
+        } else {
+            Err(InverseError::InvalidSetting(format!(
+                "the surrogate's predictor is not of the form mu + B^T phi(x) (differs by {:.2e} \
+                 of the curve at x = {x:?}), which the fast eq. 5.3 misfit needs: refit the \
+                 surrogate without output transforms such as --log-outputs",
+                worst / scale
+            )))
+        }
     }
 
     /// The wrapped Kriging model.

@@ -159,3 +159,53 @@ fn multistart_on_the_gram_misfit_finds_the_same_optimum_as_on_the_direct_one() {
         assert!((p - q).abs() < 1e-4, "{ua:?} vs {ub:?}");
     }
 }
+
+/// Regression (found through `nlvid fit`, 32 starts on an N = 300
+/// surrogate: "misfit 0.0000 %" where the direct misfit was 2.9 %): a curve
+/// far from the mean curve μ (small G0) that is well fitted makes
+/// φᵀGφ + 2φᵀh + k cancel; the Gram sum then has no correct digit (it may
+/// even be negative, clamped to 0). The misfit must still equal the direct
+/// one.
+#[test]
+fn gram_misfit_stays_exact_when_its_terms_cancel() {
+    let x_true = [600.0, 0.3, 0.2, 0.4, 8.0];
+    let mut k = Kernel::new(40, 60, 5);
+    // B-part 1e6 times larger, μ shifted so that y(x_true) stays O(1):
+    // the Gram terms are ~1e12, the weighted residual sum ~1e-5.
+    k.b *= 1e6;
+    let (phi, _) = k.basis(&x_true).expect("phi");
+    let shift = k.b.tr_mul(&phi);
+    for (m, s) in k.mu.iter_mut().zip(shift.iter()) {
+        *m -= s;
+    }
+    let clean = AsModel(&k).response(&x_true).expect("y");
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let data: Vec<f64> = clean
+        .iter()
+        .map(|y| y + 1e-3 * (rng.random::<f64>() - 0.5))
+        .collect();
+    let g = gram(&k, None).expect("gram");
+    let fast = BasisMisfit::new(vec![
+        BasisExperiment::new("RH", &k, g, &data, None).expect("e"),
+    ])
+    .expect("m");
+    let direct = Misfit::new(vec![
+        Experiment::new("RH", AsModel(&k), data.clone(), None).expect("e"),
+    ])
+    .expect("m");
+    for x in [x_true, [600.001, 0.3, 0.2, 0.4, 8.0]] {
+        let (a, ga) = fast.value_and_gradient(&x).expect("fast");
+        let (b, gb) = direct.value_and_gradient(&x).expect("direct");
+        assert!(b > 0.0);
+        // Both sides form residuals of size 1e-3 from values of size 1e6:
+        // ≈ ε·1e6/1e-3 ≈ 2e-7 relative is all either can promise.
+        assert!(
+            (a - b).abs() <= 1e-5 * b,
+            "x = {x:?}: fast {a:e} vs direct {b:e}"
+        );
+        let scale = gb.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (p, q) in ga.iter().zip(&gb) {
+            assert!((p - q).abs() <= 1e-4 * scale, "gradient {p:e} vs {q:e}");
+        }
+    }
+}

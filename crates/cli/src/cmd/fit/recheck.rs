@@ -1,0 +1,69 @@
+//! The real forward model at the optimum (§4.4.1 step 5, §5.4.1): any
+//! `nlvid_surrogate::ForwardModel` is run once and scored with eq. 5.3
+//! ([`nlvid_inverse::rerun`]); this module only sets up the model an
+//! experiment names.
+
+use anyhow::{Context as _, bail};
+use nlvid_inverse::{Domain, ForwardFromModel, LeeRadokHertz, Model as _, Rerun, rerun};
+use nlvid_surrogate::ForwardModel;
+
+use super::data::{LoadedExperiment, RealModel};
+
+/// Lee–Radok Hertz driven by the curve's own measured indentation, on
+/// 0 ∪ the surrogate grid (the hereditary integral starts from rest at
+/// t = 0; [`rerun`] interpolates back onto the grid, exactly).
+fn lee_radok(
+    exp: &LoadedExperiment,
+    domain: &Domain,
+    radius: f64,
+    poisson: f64,
+) -> anyhow::Result<Box<dyn ForwardModel>> {
+    let Some(delta) = &exp.curve.indentation else {
+        bail!(
+            "{}: the Lee-Radok re-check needs an indentation history (AFM data)",
+            exp.curve.path.display()
+        );
+    };
+    let times = exp.surrogate.model.times();
+    let grid: Vec<f64> = (times[0] > 0.0)
+        .then_some(0.0)
+        .into_iter()
+        .chain(times.iter().copied())
+        .collect();
+    let delta = exp.curve.resample(delta, &grid)?;
+    let model = LeeRadokHertz::new(domain.clone(), grid, &delta, radius, poisson)?;
+    Ok(Box::new(ForwardFromModel {
+        model,
+        identity: format!("lee-radok R={radius:e} m nu={poisson}"),
+    }))
+}
+
+/// Re-runs the real model of `exp` (if it names one) at `x`.
+///
+/// # Errors
+/// Set-up or run failures, naming the curve.
+pub fn recheck(
+    exp: &LoadedExperiment,
+    domain: &Domain,
+    x: &[f64],
+) -> anyhow::Result<Option<Rerun>> {
+    let built;
+    let model: &dyn ForwardModel = match &exp.real {
+        None => return Ok(None),
+        Some(RealModel::LeeRadok { radius, poisson }) => {
+            built = lee_radok(exp, domain, *radius, *poisson)?;
+            built.as_ref()
+        }
+        Some(RealModel::Forward(m)) => m.as_ref(),
+    };
+    let r = rerun(
+        model,
+        domain,
+        x,
+        exp.surrogate.model.times(),
+        &exp.force,
+        exp.weights.as_deref(),
+    )
+    .with_context(|| format!("{}: re-check with the real model", exp.label))?;
+    Ok(Some(r))
+}
