@@ -63,6 +63,7 @@ mod optimise;
 mod prony;
 mod starts;
 mod surrogate;
+mod surrogate_file;
 
 pub use basis::{AsModel, BasisExperiment, BasisMisfit, BasisModel, gram};
 pub use domain::{BoundHit, BoundSide, Domain, LinearConstraint, Parameter, Scale};
@@ -79,3 +80,6 @@ pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
 pub use prony::{ModulusPoint, ParameterTable, PronyShear, PronyTerm};
 pub use starts::{feasible_starts, latin_hypercube};
 pub use surrogate::{Coordinates, ForwardFromModel, KrigingSurrogate, design_domain};
+pub use surrogate_file::{
+    SurrogateFit, SurrogateFitter, SurrogateMeta, load_kriging_surrogate, read_meta,
+};

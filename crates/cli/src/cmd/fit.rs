@@ -10,13 +10,12 @@ use std::process::ExitCode;
 
 use anyhow::{Context as _, bail};
 use nlvid_inverse::{
-    AfmColumns, BasisExperiment, BasisMisfit, Calibration, CompressionColumns, Coordinates, Domain,
-    FitResult, KrigingSurrogate, LeeRadokHertz, MeasuredCurve, Model, MultiStart, Objective,
-    PronyShear, ProtocolTolerance, Segment, gram, ramp_hold_indentation, range_normalised_rmse,
-    read_afm_csv, read_compression_csv, segment_weights,
+    AfmColumns, BasisModel, Calibration, CompressionColumns, Coordinates, Domain, KrigingSurrogate,
+    LeeRadokHertz, MeasuredCurve, Model, MultiStart, PronyShear, ProtocolTolerance, Segment,
+    SurrogateFit, SurrogateFitter, load_kriging_surrogate, ramp_hold_indentation,
+    range_normalised_rmse, read_afm_csv, read_compression_csv, segment_weights,
 };
 use nlvid_study::{Bounds, Dimension, Section, Study};
-use nlvid_surrogate::KrigingModel;
 use serde_json::json;
 
 use super::{Context, Run};
@@ -70,25 +69,6 @@ enum DataKind {
 
 fn resolve(base: &Path, p: PathBuf) -> PathBuf {
     if p.is_absolute() { p } else { base.join(p) }
-}
-
-/// Time grid and surrogate input names from the `meta.json` sidecar of
-/// `nlvid build --export`.
-fn read_meta(path: &Path) -> anyhow::Result<(Vec<String>, Vec<f64>)> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let v: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
-    let names: Vec<String> =
-        serde_json::from_value(v["parameter_names"].clone()).with_context(|| {
-            format!(
-                "{}: key `parameter_names` (list of names) missing",
-                path.display()
-            )
-        })?;
-    let time: Vec<f64> = serde_json::from_value(v["time_s"].clone())
-        .with_context(|| format!("{}: key `time_s` (time grid, s) missing", path.display()))?;
-    Ok((names, time))
 }
 
 fn read_domain(s: &mut Section) -> anyhow::Result<Domain> {
@@ -229,23 +209,8 @@ impl Run for Args {
         };
         s.finish()?;
 
-        let (names, times) = read_meta(&meta_path)?;
-        let text = std::fs::read(&model_path)
-            .with_context(|| format!("cannot read surrogate {}", model_path.display()))?;
-        let kriging: KrigingModel = serde_json::from_slice(&text).with_context(|| {
-            format!(
-                "{}: not a model file of `nlvid surrogate fit`",
-                model_path.display()
-            )
-        })?;
-        let surrogate = KrigingSurrogate::new(kriging, domain, &names, times.clone(), coords)
-            .with_context(|| {
-                format!(
-                    "surrogate {} with {}",
-                    model_path.display(),
-                    meta_path.display()
-                )
-            })?;
+        let surrogate = load_kriging_surrogate(&model_path, &meta_path, domain, coords)?;
+        let times = surrogate.times().to_vec();
 
         // Ramp from 0 at `rate` to `amplitude`, then hold to the grid's end.
         let t_end = times.last().copied().unwrap_or(0.0);
@@ -294,24 +259,24 @@ impl Run for Args {
     }
 
     fn execute(c: Config, ctx: &Context) -> anyhow::Result<ExitCode> {
-        let g = gram(&c.surrogate, c.weights.as_deref())?;
-        let experiments = c
+        let fitter = SurrogateFitter::new(c.surrogate, c.weights.clone())?;
+        let curves: Vec<(&str, &[f64])> = c
             .data
             .iter()
-            .map(|(label, _, force)| {
-                BasisExperiment::new(label, &c.surrogate, g.clone(), force, c.weights.as_deref())
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        let misfit = BasisMisfit::new(experiments)?;
+            .map(|(label, _, force)| (label.as_str(), force.as_slice()))
+            .collect();
         let t0 = std::time::Instant::now();
-        let fit: FitResult = MultiStart::new()
-            .with_starts(c.starts)?
-            .with_seed(c.seed)
-            .fit(&misfit)?;
+        let SurrogateFit {
+            fit,
+            per_curve: per_sur,
+            response: fitted,
+        } = fitter.fit(
+            &curves,
+            &MultiStart::new().with_starts(c.starts)?.with_seed(c.seed),
+        )?;
         let seconds = t0.elapsed().as_secs_f64();
         let x = fit.best.x.clone();
-        let fitted = c.surrogate.response(&x)?;
-        let times = c.surrogate.times().to_vec();
+        let times = fitter.times().to_vec();
 
         // Re-run the real model at the optimum (AFM: with each curve's own
         // measured indentation history on the grid).
@@ -331,7 +296,7 @@ impl Run for Args {
                     .collect();
                 let delta = curve.resample(delta, &grid)?;
                 let m = LeeRadokHertz::new(
-                    c.surrogate.domain().clone(),
+                    fitter.surrogate().domain().clone(),
                     grid,
                     &delta,
                     *radius,
@@ -341,7 +306,6 @@ impl Run for Args {
                 real_misfits.push(range_normalised_rmse(&y, force, c.weights.as_deref())?);
             }
         }
-        let per_sur = misfit.per_experiment(&x)?;
         let agree: Option<bool> = match (c.checking_error, real_misfits.is_empty()) {
             (Some(e), false) => Some(
                 per_sur
@@ -351,7 +315,7 @@ impl Run for Args {
             ),
             _ => None,
         };
-        let shear = PronyShear::from_parameters(c.surrogate.domain(), &x)?;
+        let shear = PronyShear::from_parameters(fitter.surrogate().domain(), &x)?;
         let modulus = shear.curve(&c.modulus_times);
 
         let mut plots = Vec::new();
