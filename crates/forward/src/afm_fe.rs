@@ -1,0 +1,249 @@
+//! `model = "afm-fe"`: the axisymmetric finite-element AFM cell model of
+//! thesis §5.3 (`nlvid_fem::afm::run`) driven by the two-step script of
+//! `nlvid-protocol` (force-controlled engagement, then the piezo program
+//! of Fig. 5.2), parameters `[G0, g1, g2, τ1, τ2]` of eq. 5.1 / Table 5.3.
+
+use nlvid_fem::FemError;
+use nlvid_fem::afm::{AfmParams, AfmSetup, Cantilever, Engagement, MeshSpec};
+use nlvid_protocol::{AfmScript, Program};
+use nlvid_study::{Bounds, Dimension, Section};
+use nlvid_surrogate::{FailureKind, ForwardModel, RunFailure};
+
+use crate::error::{ForwardError, Result};
+
+/// Settings of the AFM finite-element forward model (everything but the
+/// five material parameters).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AfmFeSpec {
+    /// Cell height H [m].
+    pub height: f64,
+    /// Cell base diameter D [m].
+    pub diameter: f64,
+    /// Probe radius [m].
+    pub probe_radius: f64,
+    /// Cantilever spring constant k [N/m]; `None`: rigid (δ = Z).
+    pub spring_constant: Option<f64>,
+    /// The two-step script (engagement + piezo program), from `[protocol]`.
+    pub script: AfmScript,
+    /// Output points m, equally spaced over step 2 (thesis: 5095).
+    pub points: usize,
+    /// Mesh: elements per side (n × n).
+    pub elements_per_side: usize,
+    /// Mesh: coarsest/finest spacing ratio toward the contact.
+    pub mesh_bias: f64,
+    /// Bulk modulus over G0 (near-incompressibility).
+    pub bulk_ratio: f64,
+    /// Largest time step in ramps, as a fraction of the ramp duration.
+    pub ramp_step_fraction: f64,
+    /// Largest time step in holds [s].
+    pub hold_step_max: f64,
+}
+
+impl AfmFeSpec {
+    /// Reads the `[forward]` keys (`height`, `diameter`, `probe_radius`,
+    /// `spring_constant` or `cantilever = "rigid"`, `points`,
+    /// `elements_per_side`, `mesh_bias`, `bulk_ratio`,
+    /// `ramp_step_fraction`, `hold_step_max`); `script` is the
+    /// `[protocol]` section's AFM script.
+    ///
+    /// # Errors
+    /// Missing key, wrong unit, out-of-range value (file, line, key).
+    pub fn from_section(s: &mut Section, script: AfmScript, points: usize) -> Result<Self> {
+        let pos = Bounds::positive();
+        let height = s.req_quantity("height", Dimension::LENGTH, pos)?;
+        let diameter = s.req_quantity("diameter", Dimension::LENGTH, pos)?;
+        let probe_radius = s.req_quantity("probe_radius", Dimension::LENGTH, pos)?;
+        let rigid = match s.opt_str("cantilever")?.as_deref() {
+            None | Some("spring") => false,
+            Some("rigid") => true,
+            Some(other) => {
+                return Err(s
+                    .invalid(
+                        "cantilever",
+                        format!("`{other}`: expected \"spring\" or \"rigid\""),
+                    )
+                    .into());
+            }
+        };
+        let k = s.opt_quantity("spring_constant", Dimension::STIFFNESS, pos)?;
+        let spring_constant = match (rigid, k) {
+            (true, Some(_)) => {
+                return Err(s
+                    .invalid(
+                        "spring_constant",
+                        "a rigid cantilever has no spring constant",
+                    )
+                    .into());
+            }
+            (true, None) => None,
+            (false, Some(k)) => Some(k),
+            (false, None) => {
+                return Err(s
+                    .invalid(
+                        "spring_constant",
+                        "missing: give the cantilever's spring constant (e.g. \"0.12 N/m\") or cantilever = \"rigid\"",
+                    )
+                    .into());
+            }
+        };
+        let elements_per_side = s
+            .opt_usize("elements_per_side", Bounds::closed(2.0, 10_000.0))?
+            .unwrap_or(35);
+        let mesh_bias = s.f64_or("mesh_bias", Bounds::at_least(1.0), 4.0)?;
+        let bulk_ratio = s.f64_or("bulk_ratio", pos, 1000.0)?;
+        let ramp_step_fraction =
+            s.f64_or("ramp_step_fraction", Bounds::open_closed(0.0, 1.0), 0.1)?;
+        let hold_step_max = s.quantity_or("hold_step_max", Dimension::TIME, pos, 2.0)?;
+        Ok(Self {
+            height,
+            diameter,
+            probe_radius,
+            spring_constant,
+            script,
+            points,
+            elements_per_side,
+            mesh_bias,
+            bulk_ratio,
+            ramp_step_fraction,
+            hold_step_max,
+        })
+    }
+
+    /// The finite-element setup: the thesis's setup 1 with every setting
+    /// of this spec written over it (so solver settings not named here keep
+    /// the fem crate's defaults).
+    ///
+    /// # Errors
+    /// The script is invalid.
+    pub fn setup(&self) -> Result<AfmSetup> {
+        let bad = |e: nlvid_protocol::ProtocolError| ForwardError::Setting {
+            model: "afm-fe",
+            message: e.to_string(),
+        };
+        let piezo = self.script.piezo().map_err(bad)?;
+        let mut setup = AfmSetup::thesis_setup1();
+        setup.height = self.height;
+        setup.diameter = self.diameter;
+        setup.probe_radius = self.probe_radius;
+        setup.cantilever = match self.spring_constant {
+            Some(stiffness) => Cantilever::Spring { stiffness },
+            None => Cantilever::Rigid,
+        };
+        setup.engagement = Engagement {
+            force: self.script.engage.setpoint_force,
+            ramp: self.script.engage.ramp_time,
+            hold: self.script.engage.hold,
+        };
+        setup.piezo = breakpoints(&piezo);
+        setup.mesh = MeshSpec {
+            elements_per_side: self.elements_per_side,
+            bias: self.mesh_bias,
+        };
+        setup.bulk_ratio = self.bulk_ratio;
+        setup.output_times = piezo.uniform_grid(self.points).map_err(bad)?;
+        setup.ramp_step_fraction = self.ramp_step_fraction;
+        setup.hold_step_max = self.hold_step_max;
+        Ok(setup)
+    }
+
+    /// The forward model.
+    ///
+    /// # Errors
+    /// As [`AfmFeSpec::setup`].
+    pub fn build(&self) -> Result<AfmFeModel> {
+        Ok(AfmFeModel::new(self.setup()?))
+    }
+}
+
+/// The piezo program as (t, Z) points (every breakpoint, linear between).
+fn breakpoints(p: &Program) -> Vec<(f64, f64)> {
+    let mut pts = Vec::with_capacity(p.segments().len() + 1);
+    for seg in p.segments() {
+        if pts.is_empty() {
+            pts.push((seg.t0, seg.v0));
+        }
+        pts.push((seg.t1, seg.v1));
+    }
+    pts
+}
+
+/// The AFM finite-element model as a [`ForwardModel`]: parameters
+/// `[G0 (Pa), g1, g2, τ1 (s), τ2 (s)]` (Table 5.3 order of `nlvid build`),
+/// response F(t) [N] on the setup's output times (step-2 clock).
+#[derive(Debug, Clone)]
+pub struct AfmFeModel {
+    setup: AfmSetup,
+    identity: String,
+}
+
+impl AfmFeModel {
+    /// Wrap a setup.
+    pub fn new(setup: AfmSetup) -> Self {
+        // Debug of the whole setup: every field (geometry, cantilever,
+        // engagement, piezo points, mesh, grid, solver settings) enters the
+        // study hash, including fields added to AfmSetup later.
+        let identity = format!("afm-fe({setup:?})");
+        Self { setup, identity }
+    }
+
+    /// The finite-element setup.
+    pub fn setup(&self) -> &AfmSetup {
+        &self.setup
+    }
+}
+
+/// A finite-element error as a run failure (non-convergence keeps its time).
+pub fn fem_failure(e: &FemError) -> RunFailure {
+    let (kind, time) = match e {
+        FemError::NonConvergence(nc) => (FailureKind::NotConverged, Some(nc.time)),
+        FemError::Setting { .. } | FemError::Material { .. } => {
+            (FailureKind::InvalidParameters, None)
+        }
+        // Mesh, sparse solver, and whatever the fem crate adds later.
+        _ => (FailureKind::Other, None),
+    };
+    RunFailure {
+        kind,
+        time,
+        message: e.to_string(),
+    }
+}
+
+impl ForwardModel for AfmFeModel {
+    fn parameter_names(&self) -> Vec<String> {
+        ["G0", "g1", "g2", "tau1", "tau2"]
+            .map(String::from)
+            .to_vec()
+    }
+    fn parameter_units(&self) -> Vec<String> {
+        ["Pa", "1", "1", "s", "s"].map(String::from).to_vec()
+    }
+    fn time_grid(&self) -> &[f64] {
+        &self.setup.output_times
+    }
+    fn identity(&self) -> String {
+        self.identity.clone()
+    }
+    fn run(&self, p: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
+        let &[g0, g1, g2, tau1, tau2] = p else {
+            return Err(RunFailure {
+                kind: FailureKind::InvalidParameters,
+                time: None,
+                message: format!(
+                    "afm-fe expects 5 parameters [G0, g1, g2, tau1, tau2], got {}",
+                    p.len()
+                ),
+            });
+        };
+        let params = AfmParams {
+            g0,
+            g1,
+            tau1,
+            g2,
+            tau2,
+        };
+        nlvid_fem::afm::run(&params, &self.setup)
+            .map(|r| r.force)
+            .map_err(|e| fem_failure(&e))
+    }
+}

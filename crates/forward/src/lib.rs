@@ -1,0 +1,230 @@
+//! Forward models from study files: one place that turns a study's
+//! `[forward]` section (and, for the AFM and membrane models, its
+//! `[protocol]` section) into a [`nlvid_surrogate::ForwardModel`] — the
+//! parameters → force-curve map that meta-model builds, Kriging checks and
+//! fits evaluate.
+//!
+//! Models (`model = "…"`):
+//! * `hertz-prony` — analytic Lee–Radok ramp-hold indentation with a
+//!   2-term Prony G(t) ([`HertzPronySpec`]); parameters `[G0, g1, g2, τ1, τ2]`;
+//!   microseconds per run.
+//! * `afm-fe` — the axisymmetric finite-element AFM cell model of thesis
+//!   §5.3 (`nlvid_fem::afm::run`) with the two-step script of
+//!   `nlvid-protocol` ([`AfmFeSpec`], [`AfmFeModel`]); parameters
+//!   `[G0, g1, g2, τ1, τ2]` (eq. 5.1, Table 5.3); seconds to minutes per run.
+//! * `membrane` — the ch. II membrane solver (`nlvid_membrane::simulate`)
+//!   ([`MembraneSpec`], [`MembraneModel`]); parameters
+//!   `[C1, γ0, g1, g2, τ1, τ2]` (eq. 2.56); tenths of a second per run.
+//!
+//! Every model reports SI units (`parameter_units`) and an `identity`
+//! string holding every setting, which enters the build's study hash.
+//! The study format is in `docs/study-format.md` (`[forward]`).
+//!
+//! ```
+//! use nlvid_forward::from_study;
+//! use nlvid_study::Study;
+//! let mut study = Study::parse("s.toml", r#"
+//! [forward]
+//! model = "hertz-prony"
+//! probe_radius = "5 um"
+//! rate = "1 um/s"
+//! ramp = "1 s"
+//! hold = "9 s"
+//! points = 50
+//! "#)?;
+//! let model = from_study(&mut study)?;
+//! study.finish()?;
+//! let f = model.run(&[1000.0, 0.3, 0.2, 0.1, 5.0]).map_err(|e| e.to_string())?;
+//! assert_eq!(f.len(), 50);
+//! assert_eq!(model.parameter_units(), ["Pa", "1", "1", "s", "s"]);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+#![warn(missing_docs)]
+
+mod afm_fe;
+mod error;
+mod hertz;
+mod membrane;
+
+use std::time::Duration;
+
+use nlvid_protocol::{Loading as ProtocolLoading, ProtocolSettings};
+use nlvid_study::FromSection as _;
+use nlvid_study::{Bounds, Dimension, Section, Study};
+use nlvid_surrogate::{ForwardModel, RunFailure};
+
+pub use afm_fe::{AfmFeModel, AfmFeSpec, fem_failure};
+pub use error::{ForwardError, Result};
+pub use hertz::HertzPronySpec;
+pub use membrane::{MembraneModel, MembraneSpec, membrane_failure};
+pub use nlvid_surrogate::HertzProny;
+
+/// Which forward model, with all its settings.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ForwardSpec {
+    /// Analytic Lee–Radok Hertz ramp-hold.
+    HertzProny(HertzPronySpec),
+    /// AFM finite-element cell model.
+    AfmFe(AfmFeSpec),
+    /// Ch. II membrane solver.
+    Membrane(MembraneSpec),
+}
+
+/// The `[forward]` section: the model and a test-only delay.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForwardSettings {
+    /// The model.
+    pub spec: ForwardSpec,
+    /// **Test only**: sleep this long [s] before every run, so that a
+    /// build of a cheap model is slow enough to be killed mid-way
+    /// (`test_delay = "50 ms"`). Changes nothing else; enters the identity.
+    pub test_delay: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    HertzProny,
+    AfmFe,
+    Membrane,
+}
+
+/// Output points m: `points` in `[forward]` or `output_points`/`sampling`
+/// in `[protocol]`, exactly one of them.
+fn points(f: &mut Section, protocol: Option<(&Section, &ProtocolSettings)>) -> Result<usize> {
+    let here = f.opt_usize("points", Bounds::closed(2.0, 1e7))?;
+    let there = protocol.and_then(|(_, p)| p.output_points);
+    match (here, there) {
+        (Some(m), None) | (None, Some(m)) => Ok(m),
+        (Some(_), Some(_)) => Err(f
+            .invalid(
+                "points",
+                "the output grid is also given in [protocol] (output_points/sampling); give it once",
+            )
+            .into()),
+        (None, None) => Err(f
+            .invalid(
+                "points",
+                "missing: number of output time points m (thesis: 5095 for AFM, 1200 for capsules)",
+            )
+            .into()),
+    }
+}
+
+impl ForwardSettings {
+    /// Reads `[forward]` (and `[protocol]` for `afm-fe` and `membrane`).
+    /// The caller still owns the study and must `finish()` it.
+    ///
+    /// # Errors
+    /// Missing sections or keys, wrong units, out-of-range values, a
+    /// `[protocol]` that does not suit the model — each naming file, line
+    /// and key.
+    pub fn from_study(study: &mut Study) -> Result<Self> {
+        let mut f = study.section("forward")?;
+        let kind = f.req_enum(
+            "model",
+            &[
+                ("hertz-prony", Kind::HertzProny),
+                ("afm-fe", Kind::AfmFe),
+                ("membrane", Kind::Membrane),
+            ],
+        )?;
+        let test_delay = f.opt_quantity("test_delay", Dimension::TIME, Bounds::non_negative())?;
+        let spec = match kind {
+            Kind::HertzProny => ForwardSpec::HertzProny(HertzPronySpec::from_section(&mut f)?),
+            Kind::AfmFe => {
+                let mut ps = study.section("protocol")?;
+                let settings = ProtocolSettings::from_section(&mut ps)?;
+                let ProtocolLoading::Afm(script) = &settings.loading else {
+                    return Err(ps
+                        .invalid(
+                            "kind",
+                            "model `afm-fe` needs kind = \"afm\" (the two-step AFM script)",
+                        )
+                        .into());
+                };
+                let m = points(&mut f, Some((&ps, &settings)))?;
+                ps.finish()?;
+                ForwardSpec::AfmFe(AfmFeSpec::from_section(&mut f, script.clone(), m)?)
+            }
+            Kind::Membrane => {
+                let mut ps = study.section("protocol")?;
+                let settings = ProtocolSettings::from_section(&mut ps)?;
+                let ProtocolLoading::Program(program) = &settings.loading else {
+                    return Err(ps
+                        .invalid("kind", "model `membrane` needs a plate program (e.g. kind = \"ramp-hold\"), not the AFM script")
+                        .into());
+                };
+                if program.quantity() != nlvid_protocol::Quantity::Displacement {
+                    return Err(ps
+                        .invalid(
+                            "control",
+                            "model `membrane` follows a plate displacement program (control = \"displacement\", lengths and times with units)",
+                        )
+                        .into());
+                }
+                let m = points(&mut f, Some((&ps, &settings)))?;
+                ps.finish()?;
+                ForwardSpec::Membrane(MembraneSpec::from_section(&mut f, program.clone(), m)?)
+            }
+        };
+        f.finish()?;
+        Ok(Self { spec, test_delay })
+    }
+
+    /// The forward model.
+    ///
+    /// # Errors
+    /// Settings the model cannot use (see each spec's `build`).
+    pub fn build(&self) -> Result<Box<dyn ForwardModel>> {
+        let model: Box<dyn ForwardModel> = match &self.spec {
+            ForwardSpec::HertzProny(s) => Box::new(s.build()),
+            ForwardSpec::AfmFe(s) => Box::new(s.build()?),
+            ForwardSpec::Membrane(s) => Box::new(s.build()?),
+        };
+        Ok(match self.test_delay {
+            Some(d) if d > 0.0 => Box::new(Delayed {
+                inner: model,
+                delay: d,
+            }),
+            _ => model,
+        })
+    }
+}
+
+/// Reads `[forward]` (and `[protocol]` when the model needs it) and builds
+/// the forward model. The caller must still `finish()` the study.
+///
+/// # Errors
+/// As [`ForwardSettings::from_study`] and [`ForwardSettings::build`].
+pub fn from_study(study: &mut Study) -> Result<Box<dyn ForwardModel>> {
+    ForwardSettings::from_study(study)?.build()
+}
+
+/// Test-only wrapper: sleeps before every run.
+struct Delayed {
+    inner: Box<dyn ForwardModel>,
+    delay: f64,
+}
+
+impl ForwardModel for Delayed {
+    fn parameter_names(&self) -> Vec<String> {
+        self.inner.parameter_names()
+    }
+    fn parameter_units(&self) -> Vec<String> {
+        self.inner.parameter_units()
+    }
+    fn time_grid(&self) -> &[f64] {
+        self.inner.time_grid()
+    }
+    fn contact_index(&self) -> usize {
+        self.inner.contact_index()
+    }
+    fn identity(&self) -> String {
+        format!("{}+test_delay({:e})", self.inner.identity(), self.delay)
+    }
+    fn run(&self, params: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
+        std::thread::sleep(Duration::from_secs_f64(self.delay));
+        self.inner.run(params)
+    }
+}
