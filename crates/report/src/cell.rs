@@ -247,9 +247,7 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
         Ok(g) => g,
         Err(e) => return fail(format!("model grid: {e}")),
     };
-    let needed = settings
-        .hold_end
-        .max(grid.last().copied().unwrap_or(0.0));
+    let needed = settings.hold_end.max(grid.last().copied().unwrap_or(0.0));
     if t_last - t_first < needed * (1.0 - 1e-9) {
         return fail(format!(
             "the curve covers {:.4} s but the fitted window needs {needed} s \
@@ -407,9 +405,8 @@ pub fn hertz_baseline(
 /// √(d1·d2) of a cell, when its manifest row gives them; a problem is a flag.
 fn geometry(g: &Geometry, out: &mut CellResult) {
     if let Some((cell, glass)) = &g.height_curves {
-        let read = |p: &Path| {
-            nlvid_afm::read_force_curve(p).map_err(|e| format!("{}: {e}", p.display()))
-        };
+        let read =
+            |p: &Path| nlvid_afm::read_force_curve(p).map_err(|e| format!("{}: {e}", p.display()));
         match read(cell).and_then(|c| {
             let gl = read(glass)?;
             nlvid_afm::geometry::cell_height_from_curves(
@@ -428,5 +425,84 @@ fn geometry(g: &Geometry, out: &mut CellResult) {
             Ok(d) => out.base_diameter = Some(d),
             Err(e) => out.flags.push(format!("base diameter not measured: {e}")),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(dir: &Path) -> CohortSettings {
+        let study = dir.join("study.toml");
+        std::fs::write(
+            &study,
+            "[probe]\nradius = \"2.5 um\"\npoisson = 0.5\n[afm]\nspring_constant = \"0.1 N/m\"\n\
+             [protocol]\nramp = \"1 s\"\nhold_end = \"3 s\"\n",
+        )
+        .unwrap();
+        CohortSettings::load(&study).unwrap()
+    }
+
+    /// An elastic half-space under a sphere: F = (4/3) E/(1 − ν²) √R δ^{3/2}
+    /// (eq. 1.1), written here from the closed form; the Hertz baseline must
+    /// return that E.
+    #[test]
+    fn hertz_baseline_recovers_the_modulus_of_an_elastic_curve() {
+        let dir = std::env::temp_dir().join(format!("nlvid-report-hertz-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let s = settings(&dir);
+        let (e, r, nu, k, rate) = (1500.0, 2.5e-6, 0.5, 0.1, 2e-6);
+        let mut csv = String::from("time [s],piezo [um],deflection [nm]\n");
+        for i in 0..=300 {
+            let t = i as f64 * 0.01;
+            let d: f64 = rate * t.min(1.0);
+            let f = 4.0 / 3.0 * e / (1.0 - nu * nu) * r.sqrt() * d.powf(1.5);
+            csv.push_str(&format!("{t},{},{}\n", (d + f / k) * 1e6, f / k * 1e9));
+        }
+        let path = dir.join("elastic.csv");
+        std::fs::write(&path, csv).unwrap();
+        let cols = AfmColumns {
+            time: "time".into(),
+            piezo: "piezo".into(),
+            deflection: "deflection".into(),
+        };
+        let cal = Calibration {
+            deflection_sensitivity: None,
+            spring_constant: k,
+        };
+        let curve = nlvid_inverse::read_afm_csv(&path, &cols, &cal).unwrap();
+        let delta = curve.indentation.clone().unwrap();
+        let h = hertz_baseline(&s, &curve, &delta).unwrap();
+        assert!(
+            (h.youngs_modulus / e - 1.0).abs() < 1e-3,
+            "E = {} vs {e}",
+            h.youngs_modulus
+        );
+        assert!(h.misfit < 1e-3, "misfit {}", h.misfit);
+        assert!(h.window.contains("0-1.000 s"), "{}", h.window);
+    }
+
+    #[test]
+    fn geometry_is_taken_from_the_manifest_values() {
+        let mut out = CellResult::failed("g", "f", "c", "h", String::new());
+        geometry(
+            &Geometry {
+                height_curves: None,
+                image_distances: Some((12e-6, 27e-6)),
+            },
+            &mut out,
+        );
+        // √(12 · 27) = 18 µm.
+        assert!((out.base_diameter.unwrap() - 18e-6).abs() < 1e-18);
+        let mut bad = CellResult::failed("g", "f", "c", "h", String::new());
+        geometry(
+            &Geometry {
+                height_curves: None,
+                image_distances: Some((12e-6, -1e-6)),
+            },
+            &mut bad,
+        );
+        assert!(bad.base_diameter.is_none());
+        assert!(bad.flags[0].contains("base diameter"), "{:?}", bad.flags);
     }
 }

@@ -209,7 +209,9 @@ fn from_manifest(path: &Path) -> Result<Vec<CellInput>> {
                 }
             };
             match (num(a, na)?, num(b, nb)?) {
-                (Some(x), Some(y)) => geometry.image_distances = Some((x * dist_scale, y * dist_scale)),
+                (Some(x), Some(y)) => {
+                    geometry.image_distances = Some((x * dist_scale, y * dist_scale))
+                }
                 (None, None) => {}
                 _ => {
                     return Err(ReportError::Data {
@@ -469,7 +471,11 @@ pub fn results_csv(cells: &[CellResult]) -> Result<String> {
         row.push(num(c.relaxation.map(|r| 100.0 * r)));
         row.push(num(c.hertz.as_ref().map(|h| h.youngs_modulus)));
         row.push(num(c.hertz.as_ref().map(|h| h.misfit)));
-        row.push(c.hertz.as_ref().map_or_else(String::new, |h| h.window.clone()));
+        row.push(
+            c.hertz
+                .as_ref()
+                .map_or_else(String::new, |h| h.window.clone()),
+        );
         row.push(num(c.cell_height));
         row.push(num(c.base_diameter));
         row.push(c.status.as_str().into());

@@ -3,10 +3,10 @@
 //! distributions of (G0, g1, τ1, g2, τ2) inside the Table 5.3 domain, with
 //! measurement noise. Same study, spec and seed → byte-identical files.
 //!
-//! The study (`examples/demo/study.toml`) names the forward model in its
-//! `[forward]` section; the same section drives `nlvid build`, so the
-//! meta-model the cohort fits on and the curves it fits are made by one
-//! model (see `examples/demo/regenerate.sh`). Today only `hertz-prony`
+//! The meta-model's study (`examples/demo/metamodel.toml`) names the
+//! forward model in its `[forward]` section; the same section drives
+//! `nlvid build`, so the meta-model the cohort fits on and the curves it
+//! fits are made by one model (see `examples/demo/regenerate.sh`). Today only `hertz-prony`
 //! (analytic Lee–Radok ramp-hold) can write curves: its indentation history
 //! δ(t) is known in closed form, which the piezo column Z = δ + F/k needs.
 //!
@@ -18,8 +18,9 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use nlvid_forward::{ForwardSettings, ForwardSpec};
 use nlvid_inverse::Domain;
-use nlvid_study::{Bounds, Dimension, Study};
+use nlvid_study::Study;
 use nlvid_surrogate::{ForwardModel, HertzProny};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -172,34 +173,36 @@ pub struct HertzPronyForward {
 }
 
 impl HertzPronyForward {
-    /// Reads `[forward]` of the study at `path`.
+    /// Reads `[forward]` of the study at `path` with `nlvid_forward` (the
+    /// reader `nlvid build` uses).
     ///
     /// # Errors
-    /// A missing section or key, or a model other than `hertz-prony`
-    /// (naming file, line, key).
+    /// A missing section or key (naming file, line, key), or a model other
+    /// than `hertz-prony`.
     pub fn load(path: &Path) -> Result<Self> {
         let mut study = Study::load(path)?;
-        let mut f = study.section("forward")?;
-        let model = f.req_str("model")?;
-        if model != "hertz-prony" {
-            return Err(f
-                .invalid(
-                    "model",
-                    format!(
-                        "the demo data generator writes curves for `hertz-prony` only (got \
-                         `{model}`): it needs the indentation history δ(t) for the piezo column"
-                    ),
-                )
-                .into());
+        let fwd = ForwardSettings::from_study(&mut study)
+            .map_err(|e| ReportError::InvalidSetting(e.to_string()))?;
+        match fwd.spec {
+            ForwardSpec::HertzProny(h) => Ok(Self {
+                probe_radius: h.probe_radius,
+                rate: h.rate,
+                ramp: h.ramp,
+                hold: h.hold,
+                points: h.points,
+            }),
+            other => Err(ReportError::InvalidSetting(format!(
+                "{}: [forward] {}: the demo data generator writes curves for `hertz-prony` \
+                 only (it needs the indentation history δ(t) for the piezo column; an AFM FE \
+                 generator is for later)",
+                path.display(),
+                match other {
+                    ForwardSpec::AfmFe(_) => "afm-fe",
+                    ForwardSpec::Membrane(_) => "membrane",
+                    ForwardSpec::HertzProny(_) => "hertz-prony",
+                }
+            ))),
         }
-        let pos = Bounds::positive();
-        Ok(Self {
-            probe_radius: f.req_quantity("probe_radius", Dimension::LENGTH, pos)?,
-            rate: f.req_quantity("rate", Dimension::VELOCITY, pos)?,
-            ramp: f.req_quantity("ramp", Dimension::TIME, pos)?,
-            hold: f.req_quantity("hold", Dimension::TIME, Bounds::non_negative())?,
-            points: f.req_usize("points", Bounds::closed(2.0, 1e7))?,
-        })
     }
 
     /// The forward model on `points` equally spaced times in (0, ramp + hold].
@@ -239,19 +242,31 @@ fn sampling(spec: &DemoSpec, t_end: f64) -> Result<(usize, Vec<usize>)> {
     Ok((n, keep))
 }
 
-/// Writes `data/` and `ground_truth.csv` next to the study at `study` from
-/// its forward model, cantilever and columns.
+/// Writes `data/` and `ground_truth.csv` next to the cohort study `study`
+/// (cantilever, columns, fitted window) with the forward model of the
+/// `[forward]` section of `forward` (the meta-model's study,
+/// `metamodel.toml` in the demo).
 ///
 /// # Errors
 /// An unreadable study, a forward model the generator cannot drive, a
 /// group distribution outside the domain, an unwritable directory.
-pub fn write_demo_data(spec: &DemoSpec, study: &Path) -> Result<DemoFiles> {
+pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<DemoFiles> {
     let settings = CohortSettings::load(study)?;
-    let fwd = HertzPronyForward::load(study)?;
+    let fwd = HertzPronyForward::load(forward)?;
+    if (settings.radius / fwd.probe_radius - 1.0).abs() > 1e-12 {
+        return Err(ReportError::InvalidSetting(format!(
+            "{}: probe.radius = {} m but {} has forward.probe_radius = {} m",
+            study.display(),
+            settings.radius,
+            forward.display(),
+            fwd.probe_radius
+        )));
+    }
     let dir = study.parent().map(Path::to_path_buf).unwrap_or_default();
     let domain = Domain::prony2_table_5_3(settings.constraint_epsilon)?;
     let t_end = fwd.ramp + fwd.hold;
-    if (settings.ramp - fwd.ramp).abs() > 1e-9 * fwd.ramp || settings.hold_end > t_end * (1.0 + 1e-12)
+    if (settings.ramp - fwd.ramp).abs() > 1e-9 * fwd.ramp
+        || settings.hold_end > t_end * (1.0 + 1e-12)
     {
         return Err(ReportError::InvalidSetting(format!(
             "{}: the fitted window (ramp {} s, hold_end {} s) must match the forward model's \

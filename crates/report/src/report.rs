@@ -554,7 +554,11 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
         row.push(opt(c.peak_force, 1e9, 4));
         row.push(opt(c.relaxation, 100.0, 3));
         row.push(opt(c.hertz.as_ref().map(|h| h.youngs_modulus), 1.0, 4));
-        row.push(c.hertz.as_ref().map_or_else(String::new, |h| h.window.clone()));
+        row.push(
+            c.hertz
+                .as_ref()
+                .map_or_else(String::new, |h| h.window.clone()),
+        );
         if has_height {
             row.push(opt(c.cell_height, 1e6, 4));
         }
@@ -661,8 +665,9 @@ fn surrogate_section(h: &mut String, f: &crate::settings::SurrogateFiles) -> Res
         return Err(ReportError::Data {
             path: p.clone(),
             line: 0,
-            message: "keys `min`, `median`, `max` (output of `nlvid --json surrogate check`) missing"
-                .into(),
+            message:
+                "keys `min`, `median`, `max` (output of `nlvid --json surrogate check`) missing"
+                    .into(),
         });
     };
     let head = ["checking cases", "min (%)", "median (%)", "max (%)"].map(String::from);

@@ -27,8 +27,9 @@ pub struct Args {
     /// this binary was built from.
     #[arg(long)]
     pub demo: Option<PathBuf>,
-    /// Only (re)write the demo's cell curves (data/, ground_truth.csv) from
-    /// its study's forward model; used by examples/demo/regenerate.sh.
+    /// Only (re)write the demo's cell curves (data/, ground_truth.csv) with
+    /// the forward model of its metamodel.toml; used by
+    /// examples/demo/regenerate.sh.
     #[arg(long)]
     pub write_data: bool,
 }
@@ -70,7 +71,7 @@ impl Run for Args {
         let data = demo.join("data");
         if a.write_data {
             let spec = DemoSpec::default();
-            let files = write_demo_data(&spec, &study)?;
+            let files = write_demo_data(&spec, &study, &demo.join("metamodel.toml"))?;
             println!(
                 "wrote {} groups × {} cells from known parameters into {} (truth: {})",
                 spec.groups.len(),

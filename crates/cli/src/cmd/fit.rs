@@ -10,7 +10,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context as _, bail};
 use nlvid_inverse::{
-    AfmColumns, BasisModel, Calibration, CompressionColumns, Coordinates, Domain, KrigingSurrogate,
+    AfmColumns, Calibration, CompressionColumns, Coordinates, Domain, KrigingSurrogate,
     LeeRadokHertz, MeasuredCurve, Model, MultiStart, PronyShear, ProtocolTolerance, Segment,
     SurrogateFit, SurrogateFitter, load_kriging_surrogate, ramp_hold_indentation,
     range_normalised_rmse, read_afm_csv, read_compression_csv, segment_weights,
