@@ -213,6 +213,9 @@ mod tests {
         )
         .unwrap_err()
         .to_string();
-        assert!(e.contains("model.json") && e.contains("nlvid surrogate fit"), "{e}");
+        assert!(
+            e.contains("model.json") && e.contains("nlvid surrogate fit"),
+            "{e}"
+        );
     }
 }
