@@ -184,6 +184,30 @@ pub struct Admissibility {
     pub contact_index: usize,
 }
 
+impl Admissibility {
+    /// Reads the filter keys of the study's `[build]` section:
+    /// `min_peak_force` (a force, e.g. `"4 nN"`) and
+    /// `reject_non_repulsive` (bool); `contact_index` comes from the model.
+    ///
+    /// # Errors
+    /// Wrong unit or type (file, line, key).
+    pub fn from_section(
+        s: &mut nlvid_study::Section,
+        contact_index: usize,
+    ) -> nlvid_study::Result<Self> {
+        use nlvid_study::{Bounds, Dimension};
+        Ok(Self {
+            min_peak_force: s.opt_quantity(
+                "min_peak_force",
+                Dimension::FORCE,
+                Bounds::non_negative(),
+            )?,
+            reject_non_repulsive: s.opt_bool("reject_non_repulsive")?.unwrap_or(false),
+            contact_index,
+        })
+    }
+}
+
 /// Counts of a filtered meta-model.
 #[derive(Debug, Clone, Default, Serialize, Deserialize, PartialEq)]
 pub struct FilterCounts {
@@ -293,8 +317,10 @@ pub fn write_npy(path: &Path, rows: &[Vec<f64>], ncols: usize) -> Result<()> {
 }
 
 /// Export a filtered meta-model to `dir`: `X.csv`, `Y.csv`, `X.npy`,
-/// `Y.npy`, `t.npy`, `status.csv` and `meta.json` (names, units, time,
-/// study hash, filter counts).
+/// `Y.npy`, `t.npy`, `status.csv` (index, status, reason), `timing.csv`
+/// (index, status, wall seconds) and `meta.json` (names, units, time,
+/// study hash, filter counts). Everything but `timing.csv` is a
+/// deterministic function of the store's results.
 pub fn export(mm: &MetaModel, dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(io_err(dir))?;
     let csv_err = |p: &Path| {
@@ -330,15 +356,26 @@ pub fn export(mm: &MetaModel, dir: &Path) -> Result<()> {
             .map_err(csv_err(&yp))?;
     }
     w.flush().map_err(io_err(&yp))?;
+    // status.csv is deterministic (merged shards and resumed builds
+    // reproduce it byte for byte); wall times go to timing.csv.
     let sp = dir.join("status.csv");
     let mut w = csv::Writer::from_path(&sp).map_err(csv_err(&sp))?;
-    w.write_record(["index", "status", "reason", "seconds"])
+    w.write_record(["index", "status", "reason"])
         .map_err(csv_err(&sp))?;
-    for (i, s, r, sec) in &mm.status {
-        w.write_record([i.to_string(), s.clone(), r.clone(), format!("{sec:e}")])
+    for (i, s, r, _) in &mm.status {
+        w.write_record([i.to_string(), s.clone(), r.clone()])
             .map_err(csv_err(&sp))?;
     }
     w.flush().map_err(io_err(&sp))?;
+    let tp = dir.join("timing.csv");
+    let mut w = csv::Writer::from_path(&tp).map_err(csv_err(&tp))?;
+    w.write_record(["index", "status", "seconds"])
+        .map_err(csv_err(&tp))?;
+    for (i, s, _, sec) in &mm.status {
+        w.write_record([i.to_string(), s.clone(), format!("{sec:e}")])
+            .map_err(csv_err(&tp))?;
+    }
+    w.flush().map_err(io_err(&tp))?;
     write_npy(&dir.join("X.npy"), &mm.x, mm.meta.parameter_names.len())?;
     write_npy(&dir.join("Y.npy"), &mm.y, mm.meta.time.len())?;
     write_npy(
@@ -353,7 +390,7 @@ pub fn export(mm: &MetaModel, dir: &Path) -> Result<()> {
         "study_hash": mm.meta.study_hash,
         "model": mm.meta.model,
         "counts": mm.counts,
-        "files": {"X": "X.npy / X.csv (rows: kept runs)", "Y": "Y.npy / Y.csv", "t": "t.npy", "status": "status.csv"},
+        "files": {"X": "X.npy / X.csv (rows: kept runs)", "Y": "Y.npy / Y.csv", "t": "t.npy", "status": "status.csv", "timing": "timing.csv (wall seconds per run; the only file that differs between identical builds)"},
     });
     let bytes = serde_json::to_vec_pretty(&sidecar)
         .map_err(|e| SurrogateError::InvalidInput(e.to_string()))?;

@@ -473,6 +473,144 @@ pub fn training_and_checking(
     ))
 }
 
+/// The study's `[design]` section: the parameter domain of a forward
+/// model, the sizes of the training and checking sets and the seed.
+///
+/// ```toml
+/// [design]
+/// n_train = 100
+/// n_check = 50
+/// seed = 7
+/// ese = true                 # optimised LHS (default); false: random LHS
+/// [design.parameters]        # every parameter of the model, its SI unit
+/// G0 = { range = ["80 Pa", "4 kPa"], log = true }
+/// g1 = { range = [0.01, 1.0] }
+/// [[design.constraint]]      # Σ coefficients·x ≤ at_most
+/// coefficients = { g1 = 1, g2 = 1 }
+/// at_most = 0.99
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct DesignSettings {
+    /// Domain in the model's parameter order.
+    pub domain: Domain,
+    /// Training points N.
+    pub n_train: usize,
+    /// Checking points (separate design, may be 0).
+    pub n_check: usize,
+    /// Seed.
+    pub seed: u64,
+    /// ESE outer iterations (0: plain random Latin hypercube).
+    pub ese_iterations: usize,
+}
+
+impl DesignSettings {
+    /// Reads `[design]` for a model with these parameter names and SI
+    /// units (`"1"` for dimensionless); every parameter must be given.
+    ///
+    /// # Errors
+    /// Missing or unknown parameters, wrong units, empty ranges, log axes
+    /// with lower ≤ 0, constraints naming unknown parameters — each naming
+    /// file, line and key.
+    pub fn from_section(
+        s: &mut nlvid_study::Section,
+        names: &[String],
+        units: &[String],
+    ) -> nlvid_study::Result<Self> {
+        use nlvid_study::{Bounds, Dimension};
+        let n_train = s.req_usize("n_train", Bounds::closed(2.0, 1e7))?;
+        let n_check = s
+            .opt_usize("n_check", Bounds::closed(0.0, 1e7))?
+            .unwrap_or(0);
+        let seed = s.opt_u64("seed")?.unwrap_or(1);
+        let ese = s.opt_bool("ese")?.unwrap_or(true);
+        let iters = s.opt_usize("ese_iterations", Bounds::closed(1.0, 1e6))?;
+        if !ese && iters.is_some() {
+            return Err(s.invalid("ese_iterations", "given with ese = false"));
+        }
+        let ese_iterations = if ese { iters.unwrap_or(30) } else { 0 };
+        let mut ps = s.subsection("parameters")?;
+        let mut axes = Vec::with_capacity(names.len());
+        for (name, unit) in names.iter().zip(units) {
+            let dim = if unit == "1" {
+                Dimension::NONE
+            } else {
+                nlvid_study::parse_unit(unit)
+                    .map_err(|e| ps.invalid(name, format!("model unit `{unit}`: {e}")))?
+                    .1
+            };
+            if !ps.has(name) {
+                return Err(ps.invalid(
+                    name,
+                    format!(
+                        "missing parameter `{name}` (the model's parameters: {}); \
+                         write {name} = {{ range = [lower, upper] }}",
+                        names.join(", ")
+                    ),
+                ));
+            }
+            let mut p = ps.subsection(name)?;
+            let (lower, upper) = p.req_range("range", dim, Bounds::ANY)?;
+            let log = p.opt_bool("log")?.unwrap_or(false);
+            if log && lower <= 0.0 {
+                return Err(p.invalid("log", "a logarithmic axis needs a positive lower bound"));
+            }
+            p.finish()?;
+            axes.push(Axis {
+                name: name.clone(),
+                unit: unit.clone(),
+                lower,
+                upper,
+                log,
+            });
+        }
+        ps.finish()?;
+        let mut constraints = Vec::new();
+        for mut c in s.tables("constraint")? {
+            let mut co = c.subsection("coefficients")?;
+            let mut coeffs = vec![0.0; names.len()];
+            for key in co.keys().iter().map(|k| k.to_string()).collect::<Vec<_>>() {
+                match names.iter().position(|n| *n == key) {
+                    Some(i) => coeffs[i] = co.req_f64(&key, Bounds::ANY)?,
+                    None => {
+                        return Err(co.invalid(
+                            &key,
+                            format!("not a parameter of the model ({})", names.join(", ")),
+                        ));
+                    }
+                }
+            }
+            co.finish()?;
+            let bound = c.req_f64("at_most", Bounds::ANY)?;
+            c.finish()?;
+            constraints.push(LinearConstraint { coeffs, bound });
+        }
+        Ok(Self {
+            domain: Domain { axes, constraints },
+            n_train,
+            n_check,
+            seed,
+            ese_iterations,
+        })
+    }
+
+    /// The training and checking designs ([`training_and_checking`], checking
+    /// points at least 1e-6 (unit cube) from every training point).
+    ///
+    /// # Errors
+    /// As [`training_and_checking`].
+    pub fn designs(&self) -> Result<(Design, Design)> {
+        let (train, check) = training_and_checking(
+            &self.domain,
+            self.n_train,
+            self.n_check.max(1),
+            self.seed,
+            self.ese_iterations,
+            1e-6,
+        )?;
+        Ok((train, if self.n_check == 0 { Vec::new() } else { check }))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

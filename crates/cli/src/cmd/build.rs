@@ -1,42 +1,59 @@
 //! `nlvid build`: run a forward model over a design (parallel, resumable,
 //! shardable) and `nlvid merge`: join shard stores.
+//!
+//! Two ways to call `build`:
+//! * `nlvid build study.toml`: forward model from `[forward]` (+
+//!   `[protocol]`), training and checking designs from `[design]`, store,
+//!   export and admissibility filters from `[build]`; the training set goes
+//!   to `<store>/train`, the checking set to `<store>/check`.
+//! * flags only (as before): `--design X.csv --model hertz-prony --store DIR`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::bail;
+use anyhow::{Context, bail};
 use clap::Args;
-use nlvid_surrogate::{Admissibility, BuildOptions, HertzProny, Shard, build, export, load, merge};
+use nlvid_forward::{ForwardSettings, HertzPronySpec};
+use nlvid_study::Study;
+use nlvid_surrogate::doe::DesignSettings;
+use nlvid_surrogate::{
+    Admissibility, BuildOptions, ForwardModel, Shard, build, export, load, merge,
+};
 
 use super::surrogate::read_table;
 
 /// Arguments of `build`.
 #[derive(Debug, Args)]
 pub struct BuildArgs {
-    /// Design CSV (from `nlvid sample`).
-    #[arg(long)]
-    pub design: PathBuf,
-    /// Forward model. Available now: `hertz-prony` (analytic LV Hertz ramp-hold,
-    /// parameters G0, g1, g2, tau1, tau2). Membrane and FE models plug in here.
-    #[arg(long, default_value = "hertz-prony")]
+    /// Study file with `[forward]`, `[design]` and `[build]` sections
+    /// (docs/study-format.md). Without it, give `--design` and `--store`.
+    pub study: Option<PathBuf>,
+    /// Design CSV (from `nlvid sample`); flag-only use.
+    #[arg(long, conflicts_with = "study")]
+    pub design: Option<PathBuf>,
+    /// Forward model for flag-only use: `hertz-prony` (analytic LV Hertz
+    /// ramp-hold, R = 5 µm, 1 µm/s for 1 s, then hold to 10 s; parameters
+    /// G0, g1, g2, tau1, tau2). Study files choose any model in `[forward]`.
+    #[arg(long, default_value = "hertz-prony", conflicts_with = "study")]
     pub model: String,
-    /// Store directory (created; re-running resumes).
+    /// Store directory (created; re-running resumes). Overrides `[build] store`.
     #[arg(long)]
-    pub store: PathBuf,
+    pub store: Option<PathBuf>,
     /// Build only slice i/n (1-based), e.g. `--shard $((SLURM_ARRAY_TASK_ID+1))/$SLURM_ARRAY_TASK_COUNT`.
     #[arg(long)]
     pub shard: Option<String>,
-    /// Export X, Y (npy + CSV) and a JSON sidecar to this directory when done.
+    /// Export X, Y (npy + CSV) and a JSON sidecar to this directory when
+    /// done. Overrides `[build] export`.
     #[arg(long)]
     pub export: Option<PathBuf>,
-    /// Admissibility: remove runs whose peak force is below this [N].
-    #[arg(long)]
+    /// Admissibility: remove runs whose peak force is below this [N] (flag-only use).
+    #[arg(long, conflicts_with = "study")]
     pub min_peak_force: Option<f64>,
-    /// Admissibility: remove runs with any non-positive force after contact.
-    #[arg(long)]
+    /// Admissibility: remove runs with any non-positive force after contact (flag-only use).
+    #[arg(long, conflicts_with = "study")]
     pub reject_non_repulsive: bool,
-    /// hertz-prony: time points.
-    #[arg(long, default_value_t = 200)]
+    /// hertz-prony (flag-only use): time points.
+    #[arg(long, default_value_t = 200, conflicts_with = "study")]
     pub points: usize,
     /// No progress bar.
     #[arg(long)]
@@ -46,7 +63,7 @@ pub struct BuildArgs {
 /// Arguments of `merge`.
 #[derive(Debug, Args)]
 pub struct MergeArgs {
-    /// Shard store directories.
+    /// Shard store directories (each a store, or holding `train/` and `check/` stores).
     #[arg(required = true)]
     pub shards: Vec<PathBuf>,
     /// Merged store directory.
@@ -55,6 +72,9 @@ pub struct MergeArgs {
     /// Export X, Y after merging.
     #[arg(long)]
     pub export: Option<PathBuf>,
+    /// Take the admissibility filters from this study's `[build]` section.
+    #[arg(long, conflicts_with_all = ["min_peak_force", "reject_non_repulsive"])]
+    pub study: Option<PathBuf>,
     /// Admissibility: peak-force threshold [N].
     #[arg(long)]
     pub min_peak_force: Option<f64>,
@@ -63,11 +83,61 @@ pub struct MergeArgs {
     pub reject_non_repulsive: bool,
 }
 
-fn do_export(
-    store: &std::path::Path,
-    dir: &std::path::Path,
-    filt: &Admissibility,
-) -> anyhow::Result<()> {
+/// A study file read for a meta-model build.
+pub struct BuildStudy {
+    /// The forward model.
+    pub model: Box<dyn ForwardModel>,
+    /// `[design]`.
+    pub design: DesignSettings,
+    /// `[build] store`.
+    pub store: Option<PathBuf>,
+    /// `[build] export`.
+    pub export: Option<PathBuf>,
+    /// `[build]` filters.
+    pub filters: Admissibility,
+}
+
+/// Reads `[forward]` (+ `[protocol]`), `[design]` and `[build]`; unknown
+/// sections or keys are errors naming file and line.
+///
+/// # Errors
+/// Any study error.
+pub fn read_study(path: &Path) -> anyhow::Result<BuildStudy> {
+    let mut study = Study::load(path)?;
+    let _ = study.root().opt_str("title")?;
+    let model = ForwardSettings::from_study(&mut study)?.build()?;
+    let mut ds = study.section("design")?;
+    let design =
+        DesignSettings::from_section(&mut ds, &model.parameter_names(), &model.parameter_units())?;
+    ds.finish()?;
+    let (store, export, filters) = match study.opt_section("build")? {
+        Some(mut b) => {
+            let store = b.opt_path("store")?;
+            let export = b.opt_path("export")?;
+            let filters = Admissibility::from_section(&mut b, model.contact_index())?;
+            b.finish()?;
+            (store, export, filters)
+        }
+        None => (
+            None,
+            None,
+            Admissibility {
+                contact_index: model.contact_index(),
+                ..Default::default()
+            },
+        ),
+    };
+    study.finish()?;
+    Ok(BuildStudy {
+        model,
+        design,
+        store,
+        export,
+        filters,
+    })
+}
+
+fn do_export(store: &Path, dir: &Path, filt: &Admissibility) -> anyhow::Result<()> {
     let mm = load(store, filt)?;
     export(&mm, dir)?;
     let c = &mm.counts;
@@ -84,39 +154,108 @@ fn do_export(
     Ok(())
 }
 
+fn report_failures(store: &Path) -> anyhow::Result<()> {
+    let mm = load(store, &Admissibility::default())?;
+    for (i, status, reason, secs) in &mm.status {
+        if status == "failed" {
+            eprintln!("run {i} failed after {secs:.3} s: {reason}");
+        }
+    }
+    Ok(())
+}
+
+fn run_set(
+    name: &str,
+    model: &dyn ForwardModel,
+    design: &[Vec<f64>],
+    store: &Path,
+    shard: Option<Shard>,
+    quiet: bool,
+) -> anyhow::Result<()> {
+    let opts = BuildOptions {
+        shard,
+        progress: !quiet,
+        cancel: None,
+    };
+    let t0 = std::time::Instant::now();
+    let s = build(model, design, store, &opts)?;
+    let secs = t0.elapsed().as_secs_f64();
+    let per_run = if s.ran > 0 {
+        format!(", {:.3} s per run", secs / s.ran as f64)
+    } else {
+        String::new()
+    };
+    println!(
+        "{name}: {} runs in shard: {} already done, {} run now ({} failed) in {secs:.2} s{per_run}",
+        s.in_shard, s.skipped, s.ran, s.failed
+    );
+    if s.failed > 0 {
+        report_failures(store)?;
+    }
+    Ok(())
+}
+
 impl BuildArgs {
     /// Run.
     pub fn run(self) -> anyhow::Result<ExitCode> {
-        let model = match self.model.as_str() {
-            "hertz-prony" => HertzProny::new(5e-6, 1e-6, 1.0, 10.0, self.points),
-            other => bail!("--model {other}: unknown forward model (available: hertz-prony)"),
+        let shard = self.shard.as_deref().map(Shard::parse).transpose()?;
+        if let Some(path) = &self.study {
+            let st = read_study(path)?;
+            let Some(store) = self.store.clone().or(st.store.clone()) else {
+                bail!(
+                    "{}: no store directory: give --store DIR or `store = \"DIR\"` in [build]",
+                    path.display()
+                );
+            };
+            let export_dir = self.export.clone().or(st.export.clone());
+            let (train, check) = st.design.designs()?;
+            let mut sets = vec![("train", train)];
+            if !check.is_empty() {
+                sets.push(("check", check));
+            }
+            for (name, design) in &sets {
+                run_set(
+                    name,
+                    st.model.as_ref(),
+                    design,
+                    &store.join(name),
+                    shard,
+                    self.quiet,
+                )?;
+            }
+            if let Some(dir) = &export_dir {
+                for (name, _) in &sets {
+                    do_export(&store.join(name), &dir.join(name), &st.filters)?;
+                }
+            }
+            return Ok(ExitCode::SUCCESS);
+        }
+        let (Some(design_path), Some(store)) = (&self.design, &self.store) else {
+            bail!("give a study file, or --design X.csv and --store DIR");
         };
-        let design = read_table(&self.design)?;
+        let model = match self.model.as_str() {
+            "hertz-prony" => HertzPronySpec::flag_defaults(self.points).build(),
+            other => bail!(
+                "--model {other}: unknown forward model for flag-only use (available: hertz-prony; \
+                 afm-fe and membrane are set up in a study file's [forward] section)"
+            ),
+        };
+        let design = read_table(design_path)?;
         if design.header.len() != 5 {
             bail!(
                 "{}: hertz-prony needs 5 columns (G0, g1, g2, tau1, tau2), found {}",
-                self.design.display(),
+                design_path.display(),
                 design.header.len()
             );
         }
-        let shard = self.shard.as_deref().map(Shard::parse).transpose()?;
-        let opts = BuildOptions {
-            shard,
-            progress: !self.quiet,
-            cancel: None,
-        };
-        let s = build(&model, &design.rows, &self.store, &opts)?;
-        println!(
-            "{} runs in shard: {} already done, {} run now ({} failed)",
-            s.in_shard, s.skipped, s.ran, s.failed
-        );
+        run_set("design", &model, &design.rows, store, shard, self.quiet)?;
         if let Some(dir) = &self.export {
             let filt = Admissibility {
                 min_peak_force: self.min_peak_force,
                 reject_non_repulsive: self.reject_non_repulsive,
                 contact_index: 0,
             };
-            do_export(&self.store, dir, &filt)?;
+            do_export(store, dir, &filt)?;
         }
         Ok(ExitCode::SUCCESS)
     }
@@ -125,19 +264,53 @@ impl BuildArgs {
 impl MergeArgs {
     /// Run.
     pub fn run(self) -> anyhow::Result<ExitCode> {
-        let n = merge(&self.shards, &self.out)?;
-        println!(
-            "merged {} shards into {} ({n} runs copied)",
-            self.shards.len(),
-            self.out.display()
-        );
-        if let Some(dir) = &self.export {
-            let filt = Admissibility {
+        let filt = match &self.study {
+            Some(p) => {
+                read_study(p)
+                    .with_context(|| format!("--study {}", p.display()))?
+                    .filters
+            }
+            None => Admissibility {
                 min_peak_force: self.min_peak_force,
                 reject_non_repulsive: self.reject_non_repulsive,
                 contact_index: 0,
-            };
-            do_export(&self.out, dir, &filt)?;
+            },
+        };
+        // A study build's shards hold `train/` (and `check/`) stores.
+        let sets: Vec<Option<&str>> = if self.shards.iter().all(|d| d.join("meta.json").is_file()) {
+            vec![None]
+        } else if self
+            .shards
+            .iter()
+            .all(|d| d.join("train/meta.json").is_file())
+        {
+            let mut v = vec![Some("train")];
+            if self
+                .shards
+                .iter()
+                .all(|d| d.join("check/meta.json").is_file())
+            {
+                v.push(Some("check"));
+            }
+            v
+        } else {
+            bail!(
+                "each shard directory must be a store (meta.json) or hold train/ (and check/) stores"
+            );
+        };
+        for set in sets {
+            let sub = |d: &Path| set.map_or_else(|| d.to_path_buf(), |s| d.join(s));
+            let dirs: Vec<PathBuf> = self.shards.iter().map(|d| sub(d)).collect();
+            let out = sub(&self.out);
+            let n = merge(&dirs, &out)?;
+            println!(
+                "merged {} shards into {} ({n} runs copied)",
+                dirs.len(),
+                out.display()
+            );
+            if let Some(dir) = &self.export {
+                do_export(&out, &sub(dir), &filt)?;
+            }
         }
         Ok(ExitCode::SUCCESS)
     }

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::Context;
+use anyhow::{Context, bail};
 use clap::Args;
 use nlvid_surrogate::doe::{Domain, training_and_checking};
 
@@ -12,20 +12,22 @@ use super::surrogate::write_table;
 /// Arguments of `sample`.
 #[derive(Debug, Args)]
 pub struct SampleArgs {
-    /// Domain file (TOML: `[[axes]]` name, unit, lower, upper, log; `[[constraints]]` coeffs, bound).
-    #[arg(long)]
-    pub domain: PathBuf,
-    /// Training points.
-    #[arg(long, short)]
-    pub n: usize,
-    /// Checking points (a separate, non-overlapping design).
-    #[arg(long, default_value_t = 0)]
+    /// Study file with `[forward]` and `[design]` sections (docs/study-format.md).
+    pub study: Option<PathBuf>,
+    /// Domain file (TOML: `[[axes]]` name, unit, lower, upper, log; `[[constraints]]` coeffs, bound); flag-only use.
+    #[arg(long, conflicts_with = "study")]
+    pub domain: Option<PathBuf>,
+    /// Training points (flag-only use).
+    #[arg(long, short, conflicts_with = "study")]
+    pub n: Option<usize>,
+    /// Checking points, a separate non-overlapping design (flag-only use).
+    #[arg(long, default_value_t = 0, conflicts_with = "study")]
     pub check: usize,
-    /// Seed.
-    #[arg(long, default_value_t = 1)]
+    /// Seed (flag-only use).
+    #[arg(long, default_value_t = 1, conflicts_with = "study")]
     pub seed: u64,
-    /// ESE optimisation iterations (0: random Latin hypercube).
-    #[arg(long, default_value_t = 30)]
+    /// ESE optimisation iterations, 0: random Latin hypercube (flag-only use).
+    #[arg(long, default_value_t = 30, conflicts_with = "study")]
     pub iterations: usize,
     /// Output directory (train.csv, check.csv).
     #[arg(long, short)]
@@ -35,32 +37,43 @@ pub struct SampleArgs {
 impl SampleArgs {
     /// Run.
     pub fn run(self) -> anyhow::Result<ExitCode> {
-        let text = std::fs::read_to_string(&self.domain)
-            .with_context(|| format!("cannot read {}", self.domain.display()))?;
-        let domain: Domain =
-            toml::from_str(&text).with_context(|| format!("{}", self.domain.display()))?;
-        domain
-            .validate()
-            .with_context(|| format!("{}", self.domain.display()))?;
-        let (train, check) = training_and_checking(
-            &domain,
-            self.n,
-            self.check.max(1),
-            self.seed,
-            self.iterations,
-            1e-6,
-        )?;
+        let (domain, train, check) = if let Some(path) = &self.study {
+            let st = super::build::read_study(path)?;
+            let (train, check) = st.design.designs()?;
+            (st.design.domain, train, check)
+        } else {
+            let (Some(dpath), Some(n)) = (&self.domain, self.n) else {
+                bail!("give a study file, or --domain FILE and -n N");
+            };
+            let text = std::fs::read_to_string(dpath)
+                .with_context(|| format!("cannot read {}", dpath.display()))?;
+            let domain: Domain =
+                toml::from_str(&text).with_context(|| format!("{}", dpath.display()))?;
+            domain
+                .validate()
+                .with_context(|| format!("{}", dpath.display()))?;
+            let (train, check) = training_and_checking(
+                &domain,
+                n,
+                self.check.max(1),
+                self.seed,
+                self.iterations,
+                1e-6,
+            )?;
+            let check = if self.check > 0 { check } else { Vec::new() };
+            (domain, train, check)
+        };
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("cannot create {}", self.out.display()))?;
         let header: Vec<String> = domain.axes.iter().map(|a| a.name.clone()).collect();
         write_table(Some(&self.out.join("train.csv")), &header, &train)?;
-        if self.check > 0 {
+        if !check.is_empty() {
             write_table(Some(&self.out.join("check.csv")), &header, &check)?;
         }
         println!(
             "wrote {} training and {} checking points to {}",
             train.len(),
-            self.check,
+            check.len(),
             self.out.display()
         );
         Ok(ExitCode::SUCCESS)
