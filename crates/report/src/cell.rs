@@ -451,7 +451,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("nlvid-report-hertz-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let s = settings(&dir);
-        let (e, r, nu, k, rate) = (1500.0, 2.5e-6, 0.5, 0.1, 2e-6);
+        let (e, r, nu, k, rate): (f64, f64, f64, f64, f64) = (1500.0, 2.5e-6, 0.5, 0.1, 2e-6);
         let mut csv = String::from("time [s],piezo [um],deflection [nm]\n");
         for i in 0..=300 {
             let t = i as f64 * 0.01;
