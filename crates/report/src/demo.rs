@@ -237,7 +237,7 @@ fn sampling(spec: &DemoSpec, t_end: f64) -> Result<(usize, Vec<usize>)> {
     let fast = (spec.fast_until * spec.fast_rate).round() as usize;
     // Index i is time (i + 1)/fast_rate.
     let keep = (0..n)
-        .filter(|&i| i + 1 <= fast || (i + 1) % step == 0 || i + 1 == n)
+        .filter(|&i| i < fast || (i + 1) % step == 0 || i + 1 == n)
         .collect();
     Ok((n, keep))
 }
