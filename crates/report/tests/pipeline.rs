@@ -426,3 +426,81 @@ fn report_opens_in_headless_chromium() {
         bytes.len()
     );
 }
+
+/// A manifest with the App. B.2 geometry columns: the base diameter is
+/// √(d1·d2) and the height is what `nlvid_afm` computes from the two JPK
+/// curves (or, if it cannot, a flag on the cell, which still counts).
+#[test]
+fn a_manifest_with_geometry_columns_fills_height_and_diameter() {
+    let f = fixture();
+    let dir = scratch("manifest");
+    let afm = Path::new(env!("CARGO_MANIFEST_DIR")).join("../afm/tests/data");
+    std::fs::copy(
+        f.demo.join("data/A-stiff/a-stiff-01.csv"),
+        dir.join("a.csv"),
+    )
+    .expect("copy");
+    std::fs::copy(
+        f.demo.join("data/A-stiff/a-stiff-02.csv"),
+        dir.join("b.csv"),
+    )
+    .expect("copy");
+    let cell = afm.join("fmt-jpk-sr_cell1-0008.jpk-force");
+    let glass = afm.join("fmt-jpk-fd_spot3-0192.jpk-force");
+    std::fs::write(
+        dir.join("manifest.csv"),
+        format!(
+            "group,file,height_cell_curve,height_glass_curve,d1_um,d2_um\n\
+             A,a.csv,{},{},12,27\nA,b.csv,,,,\n",
+            cell.display(),
+            glass.display()
+        ),
+    )
+    .expect("manifest");
+    let study = f.demo.join("study.toml");
+    let settings = CohortSettings::load(&study).expect("settings");
+    let cells = cohort::discover(&dir.join("manifest.csv")).expect("discover");
+    let out = dir.join("out");
+    cohort::run_cohort(
+        &settings,
+        &study,
+        &dir.join("manifest.csv"),
+        &cells,
+        &out,
+        &RunOptions::default(),
+    )
+    .expect("cohort");
+    let res = cohort::read_cells(&out).expect("cells");
+    let a = res.iter().find(|c| c.file == "a.csv").expect("a");
+    let b = res.iter().find(|c| c.file == "b.csv").expect("b");
+    assert_eq!(a.status, CellStatus::Ok, "{}", a.reason);
+    assert!((a.base_diameter.expect("diameter") - 18e-6).abs() < 1e-15);
+    let direct = nlvid_afm::read_force_curve(&cell).and_then(|c| {
+        let g = nlvid_afm::read_force_curve(&glass)?;
+        nlvid_afm::geometry::cell_height_from_curves(&c, &g, nlvid_afm::ContactMethod::default())
+    });
+    match direct {
+        Ok(h) => assert_eq!(a.cell_height, Some(h)),
+        Err(_) => {
+            assert!(a.cell_height.is_none());
+            assert!(
+                a.flags.iter().any(|f| f.contains("cell height")),
+                "{:?}",
+                a.flags
+            );
+        }
+    }
+    assert!(b.cell_height.is_none() && b.base_diameter.is_none());
+    let table = std::fs::read_to_string(out.join("results.csv")).expect("table");
+    assert!(
+        table
+            .lines()
+            .next()
+            .expect("header")
+            .contains("cell_height_m,base_diameter_m")
+    );
+    assert!(
+        table.contains(&format!(",{},", 18e-6f64)) || table.contains(",0.000018,"),
+        "{table}"
+    );
+}
