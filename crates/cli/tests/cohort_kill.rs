@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use nlvid_report::demo::{DemoSpec, write_demo};
+use nlvid_report::demo::{DemoSpec, write_demo_data};
 
 fn scratch(name: &str) -> PathBuf {
     let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-{name}"));
@@ -30,13 +30,32 @@ fn count_cells(out: &Path) -> usize {
 #[test]
 fn killed_cohort_resumes_to_the_same_table() {
     let root = scratch("kill");
-    // 2 × 30 cells with 24 starts each: long enough to be killed mid-way.
+    // The bundled demo's study and meta-model, 2 × 30 cells, 24 starts
+    // each: long enough to be killed mid-way.
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo");
+    let dir = root.join("study");
+    std::fs::create_dir_all(dir.join("metamodel")).expect("dir");
+    for f in [
+        "metamodel.toml",
+        "metamodel/model.json",
+        "metamodel/meta.json",
+        "metamodel/check.json",
+    ] {
+        std::fs::copy(repo.join(f), dir.join(f)).expect("copy");
+    }
+    let study = std::fs::read_to_string(repo.join("study.toml")).expect("study");
+    assert!(study.contains("starts = 8\n"));
+    std::fs::write(
+        dir.join("study.toml"),
+        study.replace("starts = 8\n", "starts = 24\n"),
+    )
+    .expect("study");
     let spec = DemoSpec {
         cells_per_group: 30,
-        starts: 24,
         ..DemoSpec::default()
     };
-    let files = write_demo(&spec, &root.join("study")).expect("demo");
+    let files =
+        write_demo_data(&spec, &dir.join("study.toml"), &dir.join("metamodel.toml")).expect("demo");
     let nlvid = env!("CARGO_BIN_EXE_nlvid");
     let cohort = |out: &Path| {
         let mut c = Command::new(nlvid);

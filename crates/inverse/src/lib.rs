@@ -66,6 +66,7 @@ mod prony;
 mod rerun;
 mod starts;
 mod surrogate;
+mod surrogate_file;
 
 pub use basis::{AsModel, BasisExperiment, BasisMisfit, BasisModel, gram};
 pub use domain::{BoundHit, BoundSide, Domain, LinearConstraint, Parameter, Scale};
@@ -84,3 +85,6 @@ pub use prony::{ModulusPoint, ParameterTable, PronyShear, PronyTerm};
 pub use rerun::{Rerun, rerun};
 pub use starts::{feasible_starts, latin_hypercube};
 pub use surrogate::{Coordinates, ForwardFromModel, KrigingSurrogate, design_domain};
+pub use surrogate_file::{
+    SurrogateFit, SurrogateFitter, SurrogateMeta, load_kriging_surrogate, read_meta,
+};

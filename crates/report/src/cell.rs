@@ -1,6 +1,9 @@
 //! One cell: read its AFM curve, fit the five Prony parameters (G0, g1,
-//! τ1, g2, τ2; eq. 5.1, Table 5.3 domain) with the misfit of eq. 5.3, and
-//! keep everything the results table and the report need.
+//! τ1, g2, τ2; eq. 5.1, Table 5.3 domain) with the misfit of eq. 5.3 on the
+//! study's forward model ([`CellModel`]: a pre-built Kriging meta-model or
+//! the analytic Lee–Radok model), fit the Hertz baseline (eq. 1.1) to the
+//! loading ramp, read the cell's geometry (App. B.2) when the manifest gives
+//! it, and keep everything the results table and the report need.
 //!
 //! A cell never makes the cohort fail: unreadable data, a curve that does
 //! not cover the fitted window, or a fit that does not converge give a
@@ -9,11 +12,14 @@
 use std::path::Path;
 
 use nlvid_inverse::{
-    AfmColumns, BoundSide, Calibration, Domain, Experiment, LeeRadokHertz, Misfit, Model,
-    MultiStart, ramp_hold_grid,
+    AfmColumns, BoundSide, Calibration, Coordinates, Domain, Experiment, FitResult, LeeRadokHertz,
+    MeasuredCurve, Misfit, Model, MultiStart, SurrogateFitter, load_kriging_surrogate,
+    ramp_hold_grid,
 };
 use serde::{Deserialize, Serialize};
 
+use crate::cohort::{CellInput, Geometry};
+use crate::error::Result;
 use crate::settings::{CohortSettings, ForwardModel};
 
 /// Outcome class of a cell.
@@ -86,6 +92,29 @@ pub struct CellResult {
     pub data: Vec<f64>,
     /// Fitted force on the grid, N (empty when failed).
     pub fit: Vec<f64>,
+    /// Hertz baseline (eq. 1.1) on the loading ramp, when it could be fitted.
+    #[serde(default)]
+    pub hertz: Option<HertzBaseline>,
+    /// Cell height H from curves on the cell and on glass (eq. B.1), m.
+    #[serde(default)]
+    pub cell_height: Option<f64>,
+    /// Base diameter √(d1·d2) from two image distances (App. B.2), m.
+    #[serde(default)]
+    pub base_diameter: Option<f64>,
+}
+
+/// The familiar Hertz fit (eq. 1.1, rigid sphere on an elastic half-space,
+/// E* = E/(1 − ν²)) of the loading ramp: an apparent Young's modulus to
+/// compare with what users know. For a viscoelastic cell it lies between
+/// 3·G(t_ramp) and 3·G(0) (ν = 0.5).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HertzBaseline {
+    /// Young's modulus E, Pa.
+    pub youngs_modulus: f64,
+    /// The fitted window (time span and largest indentation).
+    pub window: String,
+    /// RMSE divided by the range of the fitted force (eq. 4.4 convention).
+    pub misfit: f64,
 }
 
 impl CellResult {
@@ -106,6 +135,9 @@ impl CellResult {
             times: Vec::new(),
             data: Vec::new(),
             fit: Vec::new(),
+            hertz: None,
+            cell_height: None,
+            base_diameter: None,
         }
     }
 
@@ -126,6 +158,48 @@ pub fn domain(settings: &CohortSettings) -> nlvid_inverse::Result<Domain> {
     Domain::prony2_table_5_3(settings.constraint_epsilon)
 }
 
+/// The forward model every cell is fitted with, prepared once per cohort
+/// (the meta-model is read and its Gram matrix computed once, then shared
+/// by every thread).
+#[derive(Debug, Clone)]
+pub enum CellModel {
+    /// Analytic Lee–Radok: built per cell from its measured indentation.
+    LeeRadok(Domain),
+    /// A pre-built Kriging meta-model on the nominal protocol.
+    Surrogate(Box<SurrogateFitter>),
+}
+
+impl CellModel {
+    /// Prepares the model named by the settings.
+    ///
+    /// # Errors
+    /// Bad ε; unreadable or mismatched meta-model files (naming them).
+    pub fn load(settings: &CohortSettings) -> Result<Self> {
+        let d = domain(settings)?;
+        match (&settings.model, &settings.surrogate) {
+            (ForwardModel::LeeRadok, _) => Ok(Self::LeeRadok(d)),
+            (ForwardModel::Surrogate, Some(f)) => {
+                let s = load_kriging_surrogate(&f.model, &f.meta, d, Coordinates::Physical)?;
+                Ok(Self::Surrogate(Box::new(SurrogateFitter::new(s, None)?)))
+            }
+            (ForwardModel::Surrogate, None) => Err(crate::ReportError::InvalidSetting(
+                "fit.model = \"surrogate\" needs fit.surrogate and fit.meta".into(),
+            )),
+        }
+    }
+
+    /// The time grid the misfit is evaluated on, s.
+    ///
+    /// # Errors
+    /// Inconsistent durations (Lee–Radok grid).
+    pub fn grid(&self, settings: &CohortSettings) -> nlvid_inverse::Result<Vec<f64>> {
+        match self {
+            Self::LeeRadok(_) => model_grid(settings),
+            Self::Surrogate(f) => Ok(f.times().to_vec()),
+        }
+    }
+}
+
 /// The model time grid: the ramp in `ramp_points` uniform steps, then the
 /// hold log-spaced (dense where fast relaxation shows).
 ///
@@ -142,7 +216,8 @@ pub fn model_grid(settings: &CohortSettings) -> nlvid_inverse::Result<Vec<f64>> 
 }
 
 /// Reads and fits one cell. Never fails: problems become a `failed` cell.
-pub fn fit_cell(settings: &CohortSettings, group: &str, file: &str, path: &Path) -> CellResult {
+pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput) -> CellResult {
+    let (group, file) = (input.group.as_str(), input.file.as_str());
     let cell = Path::new(file)
         .file_stem()
         .map_or_else(|| file.to_string(), |s| s.to_string_lossy().into_owned());
@@ -158,7 +233,7 @@ pub fn fit_cell(settings: &CohortSettings, group: &str, file: &str, path: &Path)
         deflection_sensitivity: settings.deflection_sensitivity,
         spring_constant: settings.spring_constant,
     };
-    let curve = match nlvid_inverse::read_afm_csv(path, &cols, &cal) {
+    let curve = match nlvid_inverse::read_afm_csv(&input.path, &cols, &cal) {
         Ok(c) => c,
         Err(e) => return fail(format!("cannot read the curve: {e}")),
     };
@@ -168,17 +243,18 @@ pub fn fit_cell(settings: &CohortSettings, group: &str, file: &str, path: &Path)
     let (Some(&t_first), Some(&t_last)) = (curve.time.first(), curve.time.last()) else {
         return fail("the curve has no samples".into());
     };
-    if t_last - t_first < settings.hold_end * (1.0 - 1e-9) {
-        return fail(format!(
-            "the curve covers {:.4} s but protocol.hold_end is {} s",
-            t_last - t_first,
-            settings.hold_end
-        ));
-    }
-    let grid = match model_grid(settings) {
+    let grid = match model.grid(settings) {
         Ok(g) => g,
         Err(e) => return fail(format!("model grid: {e}")),
     };
+    let needed = settings.hold_end.max(grid.last().copied().unwrap_or(0.0));
+    if t_last - t_first < needed * (1.0 - 1e-9) {
+        return fail(format!(
+            "the curve covers {:.4} s but the fitted window needs {needed} s \
+             (protocol.hold_end / the model's time grid)",
+            t_last - t_first,
+        ));
+    }
     let (force, delta) = match (
         curve.resample(&curve.force, &grid),
         curve.resample(&indentation, &grid),
@@ -186,6 +262,12 @@ pub fn fit_cell(settings: &CohortSettings, group: &str, file: &str, path: &Path)
         (Ok(f), Ok(d)) => (f, d),
         (Err(e), _) | (_, Err(e)) => return fail(format!("resampling: {e}")),
     };
+    let mut base = fail(String::new());
+    geometry(&input.geometry, &mut base);
+    match hertz_baseline(settings, &curve, &indentation) {
+        Ok(h) => base.hertz = Some(h),
+        Err(e) => base.flags.push(format!("Hertz baseline not fitted: {e}")),
+    }
     // Peak of the measured samples inside the fitted window.
     let peak = curve
         .time
@@ -194,8 +276,13 @@ pub fn fit_cell(settings: &CohortSettings, group: &str, file: &str, path: &Path)
         .filter(|(t, _)| **t - t_first <= settings.hold_end * (1.0 + 1e-12))
         .map(|(_, f)| *f)
         .fold(f64::NEG_INFINITY, f64::max);
-    let end_force = force[force.len() - 1];
-    let mut base = fail(String::new());
+    let end_force = match curve.resample(&curve.force, &[settings.hold_end]) {
+        Ok(v) => v[0],
+        Err(e) => {
+            base.reason = format!("resampling: {e}");
+            return base;
+        }
+    };
     base.times = grid.clone();
     base.data = force.clone();
     if peak.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
@@ -205,38 +292,30 @@ pub fn fit_cell(settings: &CohortSettings, group: &str, file: &str, path: &Path)
     base.peak_force = Some(peak);
     base.relaxation = Some(1.0 - end_force / peak);
 
-    let model = match (settings.model, domain(settings)) {
-        (ForwardModel::LeeRadok, Ok(d)) => {
-            match LeeRadokHertz::new(d, grid, &delta, settings.radius, settings.poisson) {
-                Ok(m) => m,
-                Err(e) => {
-                    base.reason = format!("model: {e}");
-                    return base;
-                }
-            }
-        }
-        (_, Err(e)) => {
-            base.reason = format!("domain: {e}");
-            return base;
-        }
-    };
-    let fitted = Experiment::new(&cell, model, force, None)
-        .and_then(|e| Misfit::new(vec![e]))
-        .and_then(|misfit| {
-            let fit = MultiStart::new()
-                .with_starts(settings.starts)?
-                .with_seed(settings.seed)
-                .fit(&misfit)?;
+    let multistart = MultiStart::new()
+        .with_starts(settings.starts)
+        .map(|m| m.with_seed(settings.seed));
+    let fitted = match model {
+        CellModel::LeeRadok(d) => multistart.and_then(|ms| {
+            let m = LeeRadokHertz::new(d.clone(), grid, &delta, settings.radius, settings.poisson)?;
+            let misfit = Misfit::new(vec![Experiment::new(&cell, m, force, None)?])?;
+            let fit = ms.fit(&misfit)?;
             let y = misfit.experiments()[0].model.response(&fit.best.x)?;
             Ok((fit, y))
-        });
-    let (fit, y) = match fitted {
-        Ok(v) => v,
-        Err(e) => {
-            base.reason = format!("fit: {e}");
-            return base;
-        }
+        }),
+        CellModel::Surrogate(f) => multistart
+            .and_then(|ms| f.fit(&[(cell.as_str(), force.as_slice())], &ms))
+            .map(|r| (r.fit, r.response)),
     };
+    match fitted {
+        Ok((fit, y)) => record_fit(settings, &mut base, &fit, y),
+        Err(e) => base.reason = format!("fit: {e}"),
+    }
+    base
+}
+
+/// Parameters, misfit, flags and status of a finished fit.
+fn record_fit(settings: &CohortSettings, base: &mut CellResult, fit: &FitResult, y: Vec<f64>) {
     base.parameters = fit
         .domain
         .params()
@@ -284,5 +363,146 @@ pub fn fit_cell(settings: &CohortSettings, group: &str, file: &str, path: &Path)
         base.status = CellStatus::Ok;
         base.reason.clear();
     }
-    base
+}
+
+/// Hertz fit (eq. 1.1 with E* = E/(1 − ν²), eq. 1.3) of the loading ramp
+/// 0 ≤ t − t₀ ≤ `protocol.ramp`: tip–sample separation s = −δ, contact
+/// point and force offset fitted (`nlvid_afm::fit_hertz`).
+///
+/// # Errors
+/// Too few samples on the ramp; the fit does not converge.
+pub fn hertz_baseline(
+    settings: &CohortSettings,
+    curve: &MeasuredCurve,
+    indentation: &[f64],
+) -> std::result::Result<HertzBaseline, String> {
+    let t0 = curve.time.first().copied().unwrap_or(0.0);
+    let (mut sep, mut f) = (Vec::new(), Vec::new());
+    for ((t, d), fv) in curve.time.iter().zip(indentation).zip(&curve.force) {
+        if t - t0 <= settings.ramp * (1.0 + 1e-9) {
+            sep.push(-d);
+            f.push(*fv);
+        }
+    }
+    let hs = nlvid_afm::HertzSettings::new(settings.radius, settings.poisson);
+    let h = nlvid_afm::fit_hertz(&sep, &f, &hs).map_err(|e| e.to_string())?;
+    let t_end = curve
+        .time
+        .get(sep.len().saturating_sub(1))
+        .map_or(0.0, |t| t - t0);
+    Ok(HertzBaseline {
+        youngs_modulus: h.youngs_modulus,
+        window: format!(
+            "0-{t_end:.3} s (loading ramp, {} samples), indentation <= {:.3} um",
+            h.n_points,
+            h.max_indentation * 1e6
+        ),
+        misfit: h.range_normalised_rmse,
+    })
+}
+
+/// Height (eq. B.1, from curves on the cell and on glass) and base diameter
+/// √(d1·d2) of a cell, when its manifest row gives them; a problem is a flag.
+fn geometry(g: &Geometry, out: &mut CellResult) {
+    if let Some((cell, glass)) = &g.height_curves {
+        let read =
+            |p: &Path| nlvid_afm::read_force_curve(p).map_err(|e| format!("{}: {e}", p.display()));
+        match read(cell).and_then(|c| {
+            let gl = read(glass)?;
+            nlvid_afm::geometry::cell_height_from_curves(
+                &c,
+                &gl,
+                nlvid_afm::ContactMethod::default(),
+            )
+            .map_err(|e| e.to_string())
+        }) {
+            Ok(h) => out.cell_height = Some(h),
+            Err(e) => out.flags.push(format!("cell height not measured: {e}")),
+        }
+    }
+    if let Some((d1, d2)) = g.image_distances {
+        match nlvid_afm::geometry::base_diameter(d1, d2) {
+            Ok(d) => out.base_diameter = Some(d),
+            Err(e) => out.flags.push(format!("base diameter not measured: {e}")),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(dir: &Path) -> CohortSettings {
+        let study = dir.join("study.toml");
+        std::fs::write(
+            &study,
+            "[probe]\nradius = \"2.5 um\"\npoisson = 0.5\n[afm]\nspring_constant = \"0.1 N/m\"\n\
+             [protocol]\nramp = \"1 s\"\nhold_end = \"3 s\"\n",
+        )
+        .unwrap();
+        CohortSettings::load(&study).unwrap()
+    }
+
+    /// An elastic half-space under a sphere: F = (4/3) E/(1 − ν²) √R δ^{3/2}
+    /// (eq. 1.1), written here from the closed form; the Hertz baseline must
+    /// return that E.
+    #[test]
+    fn hertz_baseline_recovers_the_modulus_of_an_elastic_curve() {
+        let dir = std::env::temp_dir().join(format!("nlvid-report-hertz-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let s = settings(&dir);
+        let (e, r, nu, k, rate): (f64, f64, f64, f64, f64) = (1500.0, 2.5e-6, 0.5, 0.1, 2e-6);
+        let mut csv = String::from("time [s],piezo [um],deflection [nm]\n");
+        for i in 0..=300 {
+            let t = i as f64 * 0.01;
+            let d: f64 = rate * t.min(1.0);
+            let f = 4.0 / 3.0 * e / (1.0 - nu * nu) * r.sqrt() * d.powf(1.5);
+            csv.push_str(&format!("{t},{},{}\n", (d + f / k) * 1e6, f / k * 1e9));
+        }
+        let path = dir.join("elastic.csv");
+        std::fs::write(&path, csv).unwrap();
+        let cols = AfmColumns {
+            time: "time".into(),
+            piezo: "piezo".into(),
+            deflection: "deflection".into(),
+        };
+        let cal = Calibration {
+            deflection_sensitivity: None,
+            spring_constant: k,
+        };
+        let curve = nlvid_inverse::read_afm_csv(&path, &cols, &cal).unwrap();
+        let delta = curve.indentation.clone().unwrap();
+        let h = hertz_baseline(&s, &curve, &delta).unwrap();
+        assert!(
+            (h.youngs_modulus / e - 1.0).abs() < 1e-3,
+            "E = {} vs {e}",
+            h.youngs_modulus
+        );
+        assert!(h.misfit < 1e-3, "misfit {}", h.misfit);
+        assert!(h.window.contains("0-1.000 s"), "{}", h.window);
+    }
+
+    #[test]
+    fn geometry_is_taken_from_the_manifest_values() {
+        let mut out = CellResult::failed("g", "f", "c", "h", String::new());
+        geometry(
+            &Geometry {
+                height_curves: None,
+                image_distances: Some((12e-6, 27e-6)),
+            },
+            &mut out,
+        );
+        // √(12 · 27) = 18 µm.
+        assert!((out.base_diameter.unwrap() - 18e-6).abs() < 1e-18);
+        let mut bad = CellResult::failed("g", "f", "c", "h", String::new());
+        geometry(
+            &Geometry {
+                height_curves: None,
+                image_distances: Some((12e-6, -1e-6)),
+            },
+            &mut bad,
+        );
+        assert!(bad.base_diameter.is_none());
+        assert!(bad.flags[0].contains("base diameter"), "{:?}", bad.flags);
+    }
 }

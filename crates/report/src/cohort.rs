@@ -18,12 +18,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::cell::{CellResult, CellStatus, fit_cell};
+use crate::cell::{CellModel, CellResult, CellStatus, fit_cell};
 use crate::error::{ReportError, Result};
 use crate::settings::CohortSettings;
 
 /// One cell to fit.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CellInput {
     /// Group name.
     pub group: String,
@@ -31,11 +31,26 @@ pub struct CellInput {
     pub file: String,
     /// Path to read.
     pub path: PathBuf,
+    /// Geometry measurements from the manifest (App. B.2), if any.
+    #[serde(default)]
+    pub geometry: Geometry,
+}
+
+/// A cell's geometry measurements as given in a manifest (App. B.2).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Geometry {
+    /// JPK approach curves on the cell and on the nearby glass (same
+    /// z-stepper position): columns `height_cell_curve`, `height_glass_curve`.
+    pub height_curves: Option<(PathBuf, PathBuf)>,
+    /// Two distances on an optical image, m: columns `d1_um`, `d2_um`
+    /// (or `d1_m`, `d2_m`).
+    pub image_distances: Option<(f64, f64)>,
 }
 
 /// The cells of a cohort input: a folder whose sub-folders are the groups
 /// (each `*.csv` in them a cell), or a manifest CSV with columns `group`
-/// and `file` (relative to the manifest's directory). Sorted by group, file.
+/// and `file` (relative to the manifest's directory) and optionally the
+/// geometry columns of [`Geometry`]. Sorted by group, file.
 ///
 /// # Errors
 /// Unreadable folder or manifest, a manifest row without group or file
@@ -101,6 +116,7 @@ fn from_folder(dir: &Path) -> Result<Vec<CellInput>> {
                     group: group.clone(),
                     file: format!("{group}/{name}"),
                     path: f,
+                    geometry: Geometry::default(),
                 });
             }
         }
@@ -127,6 +143,21 @@ fn from_manifest(path: &Path) -> Result<Vec<CellInput>> {
             })
     };
     let (gi, fi) = (col("group")?, col("file")?);
+    let find = |name: &str| headers.iter().position(|h| h == name);
+    let curves = (find("height_cell_curve"), find("height_glass_curve"));
+    let (dist, dist_scale) = match (find("d1_um"), find("d2_um"), find("d1_m"), find("d2_m")) {
+        (Some(a), Some(b), _, _) => (Some((a, b, "d1_um", "d2_um")), 1e-6),
+        (_, _, Some(a), Some(b)) => (Some((a, b, "d1_m", "d2_m")), 1.0),
+        _ => (None, 1.0),
+    };
+    if curves.0.is_some() != curves.1.is_some() {
+        return Err(ReportError::Data {
+            path: path.to_path_buf(),
+            line: 1,
+            message: "cell height needs both columns height_cell_curve and height_glass_curve"
+                .into(),
+        });
+    }
     let mut cells = Vec::new();
     for rec in rdr.records() {
         let rec = rec.map_err(|e| ReportError::io(path, e))?;
@@ -148,10 +179,54 @@ fn from_manifest(path: &Path) -> Result<Vec<CellInput>> {
                 message: format!("column `file`: no such file {}", p.display()),
             });
         }
+        let mut geometry = Geometry::default();
+        if let (Some(ci), Some(gi)) = curves {
+            let (c, g) = (rec.get(ci).unwrap_or(""), rec.get(gi).unwrap_or(""));
+            if !c.is_empty() || !g.is_empty() {
+                let cp = base.join(get(ci, "height_cell_curve")?);
+                let gp = base.join(get(gi, "height_glass_curve")?);
+                for (p, name) in [(&cp, "height_cell_curve"), (&gp, "height_glass_curve")] {
+                    if !p.is_file() {
+                        return Err(ReportError::Data {
+                            path: path.to_path_buf(),
+                            line,
+                            message: format!("column `{name}`: no such file {}", p.display()),
+                        });
+                    }
+                }
+                geometry.height_curves = Some((cp, gp));
+            }
+        }
+        if let Some((a, b, na, nb)) = dist {
+            let num = |i: usize, name: &str| -> Result<Option<f64>> {
+                match rec.get(i).unwrap_or("") {
+                    "" => Ok(None),
+                    v => v.parse::<f64>().map(Some).map_err(|_| ReportError::Data {
+                        path: path.to_path_buf(),
+                        line,
+                        message: format!("column `{name}`: `{v}` is not a number"),
+                    }),
+                }
+            };
+            match (num(a, na)?, num(b, nb)?) {
+                (Some(x), Some(y)) => {
+                    geometry.image_distances = Some((x * dist_scale, y * dist_scale))
+                }
+                (None, None) => {}
+                _ => {
+                    return Err(ReportError::Data {
+                        path: path.to_path_buf(),
+                        line,
+                        message: format!("give both `{na}` and `{nb}` or neither"),
+                    });
+                }
+            }
+        }
         cells.push(CellInput {
             group,
             file,
             path: p,
+            geometry,
         });
     }
     Ok(cells)
@@ -262,6 +337,7 @@ pub fn run_cohort(
         .map_err(|e| ReportError::io(out_dir.join("cohort.json"), e))?;
     write_atomic(&out_dir.join("cohort.json"), &json)?;
 
+    let model = CellModel::load(settings)?;
     let started = AtomicUsize::new(0);
     let done: Vec<Result<Option<(CellResult, bool)>>> = cells
         .par_iter()
@@ -278,7 +354,7 @@ pub fn run_cohort(
                     return Ok(None);
                 }
             }
-            let r = fit_cell(settings, &c.group, &c.file, &c.path);
+            let r = fit_cell(settings, &model, c);
             let bytes = serde_json::to_vec(&r).map_err(|e| ReportError::io(&path, e))?;
             write_atomic(&path, &bytes)?;
             if let Some(f) = opts.on_cell {
@@ -326,7 +402,9 @@ fn column(name: &str, unit: &str) -> String {
 
 /// The results table (docs/cli/compare.md format): `group, cell, file`,
 /// the parameters with unit-suffixed names, `misfit`, `alternatives`,
-/// `peak_force_N`, `relaxation_pct`, `status`, `reason`, `flags`. Numbers
+/// `peak_force_N`, `relaxation_pct`, the Hertz baseline (`hertz_E_Pa`,
+/// `hertz_misfit`, `hertz_window`), the geometry (`cell_height_m`,
+/// `base_diameter_m`), `status`, `reason`, `flags`. Numbers
 /// in shortest round-trip form; empty cells where a value is missing.
 ///
 /// # Errors
@@ -362,6 +440,11 @@ pub fn results_csv(cells: &[CellResult]) -> Result<String> {
             "alternatives",
             "peak_force_N",
             "relaxation_pct",
+            "hertz_E_Pa",
+            "hertz_misfit",
+            "hertz_window",
+            "cell_height_m",
+            "base_diameter_m",
             "status",
             "reason",
             "flags",
@@ -386,6 +469,15 @@ pub fn results_csv(cells: &[CellResult]) -> Result<String> {
         });
         row.push(num(c.peak_force));
         row.push(num(c.relaxation.map(|r| 100.0 * r)));
+        row.push(num(c.hertz.as_ref().map(|h| h.youngs_modulus)));
+        row.push(num(c.hertz.as_ref().map(|h| h.misfit)));
+        row.push(
+            c.hertz
+                .as_ref()
+                .map_or_else(String::new, |h| h.window.clone()),
+        );
+        row.push(num(c.cell_height));
+        row.push(num(c.base_diameter));
         row.push(c.status.as_str().into());
         row.push(c.reason.clone());
         row.push(c.flags.join("; "));

@@ -1,25 +1,33 @@
-//! The bundled example: a seeded synthetic study of two groups of cells
-//! whose AFM ramp-hold curves are made by the forward model from known
-//! group distributions of (G0, g1, τ1, g2, τ2) inside the Table 5.3 domain,
-//! with measurement noise. Same spec and seed → byte-identical files.
+//! The bundled example's data generator: two groups of cells whose AFM
+//! ramp-hold curves are made by the study's forward model from known group
+//! distributions of (G0, g1, τ1, g2, τ2) inside the Table 5.3 domain, with
+//! measurement noise. Same study, spec and seed → byte-identical files.
 //!
-//! Forward model: small-strain Lee–Radok (linear-viscoelastic Hertz,
-//! rigid sphere, eq. 1.1 generalised with eq. 5.1); the FE model replaces
-//! it when it lands.
+//! The meta-model's study (`examples/demo/metamodel.toml`) names the
+//! forward model in its `[forward]` section; the same section drives
+//! `nlvid build`, so the meta-model the cohort fits on and the curves it
+//! fits are made by one model (see `examples/demo/regenerate.sh`). Today only `hertz-prony`
+//! (analytic Lee–Radok ramp-hold) can write curves: its indentation history
+//! δ(t) is known in closed form, which the piezo column Z = δ + F/k needs.
 //!
-//! Files: `study.toml`, `data/<group>/<cell>.csv` (`time [s]`,
-//! `piezo [um]`, `deflection [nm]`; 250 Hz for the first 2 s, 10 Hz after —
-//! decimated to keep the repository small), `ground_truth.csv`.
+//! Files written next to the study: `data/<group>/<cell>.csv` (`time [s]`,
+//! `piezo [um]`, `deflection [nm]`; `fast_rate` Hz until `fast_until`,
+//! `slow_rate` Hz after — decimated to keep the repository small) and
+//! `ground_truth.csv`.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use nlvid_inverse::{Domain, LeeRadokHertz, Model};
+use nlvid_forward::{ForwardSettings, ForwardSpec};
+use nlvid_inverse::Domain;
+use nlvid_study::Study;
+use nlvid_surrogate::{ForwardModel, HertzProny};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::cohort::write_atomic;
 use crate::error::{ReportError, Result};
+use crate::settings::CohortSettings;
 
 /// A group's parameter distribution: G0 and τ's log-normal (median,
 /// sd of ln), g's normal (mean, sd).
@@ -39,7 +47,8 @@ pub struct GroupSpec {
     pub tau2: (f64, f64),
 }
 
-/// The synthetic study.
+/// The synthetic cells (the study file holds probe, cantilever, protocol
+/// and forward model).
 #[derive(Debug, Clone, PartialEq)]
 pub struct DemoSpec {
     /// Groups.
@@ -50,24 +59,19 @@ pub struct DemoSpec {
     pub seed: u64,
     /// Noise sd as a fraction of each cell's peak force (on the deflection).
     pub noise: f64,
-    /// Sphere radius, m.
-    pub radius: f64,
-    /// Cantilever k, N/m.
-    pub spring_constant: f64,
-    /// Indentation depth, m.
-    pub depth: f64,
-    /// Indentation rate, m/s.
-    pub rate: f64,
-    /// End of the hold, s.
-    pub hold_end: f64,
-    /// Multistart starts written into the study.
-    pub starts: usize,
+    /// Sampling rate until `fast_until`, Hz.
+    pub fast_rate: f64,
+    /// End of the fast sampling, s.
+    pub fast_until: f64,
+    /// Sampling rate after `fast_until`, Hz.
+    pub slow_rate: f64,
 }
 
 impl Default for DemoSpec {
     /// Two groups of 8 cells: `A-stiff` (G0 ≈ 2 kPa, relaxes ≈ 55 % by
     /// 52 s) and `B-soft` (G0 ≈ 0.9 kPa, ≈ 75 %), the direction of the
-    /// benign vs malignant contrast of §5.4.2; 1 % force noise.
+    /// benign vs malignant contrast of §5.4.2; 1 % force noise; 100 Hz for
+    /// the first 2 s, then 10 Hz.
     fn default() -> Self {
         Self {
             groups: vec![
@@ -75,7 +79,7 @@ impl Default for DemoSpec {
                     name: "A-stiff".into(),
                     g0: (2000.0, 0.2),
                     g1: (0.30, 0.04),
-                    tau1: (0.3, 0.3),
+                    tau1: (0.6, 0.3),
                     g2: (0.25, 0.04),
                     tau2: (10.0, 0.2),
                 },
@@ -83,7 +87,7 @@ impl Default for DemoSpec {
                     name: "B-soft".into(),
                     g0: (900.0, 0.2),
                     g1: (0.40, 0.04),
-                    tau1: (0.3, 0.3),
+                    tau1: (0.6, 0.3),
                     g2: (0.35, 0.04),
                     tau2: (10.0, 0.2),
                 },
@@ -91,12 +95,9 @@ impl Default for DemoSpec {
             cells_per_group: 8,
             seed: 20261122,
             noise: 0.01,
-            radius: 2.5e-6,
-            spring_constant: 0.12,
-            depth: 2e-6,
-            rate: 10e-6,
-            hold_end: 52.0,
-            starts: 8,
+            fast_rate: 100.0,
+            fast_until: 2.0,
+            slow_rate: 10.0,
         }
     }
 }
@@ -108,14 +109,14 @@ pub struct TrueCell {
     pub group: String,
     /// Cell name (file stem).
     pub cell: String,
-    /// (G0, g1, τ1, g2, τ2), SI.
+    /// (G0, g1, τ1, g2, τ2), SI (Table 5.3 order).
     pub x: [f64; 5],
 }
 
-/// What [`write_demo`] wrote.
+/// What [`write_demo_data`] wrote.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DemoFiles {
-    /// The study file.
+    /// The study file (read, not written).
     pub study: PathBuf,
     /// The data folder (one sub-folder per group).
     pub data: PathBuf,
@@ -155,60 +156,166 @@ fn draw(g: &GroupSpec, domain: &Domain, rng: &mut ChaCha8Rng) -> Result<[f64; 5]
     )))
 }
 
-/// Sample times: 250 Hz to 2 s, then 10 Hz to the end of the hold.
-pub fn sample_times(hold_end: f64) -> Vec<f64> {
-    let mut t: Vec<f64> = (0..500).map(|i| i as f64 / 250.0).collect();
-    let n = ((hold_end - 2.0) * 10.0).round() as usize;
-    t.extend((0..=n).map(|i| 2.0 + i as f64 / 10.0));
-    t
+/// The `hertz-prony` settings of a study's `[forward]` section (the keys
+/// `nlvid build` reads: `probe_radius`, `rate`, `ramp`, `hold`, `points`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HertzPronyForward {
+    /// Probe radius R, m.
+    pub probe_radius: f64,
+    /// Indentation rate on the ramp, m/s.
+    pub rate: f64,
+    /// Ramp duration, s.
+    pub ramp: f64,
+    /// Hold duration, s.
+    pub hold: f64,
+    /// Output points of the meta-model's grid.
+    pub points: usize,
 }
 
-/// The study file text of a demo.
-pub fn study_toml(spec: &DemoSpec) -> String {
-    format!(
-        "# Synthetic demo study written by `nlvid demo` (crate nlvid-report, demo.rs).\n\
-         # Forward model: small-strain Lee–Radok; the FE model replaces it when it lands.\n\
-         title = \"nlvid demo: two synthetic groups of {n} cells\"\n\
-         seed = 1\n\n\
-         [probe]\nradius = \"{r} um\"\npoisson = 0.5\n\n\
-         [afm]\nspring_constant = \"{k} N/m\"\ntime_column = \"time\"\n\
-         piezo_column = \"piezo\"\ndeflection_column = \"deflection\"\n\n\
-         [protocol]\nramp = \"{ramp} s\"\nhold_end = \"{end} s\"\n\n\
-         [fit]\nmodel = \"lee-radok\"\nstarts = {starts}\nramp_points = 40\nhold_points = 120\n\
-         first_hold_step = \"1 ms\"\nconstraint_epsilon = 0.01\nsuspicious_misfit = 0.05\n",
-        n = spec.cells_per_group,
-        r = spec.radius * 1e6,
-        k = spec.spring_constant,
-        // Rounded to 1 ns so the study file reads `0.2 s`, not `0.19999999999999998 s`.
-        ramp = (spec.depth / spec.rate * 1e9).round() / 1e9,
-        end = spec.hold_end,
-        starts = spec.starts,
-    )
+impl HertzPronyForward {
+    /// Reads `[forward]` of the study at `path` with `nlvid_forward` (the
+    /// reader `nlvid build` uses).
+    ///
+    /// # Errors
+    /// A missing section or key (naming file, line, key), or a model other
+    /// than `hertz-prony`.
+    pub fn load(path: &Path) -> Result<Self> {
+        let mut study = Study::load(path)?;
+        let fwd = ForwardSettings::from_study(&mut study)
+            .map_err(|e| ReportError::InvalidSetting(e.to_string()))?;
+        match fwd.spec {
+            ForwardSpec::HertzProny(h) => Ok(Self {
+                probe_radius: h.probe_radius,
+                rate: h.rate,
+                ramp: h.ramp,
+                hold: h.hold,
+                points: h.points,
+            }),
+            other => Err(ReportError::InvalidSetting(format!(
+                "{}: [forward] {}: the demo data generator writes curves for `hertz-prony` \
+                 only (it needs the indentation history δ(t) for the piezo column; an AFM FE \
+                 generator is for later)",
+                path.display(),
+                match other {
+                    ForwardSpec::AfmFe(_) => "afm-fe",
+                    ForwardSpec::Membrane(_) => "membrane",
+                    ForwardSpec::HertzProny(_) => "hertz-prony",
+                }
+            ))),
+        }
+    }
+
+    /// The forward model on `points` equally spaced times in (0, ramp + hold].
+    pub fn model(&self, points: usize) -> HertzProny {
+        HertzProny::new(
+            self.probe_radius,
+            self.rate,
+            self.ramp,
+            self.ramp + self.hold,
+            points,
+        )
+    }
+
+    /// Indentation δ(t) of the nominal ramp-hold, m.
+    pub fn indentation(&self, t: f64) -> f64 {
+        self.rate * t.clamp(0.0, self.ramp)
+    }
 }
 
-/// Writes the demo study into `dir` (created).
+/// Sample times of a cell's file (a subset of the fine model grid of
+/// spacing 1/`fast_rate`): every point until `fast_until`, then every
+/// `fast_rate/slow_rate`-th. Returns the fine grid size and the kept indices.
+fn sampling(spec: &DemoSpec, t_end: f64) -> Result<(usize, Vec<usize>)> {
+    let n = (t_end * spec.fast_rate).round() as usize;
+    let step = (spec.fast_rate / spec.slow_rate).round() as usize;
+    if n < 2 || step < 1 {
+        return Err(ReportError::InvalidSetting(format!(
+            "demo sampling: {} Hz over {t_end} s, then {} Hz",
+            spec.fast_rate, spec.slow_rate
+        )));
+    }
+    let fast = (spec.fast_until * spec.fast_rate).round() as usize;
+    // Index i is time (i + 1)/fast_rate.
+    let keep = (0..n)
+        .filter(|&i| i < fast || (i + 1) % step == 0 || i + 1 == n)
+        .collect();
+    Ok((n, keep))
+}
+
+/// Writes `data/` and `ground_truth.csv` next to the cohort study `study`
+/// (cantilever, columns, fitted window) with the forward model of the
+/// `[forward]` section of `forward` (the meta-model's study,
+/// `metamodel.toml` in the demo).
 ///
 /// # Errors
-/// Unwritable directory; a group distribution outside the domain.
-pub fn write_demo(spec: &DemoSpec, dir: &Path) -> Result<DemoFiles> {
-    let domain = Domain::prony2_table_5_3(0.01)?;
+/// An unreadable study, a forward model the generator cannot drive, a
+/// group distribution outside the domain, an unwritable directory.
+pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<DemoFiles> {
+    let settings = CohortSettings::load(study)?;
+    let fwd = HertzPronyForward::load(forward)?;
+    if (settings.radius / fwd.probe_radius - 1.0).abs() > 1e-12 {
+        return Err(ReportError::InvalidSetting(format!(
+            "{}: probe.radius = {} m but {} has forward.probe_radius = {} m",
+            study.display(),
+            settings.radius,
+            forward.display(),
+            fwd.probe_radius
+        )));
+    }
+    let dir = study.parent().map(Path::to_path_buf).unwrap_or_default();
+    let domain = Domain::prony2_table_5_3(settings.constraint_epsilon)?;
+    let t_end = fwd.ramp + fwd.hold;
+    if (settings.ramp - fwd.ramp).abs() > 1e-9 * fwd.ramp
+        || settings.hold_end > t_end * (1.0 + 1e-12)
+    {
+        return Err(ReportError::InvalidSetting(format!(
+            "{}: the fitted window (ramp {} s, hold_end {} s) must match the forward model's \
+             ramp ({} s) and end within its protocol ({t_end} s)",
+            study.display(),
+            settings.ramp,
+            settings.hold_end,
+            fwd.ramp
+        )));
+    }
+    let (fine, keep) = sampling(spec, t_end)?;
+    let model = fwd.model(fine);
+    // Model parameter k is domain parameter perm[k].
+    let perm = model
+        .parameter_names()
+        .iter()
+        .map(|n| {
+            domain.index_of(n).ok_or_else(|| {
+                ReportError::InvalidSetting(format!(
+                    "forward model parameter `{n}` is not in the Table 5.3 domain"
+                ))
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let times: Vec<f64> = model.time_grid().to_vec();
+    let k = settings.spring_constant;
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
-    let t = sample_times(spec.hold_end);
-    let delta: Vec<f64> = t.iter().map(|&s| (spec.rate * s).min(spec.depth)).collect();
-    let model = LeeRadokHertz::new(domain.clone(), t.clone(), &delta, spec.radius, 0.5)?;
     let data = dir.join("data");
     let mut cells = Vec::new();
     let mut truth = String::from("group,cell,G0_Pa,g1,tau1_s,g2,tau2_s,G_end_Pa,relaxation_end\n");
     for g in &spec.groups {
         for i in 0..spec.cells_per_group {
             let x = draw(g, &domain, &mut rng)?;
-            let f = model.response(&x)?;
+            let p: Vec<f64> = perm.iter().map(|&j| x[j]).collect();
+            let f = model
+                .run(&p)
+                .map_err(|e| ReportError::InvalidSetting(format!("forward model: {e}")))?;
             let peak = f.iter().fold(0.0f64, |a, &b| a.max(b));
-            let mut csv = String::from("time [s],piezo [um],deflection [nm]\n");
-            for ((tj, dj), fj) in t.iter().zip(&delta).zip(&f) {
-                let d_true = fj / spec.spring_constant;
-                let z = dj + d_true;
-                let d_meas = (fj + spec.noise * peak * normal(&mut rng)) / spec.spring_constant;
+            let mut csv = format!(
+                "{},{},{}\n0.0000,0.000000,{:.4}\n",
+                "time [s]",
+                "piezo [um]",
+                "deflection [nm]",
+                spec.noise * peak * normal(&mut rng) / k * 1e9
+            );
+            for &j in &keep {
+                let (tj, fj) = (times[j], f[j]);
+                let z = fwd.indentation(tj) + fj / k;
+                let d_meas = (fj + spec.noise * peak * normal(&mut rng)) / k;
                 let _ = writeln!(csv, "{tj:.4},{:.6},{:.4}", z * 1e6, d_meas * 1e9);
             }
             let cell = format!("{}-{:02}", g.name.to_lowercase(), i + 1);
@@ -216,11 +323,9 @@ pub fn write_demo(spec: &DemoSpec, dir: &Path) -> Result<DemoFiles> {
                 &data.join(&g.name).join(format!("{cell}.csv")),
                 csv.as_bytes(),
             )?;
+            let end = settings.hold_end;
             let ginf = 1.0 - x[1] - x[3];
-            let g_end = x[0]
-                * (ginf
-                    + x[1] * (-spec.hold_end / x[2]).exp()
-                    + x[3] * (-spec.hold_end / x[4]).exp());
+            let g_end = x[0] * (ginf + x[1] * (-end / x[2]).exp() + x[3] * (-end / x[4]).exp());
             let _ = writeln!(
                 truth,
                 "{},{cell},{},{},{},{},{},{},{}",
@@ -240,14 +345,29 @@ pub fn write_demo(spec: &DemoSpec, dir: &Path) -> Result<DemoFiles> {
             });
         }
     }
-    let study = dir.join("study.toml");
-    write_atomic(&study, study_toml(spec).as_bytes())?;
     let truth_path = dir.join("ground_truth.csv");
     write_atomic(&truth_path, truth.as_bytes())?;
     Ok(DemoFiles {
-        study,
+        study: study.to_path_buf(),
         data,
         truth: truth_path,
         cells,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sampling_keeps_every_fast_sample_then_every_tenth() {
+        let spec = DemoSpec::default();
+        let (n, keep) = sampling(&spec, 52.0).unwrap();
+        assert_eq!(n, 5200);
+        // 200 samples in (0, 2] s, then 10 Hz to 52 s: 500 more.
+        assert_eq!(keep.len(), 200 + 500);
+        assert_eq!(*keep.last().unwrap(), 5199);
+        assert_eq!(keep[199], 199);
+        assert_eq!(keep[200], 209);
+    }
 }

@@ -6,22 +6,27 @@
 //!   cantilever, fitted ramp-hold window, fit settings);
 //! - [`cell`]: one cell — its AFM curve read (F = k d, δ = Z − d), the five
 //!   Prony parameters of eq. 5.1 fitted with the misfit of eq. 5.3 in the
-//!   Table 5.3 domain, peak force and relaxation of the peak-normalised
-//!   curve; a failed cell is a result with its reason, never an error;
+//!   Table 5.3 domain on a pre-built Kriging meta-model (or the analytic
+//!   Lee–Radok model), the Hertz baseline (eq. 1.1) of the loading ramp,
+//!   the cell's height (eq. B.1) and base diameter √(d1·d2) when given,
+//!   peak force and relaxation of the peak-normalised curve; a failed cell
+//!   is a result with its reason, never an error;
 //! - [`cohort`]: every cell in parallel, one result file per cell written
 //!   atomically (a re-run fits only what is missing), the results table in
 //!   the format of docs/cli/compare.md;
 //! - [`report`]: the self-contained HTML page with inline SVG figures
 //!   (data overview, per-cell fits, group G(t) with p(t), tables);
-//! - [`demo`]: a seeded synthetic two-group study with known parameters.
+//! - [`demo`]: the bundled example's curve writer: two groups of cells made
+//!   by the study's forward model from known distributions, with noise.
 //!
-//! The forward model is, for now, the small-strain Lee–Radok model of
-//! `nlvid_inverse` (linear-viscoelastic Hertz contact of a rigid sphere);
-//! the FE model / its Kriging surrogate replaces it when it lands.
+//! The bundled demo fits on a meta-model of the analytic `hertz-prony`
+//! forward model for now; an FE meta-model is for later.
 //!
-//! Cost: a cell costs one multistart fit (8 SLSQP starts on ~160 grid
-//! points with the analytic model: a few ms to tens of ms); a report is
-//! dominated by SVG drawing (well under a second for tens of cells).
+//! Cost: a cell costs one multistart fit (8 SLSQP starts; on a meta-model
+//! of N training runs each misfit evaluation is O(N²), tens of ms per cell
+//! for N = 400); reading the meta-model and its Gram matrix (O(N²·m)) is
+//! paid once per cohort; a report is dominated by SVG drawing (well under a
+//! second for tens of cells).
 //!
 //! ```no_run
 //! use std::path::Path;

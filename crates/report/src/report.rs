@@ -519,11 +519,20 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
             "misfit",
             "peak force (nN)",
             "relaxation (%)",
-            "status",
-            "reason / flags",
+            "Hertz E (Pa)",
+            "Hertz window",
         ]
         .map(String::from),
     );
+    let has_height = cells.iter().any(|c| c.cell_height.is_some());
+    let has_diameter = cells.iter().any(|c| c.base_diameter.is_some());
+    if has_height {
+        head.push("height H (µm)".into());
+    }
+    if has_diameter {
+        head.push("base diameter (µm)".into());
+    }
+    head.extend(["status", "reason / flags"].map(String::from));
     h.push_str("<table>\n<thead><tr>");
     for c in &head {
         let _ = write!(h, "<th>{}</th>", escape(c));
@@ -544,6 +553,18 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
         row.push(opt(c.misfit, 1.0, 3));
         row.push(opt(c.peak_force, 1e9, 4));
         row.push(opt(c.relaxation, 100.0, 3));
+        row.push(opt(c.hertz.as_ref().map(|h| h.youngs_modulus), 1.0, 4));
+        row.push(
+            c.hertz
+                .as_ref()
+                .map_or_else(String::new, |h| h.window.clone()),
+        );
+        if has_height {
+            row.push(opt(c.cell_height, 1e6, 4));
+        }
+        if has_diameter {
+            row.push(opt(c.base_diameter, 1e6, 4));
+        }
         row.push(c.status.as_str().into());
         let mut notes = Vec::new();
         if !c.reason.is_empty() {
@@ -565,6 +586,9 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
     );
 
     h.push_str("<h2 id=\"surrogate\">Surrogate checking errors</h2>\n");
+    if let Some(f) = &s.surrogate {
+        surrogate_section(&mut h, f)?;
+    }
     let check = opts.surrogate_check.clone().or_else(|| {
         let p = cohort_dir.join("surrogate_check.csv");
         p.is_file().then_some(p)
@@ -579,6 +603,7 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
             );
             html_table(&mut h, &hd, &rows);
         }
+        None if s.surrogate.is_some() => {}
         None => {
             let _ = writeln!(
                 h,
@@ -611,6 +636,55 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
         figure_ids: figures.iter().map(|f| f.id.clone()).collect(),
         svgs,
     })
+}
+
+/// The meta-model the cells were fitted on: its files, the forward model it
+/// stands for, and its checking errors (eq. 4.4) when the study names them.
+fn surrogate_section(h: &mut String, f: &crate::settings::SurrogateFiles) -> Result<()> {
+    let _ = writeln!(
+        h,
+        "<p>Every cell was fitted on the Kriging meta-model <code>{}</code> (time grid and \
+         inputs: <code>{}</code>) of the forward model <code>{}</code>.</p>",
+        escape(&f.model.display().to_string()),
+        escape(&f.meta.display().to_string()),
+        escape(&f.forward)
+    );
+    let Some(p) = &f.check else {
+        h.push_str("<p>The study names no checking-error file (<code>fit.check</code>).</p>\n");
+        return Ok(());
+    };
+    let bytes = fs::read(p).map_err(|e| ReportError::io(p, e))?;
+    let v: serde_json::Value = serde_json::from_slice(&bytes).map_err(|e| ReportError::Data {
+        path: p.clone(),
+        line: e.line() as u64,
+        message: format!("not the JSON of `nlvid surrogate check`: {e}"),
+    })?;
+    let num = |k: &str| v.get(k).and_then(serde_json::Value::as_f64);
+    let n = v.get("rmse").and_then(|r| r.as_array()).map_or(0, Vec::len);
+    let (Some(min), Some(median), Some(max)) = (num("min"), num("median"), num("max")) else {
+        return Err(ReportError::Data {
+            path: p.clone(),
+            line: 0,
+            message:
+                "keys `min`, `median`, `max` (output of `nlvid --json surrogate check`) missing"
+                    .into(),
+        });
+    };
+    let head = ["checking cases", "min (%)", "median (%)", "max (%)"].map(String::from);
+    let row = vec![
+        n.to_string(),
+        sig(100.0 * min, 3),
+        sig(100.0 * median, 3),
+        sig(100.0 * max, 3),
+    ];
+    let _ = writeln!(
+        h,
+        "<p>Range-normalised RMSE (eq. 4.4) of the meta-model against the forward model on \
+         its checking design, from <code>{}</code>:</p>",
+        escape(&p.display().to_string())
+    );
+    html_table(h, &head, &[row]);
+    Ok(())
 }
 
 /// Uniform grid 0 … t_end with `points` points.

@@ -16,8 +16,13 @@
 //! [protocol]
 //! ramp = "0.2 s"               # end of the loading ramp
 //! hold_end = "52 s"            # end of the hold = end of the fitted window
+//! # (or `ramp`, `hold_end` in [fit]: then [protocol] is the forward model's,
+//! # nlvid-protocol format, and the cohort does not read it)
 //! [fit]
-//! model = "lee-radok"          # the only forward model until the FE/surrogate lands
+//! model = "surrogate"          # or "lee-radok" (analytic, no surrogate)
+//! surrogate = "metamodel/model.json"  # model file of `nlvid surrogate fit`
+//! meta = "metamodel/meta.json"        # sidecar of `nlvid build --export`
+//! check = "metamodel/check.json"      # optional: `nlvid --json surrogate check` output
 //! starts = 8
 //! ramp_points = 40
 //! hold_points = 120
@@ -26,18 +31,37 @@
 //! suspicious_misfit = 0.05     # eq. 5.3 misfit above which a cell is `suspicious`
 //! ```
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use nlvid_study::{Bounds, Dimension, FromSection, Section, Study, StudyError};
 use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
 
-use crate::error::Result;
+use crate::error::{ReportError, Result};
+
+/// The `model` key of a `meta.json` (the forward model's identity), if any.
+fn forward_of_meta(meta: &Path) -> Result<String> {
+    let bytes = std::fs::read(meta).map_err(|e| ReportError::io(meta, e))?;
+    let v: serde_json::Value = serde_json::from_slice(&bytes).map_err(|e| ReportError::Data {
+        path: meta.to_path_buf(),
+        line: e.line() as u64,
+        message: format!("not JSON: {e}"),
+    })?;
+    Ok(v.get("model")
+        .and_then(|m| m.as_str())
+        .unwrap_or("(meta.json names no model)")
+        .to_string())
+}
 
 /// The forward model used to fit each cell.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ForwardModel {
-    /// Small-strain Lee–Radok linear-viscoelastic Hertz contact, rigid sphere.
+    /// Small-strain Lee–Radok linear-viscoelastic Hertz contact, rigid
+    /// sphere, run with each cell's measured indentation.
     LeeRadok,
+    /// A pre-built Kriging meta-model of a forward model (thesis §4.4.1,
+    /// §5.4.1): `nlvid surrogate fit` model file + `meta.json`.
+    Surrogate,
 }
 
 impl ForwardModel {
@@ -45,11 +69,30 @@ impl ForwardModel {
     pub fn describe(&self) -> &'static str {
         match self {
             ForwardModel::LeeRadok => {
-                "small-strain Lee–Radok (linear-viscoelastic Hertz, rigid sphere); \
-                 the FE model replaces it when it lands"
+                "small-strain Lee–Radok (linear-viscoelastic Hertz, rigid sphere), \
+                 run with each cell's measured indentation; no surrogate"
+            }
+            ForwardModel::Surrogate => {
+                "Kriging meta-model (nlvid surrogate fit) of the forward model named in \
+                 the study, on the nominal ramp-hold protocol"
             }
         }
     }
+}
+
+/// The files of a pre-built meta-model (paths resolved against the study's
+/// directory).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SurrogateFiles {
+    /// Model file of `nlvid surrogate fit`.
+    pub model: PathBuf,
+    /// `meta.json` of `nlvid build --export` (input names, time grid).
+    pub meta: PathBuf,
+    /// Optional checking-error summary (`nlvid --json surrogate check`).
+    pub check: Option<PathBuf>,
+    /// Text describing the forward model the surrogate stands for (from
+    /// `meta.json`'s `model` key when present).
+    pub forward: String,
 }
 
 /// Cohort settings, all in SI.
@@ -83,6 +126,8 @@ pub struct CohortSettings {
     pub hold_end: f64,
     /// Forward model.
     pub model: ForwardModel,
+    /// The meta-model's files (when `model` is [`ForwardModel::Surrogate`]).
+    pub surrogate: Option<SurrogateFiles>,
     /// Multistart starts per cell.
     pub starts: usize,
     /// Uniform intervals of the model grid on the ramp.
@@ -137,6 +182,7 @@ impl FromSection for Afm {
     }
 }
 
+#[derive(Clone, Copy)]
 struct Window {
     ramp: f64,
     hold_end: f64,
@@ -153,8 +199,19 @@ impl FromSection for Window {
     }
 }
 
+/// The fitted window from `[fit]` (`ramp`, `hold_end`) when given there:
+/// then `[protocol]` belongs to the forward model (nlvid-protocol format).
+fn fit_window(s: &mut Section) -> std::result::Result<Option<Window>, StudyError> {
+    match (s.has("ramp"), s.has("hold_end")) {
+        (false, false) => Ok(None),
+        _ => Window::from_section(s).map(Some),
+    }
+}
+
 struct Fit {
+    window: Option<Window>,
     model: ForwardModel,
+    surrogate: Option<(PathBuf, PathBuf, Option<PathBuf>)>,
     starts: usize,
     ramp_points: usize,
     hold_points: usize,
@@ -165,12 +222,38 @@ struct Fit {
 
 impl FromSection for Fit {
     fn from_section(s: &mut Section) -> std::result::Result<Self, StudyError> {
+        let model = s.enum_or(
+            "model",
+            &[
+                ("lee-radok", ForwardModel::LeeRadok),
+                ("surrogate", ForwardModel::Surrogate),
+            ],
+            ForwardModel::LeeRadok,
+        )?;
+        let surrogate = match model {
+            ForwardModel::Surrogate => Some((
+                s.req_input_file("surrogate")?,
+                s.req_input_file("meta")?,
+                match s.opt_path("check")? {
+                    Some(p) if !p.is_file() => {
+                        return Err(s.invalid("check", format!("no such file: {}", p.display())));
+                    }
+                    other => other,
+                },
+            )),
+            ForwardModel::LeeRadok => {
+                for key in ["surrogate", "meta", "check"] {
+                    if s.has(key) {
+                        return Err(s.invalid(key, "only with model = \"surrogate\""));
+                    }
+                }
+                None
+            }
+        };
         Ok(Self {
-            model: s.enum_or(
-                "model",
-                &[("lee-radok", ForwardModel::LeeRadok)],
-                ForwardModel::LeeRadok,
-            )?,
+            window: fit_window(s)?,
+            model,
+            surrogate,
             starts: s
                 .opt_usize("starts", Bounds::closed(1.0, 1000.0))?
                 .unwrap_or(8),
@@ -215,9 +298,15 @@ impl CohortSettings {
         let seed = study.root().opt_u64("seed")?.unwrap_or(0);
         let probe: Probe = study.read("probe")?;
         let afm: Afm = study.read("afm")?;
-        let window: Window = study.read("protocol")?;
+        // Sections of the meta-model build (`nlvid sample/build`): not the
+        // cohort's business, but part of the same study file.
+        for other in ["forward", "design", "build"] {
+            study.root().skip(other);
+        }
         let fit: Fit = study.opt_read("fit")?.unwrap_or(Fit {
+            window: None,
             model: ForwardModel::LeeRadok,
+            surrogate: None,
             starts: 8,
             ramp_points: 40,
             hold_points: 120,
@@ -225,6 +314,13 @@ impl CohortSettings {
             eps: 0.01,
             suspicious: 0.05,
         });
+        let window = match fit.window {
+            Some(w) => {
+                study.root().skip("protocol");
+                w
+            }
+            None => study.read("protocol")?,
+        };
         if window.ramp + fit.first_hold_step >= window.hold_end {
             return Err(crate::ReportError::InvalidSetting(format!(
                 "{}: fit.first_hold_step ({} s) does not fit between protocol.ramp and protocol.hold_end",
@@ -232,7 +328,28 @@ impl CohortSettings {
                 fit.first_hold_step
             )));
         }
-        let study_hash = study.hash().to_string();
+        let surrogate = match fit.surrogate {
+            Some((model, meta, check)) => Some(SurrogateFiles {
+                forward: forward_of_meta(&meta)?,
+                model,
+                meta,
+                check,
+            }),
+            None => None,
+        };
+        // A rebuilt meta-model must not reuse cells fitted on the old one.
+        let study_hash = match &surrogate {
+            Some(f) => {
+                let mut h = Sha256::new();
+                h.update(study.hash().to_string().as_bytes());
+                for p in [&f.model, &f.meta] {
+                    let bytes = std::fs::read(p).map_err(|e| ReportError::io(p, e))?;
+                    h.update(Sha256::digest(&bytes));
+                }
+                h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+            }
+            None => study.hash().to_string(),
+        };
         study.finish()?;
         Ok(Self {
             title,
@@ -248,6 +365,7 @@ impl CohortSettings {
             ramp: window.ramp,
             hold_end: window.hold_end,
             model: fit.model,
+            surrogate,
             starts: fit.starts,
             ramp_points: fit.ramp_points,
             hold_points: fit.hold_points,

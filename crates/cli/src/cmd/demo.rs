@@ -1,13 +1,15 @@
-//! `nlvid demo [--out DIR]`: writes the bundled synthetic study (two groups
-//! of 8 cells, known parameters, noise), then runs cohort → compare →
-//! report on it and prints where the report is. See docs/cli/demo.md.
+//! `nlvid demo [--out DIR]`: runs cohort → compare → report on the bundled
+//! synthetic study (`examples/demo`: two groups of 8 cells made by the
+//! forward model from known parameters with noise, and its pre-built
+//! meta-model) and prints where the report is. `--write-data` regenerates
+//! the cells' curves from the study instead. See docs/cli/demo.md.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use nlvid_report::cohort;
-use nlvid_report::demo::{DemoSpec, write_demo};
+use nlvid_report::demo::{DemoSpec, write_demo_data};
 use nlvid_report::report::{ReportOptions, write_report};
 use nlvid_report::settings::CohortSettings;
 
@@ -16,14 +18,38 @@ use super::{Context, Run};
 /// Raw arguments of `nlvid demo`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Output directory: `study/` (the synthetic study), `cohort/` (fits,
-    /// results.csv, compare CSVs), `cohort/report/index.html`.
+    /// Output directory: `cohort/` (fits, results.csv, compare CSVs),
+    /// `cohort/report/index.html`.
     #[arg(long, default_value = "nlvid-demo")]
     pub out: PathBuf,
-    /// Only write the synthetic study (study.toml, data/, ground_truth.csv)
-    /// into --out; this is how examples/demo/ is made.
+    /// The bundled example (study.toml, data/, metamodel/); default
+    /// `examples/demo` in the current directory, else in the source tree
+    /// this binary was built from.
     #[arg(long)]
-    pub study_only: bool,
+    pub demo: Option<PathBuf>,
+    /// Only (re)write the demo's cell curves (data/, ground_truth.csv) with
+    /// the forward model of its metamodel.toml; used by
+    /// examples/demo/regenerate.sh.
+    #[arg(long)]
+    pub write_data: bool,
+}
+
+fn demo_dir(given: Option<PathBuf>) -> anyhow::Result<PathBuf> {
+    if let Some(d) = given {
+        return Ok(d);
+    }
+    let here = PathBuf::from("examples/demo");
+    if here.join("study.toml").is_file() {
+        return Ok(here);
+    }
+    let built = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/demo"));
+    if built.join("study.toml").is_file() {
+        return Ok(built);
+    }
+    anyhow::bail!(
+        "no bundled example: neither ./examples/demo nor {} has a study.toml; give --demo DIR",
+        built.display()
+    )
 }
 
 impl Run for Args {
@@ -40,34 +66,45 @@ impl Run for Args {
 
     fn execute(a: Args, ctx: &Context) -> anyhow::Result<ExitCode> {
         let start = Instant::now();
-        let spec = DemoSpec::default();
-        let study_dir = if a.study_only {
-            a.out.clone()
-        } else {
-            a.out.join("study")
-        };
-        let files = write_demo(&spec, &study_dir)?;
-        println!(
-            "1. synthetic study: {} groups × {} cells from known parameters (truth: {})",
-            spec.groups.len(),
-            spec.cells_per_group,
-            files.truth.display()
-        );
-        if a.study_only {
-            println!("wrote {}", study_dir.display());
+        let demo = demo_dir(a.demo)?;
+        let study = demo.join("study.toml");
+        let data = demo.join("data");
+        if a.write_data {
+            let spec = DemoSpec::default();
+            let files = write_demo_data(&spec, &study, &demo.join("metamodel.toml"))?;
+            println!(
+                "wrote {} groups × {} cells from known parameters into {} (truth: {})",
+                spec.groups.len(),
+                spec.cells_per_group,
+                files.data.display(),
+                files.truth.display()
+            );
             return Ok(ExitCode::SUCCESS);
         }
-        let settings = CohortSettings::load(&files.study)?;
-        let cells = cohort::discover(&files.data)?;
+        let settings = CohortSettings::load(&study)?;
+        let cells = cohort::discover(&data)?;
+        println!(
+            "1. bundled study {}: {} cells made by the forward model from known parameters \
+             (truth: {})",
+            study.display(),
+            cells.len(),
+            demo.join("ground_truth.csv").display()
+        );
+        if let Some(f) = &settings.surrogate {
+            println!(
+                "   fitted on the pre-built meta-model {} of `{}`",
+                f.model.display(),
+                f.forward
+            );
+        }
         let out = a.out.join("cohort");
         println!(
             "2. nlvid cohort {} {} --out {}",
-            files.study.display(),
-            files.data.display(),
+            study.display(),
+            data.display(),
             out.display()
         );
-        let run =
-            super::cohort::run_with_progress(&settings, &files.study, &files.data, &cells, &out)?;
+        let run = super::cohort::run_with_progress(&settings, &study, &data, &cells, &out)?;
         super::cohort::print_outcome(&settings, &out, &run, false)?;
         let results = out.join("results.csv");
         println!("3. nlvid compare {}", results.display());

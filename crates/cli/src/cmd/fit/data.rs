@@ -9,10 +9,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context as _, bail};
 use nlvid_inverse::Model as _;
 use nlvid_inverse::{
-    Calibration, Coordinates, Domain, KrigingSurrogate, MeasuredCurve, ramp_hold_indentation,
-    read_afm_csv, read_compression_csv, segment_weights,
+    Calibration, Coordinates, Domain, KrigingSurrogate, MeasuredCurve, load_kriging_surrogate,
+    ramp_hold_indentation, read_afm_csv, read_compression_csv, segment_weights,
 };
-use nlvid_surrogate::KrigingModel;
 
 use super::config::{DataColumns, ExperimentSettings, FitSettings, RealModelSpec};
 
@@ -127,23 +126,8 @@ fn load_surrogate(
     domain: &Domain,
     inputs: Coordinates,
 ) -> anyhow::Result<Surrogate> {
-    let (names, times) = read_meta(&exp.meta)?;
-    let text = std::fs::read(&exp.surrogate)
-        .with_context(|| format!("cannot read surrogate {}", exp.surrogate.display()))?;
-    let kriging: KrigingModel = serde_json::from_slice(&text).with_context(|| {
-        format!(
-            "{}: not a model file of `nlvid surrogate fit`",
-            exp.surrogate.display()
-        )
-    })?;
-    let model = KrigingSurrogate::new(kriging, domain.clone(), &names, times, inputs)
-        .with_context(|| {
-            format!(
-                "surrogate {} with {}",
-                exp.surrogate.display(),
-                exp.meta.display()
-            )
-        })?;
+    let model = load_kriging_surrogate(&exp.surrogate, &exp.meta, domain.clone(), inputs)
+        .with_context(|| format!("surrogate {}", exp.surrogate.display()))?;
     let checking = match &exp.checking {
         Some(p) => Some((read_checking_error(p)?, p.clone())),
         None => {
@@ -186,28 +170,6 @@ fn read_checking_error(path: &Path) -> anyhow::Result<f64> {
             path.display()
         ),
     }
-}
-
-/// Time grid and surrogate input names from the `meta.json` sidecar of
-/// `nlvid build --export`.
-fn read_meta(path: &Path) -> anyhow::Result<(Vec<String>, Vec<f64>)> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let v: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("{}: not JSON", path.display()))?;
-    let names: Vec<String> =
-        serde_json::from_value(v["parameter_names"].clone()).with_context(|| {
-            format!(
-                "{}: key `parameter_names` (list of names) missing",
-                path.display()
-            )
-        })?;
-    let time: Vec<f64> = serde_json::from_value(v["time_s"].clone())
-        .with_context(|| format!("{}: key `time_s` (time grid, s) missing", path.display()))?;
-    if time.is_empty() {
-        bail!("{}: key `time_s` is empty", path.display());
-    }
-    Ok((names, time))
 }
 
 fn read_curve(path: &Path, columns: &DataColumns) -> anyhow::Result<MeasuredCurve> {

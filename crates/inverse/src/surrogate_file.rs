@@ -1,0 +1,221 @@
+//! A surrogate as the CLI stores it, and fitting measured curves on it
+//! (thesis §4.4.1 step 5, §5.4.1, eq. 5.3).
+//!
+//! The files: the model file of `nlvid surrogate fit` (a serialised
+//! [`KrigingModel`]) and the `meta.json` sidecar of `nlvid build --export`
+//! (`parameter_names` in the surrogate's input order, `time_s` the output
+//! grid). [`SurrogateFitter`] holds the surrogate and its Gram matrix (the
+//! O(N²·m) part, computed once) and fits one cell's curves with the O(N²)
+//! basis form of the eq. 5.3 misfit ([`BasisMisfit`]) and a seeded
+//! [`MultiStart`]. `nlvid fit` and `nlvid cohort` both use it.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use nalgebra::DMatrix;
+use nlvid_surrogate::KrigingModel;
+
+use crate::basis::{BasisExperiment, BasisMisfit, BasisModel, gram};
+use crate::domain::Domain;
+use crate::error::{InverseError, Result};
+use crate::model::Model;
+use crate::optimise::{FitResult, MultiStart};
+use crate::surrogate::{Coordinates, KrigingSurrogate};
+
+/// The `meta.json` sidecar of `nlvid build --export`: what the surrogate's
+/// inputs and outputs are.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SurrogateMeta {
+    /// Parameter names in the surrogate's input order.
+    pub parameter_names: Vec<String>,
+    /// Time grid of the outputs, s.
+    pub time_s: Vec<f64>,
+}
+
+fn io(path: &Path, message: impl std::fmt::Display) -> InverseError {
+    InverseError::Io {
+        path: path.to_path_buf(),
+        message: message.to_string(),
+    }
+}
+
+/// Reads a `meta.json` sidecar (keys `parameter_names`, `time_s`).
+///
+/// # Errors
+/// [`InverseError::Io`] naming the file and the missing or malformed key.
+pub fn read_meta(path: &Path) -> Result<SurrogateMeta> {
+    let text = std::fs::read_to_string(path).map_err(|e| io(path, format!("cannot read: {e}")))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| io(path, format!("not JSON: {e}")))?;
+    let parameter_names: Vec<String> = serde_json::from_value(v["parameter_names"].clone())
+        .map_err(|e| io(path, format!("key `parameter_names` (list of names): {e}")))?;
+    let time_s: Vec<f64> = serde_json::from_value(v["time_s"].clone())
+        .map_err(|e| io(path, format!("key `time_s` (time grid, s): {e}")))?;
+    if time_s.is_empty() || time_s.windows(2).any(|w| !(w[1] > w[0])) {
+        return Err(io(
+            path,
+            "key `time_s`: the time grid must be non-empty and strictly increasing",
+        ));
+    }
+    Ok(SurrogateMeta {
+        parameter_names,
+        time_s,
+    })
+}
+
+/// Reads a model file of `nlvid surrogate fit` and its `meta.json` and
+/// wraps them as a [`KrigingSurrogate`] on `domain`.
+///
+/// # Errors
+/// Unreadable or malformed files (naming them); names or sizes that do not
+/// match the domain ([`KrigingSurrogate::new`]).
+pub fn load_kriging_surrogate(
+    model: &Path,
+    meta: &Path,
+    domain: Domain,
+    coordinates: Coordinates,
+) -> Result<KrigingSurrogate> {
+    let m = read_meta(meta)?;
+    let bytes = std::fs::read(model).map_err(|e| io(model, format!("cannot read: {e}")))?;
+    let kriging: KrigingModel = serde_json::from_slice(&bytes).map_err(|e| {
+        io(
+            model,
+            format!("not a model file of `nlvid surrogate fit`: {e}"),
+        )
+    })?;
+    KrigingSurrogate::new(kriging, domain, &m.parameter_names, m.time_s, coordinates).map_err(|e| {
+        io(
+            model,
+            format!("does not match {} and the domain: {e}", meta.display()),
+        )
+    })
+}
+
+/// A surrogate ready to fit many cells: the Gram matrix B W Bᵀ of the
+/// basis misfit is computed once and shared by every fit (and thread).
+#[derive(Debug, Clone)]
+pub struct SurrogateFitter {
+    surrogate: KrigingSurrogate,
+    weights: Option<Vec<f64>>,
+    gram: Arc<DMatrix<f64>>,
+}
+
+/// One fit on the surrogate.
+#[derive(Debug, Clone)]
+pub struct SurrogateFit {
+    /// The multistart result (best point, alternatives, bound hits).
+    pub fit: FitResult,
+    /// Eq. 5.3 misfit of each curve at the best point.
+    pub per_curve: Vec<f64>,
+    /// The surrogate's response at the best point, on [`SurrogateFitter::times`].
+    pub response: Vec<f64>,
+}
+
+impl SurrogateFitter {
+    /// Prepares `surrogate` for fitting with optional per-time-point
+    /// weights (eq. 5.3; None = all 1). Cost O(N²·m) once.
+    ///
+    /// # Errors
+    /// Weights of the wrong length.
+    pub fn new(surrogate: KrigingSurrogate, weights: Option<Vec<f64>>) -> Result<Self> {
+        let gram = gram(&surrogate, weights.as_deref())?;
+        Ok(Self {
+            surrogate,
+            weights,
+            gram,
+        })
+    }
+
+    /// The surrogate.
+    pub fn surrogate(&self) -> &KrigingSurrogate {
+        &self.surrogate
+    }
+
+    /// The surrogate's time grid (s): measured curves must be resampled
+    /// onto it.
+    pub fn times(&self) -> &[f64] {
+        BasisModel::times(&self.surrogate)
+    }
+
+    /// Fits one parameter set to `curves` (label, force on [`Self::times`]):
+    /// the sum of their eq. 5.3 misfits, minimised by `multistart`.
+    ///
+    /// # Errors
+    /// Bad data (length, non-finite, zero range) naming the curve; no start
+    /// converged.
+    pub fn fit(&self, curves: &[(&str, &[f64])], multistart: &MultiStart) -> Result<SurrogateFit> {
+        let experiments = curves
+            .iter()
+            .map(|(label, force)| {
+                BasisExperiment::new(
+                    label,
+                    &self.surrogate,
+                    self.gram.clone(),
+                    force,
+                    self.weights.as_deref(),
+                )
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let misfit = BasisMisfit::new(experiments)?;
+        let fit = multistart.fit(&misfit)?;
+        let per_curve = crate::misfit::Objective::per_experiment(&misfit, &fit.best.x)?;
+        let response = self.surrogate.response(&fit.best.x)?;
+        Ok(SurrogateFit {
+            fit,
+            per_curve,
+            response,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tmp(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("nlvid-sfile-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn meta_errors_name_the_file_and_the_key() {
+        let d = tmp("meta");
+        let p = d.join("meta.json");
+        std::fs::write(&p, r#"{"parameter_names": ["G0"]}"#).unwrap();
+        let e = read_meta(&p).unwrap_err().to_string();
+        assert!(e.contains("meta.json") && e.contains("time_s"), "{e}");
+        std::fs::write(&p, r#"{"parameter_names": ["G0"], "time_s": [1.0, 0.5]}"#).unwrap();
+        let e = read_meta(&p).unwrap_err().to_string();
+        assert!(e.contains("strictly increasing"), "{e}");
+        std::fs::write(&p, r#"{"parameter_names": ["G0"], "time_s": [0.5, 1.0]}"#).unwrap();
+        let m = read_meta(&p).unwrap();
+        assert_eq!(m.parameter_names, vec!["G0".to_string()]);
+        assert_eq!(m.time_s, vec![0.5, 1.0]);
+    }
+
+    #[test]
+    fn a_model_file_that_is_not_a_kriging_model_is_named() {
+        let d = tmp("model");
+        let meta = d.join("meta.json");
+        std::fs::write(
+            &meta,
+            r#"{"parameter_names": ["G0","g1","g2","tau1","tau2"], "time_s": [1.0]}"#,
+        )
+        .unwrap();
+        let model = d.join("model.json");
+        std::fs::write(&model, "{}").unwrap();
+        let e = load_kriging_surrogate(
+            &model,
+            &meta,
+            Domain::prony2_table_5_3(0.01).unwrap(),
+            Coordinates::Physical,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("model.json") && e.contains("nlvid surrogate fit"),
+            "{e}"
+        );
+    }
+}
