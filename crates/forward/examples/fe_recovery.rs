@@ -89,7 +89,7 @@ fn main() -> anyhow::Result<()> {
     let column = |name: &str| {
         xhead
             .iter()
-            .position(|h| h == name || h.starts_with(&format!("{name}_")))
+            .position(|h| h == name || h.starts_with(&format!("{name} [")))
             .with_context(|| format!("column {name} not in {xhead:?}"))
     };
     let cols = domain

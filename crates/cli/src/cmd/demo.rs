@@ -44,7 +44,8 @@ fn demo_dir(given: Option<PathBuf>) -> anyhow::Result<PathBuf> {
     }
     let built = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/demo"));
     if built.join("study.toml").is_file() {
-        return Ok(built);
+        // Print `/…/examples/demo`, not `/…/crates/cli/../../examples/demo`.
+        return Ok(std::fs::canonicalize(&built).unwrap_or(built));
     }
     anyhow::bail!(
         "no bundled example: neither ./examples/demo nor {} has a study.toml; give --demo DIR",

@@ -140,6 +140,16 @@ impl Table {
 
 /// Read a numeric CSV with a header; a column named `index` is dropped.
 /// Errors name the file, row (1-based line) and column.
+/// A column by its full header (`G0 [Pa]`) or by its name without the unit
+/// suffix that `nlvid build --export` writes (`G0`).
+fn column_index(header: &[String], name: &str) -> Option<usize> {
+    header.iter().position(|h| h == name).or_else(|| {
+        header
+            .iter()
+            .position(|h| h.split_once(" [").is_some_and(|(bare, _)| bare == name))
+    })
+}
+
 pub fn read_table(path: &Path) -> anyhow::Result<Table> {
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
@@ -260,7 +270,7 @@ fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
     if let Some(cols) = &a.log_inputs {
         let mut flags = vec![false; d];
         for col in cols {
-            let k = x.header.iter().position(|h| h == col).with_context(|| {
+            let k = column_index(&x.header, col).with_context(|| {
                 format!(
                     "--log-inputs {col}: no such column in {} (columns: {:?})",
                     a.x.display(),
@@ -272,7 +282,7 @@ fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
         s.log_inputs = flags;
     }
     if let Some(col) = &a.proportional_to {
-        let input = x.header.iter().position(|h| h == col).with_context(|| {
+        let input = column_index(&x.header, col).with_context(|| {
             format!(
                 "--proportional-to {col}: no such column in {} (columns: {:?})",
                 a.x.display(),
