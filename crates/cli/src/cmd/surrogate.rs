@@ -464,3 +464,21 @@ fn parse_time(h: &str) -> Option<f64> {
     let b = rest.find(' ')?;
     rest[..b].parse().ok()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::column_index;
+
+    #[test]
+    fn columns_are_found_with_or_without_their_unit_suffix() {
+        let header: Vec<String> = ["index", "G0 [Pa]", "g1 [1]", "tau1 [s]"]
+            .iter()
+            .map(|s| s.to_string())
+            .collect();
+        assert_eq!(column_index(&header, "G0 [Pa]"), Some(1));
+        assert_eq!(column_index(&header, "G0"), Some(1));
+        assert_eq!(column_index(&header, "tau1"), Some(3));
+        assert_eq!(column_index(&header, "tau"), None);
+        assert_eq!(column_index(&header, "Pa"), None);
+    }
+}
