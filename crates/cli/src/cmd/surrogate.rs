@@ -138,8 +138,6 @@ impl Table {
     }
 }
 
-/// Read a numeric CSV with a header; a column named `index` is dropped.
-/// Errors name the file, row (1-based line) and column.
 /// A column by its full header (`G0 [Pa]`) or by its name without the unit
 /// suffix that `nlvid build --export` writes (`G0`).
 fn column_index(header: &[String], name: &str) -> Option<usize> {
@@ -150,6 +148,8 @@ fn column_index(header: &[String], name: &str) -> Option<usize> {
     })
 }
 
+/// Read a numeric CSV with a header; a column named `index` is dropped.
+/// Errors name the file, row (1-based line) and column.
 pub fn read_table(path: &Path) -> anyhow::Result<Table> {
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
