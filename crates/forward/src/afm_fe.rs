@@ -211,12 +211,10 @@ pub fn fem_failure(e: &FemError) -> RunFailure {
 
 impl ForwardModel for AfmFeModel {
     fn parameter_names(&self) -> Vec<String> {
-        ["G0", "g1", "g2", "tau1", "tau2"]
-            .map(String::from)
-            .to_vec()
+        nlvid_surrogate::PRONY2_NAMES.map(String::from).to_vec()
     }
     fn parameter_units(&self) -> Vec<String> {
-        ["Pa", "1", "1", "s", "s"].map(String::from).to_vec()
+        nlvid_surrogate::PRONY2_UNITS.map(String::from).to_vec()
     }
     fn time_grid(&self) -> &[f64] {
         &self.setup.output_times

@@ -129,14 +129,19 @@ impl HertzProny {
     }
 }
 
+/// Names of the five cell parameters of thesis Table 5.3 in the order the
+/// forward models take them: `G0, g1, g2, tau1, tau2` (eq. 5.1).
+pub const PRONY2_NAMES: [&str; 5] = ["G0", "g1", "g2", "tau1", "tau2"];
+
+/// SI units of [`PRONY2_NAMES`].
+pub const PRONY2_UNITS: [&str; 5] = ["Pa", "1", "1", "s", "s"];
+
 impl ForwardModel for HertzProny {
     fn parameter_names(&self) -> Vec<String> {
-        ["G0", "g1", "g2", "tau1", "tau2"]
-            .map(String::from)
-            .to_vec()
+        PRONY2_NAMES.map(String::from).to_vec()
     }
     fn parameter_units(&self) -> Vec<String> {
-        ["Pa", "1", "1", "s", "s"].map(String::from).to_vec()
+        PRONY2_UNITS.map(String::from).to_vec()
     }
     fn time_grid(&self) -> &[f64] {
         &self.times

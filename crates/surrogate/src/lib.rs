@@ -57,7 +57,7 @@ pub use build::{
 pub use correlation::Correlation;
 pub use error::{Result, SurrogateError};
 pub use faer;
-pub use forward::{FailureKind, ForwardModel, HertzProny, RunFailure};
+pub use forward::{FailureKind, ForwardModel, HertzProny, PRONY2_NAMES, PRONY2_UNITS, RunFailure};
 pub use kriging::{
     FitReport, KrigingModel, KrigingSettings, OutputScale, Pca, PointPrediction, ThetaSearch,
     likelihood_psi,
