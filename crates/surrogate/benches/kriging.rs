@@ -9,7 +9,7 @@
 //! Set NLVID_BENCH_N / NLVID_BENCH_M to change the prediction model size.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use nlvid_surrogate::doe::{Axis, Domain, LinearConstraint, SampleSettings, sample};
+use nlvid_surrogate::doe::{Domain, SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
     Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, OptimiserSettings,
@@ -17,26 +17,7 @@ use nlvid_surrogate::{
 };
 
 fn data(n: usize, m: usize) -> (Mat<f64>, Mat<f64>) {
-    let ax = |name: &str, lower: f64, upper: f64, log: bool| Axis {
-        name: name.into(),
-        unit: String::new(),
-        lower,
-        upper,
-        log,
-    };
-    let domain = Domain {
-        axes: vec![
-            ax("G0", 100.0, 5000.0, true),
-            ax("g1", 0.0, 0.9, false),
-            ax("g2", 0.0, 0.9, false),
-            ax("tau1", 0.01, 1.0, true),
-            ax("tau2", 1.0, 100.0, true),
-        ],
-        constraints: vec![LinearConstraint {
-            coeffs: vec![0.0, 1.0, 1.0, 0.0, 0.0],
-            bound: 0.99,
-        }],
-    };
+    let domain = Domain::cell_study();
     let design = sample(
         &domain,
         &SampleSettings {

@@ -6,7 +6,7 @@
 //! `cargo run --release -p nlvid-surrogate --example diagnose_worst [-- N]`
 
 use nlvid_surrogate::check::summarise;
-use nlvid_surrogate::doe::{Axis, Domain, LinearConstraint, training_and_checking};
+use nlvid_surrogate::doe::{Domain, training_and_checking};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
     Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, Regression,
@@ -17,26 +17,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .nth(1)
         .and_then(|a| a.parse().ok())
         .unwrap_or(300);
-    let ax = |name: &str, lower: f64, upper: f64, log: bool| Axis {
-        name: name.into(),
-        unit: String::new(),
-        lower,
-        upper,
-        log,
-    };
-    let domain = Domain {
-        axes: vec![
-            ax("G0", 100.0, 5000.0, true),
-            ax("g1", 0.0, 0.9, false),
-            ax("g2", 0.0, 0.9, false),
-            ax("tau1", 0.01, 1.0, true),
-            ax("tau2", 1.0, 100.0, true),
-        ],
-        constraints: vec![LinearConstraint {
-            coeffs: vec![0.0, 1.0, 1.0, 0.0, 0.0],
-            bound: 0.99,
-        }],
-    };
+    let domain = Domain::cell_study();
     let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, 200);
     let (train, check) = training_and_checking(&domain, n, 200, 42, 30, 1e-6)?;
     let unit = |x: &Vec<f64>| -> Vec<f64> {

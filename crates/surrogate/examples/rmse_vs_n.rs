@@ -5,7 +5,7 @@
 //! `cargo run --release -p nlvid-surrogate --example rmse_vs_n [-- N1 N2 …]`
 
 use nlvid_surrogate::check::summarise;
-use nlvid_surrogate::doe::{Axis, Domain, LinearConstraint, training_and_checking};
+use nlvid_surrogate::doe::{Domain, training_and_checking};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
     Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, OutputScale, Regression,
@@ -21,26 +21,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     } else {
         ns
     };
-    let ax = |name: &str, unit: &str, lower: f64, upper: f64, log: bool| Axis {
-        name: name.into(),
-        unit: unit.into(),
-        lower,
-        upper,
-        log,
-    };
-    let domain = Domain {
-        axes: vec![
-            ax("G0", "Pa", 100.0, 5000.0, true),
-            ax("g1", "1", 0.0, 0.9, false),
-            ax("g2", "1", 0.0, 0.9, false),
-            ax("tau1", "s", 0.01, 1.0, true),
-            ax("tau2", "s", 1.0, 100.0, true),
-        ],
-        constraints: vec![LinearConstraint {
-            coeffs: vec![0.0, 1.0, 1.0, 0.0, 0.0],
-            bound: 0.99,
-        }],
-    };
+    let domain = Domain::cell_study();
     let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, 200);
     let n_check = 200;
     println!("model: {}", model.identity());

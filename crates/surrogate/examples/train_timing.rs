@@ -7,7 +7,7 @@
 
 use std::time::Instant;
 
-use nlvid_surrogate::doe::{Axis, Domain, LinearConstraint, SampleSettings, sample};
+use nlvid_surrogate::doe::{Domain, SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
     Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, Regression, ThetaSearch,
@@ -37,26 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     let n = args.first().copied().unwrap_or(1000);
     let m = args.get(1).copied().unwrap_or(5095);
-    let ax = |name: &str, lower: f64, upper: f64, log: bool| Axis {
-        name: name.into(),
-        unit: String::new(),
-        lower,
-        upper,
-        log,
-    };
-    let domain = Domain {
-        axes: vec![
-            ax("G0", 100.0, 5000.0, true),
-            ax("g1", 0.0, 0.9, false),
-            ax("g2", 0.0, 0.9, false),
-            ax("tau1", 0.01, 1.0, true),
-            ax("tau2", 1.0, 100.0, true),
-        ],
-        constraints: vec![LinearConstraint {
-            coeffs: vec![0.0, 1.0, 1.0, 0.0, 0.0],
-            bound: 0.99,
-        }],
-    };
+    let domain = Domain::cell_study();
     let t0 = Instant::now();
     let design = sample(
         &domain,

@@ -53,6 +53,39 @@ pub struct Domain {
 pub type Design = Vec<Vec<f64>>;
 
 impl Domain {
+    /// The 5-parameter cell domain of the accuracy and timing studies
+    /// (docs/theory/surrogate.md): G0 ∈ [100, 5000] Pa (log), g1, g2 ∈
+    /// [0, 0.9], τ1 ∈ [0.01, 1] s (log), τ2 ∈ [1, 100] s (log), with
+    /// g1 + g2 ≤ 0.99; parameter order as [`crate::PRONY2_NAMES`].
+    pub fn cell_study() -> Self {
+        let bounds = [
+            (100.0, 5000.0, true),
+            (0.0, 0.9, false),
+            (0.0, 0.9, false),
+            (0.01, 1.0, true),
+            (1.0, 100.0, true),
+        ];
+        let axes = crate::PRONY2_NAMES
+            .iter()
+            .zip(crate::PRONY2_UNITS)
+            .zip(bounds)
+            .map(|((name, unit), (lower, upper, log))| Axis {
+                name: (*name).into(),
+                unit: unit.into(),
+                lower,
+                upper,
+                log,
+            })
+            .collect();
+        Self {
+            axes,
+            constraints: vec![LinearConstraint {
+                coeffs: vec![0.0, 1.0, 1.0, 0.0, 0.0],
+                bound: 0.99,
+            }],
+        }
+    }
+
     /// Check bounds and constraint shapes.
     ///
     /// # Errors
