@@ -1,10 +1,30 @@
 //! `model = "hertz-prony"`: the analytic Lee–Radok ramp-hold model of the
-//! surrogate crate ([`HertzProny`]) with every setting from the study.
+//! surrogate crate ([`HertzProny`]) with every setting from the study, on
+//! an equally spaced output grid or on a graded one (dense ramp, optionally
+//! log-spaced hold) that resolves a fast ramp and fast relaxation with few
+//! points.
 
 use nlvid_study::{Bounds, Dimension, Section};
-use nlvid_surrogate::HertzProny;
+use nlvid_surrogate::{ForwardModel, HertzProny, RunFailure};
 
 use crate::error::Result;
+
+/// How the output times are placed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum HertzGrid {
+    /// `points` equally spaced times in (0, ramp + hold].
+    Uniform,
+    /// `ramp_points` equally spaced times in (0, ramp], the other
+    /// `points − ramp_points` in (ramp, ramp + hold]: equally spaced, or,
+    /// with `first_hold_step`, log-spaced in t − ramp from `first_hold_step`
+    /// to `hold` (as `nlvid_inverse::ramp_hold_grid`).
+    Graded {
+        /// Output times on the ramp.
+        ramp_points: usize,
+        /// First time after the ramp's end [s] of a log-spaced hold.
+        first_hold_step: Option<f64>,
+    },
+}
 
 /// Settings of the analytic linear-viscoelastic Hertz ramp-hold model.
 #[derive(Debug, Clone, PartialEq)]
@@ -17,8 +37,10 @@ pub struct HertzPronySpec {
     pub ramp: f64,
     /// Hold duration after the ramp [s].
     pub hold: f64,
-    /// Output points m, equally spaced in (0, ramp + hold].
+    /// Output points m.
     pub points: usize,
+    /// Where the m output times are.
+    pub grid: HertzGrid,
 }
 
 impl HertzPronySpec {
@@ -31,32 +53,305 @@ impl HertzPronySpec {
             ramp: 1.0,
             hold: 9.0,
             points,
+            grid: HertzGrid::Uniform,
         }
     }
 
-    /// Reads `probe_radius`, `rate`, `ramp`, `hold`, `points` from `[forward]`.
+    /// Reads `probe_radius`, `rate`, `ramp`, `hold`, `points` and the
+    /// optional `ramp_points`, `first_hold_step` from `[forward]`.
     ///
     /// # Errors
     /// Missing key, wrong unit or out-of-range value (file, line, key).
     pub fn from_section(s: &mut Section) -> Result<Self> {
         let pos = Bounds::positive();
+        let probe_radius = s.req_quantity("probe_radius", Dimension::LENGTH, pos)?;
+        let rate = s.req_quantity("rate", Dimension::VELOCITY, pos)?;
+        let ramp = s.req_quantity("ramp", Dimension::TIME, pos)?;
+        let hold = s.req_quantity("hold", Dimension::TIME, Bounds::non_negative())?;
+        let points = s.req_usize("points", Bounds::closed(2.0, 1e7))?;
+        let ramp_points = s.opt_usize("ramp_points", Bounds::closed(1.0, 1e7))?;
+        let first_hold_step = s.opt_quantity("first_hold_step", Dimension::TIME, pos)?;
+        let grid = match (ramp_points, first_hold_step) {
+            (None, None) => HertzGrid::Uniform,
+            (None, Some(_)) => {
+                return Err(s
+                    .invalid(
+                        "first_hold_step",
+                        "a log-spaced hold needs `ramp_points` too (output times on the ramp)",
+                    )
+                    .into());
+            }
+            (Some(r), first) => {
+                let hold_points = points.saturating_sub(r);
+                let min_hold = if first.is_some() { 2 } else { 1 };
+                if hold_points < min_hold || hold <= 0.0 {
+                    return Err(s
+                        .invalid(
+                            "ramp_points",
+                            format!(
+                                "{r} of the {points} points on the ramp leaves {hold_points} for \
+                                 a hold of {hold} s: the hold needs at least {min_hold} (raise \
+                                 `points` or lower `ramp_points`)"
+                            ),
+                        )
+                        .into());
+                }
+                if let Some(f) = first.filter(|&f| f >= hold) {
+                    return Err(s
+                        .invalid(
+                            "first_hold_step",
+                            format!("{f} s is not shorter than the hold ({hold} s)"),
+                        )
+                        .into());
+                }
+                HertzGrid::Graded {
+                    ramp_points: r,
+                    first_hold_step: first,
+                }
+            }
+        };
         Ok(Self {
-            probe_radius: s.req_quantity("probe_radius", Dimension::LENGTH, pos)?,
-            rate: s.req_quantity("rate", Dimension::VELOCITY, pos)?,
-            ramp: s.req_quantity("ramp", Dimension::TIME, pos)?,
-            hold: s.req_quantity("hold", Dimension::TIME, Bounds::non_negative())?,
-            points: s.req_usize("points", Bounds::closed(2.0, 1e7))?,
+            probe_radius,
+            rate,
+            ramp,
+            hold,
+            points,
+            grid,
         })
     }
 
+    /// The output times: (0, ramp + hold], increasing, ending at ramp + hold.
+    pub fn times(&self) -> Vec<f64> {
+        let end = self.ramp + self.hold;
+        let uniform = |start: f64, length: f64, n: usize| {
+            (1..=n).map(move |i| start + length * i as f64 / n as f64)
+        };
+        match self.grid {
+            HertzGrid::Uniform => uniform(0.0, end, self.points).collect(),
+            HertzGrid::Graded {
+                ramp_points,
+                first_hold_step,
+            } => {
+                let n_hold = self.points - ramp_points;
+                let mut t: Vec<f64> = uniform(0.0, self.ramp, ramp_points).collect();
+                match first_hold_step {
+                    None => t.extend(uniform(self.ramp, self.hold, n_hold)),
+                    Some(first) => {
+                        let (l0, l1) = (first.ln(), self.hold.ln());
+                        t.extend((0..n_hold - 1).map(|j| {
+                            self.ramp + (l0 + (l1 - l0) * j as f64 / (n_hold - 1) as f64).exp()
+                        }));
+                        t.push(end);
+                    }
+                }
+                t
+            }
+        }
+    }
+
     /// The model.
-    pub fn build(&self) -> HertzProny {
-        HertzProny::new(
+    pub fn build(&self) -> HertzPronyModel {
+        let uniform = HertzProny::new(
             self.probe_radius,
             self.rate,
             self.ramp,
             self.ramp + self.hold,
             self.points,
-        )
+        );
+        let graded = match self.grid {
+            HertzGrid::Uniform => None,
+            HertzGrid::Graded {
+                ramp_points,
+                first_hold_step,
+            } => {
+                let times = self.times();
+                // One single-time model per output time: the same quadrature
+                // as the uniform model, evaluated at exactly t_i.
+                let at = times
+                    .iter()
+                    .map(|&t| HertzProny::new(self.probe_radius, self.rate, self.ramp, t, 1))
+                    .collect();
+                let hold = match first_hold_step {
+                    None => "uniform".to_string(),
+                    Some(f) => format!("log from {f:e}"),
+                };
+                Some(Graded {
+                    identity: format!(
+                        "{}+grid(ramp_points={ramp_points},hold={hold})",
+                        uniform.identity()
+                    ),
+                    times,
+                    at,
+                })
+            }
+        };
+        HertzPronyModel { uniform, graded }
+    }
+}
+
+/// [`HertzProny`] on the grid of a [`HertzPronySpec`]. On the uniform grid
+/// it is exactly `HertzProny` (same times, forces and identity).
+#[derive(Debug, Clone)]
+pub struct HertzPronyModel {
+    uniform: HertzProny,
+    graded: Option<Graded>,
+}
+
+#[derive(Debug, Clone)]
+struct Graded {
+    times: Vec<f64>,
+    at: Vec<HertzProny>,
+    identity: String,
+}
+
+impl ForwardModel for HertzPronyModel {
+    fn parameter_names(&self) -> Vec<String> {
+        self.uniform.parameter_names()
+    }
+    fn parameter_units(&self) -> Vec<String> {
+        self.uniform.parameter_units()
+    }
+    fn time_grid(&self) -> &[f64] {
+        match &self.graded {
+            None => self.uniform.time_grid(),
+            Some(g) => &g.times,
+        }
+    }
+    fn identity(&self) -> String {
+        match &self.graded {
+            None => self.uniform.identity(),
+            Some(g) => g.identity.clone(),
+        }
+    }
+    fn run(&self, params: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
+        let Some(g) = &self.graded else {
+            return self.uniform.run(params);
+        };
+        let mut f = Vec::with_capacity(g.times.len());
+        for m in &g.at {
+            f.extend(m.run(params)?);
+        }
+        Ok(f)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nlvid_study::Study;
+
+    const BASE: &str = r#"
+[forward]
+model = "hertz-prony"
+probe_radius = "2.5 um"
+rate = "10 um/s"
+ramp = "0.2 s"
+hold = "1.8 s"
+points = 10
+"#;
+
+    fn spec(extra: &str) -> std::result::Result<HertzPronySpec, String> {
+        let mut st =
+            Study::parse("s.toml", &format!("{BASE}{extra}")).map_err(|e| e.to_string())?;
+        let mut s = st.section("forward").map_err(|e| e.to_string())?;
+        s.skip("model");
+        let spec = HertzPronySpec::from_section(&mut s).map_err(|e| e.to_string())?;
+        s.finish().map_err(|e| e.to_string())?;
+        Ok(spec)
+    }
+
+    #[test]
+    fn log_graded_grid_is_uniform_on_the_ramp_and_geometric_on_the_hold() {
+        let s = spec("ramp_points = 4\nfirst_hold_step = \"1 ms\"\n").unwrap();
+        let t = s.times();
+        assert_eq!(t.len(), 10);
+        for (i, want) in [0.05, 0.1, 0.15, 0.2].iter().enumerate() {
+            assert!((t[i] - want).abs() < 1e-15, "t[{i}] = {}", t[i]);
+        }
+        // t − ramp = 1 ms · r^j, r = (1.8 s / 1 ms)^(1/5), j = 0 … 5.
+        let r = (1.8f64 / 1e-3).powf(0.2);
+        for j in 0..6 {
+            let want = 0.2 + 1e-3 * r.powi(j);
+            assert!(
+                (t[4 + j as usize] / want - 1.0).abs() < 1e-12,
+                "hold point {j}"
+            );
+        }
+        assert_eq!(t[9], 2.0);
+        assert!(t.windows(2).all(|w| w[1] > w[0]));
+    }
+
+    #[test]
+    fn graded_forces_are_the_uniform_models_at_the_same_times_and_hertz_when_elastic() {
+        // Uniform hold: times 0.1, 0.2 | 0.4, 0.6, …, 2.0 — every one a time
+        // of the 20-point uniform model.
+        let graded = spec("ramp_points = 2\n").unwrap();
+        assert_eq!(graded.times().len(), 11 - 1);
+        let model = HertzPronySpec {
+            points: 11,
+            ..graded.clone()
+        }
+        .build();
+        let uniform = HertzProny::new(2.5e-6, 10e-6, 0.2, 2.0, 20);
+        let p = [1500.0, 0.4, 0.3, 0.03, 5.0];
+        let (fg, fu) = (model.run(&p).unwrap(), uniform.run(&p).unwrap());
+        assert_eq!(model.time_grid().len(), 11);
+        for (t, f) in model.time_grid().iter().zip(&fg) {
+            let i = uniform
+                .time_grid()
+                .iter()
+                .position(|u| (u - t).abs() < 1e-12)
+                .unwrap_or_else(|| panic!("{t} not on the uniform grid"));
+            assert!((f / fu[i] - 1.0).abs() < 1e-12, "t = {t}: {f} vs {}", fu[i]);
+        }
+        // g1 = g2 = 0: F = (16/3) G0 √R δ^{3/2}, δ = v·min(t, ramp).
+        let log = spec("ramp_points = 4\nfirst_hold_step = \"1 ms\"\n")
+            .unwrap()
+            .build();
+        let f = log.run(&[1500.0, 0.0, 0.0, 0.03, 5.0]).unwrap();
+        for (t, f) in log.time_grid().iter().zip(&f) {
+            let delta = 10e-6 * t.min(0.2);
+            let hertz = 16.0 / 3.0 * 1500.0 * 2.5e-6f64.sqrt() * delta.powf(1.5);
+            assert!((f / hertz - 1.0).abs() < 1e-10, "t = {t}: {f} vs {hertz}");
+        }
+    }
+
+    #[test]
+    fn the_grid_is_part_of_the_identity_and_the_uniform_model_is_unchanged() {
+        let uniform = spec("").unwrap().build();
+        let plain = HertzProny::new(2.5e-6, 10e-6, 0.2, 2.0, 10);
+        assert_eq!(uniform.identity(), plain.identity());
+        assert_eq!(uniform.time_grid(), plain.time_grid());
+        let ids = [
+            "ramp_points = 4\n",
+            "ramp_points = 5\n",
+            "ramp_points = 4\nfirst_hold_step = \"1 ms\"\n",
+            "ramp_points = 4\nfirst_hold_step = \"2 ms\"\n",
+        ]
+        .map(|e| spec(e).unwrap().build().identity());
+        for (i, a) in ids.iter().enumerate() {
+            assert_ne!(a, &plain.identity());
+            for b in &ids[i + 1..] {
+                assert_ne!(a, b);
+            }
+        }
+    }
+
+    #[test]
+    fn bad_grids_name_the_key() {
+        let e = spec("first_hold_step = \"1 ms\"\n").unwrap_err();
+        assert!(
+            e.contains("forward.first_hold_step") && e.contains("needs `ramp_points`"),
+            "{e}"
+        );
+        let e = spec("ramp_points = 10\n").unwrap_err();
+        assert!(
+            e.contains("s.toml:9") && e.contains("forward.ramp_points"),
+            "{e}"
+        );
+        let e = spec("ramp_points = 9\nfirst_hold_step = \"1 ms\"\n").unwrap_err();
+        assert!(e.contains("leaves 1 for a hold"), "{e}");
+        let e = spec("ramp_points = 4\nfirst_hold_step = \"2 s\"\n").unwrap_err();
+        assert!(e.contains("not shorter than the hold"), "{e}");
     }
 }

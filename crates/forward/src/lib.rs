@@ -56,7 +56,7 @@ use nlvid_surrogate::{ForwardModel, RunFailure};
 
 pub use afm_fe::{AfmFeModel, AfmFeSpec, fem_failure};
 pub use error::{ForwardError, Result};
-pub use hertz::HertzPronySpec;
+pub use hertz::{HertzGrid, HertzPronyModel, HertzPronySpec};
 pub use membrane::{MembraneModel, MembraneSpec, membrane_failure};
 pub use nlvid_surrogate::HertzProny;
 
