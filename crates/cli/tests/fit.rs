@@ -1,7 +1,8 @@
 //! `nlvid fit` end to end, as a user runs it (examples/fit/run.sh):
 //! `nlvid sample` → `nlvid build` (training and checking runs of the
-//! analytic `hertz-prony` forward model) → `nlvid surrogate fit` →
-//! `nlvid --json surrogate check … > model.check.json` → synthetic AFM data
+//! analytic `hertz-prony` forward model) → `nlvid surrogate fit` (F/G0
+//! kriged in ln G0, ln τ: the options of docs/cli/fit.md) → `nlvid surrogate
+//! check` (saves `model.check.json` next to the model) → synthetic AFM data
 //! made with the same forward model at known parameters plus 2 % Gaussian
 //! noise → `nlvid fit`. Also: malformed data files (each error must name the
 //! file, the row and the column or time) and several experiments at once.
@@ -27,6 +28,12 @@ const END: f64 = 10.0;
 /// Cantilever k (N/m) and deflection sensitivity (m/V) of the synthetic data.
 const K: f64 = 1.0;
 const SENS: f64 = 50e-9;
+/// Noise of every synthetic curve: σ = 0.02 · peak force, additive.
+const NOISE: f64 = 0.02;
+/// The surrogate options of docs/cli/fit.md: the force of a linear
+/// viscoelastic model is ∝ G0 (krige F/G0), and G0, τ1, τ2 are designed on
+/// log axes (krige them in ln x).
+const SURROGATE_OPTIONS: [&str; 4] = ["--proportional-to", "G0", "--log-inputs", "G0,tau1,tau2"];
 
 fn nlvid(args: &[&str], cwd: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_nlvid"))
@@ -51,6 +58,54 @@ fn ok(out: &Output, what: &str) -> String {
     text(&out.stdout)
 }
 
+/// `nlvid ARGS` in `dir`, which must succeed; its stdout.
+fn run(dir: &Path, args: &[&str]) -> String {
+    ok(&nlvid(args, dir), &args.join(" "))
+}
+
+/// `nlvid surrogate fit` on `train`/X.csv, Y.csv (poly1, gauss,
+/// [`SURROGATE_OPTIONS`]) into `model`, then `nlvid --json surrogate check`
+/// on `check`/X.csv, Y.csv, which must save its summary as
+/// `<model stem>.check.json` (what `nlvid fit` reads) and print the same.
+fn fit_and_check(dir: &Path, train: &str, check: &str, model: &str) -> serde_json::Value {
+    let (x, y) = (format!("{train}/X.csv"), format!("{train}/Y.csv"));
+    let mut args = vec![
+        "surrogate",
+        "fit",
+        "--x",
+        &x,
+        "--y",
+        &y,
+        "--regression",
+        "poly1",
+        "--correlation",
+        "gauss",
+        "-o",
+        model,
+    ];
+    args.extend(SURROGATE_OPTIONS);
+    run(dir, &args);
+    let (cx, cy) = (format!("{check}/X.csv"), format!("{check}/Y.csv"));
+    let printed = run(
+        dir,
+        &[
+            "--json",
+            "surrogate",
+            "check",
+            model,
+            "--x",
+            &cx,
+            "--y",
+            &cy,
+        ],
+    );
+    let saved = dir.join(Path::new(model).with_extension("check.json"));
+    let file = std::fs::read_to_string(&saved)
+        .unwrap_or_else(|e| panic!("{}: not saved by surrogate check: {e}", saved.display()));
+    assert_eq!(file.trim_end(), printed.trim_end());
+    serde_json::from_str(&file).unwrap()
+}
+
 /// The shared surrogate: directory with work/model.json,
 /// work/model.check.json, work/export/meta.json.
 fn pipeline() -> &'static Path {
@@ -63,20 +118,22 @@ fn pipeline() -> &'static Path {
             env!("CARGO_MANIFEST_DIR"),
             "/../../examples/fit/domain.toml"
         );
-        let run = |args: &[&str]| ok(&nlvid(args, &dir), &args.join(" "));
-        run(&[
-            "sample",
-            "--domain",
-            domain,
-            "-n",
-            "200",
-            "--check",
-            "40",
-            "--seed",
-            "1",
-            "--out",
-            "work/design",
-        ]);
+        run(
+            &dir,
+            &[
+                "sample",
+                "--domain",
+                domain,
+                "-n",
+                "200",
+                "--check",
+                "40",
+                "--seed",
+                "1",
+                "--out",
+                "work/design",
+            ],
+        );
         for (design, store, export) in [
             ("work/design/train.csv", "work/store", "work/export"),
             (
@@ -85,48 +142,68 @@ fn pipeline() -> &'static Path {
                 "work/export-check",
             ),
         ] {
-            run(&[
-                "build",
-                "--design",
-                design,
-                "--model",
-                "hertz-prony",
-                "--points",
-                "100",
-                "--store",
-                store,
-                "--export",
-                export,
-                "--quiet",
-            ]);
+            run(
+                &dir,
+                &[
+                    "build",
+                    "--design",
+                    design,
+                    "--model",
+                    "hertz-prony",
+                    "--points",
+                    "100",
+                    "--store",
+                    store,
+                    "--export",
+                    export,
+                    "--quiet",
+                ],
+            );
         }
-        run(&[
-            "surrogate",
-            "fit",
-            "--x",
-            "work/export/X.csv",
-            "--y",
-            "work/export/Y.csv",
-            "--regression",
-            "poly1",
-            "--correlation",
-            "gauss",
-            "-o",
-            "work/model.json",
-        ]);
-        let check = run(&[
-            "--json",
-            "surrogate",
-            "check",
-            "work/model.json",
-            "--x",
-            "work/export-check/X.csv",
-            "--y",
-            "work/export-check/Y.csv",
-        ]);
-        std::fs::write(dir.join("work/model.check.json"), check).unwrap();
+        fit_and_check(&dir, "work/export", "work/export-check", "work/model.json");
         dir
     })
+}
+
+/// A build study (`nlvid build <study>`: [forward], Table 5.3 [design],
+/// [build]) in `dir`/build.toml, built, with its surrogate `model.json`
+/// fitted and checked; returns the checking summary.
+fn build_from_study(dir: &Path, title: &str, forward: &str, n_train: usize) -> serde_json::Value {
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::write(
+        dir.join("build.toml"),
+        format!(
+            r#"title = "{title}"
+
+[forward]
+model = "hertz-prony"
+{forward}
+[design]
+n_train = {n_train}
+n_check = 40
+seed = 1
+ese = true
+
+[design.parameters]
+G0 = {{ range = ["80 Pa", "4 kPa"], log = true }}
+g1 = {{ range = [0.01, 1.0] }}
+g2 = {{ range = [0.01, 1.0] }}
+tau1 = {{ range = ["0.01 s", "2 s"], log = true }}
+tau2 = {{ range = ["2 s", "40 s"], log = true }}
+
+[[design.constraint]]
+coefficients = {{ g1 = 1, g2 = 1 }}
+at_most = 0.99
+
+[build]
+store = "store"
+export = "export"
+"#
+        ),
+    )
+    .unwrap();
+    run(dir, &["build", "build.toml", "--quiet"]);
+    fit_and_check(dir, "export/train", "export/check", "model.json")
 }
 
 /// SplitMix64 + Box–Muller: seeded standard normal numbers (no dependency).
@@ -147,9 +224,13 @@ impl Normal {
     }
 }
 
-/// Clean force at t = 0, 0.01, …, 10 s from the forward model itself.
-fn clean_force(truth: &[f64; 5]) -> (Vec<f64>, Vec<f64>) {
-    let model = HertzProny::new(RADIUS, RATE, RAMP, END, 1000);
+/// The data model of the 10-s build protocol: t = 0.01, …, 10 s.
+fn data_model() -> HertzProny {
+    HertzProny::new(RADIUS, RATE, RAMP, END, 1000)
+}
+
+/// Clean force of `model` at `truth`, with t = 0 (F = 0) prepended.
+fn clean_force(model: &HertzProny, truth: &[f64; 5]) -> (Vec<f64>, Vec<f64>) {
     let mut t = vec![0.0];
     t.extend_from_slice(model.time_grid());
     let mut f = vec![0.0];
@@ -157,17 +238,23 @@ fn clean_force(truth: &[f64; 5]) -> (Vec<f64>, Vec<f64>) {
     (t, f)
 }
 
-/// AFM CSV text (time [s], piezo [um], deflection [V]) of the truth with
-/// Gaussian noise of `noise` × peak force; the piezo ramps at `rate` for
-/// `ramp` s (the model's δ stays the build protocol's: this only changes
-/// the recorded piezo, for protocol-mismatch tests).
-fn afm_csv(truth: &[f64; 5], noise: f64, seed: u64, rate: f64, ramp: f64) -> String {
-    let (t, f) = clean_force(truth);
+/// AFM CSV text (time [s], piezo [um], deflection [V]) of `model` at
+/// `truth` with Gaussian noise of [`NOISE`] × peak force (seed `seed`); the
+/// piezo ramps at `rate` for `ramp` s (the model's δ stays its own: other
+/// values only change the recorded piezo, for protocol-mismatch tests).
+fn afm_csv_with_piezo(
+    model: &HertzProny,
+    truth: &[f64; 5],
+    seed: u64,
+    rate: f64,
+    ramp: f64,
+) -> String {
+    let (t, f) = clean_force(model, truth);
     let peak = f.iter().copied().fold(0.0, f64::max);
     let mut rng = Normal(seed);
     let mut s = String::from("time [s],piezo [um],deflection [V]\n");
     for (t, f) in t.iter().zip(&f) {
-        let force = f + noise * peak * rng.sample();
+        let force = f + NOISE * peak * rng.sample();
         let d = force / K;
         let z = rate * t.min(ramp) + d;
         s.push_str(&format!("{t:.4},{:.9},{:.9}\n", z * 1e6, d / SENS));
@@ -175,7 +262,42 @@ fn afm_csv(truth: &[f64; 5], noise: f64, seed: u64, rate: f64, ramp: f64) -> Str
     s
 }
 
-/// The study of examples/fit with absolute surrogate paths; `extra` is
+/// [`afm_csv_with_piezo`] with the model's own ramp.
+fn afm_csv_of(model: &HertzProny, truth: &[f64; 5], seed: u64) -> String {
+    afm_csv_with_piezo(model, truth, seed, model.rate, model.ramp_time)
+}
+
+/// [`afm_csv_of`] the 10-s build protocol.
+fn afm_csv(truth: &[f64; 5], seed: u64) -> String {
+    afm_csv_of(&data_model(), truth, seed)
+}
+
+/// (time, force) of every row of an AFM CSV written here.
+fn csv_force(csv: &str) -> Vec<(f64, f64)> {
+    csv.lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
+            (f[0], f[2] * SENS * K)
+        })
+        .collect()
+}
+
+/// The data at the times of `grid`, linearly interpolated (as `nlvid fit`
+/// resamples; exact where the times coincide).
+fn on_grid(rows: &[(f64, f64)], grid: &[f64]) -> Vec<f64> {
+    grid.iter()
+        .map(|&g| {
+            let i = rows
+                .partition_point(|(t, _)| *t < g)
+                .clamp(1, rows.len() - 1);
+            let ((t0, f0), (t1, f1)) = (rows[i - 1], rows[i]);
+            f0 + (f1 - f0) * (g - t0) / (t1 - t0)
+        })
+        .collect()
+}
+
+/// The study of examples/fit with absolute surrogate paths; `fit_extra` is
 /// appended inside [fit] (before the sub-tables).
 fn study(name: &str, fit_extra: &str, calibration: &str, tail: &str) -> PathBuf {
     let dir = pipeline();
@@ -210,6 +332,21 @@ spring_constant = "1 N/m"
     p
 }
 
+/// [`study`] with `experiments` (`[[fit.experiment]]` tables) instead of
+/// the single surrogate of [fit].
+fn multi_study(name: &str, experiments: &str) -> PathBuf {
+    let w = pipeline().join("work");
+    let base = std::fs::read_to_string(study(name, "", SENSITIVITY, "")).unwrap();
+    let head = format!(
+        "surrogate = \"{0}/model.json\"\nmeta = \"{0}/export/meta.json\"\n",
+        w.display()
+    );
+    assert!(base.contains(&head));
+    let p = pipeline().join(name);
+    std::fs::write(&p, base.replace(&head, "") + experiments).unwrap();
+    p
+}
+
 const SENSITIVITY: &str = r#"deflection_sensitivity = "50 nm/V""#;
 const PROTOCOL: &str = r#"
 [fit.protocol]
@@ -224,6 +361,14 @@ poisson = 0.5
 
 fn json(out: &Output) -> serde_json::Value {
     serde_json::from_str(&ok(out, "fit")).expect("one JSON document on stdout")
+}
+
+/// `nlvid --json fit STUDY FILE [EXTRA…]` in `dir`, which must succeed.
+fn fit_json(dir: &Path, study: &Path, files: &[&str], extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["--json", "fit", study.to_str().unwrap()];
+    args.extend(files);
+    args.extend(extra);
+    json(&nlvid(&args, dir))
 }
 
 /// G(t) = G0 (1 − g1 − g2 + g1 e^{−t/τ1} + g2 e^{−t/τ2}), hertz-prony order.
@@ -242,6 +387,20 @@ fn value(doc: &serde_json::Value, name: &str) -> f64 {
         .unwrap()
 }
 
+/// The fitted parameters in the hertz-prony order.
+fn fitted(doc: &serde_json::Value) -> [f64; 5] {
+    ["G0", "g1", "g2", "tau1", "tau2"].map(|n| value(doc, n))
+}
+
+/// G(t) of `x` within 5 % of the truth at t = 1, 2, 5, 10 s (the hold of
+/// the 10-s protocol).
+fn assert_hold_modulus_recovered(x: &[f64; 5]) {
+    for t in [1.0, 2.0, 5.0, 10.0] {
+        let (a, b) = (shear(x, t), shear(&TRUTH, t));
+        assert!((a / b - 1.0).abs() <= 0.05, "G({t} s): {a} vs truth {b}");
+    }
+}
+
 /// Eq. 5.3 computed here, independently of nlvid.
 fn rmse_over_range(model: &[f64], data: &[f64]) -> f64 {
     let lo = data.iter().copied().fold(f64::INFINITY, f64::min);
@@ -250,23 +409,27 @@ fn rmse_over_range(model: &[f64], data: &[f64]) -> f64 {
     (ss / data.len() as f64).sqrt() / (hi - lo)
 }
 
+/// Eq. 5.3 of `model` at `x` against the force of an AFM CSV resampled
+/// onto the model's grid.
+fn misfit_of(model: &dyn ForwardModel, x: &[f64; 5], csv: &str) -> f64 {
+    let data = on_grid(&csv_force(csv), model.time_grid());
+    rmse_over_range(&model.run(x).unwrap(), &data)
+}
+
+/// Eq. 5.3 of the forward model at TRUTH (ramp at `rate` for 1 s) against
+/// the force in an AFM CSV, on the surrogate grid (0.1 … 10 s).
+fn misfit_at_truth(csv: &Path, rate: f64) -> f64 {
+    let model = HertzProny::new(RADIUS, rate, RAMP, END, 100);
+    misfit_of(&model, &TRUTH, &std::fs::read_to_string(csv).unwrap())
+}
+
 #[test]
 fn fit_recovers_the_truth_and_reports_units_modulus_misfits_flags_and_a_plotters_svg() {
     let dir = pipeline();
-    std::fs::write(dir.join("cell1.csv"), afm_csv(&TRUTH, 0.02, 6, RATE, RAMP)).unwrap();
+    let csv = afm_csv(&TRUTH, 6);
+    std::fs::write(dir.join("cell1.csv"), &csv).unwrap();
     let study = study("e2e.toml", "", SENSITIVITY, PROTOCOL);
-    let out = nlvid(
-        &[
-            "--json",
-            "fit",
-            study.to_str().unwrap(),
-            "cell1.csv",
-            "--plot",
-            "plots",
-        ],
-        dir,
-    );
-    let doc = json(&out);
+    let doc = fit_json(dir, &study, &["cell1.csv"], &["--plot", "plots"]);
 
     // Parameters with units, in the Table 5.3 order.
     let units: Vec<(String, String)> = doc["parameters"]
@@ -292,13 +455,7 @@ fn fit_recovers_the_truth_and_reports_units_modulus_misfits_flags_and_a_plotters
         assert_eq!(n, wn);
         assert!(u == wu || (wu.is_empty() && u == "1"), "{n}: unit {u}");
     }
-    let fitted = [
-        value(&doc, "G0"),
-        value(&doc, "g1"),
-        value(&doc, "g2"),
-        value(&doc, "tau1"),
-        value(&doc, "tau2"),
-    ];
+    let fitted = fitted(&doc);
 
     // G(t), E(t) table on the requested times, E = 3G, consistent with the
     // reported parameters.
@@ -317,22 +474,17 @@ fn fit_recovers_the_truth_and_reports_units_modulus_misfits_flags_and_a_plotters
     // than the 1-s ramp) poorly: the fit's own identifiability analysis
     // gives G0 a 95 % half-width far above 5 % here, so the issue's "G0
     // within 5 %" is not a property of this small protocol (see
-    // docs/theory/inverse.md). Asserted: G(t) within 5 % on the hold,
-    // |Δ(g1 + g2)| ≤ 0.03, and the truth of every parameter inside the
-    // reported 95 % interval.
-    for t in [1.0, 2.0, 5.0, 10.0] {
-        let (a, b) = (shear(&fitted, t), shear(&TRUTH, t));
-        assert!((a / b - 1.0).abs() <= 0.05, "G({t} s): {a} vs truth {b}");
-    }
+    // docs/theory/inverse.md and the thesis-like test below). Asserted:
+    // G(t) within 5 % on the hold, |Δ(g1 + g2)| ≤ 0.03, G0 within a
+    // sanity bound.
+    assert_hold_modulus_recovered(&fitted);
     // Holds for this case (the issue's 0.03); not in general with a 10-s
-    // hold — see the ten-case test, |Δ| up to 0.12.
+    // hold — see the ten-case test.
     let sum = fitted[1] + fitted[2];
     assert!((sum - 0.65).abs() <= 0.03, "g1 + g2 = {sum}");
-    // G0 is a sanity bound only (measured: −12.8 %): the surrogate's own
-    // error (max checking error ≈ 34 % at N = 200) biases it, and the
-    // reported 95 % interval (±7.7 %, surrogate error not included) does
-    // not contain the truth here — the report must not be read as more
-    // than it is. The issue's 5 % needs a better surrogate and more data.
+    // G0 is a sanity bound only: the 1-s ramp does not pin it down (see the
+    // reported 95 % interval); the issue's 5 % needs the thesis's fast
+    // ramp (thesis-like test).
     assert!(
         (fitted[0] / TRUTH[0] - 1.0).abs() <= 0.2,
         "G0 = {}",
@@ -346,35 +498,19 @@ fn fit_recovers_the_truth_and_reports_units_modulus_misfits_flags_and_a_plotters
     }
 
     // Misfits: the real model re-run at the optimum reproduces the data as
-    // well as the truth does, up to the surrogate's typical error (median
-    // checking error ≈ 1.4 % added in quadrature to the 2 % noise: ≤ 1.25×).
+    // well as the truth does, up to the surrogate's typical error (≤ 1.25×).
     let exp = &doc["experiments"][0];
     let real = exp["misfit_real"].as_f64().unwrap();
     let sur = exp["misfit_surrogate"].as_f64().unwrap();
-    let (t, f_clean) = clean_force(&TRUTH);
-    let csv = afm_csv(&TRUTH, 0.02, 6, RATE, RAMP);
-    let noisy: Vec<f64> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').nth(2).unwrap().parse::<f64>().unwrap() * SENS * K)
-        .collect();
-    let grid = HertzProny::new(RADIUS, RATE, RAMP, END, 100)
-        .time_grid()
-        .to_vec();
-    let on_grid = |v: &[f64]| -> Vec<f64> {
-        grid.iter()
-            .map(|g| v[t.iter().position(|x| (x - g).abs() < 1e-9).unwrap()])
-            .collect()
-    };
-    let at_truth = rmse_over_range(&on_grid(&f_clean), &on_grid(&noisy));
+    let at_truth = misfit_at_truth(&dir.join("cell1.csv"), RATE);
     assert!((0.015..0.025).contains(&at_truth), "noise level {at_truth}");
     assert!(real <= 1.25 * at_truth, "real {real} vs truth {at_truth}");
     assert!(sur > 0.0 && sur < 0.05, "surrogate misfit {sur}");
     assert_eq!(doc["misfit_surrogate"][0].as_f64().unwrap(), sur);
     assert_eq!(doc["misfit_real"][0].as_f64().unwrap(), real);
 
-    // Checking error: read from model.check.json (written by `nlvid --json
-    // surrogate check`), and the agreement verdict follows from the numbers.
+    // Checking error: read from model.check.json (saved by `nlvid surrogate
+    // check`), and the agreement verdict follows from the numbers.
     let check: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("work/model.check.json")).unwrap())
             .unwrap();
@@ -424,11 +560,7 @@ fn fit_recovers_the_truth_and_reports_units_modulus_misfits_flags_and_a_plotters
 #[test]
 fn text_report_says_whether_surrogate_and_real_misfits_agree_within_the_checking_error() {
     let dir = pipeline();
-    std::fs::write(
-        dir.join("cell-text.csv"),
-        afm_csv(&TRUTH, 0.02, 7, RATE, RAMP),
-    )
-    .unwrap();
+    std::fs::write(dir.join("cell-text.csv"), afm_csv(&TRUTH, 7)).unwrap();
     let study = study("e2e-text.toml", "", SENSITIVITY, PROTOCOL);
     let out = nlvid(&["fit", study.to_str().unwrap(), "cell-text.csv"], dir);
     let s = ok(&out, "fit");
@@ -453,31 +585,17 @@ fn without_a_checking_summary_the_agreement_is_unknown_and_says_how_to_get_one()
     let dir = pipeline();
     let copy = dir.join("work/model-nocheck.json");
     std::fs::copy(dir.join("work/model.json"), &copy).unwrap();
-    std::fs::write(
-        dir.join("cell-nc.csv"),
-        afm_csv(&TRUTH, 0.02, 8, RATE, RAMP),
-    )
-    .unwrap();
+    std::fs::write(dir.join("cell-nc.csv"), afm_csv(&TRUTH, 8)).unwrap();
     let s = study("e2e-nc.toml", "", SENSITIVITY, PROTOCOL);
     let text_in = std::fs::read_to_string(&s)
         .unwrap()
         .replace("model.json", "model-nocheck.json");
     std::fs::write(&s, text_in).unwrap();
-    let doc = json(&nlvid(
-        &[
-            "--json",
-            "fit",
-            s.to_str().unwrap(),
-            "cell-nc.csv",
-            "--starts",
-            "2",
-        ],
-        dir,
-    ));
+    let doc = fit_json(dir, &s, &["cell-nc.csv"], &["--starts", "2"]);
     assert_eq!(doc["surrogate_and_real_agree"], "unknown");
     let note = doc["experiments"][0]["agree_note"].as_str().unwrap();
     assert!(
-        note.contains("nlvid --json surrogate check") && note.contains("model-nocheck.check.json"),
+        note.contains("nlvid surrogate check") && note.contains("model-nocheck.check.json"),
         "{note}"
     );
 }
@@ -513,7 +631,7 @@ fn set_field(l: &str, k: usize, v: &str) -> String {
 
 #[test]
 fn malformed_data_fails_naming_the_file_row_and_column() {
-    let good = afm_csv(&TRUTH, 0.02, 6, RATE, RAMP);
+    let good = afm_csv(&TRUTH, 6);
     let study = study("e2e-bad.toml", "", SENSITIVITY, PROTOCOL);
 
     let missing = good.replacen("piezo [um]", "height [um]", 1);
@@ -601,7 +719,7 @@ fn protocol_mismatches_fail_naming_the_file_row_and_time() {
     let study = study("e2e-proto.toml", "", SENSITIVITY, PROTOCOL);
 
     // Duration: the file stops at 8 s (line 802) instead of 10 s.
-    let good = afm_csv(&TRUTH, 0.02, 6, RATE, RAMP);
+    let good = afm_csv(&TRUTH, 6);
     let short: String = good.lines().take(802).map(|l| format!("{l}\n")).collect();
     assert_fails(
         "bad-duration.csv",
@@ -614,7 +732,7 @@ fn protocol_mismatches_fail_naming_the_file_row_and_time() {
 
     // Rate: piezo at 2 µm/s for 0.5 s (same 1 µm amplitude): the first
     // sample more than 5 % of the amplitude off the expected ramp.
-    let fast = afm_csv(&TRUTH, 0.02, 6, 2.0 * RATE, 0.5 * RAMP);
+    let fast = afm_csv_with_piezo(&data_model(), &TRUTH, 6, 2.0 * RATE, 0.5 * RAMP);
     assert_fails(
         "bad-rate.csv",
         &fast,
@@ -626,7 +744,7 @@ fn protocol_mismatches_fail_naming_the_file_row_and_time() {
     );
 
     // Amplitude: 1.3 µm at 1.3 µm/s.
-    let deep = afm_csv(&TRUTH, 0.02, 6, 1.3 * RATE, RAMP);
+    let deep = afm_csv_with_piezo(&data_model(), &TRUTH, 6, 1.3 * RATE, RAMP);
     assert_fails(
         "bad-amplitude.csv",
         &deep,
@@ -639,16 +757,35 @@ fn protocol_mismatches_fail_naming_the_file_row_and_time() {
     );
 }
 
+/// Both `per_experiment` misfits of a fit of two curves and their sum, the
+/// objective.
+fn per_experiment_sum(doc: &serde_json::Value) -> Vec<f64> {
+    let per: Vec<f64> = doc["fit"]["best"]["per_experiment"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let total = doc["fit"]["best"]["misfit"].as_f64().unwrap();
+    assert_eq!(per.len(), 2);
+    assert!(
+        (per[0] + per[1] - total).abs() <= 1e-9 * total,
+        "{per:?} vs {total}"
+    );
+    per
+}
+
 #[test]
 fn several_experiments_are_fitted_with_one_parameter_set_and_summed_misfits() {
     let dir = pipeline();
     // Two curves of one cell at the same parameters (independent noise),
     // the second weighted ×4 on the ramp (segment weights).
-    std::fs::write(dir.join("rep-a.csv"), afm_csv(&TRUTH, 0.02, 11, RATE, RAMP)).unwrap();
-    std::fs::write(dir.join("rep-b.csv"), afm_csv(&TRUTH, 0.02, 12, RATE, RAMP)).unwrap();
-    let w = dir.join("work");
-    let experiments = format!(
-        r#"
+    std::fs::write(dir.join("rep-a.csv"), afm_csv(&TRUTH, 11)).unwrap();
+    std::fs::write(dir.join("rep-b.csv"), afm_csv(&TRUTH, 12)).unwrap();
+    let multi = multi_study(
+        "e2e-multi.toml",
+        &format!(
+            r#"
 [[fit.experiment]]
 label = "first"
 surrogate = "{w}/model.json"
@@ -664,48 +801,17 @@ protocol = {{ rate = "1 um/s", amplitude = "1 um" }}
 real_model = {{ model = "lee-radok", radius = "5 um" }}
 segment = [{{ start = "0 s", end = "1 s", weight = 4.0 }}]
 "#,
-        w = w.display()
+            w = dir.join("work").display()
+        ),
     );
-    let s = std::fs::read_to_string(study("e2e-multi.toml", "", SENSITIVITY, ""))
-        .unwrap()
-        .replace(
-            &format!(
-                "surrogate = \"{}/model.json\"\nmeta = \"{}/export/meta.json\"\n",
-                w.display(),
-                w.display()
-            ),
-            "",
-        )
-        + &experiments;
-    let multi = dir.join("e2e-multi.toml");
-    std::fs::write(&multi, s).unwrap();
 
-    let doc = json(&nlvid(
-        &[
-            "--json",
-            "fit",
-            multi.to_str().unwrap(),
-            "rep-a.csv",
-            "rep-b.csv",
-        ],
-        dir,
-    ));
+    let doc = fit_json(dir, &multi, &["rep-a.csv", "rep-b.csv"], &[]);
     let exps = doc["experiments"].as_array().unwrap();
     assert_eq!(exps.len(), 2);
     assert_eq!(exps[0]["label"], "first");
     assert_eq!(exps[1]["label"], "second, ramp x4");
     // The objective is the sum of the two eq. 5.3 misfits.
-    let per: Vec<f64> = doc["fit"]["best"]["per_experiment"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
-    let total = doc["fit"]["best"]["misfit"].as_f64().unwrap();
-    assert!(
-        (per[0] + per[1] - total).abs() <= 1e-9 * total,
-        "{per:?} vs {total}"
-    );
+    let per = per_experiment_sum(&doc);
     for (e, p) in exps.iter().zip(&per) {
         let m = e["misfit_surrogate"].as_f64().unwrap();
         // `per_experiment` comes from the O(N²) Gram form (φᵀGφ + 2φᵀh + k,
@@ -715,17 +821,7 @@ segment = [{{ start = "0 s", end = "1 s", weight = 4.0 }}]
         assert!(e["misfit_real"].as_f64().unwrap() < 0.03);
     }
     // One parameter set recovering the hold as in the single-curve test.
-    let fitted = [
-        value(&doc, "G0"),
-        value(&doc, "g1"),
-        value(&doc, "g2"),
-        value(&doc, "tau1"),
-        value(&doc, "tau2"),
-    ];
-    for t in [1.0, 2.0, 5.0, 10.0] {
-        let (a, b) = (shear(&fitted, t), shear(&TRUTH, t));
-        assert!((a / b - 1.0).abs() <= 0.05, "G({t} s): {a} vs truth {b}");
-    }
+    assert_hold_modulus_recovered(&fitted(&doc));
 
     // One file per experiment, in order: a missing one is an error.
     let out = nlvid(&["fit", multi.to_str().unwrap(), "rep-a.csv"], dir);
@@ -740,11 +836,8 @@ segment = [{{ start = "0 s", end = "1 s", weight = 4.0 }}]
 #[test]
 fn the_real_model_can_be_the_forward_model_of_a_study_and_its_misfit_is_eq_5_3_of_its_run() {
     let dir = pipeline();
-    std::fs::write(
-        dir.join("cell-fw.csv"),
-        afm_csv(&TRUTH, 0.02, 9, RATE, RAMP),
-    )
-    .unwrap();
+    let csv = afm_csv(&TRUTH, 9);
+    std::fs::write(dir.join("cell-fw.csv"), &csv).unwrap();
     // Same protocol as `nlvid build --model hertz-prony --points 100`.
     let forward = r#"
 [fit.protocol]
@@ -763,116 +856,13 @@ hold = "9 s"
 points = 100
 "#;
     let s = study("e2e-forward.toml", "", SENSITIVITY, forward);
-    let doc = json(&nlvid(
-        &[
-            "--json",
-            "fit",
-            s.to_str().unwrap(),
-            "cell-fw.csv",
-            "--starts",
-            "4",
-        ],
-        dir,
-    ));
-    let fitted = [
-        value(&doc, "G0"),
-        value(&doc, "g1"),
-        value(&doc, "g2"),
-        value(&doc, "tau1"),
-        value(&doc, "tau2"),
-    ];
+    let doc = fit_json(dir, &s, &["cell-fw.csv"], &["--starts", "4"]);
     // Independently: run HertzProny at the fitted parameters, take the data
     // on the same grid, eq. 5.3 by hand.
     let model = HertzProny::new(RADIUS, RATE, RAMP, END, 100);
-    let y = model.run(&fitted).unwrap();
-    let csv = afm_csv(&TRUTH, 0.02, 9, RATE, RAMP);
-    let rows: Vec<(f64, f64)> = csv
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let f: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
-            (f[0], f[2] * SENS * K)
-        })
-        .collect();
-    let data: Vec<f64> = model
-        .time_grid()
-        .iter()
-        .map(|g| rows.iter().find(|(t, _)| (t - g).abs() < 1e-9).unwrap().1)
-        .collect();
-    let want = rmse_over_range(&y, &data);
+    let want = misfit_of(&model, &fitted(&doc), &csv);
     let got = doc["experiments"][0]["misfit_real"].as_f64().unwrap();
     assert!((got - want).abs() <= 1e-9 * want, "{got} vs {want}");
-}
-
-/// Issue 6 "Done when" 1 through the CLI: 10 seeded parameter sets inside
-/// Table 5.3 (log-uniform G0, τ1, τ2; uniform g1, g2 with g1 + g2 ≤ 0.99),
-/// 2 % noise, `nlvid fit` on the shared N = 200 surrogate. Criteria of the
-/// issue: G0 within 5 %, |Δ(g1 + g2)| ≤ 0.03, G(52 s) within 5 % — with this
-/// 10-s protocol G(52 s) is an extrapolation, so G(10 s) is counted too.
-/// Ignored: it asserts the issue's ≥ 9 of 10 and does not meet it (counts
-/// in docs/theory/inverse.md). Run:
-/// `cargo test -p nlvid --test fit -- --ignored --nocapture ten_seeded`
-#[test]
-#[ignore = "issue 6 recovery criterion, not met with the small surrogate (see docs/theory/inverse.md)"]
-fn ten_seeded_cases_recover_g0_sum_and_g52_through_the_cli() {
-    let dir = pipeline();
-    let study = study("e2e-ten.toml", "", SENSITIVITY, PROTOCOL);
-    let mut rng = Normal(20261122);
-    let log_uniform = |r: &mut Normal, lo: f64, hi: f64| lo * (hi / lo).powf(r.uniform());
-    let (mut ok_issue, mut ok_g10) = (0, 0);
-    for case in 0..10 {
-        let (g1, g2) = loop {
-            let (a, b) = (0.01 + 0.99 * rng.uniform(), 0.01 + 0.99 * rng.uniform());
-            if a + b <= 0.99 {
-                break (a, b);
-            }
-        };
-        let truth = [
-            log_uniform(&mut rng, 80.0, 4000.0),
-            g1,
-            g2,
-            log_uniform(&mut rng, 0.01, 2.0),
-            log_uniform(&mut rng, 2.0, 40.0),
-        ];
-        let name = format!("ten-{case}.csv");
-        std::fs::write(
-            dir.join(&name),
-            afm_csv(&truth, 0.02, 100 + case, RATE, RAMP),
-        )
-        .unwrap();
-        let doc = json(&nlvid(
-            &["--json", "fit", study.to_str().unwrap(), &name],
-            dir,
-        ));
-        let x = [
-            value(&doc, "G0"),
-            value(&doc, "g1"),
-            value(&doc, "g2"),
-            value(&doc, "tau1"),
-            value(&doc, "tau2"),
-        ];
-        let e_g0 = x[0] / truth[0] - 1.0;
-        let e_sum = x[1] + x[2] - truth[1] - truth[2];
-        let e52 = shear(&x, 52.0) / shear(&truth, 52.0) - 1.0;
-        let e10 = shear(&x, 10.0) / shear(&truth, 10.0) - 1.0;
-        let pass = e_g0.abs() <= 0.05 && e_sum.abs() <= 0.03;
-        ok_issue += usize::from(pass && e52.abs() <= 0.05);
-        ok_g10 += usize::from(pass && e10.abs() <= 0.05);
-        let exp = &doc["experiments"][0];
-        println!(
-            "case {case}: truth {truth:.3?}\n  fit {x:.3?}\n  G0 {:+.1} %, Δsum {e_sum:+.3}, G(52) {:+.1} %, G(10) {:+.1} %; misfit surrogate {:.2} %, real {:.2} %, agree {}",
-            100.0 * e_g0,
-            100.0 * e52,
-            100.0 * e10,
-            100.0 * exp["misfit_surrogate"].as_f64().unwrap(),
-            100.0 * exp["misfit_real"].as_f64().unwrap(),
-            exp["agree"]
-        );
-    }
-    println!(
-        "recovered (issue: G0 5 %, sum 0.03, G(52 s) 5 %): {ok_issue}/10; with G(10 s): {ok_g10}/10"
-    );
-    assert!(ok_issue >= 9, "{ok_issue}/10 recovered");
 }
 
 #[test]
@@ -884,95 +874,21 @@ fn two_ramp_hold_depths_are_fitted_together_with_one_parameter_set() {
     // and that study's forward model as the real model of the re-check.
     let s: f64 = 1.5;
     let d15 = w.join("d15");
-    std::fs::create_dir_all(&d15).unwrap();
-    std::fs::write(
-        d15.join("build.toml"),
-        r#"title = "RH 1.5 um"
+    build_from_study(
+        &d15,
+        "RH 1.5 um",
+        "probe_radius = \"5 um\"\nrate = \"1.5 um/s\"\nramp = \"1 s\"\nhold = \"9 s\"\npoints = 100\n",
+        200,
+    );
 
-[forward]
-model = "hertz-prony"
-probe_radius = "5 um"
-rate = "1.5 um/s"
-ramp = "1 s"
-hold = "9 s"
-points = 100
+    std::fs::write(dir.join("depth-1.csv"), afm_csv(&TRUTH, 21)).unwrap();
+    let deep = HertzProny::new(RADIUS, s * RATE, RAMP, END, 1000);
+    std::fs::write(dir.join("depth-1.5.csv"), afm_csv_of(&deep, &TRUTH, 22)).unwrap();
 
-[design]
-n_train = 200
-n_check = 40
-seed = 1
-ese = true
-
-[design.parameters]
-G0 = { range = ["80 Pa", "4 kPa"], log = true }
-g1 = { range = [0.01, 1.0] }
-g2 = { range = [0.01, 1.0] }
-tau1 = { range = ["0.01 s", "2 s"], log = true }
-tau2 = { range = ["2 s", "40 s"], log = true }
-
-[[design.constraint]]
-coefficients = { g1 = 1, g2 = 1 }
-at_most = 0.99
-
-[build]
-store = "store"
-export = "export"
-"#,
-    )
-    .unwrap();
-    let run = |args: &[&str]| ok(&nlvid(args, &d15), &args.join(" "));
-    run(&["build", "build.toml", "--quiet"]);
-    run(&[
-        "surrogate",
-        "fit",
-        "--x",
-        "export/train/X.csv",
-        "--y",
-        "export/train/Y.csv",
-        "--regression",
-        "poly1",
-        "--correlation",
-        "gauss",
-        "-o",
-        "model.json",
-    ]);
-    let check = run(&[
-        "--json",
-        "surrogate",
-        "check",
-        "model.json",
-        "--x",
-        "export/check/X.csv",
-        "--y",
-        "export/check/Y.csv",
-    ]);
-    std::fs::write(d15.join("model.check.json"), check).unwrap();
-
-    std::fs::write(
-        dir.join("depth-1.csv"),
-        afm_csv(&TRUTH, 0.02, 21, RATE, RAMP),
-    )
-    .unwrap();
-    let deep = {
-        let model = HertzProny::new(RADIUS, s * RATE, RAMP, END, 1000);
-        let mut t = vec![0.0];
-        t.extend_from_slice(model.time_grid());
-        let mut f = vec![0.0];
-        f.extend(model.run(&TRUTH).unwrap());
-        let peak = f.iter().copied().fold(0.0, f64::max);
-        let mut rng = Normal(22);
-        let mut csv = String::from("time [s],piezo [um],deflection [V]\n");
-        for (t, f) in t.iter().zip(&f) {
-            let d = (f + 0.02 * peak * rng.sample()) / K;
-            let z = s * RATE * t.min(RAMP) + d;
-            csv.push_str(&format!("{t:.4},{:.9},{:.9}\n", z * 1e6, d / SENS));
-        }
-        csv
-    };
-    std::fs::write(dir.join("depth-1.5.csv"), deep).unwrap();
-
-    let experiments = format!(
-        r#"
+    let depths = multi_study(
+        "e2e-depths.toml",
+        &format!(
+            r#"
 [[fit.experiment]]
 label = "RH 1 um"
 surrogate = "{w}/model.json"
@@ -987,27 +903,11 @@ meta = "{w}/d15/export/train/meta.json"
 protocol = {{ rate = "1.5 um/s", amplitude = "1.5 um" }}
 real_model = {{ model = "forward", study = "{w}/d15/build.toml" }}
 "#,
-        w = w.display()
+            w = w.display()
+        ),
     );
-    let base = std::fs::read_to_string(study("e2e-depths.toml", "", SENSITIVITY, "")).unwrap();
-    let head = format!(
-        "surrogate = \"{0}/model.json\"\nmeta = \"{0}/export/meta.json\"\n",
-        w.display()
-    );
-    assert!(base.contains(&head));
-    let depths = dir.join("e2e-depths.toml");
-    std::fs::write(&depths, base.replace(&head, "") + &experiments).unwrap();
 
-    let doc = json(&nlvid(
-        &[
-            "--json",
-            "fit",
-            depths.to_str().unwrap(),
-            "depth-1.csv",
-            "depth-1.5.csv",
-        ],
-        dir,
-    ));
+    let doc = fit_json(dir, &depths, &["depth-1.csv", "depth-1.5.csv"], &[]);
     let exps = doc["experiments"].as_array().unwrap();
     assert_eq!(exps.len(), 2);
     assert!(
@@ -1016,14 +916,7 @@ real_model = {{ model = "forward", study = "{w}/d15/build.toml" }}
             .unwrap()
             .ends_with("d15/model.check.json")
     );
-    let per: Vec<f64> = doc["fit"]["best"]["per_experiment"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
-    let total = doc["fit"]["best"]["misfit"].as_f64().unwrap();
-    assert!((per[0] + per[1] - total).abs() <= 1e-9 * total);
+    per_experiment_sum(&doc);
     // Both curves reproduced by the real model as well as the truth
     // reproduces them (eq. 5.3 at the truth computed here), within the
     // single-curve test's 1.25×.
@@ -1039,42 +932,9 @@ real_model = {{ model = "forward", study = "{w}/d15/build.toml" }}
             e["label"]
         );
     }
-    let fitted = [
-        value(&doc, "G0"),
-        value(&doc, "g1"),
-        value(&doc, "g2"),
-        value(&doc, "tau1"),
-        value(&doc, "tau2"),
-    ];
-    for t in [1.0, 2.0, 5.0, 10.0] {
-        let (a, b) = (shear(&fitted, t), shear(&TRUTH, t));
-        assert!((a / b - 1.0).abs() <= 0.05, "G({t} s): {a} vs truth {b}");
-    }
+    assert_hold_modulus_recovered(&fitted(&doc));
     // g1 + g2 is not asserted: a 10-s hold does not separate g∞ from the
-    // slow mode (measured here 0.608 vs 0.65; the ten-case run shows
-    // |Δ| up to 0.12), see docs/theory/inverse.md.
-}
-
-/// Eq. 5.3 of the forward model at TRUTH (ramp at `rate` for 1 s) against
-/// the force in an AFM CSV, on the surrogate grid (0.1 … 10 s).
-fn misfit_at_truth(csv: &Path, rate: f64) -> f64 {
-    let model = HertzProny::new(RADIUS, rate, RAMP, END, 100);
-    let y = model.run(&TRUTH).unwrap();
-    let text = std::fs::read_to_string(csv).unwrap();
-    let rows: Vec<(f64, f64)> = text
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let f: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
-            (f[0], f[2] * SENS * K)
-        })
-        .collect();
-    let data: Vec<f64> = model
-        .time_grid()
-        .iter()
-        .map(|g| rows.iter().find(|(t, _)| (t - g).abs() < 1e-9).unwrap().1)
-        .collect();
-    rmse_over_range(&y, &data)
+    // slow mode (see the ten-case test), see docs/theory/inverse.md.
 }
 
 /// examples/fit/run.sh itself, as documented (needs `python3` for its
@@ -1115,16 +975,13 @@ fn the_worked_example_script_runs_end_to_end() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("work/model.check.json")).unwrap())
             .unwrap();
     assert!(check["max"].as_f64().unwrap() > 0.0);
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn a_failing_real_model_is_reported_and_the_fit_still_printed() {
     let dir = pipeline();
-    std::fs::write(
-        dir.join("cell-fail.csv"),
-        afm_csv(&TRUTH, 0.02, 31, RATE, RAMP),
-    )
-    .unwrap();
+    std::fs::write(dir.join("cell-fail.csv"), afm_csv(&TRUTH, 31)).unwrap();
     // A [forward] model whose grid ends at 6 s cannot score a 10-s curve.
     let forward = r#"
 [fit.protocol]
@@ -1143,17 +1000,7 @@ hold = "5 s"
 points = 60
 "#;
     let s = study("e2e-fail.toml", "", SENSITIVITY, forward);
-    let doc = json(&nlvid(
-        &[
-            "--json",
-            "fit",
-            s.to_str().unwrap(),
-            "cell-fail.csv",
-            "--starts",
-            "2",
-        ],
-        dir,
-    ));
+    let doc = fit_json(dir, &s, &["cell-fail.csv"], &["--starts", "2"]);
     let e = &doc["experiments"][0];
     assert!(e["misfit_real"].is_null());
     let msg = e["rerun_error"].as_str().unwrap();
@@ -1173,52 +1020,168 @@ points = 60
     assert!(value(&doc, "G0") > 0.0);
 }
 
-/// The ten cases of `ten_seeded_cases_…` with a longer, thesis-like
-/// protocol built from a study: R = 2.5 µm, 1 µm/s for 2 s to 2 µm, hold to
-/// 52 s, 520 points, N = 300 training runs. Measures whether the CLI then
-/// meets the issue's criterion. Ignored (minutes); asserts ≥ 9/10. Run:
-/// `cargo test -p nlvid --test fit -- --ignored --nocapture thesis_like`
+/// The seeded cases of issue 6 "Done when" 1: 10 parameter sets inside
+/// Table 5.3 (log-uniform G0, τ1, τ2; uniform g1, g2 with g1 + g2 ≤ 0.99),
+/// hertz-prony order; case k's noise has seed 100 + k.
+fn seeded_cases() -> Vec<[f64; 5]> {
+    let mut rng = Normal(20261122);
+    let log_uniform = |r: &mut Normal, lo: f64, hi: f64| lo * (hi / lo).powf(r.uniform());
+    (0..10)
+        .map(|_| {
+            let (g1, g2) = loop {
+                let (a, b) = (0.01 + 0.99 * rng.uniform(), 0.01 + 0.99 * rng.uniform());
+                if a + b <= 0.99 {
+                    break (a, b);
+                }
+            };
+            [
+                log_uniform(&mut rng, 80.0, 4000.0),
+                g1,
+                g2,
+                log_uniform(&mut rng, 0.01, 2.0),
+                log_uniform(&mut rng, 2.0, 40.0),
+            ]
+        })
+        .collect()
+}
+
+/// Issue 6's criteria for one case: G0 within 5 %, |Δ(g1 + g2)| ≤ 0.03,
+/// G(52 s) within 5 %, and (reported only) G(10 s) within 5 %.
+struct CaseResult {
+    e_g0: f64,
+    e_sum: f64,
+    e52: f64,
+    e10: f64,
+}
+
+impl CaseResult {
+    fn new(x: &[f64; 5], truth: &[f64; 5]) -> Self {
+        Self {
+            e_g0: x[0] / truth[0] - 1.0,
+            e_sum: x[1] + x[2] - truth[1] - truth[2],
+            e52: shear(x, 52.0) / shear(truth, 52.0) - 1.0,
+            e10: shear(x, 10.0) / shear(truth, 10.0) - 1.0,
+        }
+    }
+    fn g0_and_sum(&self) -> bool {
+        self.e_g0.abs() <= 0.05 && self.e_sum.abs() <= 0.03
+    }
+    fn pass(&self) -> bool {
+        self.g0_and_sum() && self.e52.abs() <= 0.05
+    }
+    /// The criteria that fail.
+    fn failing(&self) -> String {
+        let mut f = Vec::new();
+        if self.e_g0.abs() > 0.05 {
+            f.push("G0");
+        }
+        if self.e_sum.abs() > 0.03 {
+            f.push("g1+g2");
+        }
+        if self.e52.abs() > 0.05 {
+            f.push("G(52)");
+        }
+        f.join(",")
+    }
+}
+
+/// Fits the ten [`seeded_cases`] with `nlvid fit STUDY` in `dir`: `csv`
+/// writes case k's data file, `real` is the data-generating model on the
+/// surrogate grid (for eq. 5.3 at the truth). Prints the per-case table:
+/// errors, failing criteria, the surrogate misfit at the optimum, the
+/// re-run misfit `nlvid fit` reports, and eq. 5.3 of `real` (computed here)
+/// at the optimum and at the truth — `real` at the optimum below the
+/// truth's means the data prefer the fitted point (identifiability), above
+/// it that the fit missed (surrogate error or optimiser).
+fn ten_cases(
+    dir: &Path,
+    study: &Path,
+    real: &dyn ForwardModel,
+    csv: impl Fn(u64, &[f64; 5]) -> String,
+) -> Vec<CaseResult> {
+    let mut out = Vec::new();
+    println!(
+        "case | G0 truth | g1+g2 | tau1 | dG0 % | dsum | dG52 % | dG10 % | sur % | rerun % | opt % | truth % | fails"
+    );
+    for (case, truth) in seeded_cases().iter().enumerate() {
+        let name = format!("case-{case}.csv");
+        let data = csv(case as u64, truth);
+        std::fs::write(dir.join(&name), &data).unwrap();
+        let doc = fit_json(dir, study, &[&name], &[]);
+        let x = fitted(&doc);
+        let r = CaseResult::new(&x, truth);
+        let exp = &doc["experiments"][0];
+        let (at_opt, at_truth) = (misfit_of(real, &x, &data), misfit_of(real, truth, &data));
+        let verdict = if r.pass() {
+            "ok".to_string()
+        } else {
+            r.failing()
+        };
+        println!(
+            "{case} | {:.0} | {:.3} | {:.3} | {:+.1} | {:+.3} | {:+.1} | {:+.1} | {:.3} | {:.3} | {:.3} | {:.3} | {verdict}",
+            truth[0],
+            truth[1] + truth[2],
+            truth[3],
+            100.0 * r.e_g0,
+            r.e_sum,
+            100.0 * r.e52,
+            100.0 * r.e10,
+            100.0 * exp["misfit_surrogate"].as_f64().unwrap(),
+            100.0 * exp["misfit_real"].as_f64().unwrap_or(f64::NAN),
+            100.0 * at_opt,
+            100.0 * at_truth,
+        );
+        out.push(r);
+    }
+    out
+}
+
+/// Issue 6 "Done when" 1 through the CLI on the shared N = 200 surrogate of
+/// the 10-s protocol (1 µm/s ramp for 1 s). With this protocol G(52 s) is an
+/// extrapolation, so G(10 s) is counted too. Ignored: it asserts the issue's
+/// ≥ 9 of 10 and does not meet it (counts in docs/theory/inverse.md). Run:
+/// `cargo test --release -p nlvid --test fit -- --ignored --nocapture ten_seeded`
 #[test]
-#[ignore = "issue 6 recovery criterion with a 52-s protocol (slow; see docs/theory/inverse.md)"]
+#[ignore = "issue 6 recovery criterion, not met with the 10-s protocol (see docs/theory/inverse.md)"]
+fn ten_seeded_cases_recover_g0_sum_and_g52_through_the_cli() {
+    let dir = pipeline();
+    let study = study("e2e-ten.toml", "", SENSITIVITY, PROTOCOL);
+    let real = HertzProny::new(RADIUS, RATE, RAMP, END, 100);
+    let r = ten_cases(dir, &study, &real, |case, truth| afm_csv(truth, 100 + case));
+    let ok_issue = r.iter().filter(|c| c.pass()).count();
+    let ok_g10 = r
+        .iter()
+        .filter(|c| c.g0_and_sum() && c.e10.abs() <= 0.05)
+        .count();
+    println!(
+        "recovered (issue: G0 5 %, sum 0.03, G(52 s) 5 %): {ok_issue}/10; with G(10 s): {ok_g10}/10"
+    );
+    assert!(ok_issue >= 9, "{ok_issue}/10 recovered");
+}
+
+/// The thesis's relaxation test (§5.2.2: a fast ramp at 10 µm/s, then a
+/// 50-s hold): R = 2.5 µm, 10 µm/s for 0.2 s to 2 µm, hold to 52 s, data
+/// sampled at 1 kHz. The choices of docs/cli/fit.md: the surrogate grid
+/// has one point per data sample on the ramp (200) and 1800 points
+/// log-spaced on the hold from one sample period (1 ms) to 51.8 s
+/// (`ramp_points`, `first_hold_step`); N = 300 training runs, F/G0 kriged
+/// in ln G0, ln τ. Asserts the issue's ≥ 9/10. Ignored (≈ 35 s in release).
+/// Run:
+/// `cargo test --release -p nlvid --test fit -- --ignored --nocapture thesis_like`
+#[test]
+#[ignore = "issue 6 recovery criterion with the thesis's 52-s relaxation protocol (slow; see docs/theory/inverse.md)"]
 fn thesis_like_protocol_ten_seeded_cases_through_the_cli() {
     let dir = pipeline().join("long");
-    std::fs::create_dir_all(&dir).unwrap();
-    let (radius, rate, ramp, end) = (2.5e-6, 1e-6, 2.0, 52.0);
-    std::fs::write(
-        dir.join("build.toml"),
-        r#"title = "RH 2 um, hold to 52 s"
-
-[forward]
-model = "hertz-prony"
-probe_radius = "2.5 um"
-rate = "1 um/s"
-ramp = "2 s"
-hold = "50 s"
-points = 520
-
-[design]
-n_train = 300
-n_check = 40
-seed = 1
-ese = true
-
-[design.parameters]
-G0 = { range = ["80 Pa", "4 kPa"], log = true }
-g1 = { range = [0.01, 1.0] }
-g2 = { range = [0.01, 1.0] }
-tau1 = { range = ["0.01 s", "2 s"], log = true }
-tau2 = { range = ["2 s", "40 s"], log = true }
-
-[[design.constraint]]
-coefficients = { g1 = 1, g2 = 1 }
-at_most = 0.99
-
-[build]
-store = "store"
-export = "export"
-"#,
-    )
-    .unwrap();
+    let forward = r#"probe_radius = "2.5 um"
+rate = "10 um/s"
+ramp = "0.2 s"
+hold = "51.8 s"
+points = 2000
+ramp_points = 200
+first_hold_step = "1 ms"
+"#;
+    let c = build_from_study(&dir, "RH 2 um at 10 um/s, hold to 52 s", forward, 300);
+    println!("checking error: max {}, median {}", c["max"], c["median"]);
     // `nlvid build` refuses sections it does not know, so [fit] lives in its
     // own study and names the build study for the re-check.
     std::fs::write(
@@ -1240,7 +1203,7 @@ spring_constant = "1 N/m"
 deflection_sensitivity = "50 nm/V"
 
 [fit.protocol]
-rate = "1 um/s"
+rate = "10 um/s"
 amplitude = "2 um"
 
 [fit.real_model]
@@ -1249,92 +1212,13 @@ study = "build.toml"
 "#,
     )
     .unwrap();
-    let run = |args: &[&str]| ok(&nlvid(args, &dir), &args.join(" "));
-    run(&["build", "build.toml", "--quiet"]);
-    run(&[
-        "surrogate",
-        "fit",
-        "--x",
-        "export/train/X.csv",
-        "--y",
-        "export/train/Y.csv",
-        "--regression",
-        "poly1",
-        "--correlation",
-        "gauss",
-        "-o",
-        "model.json",
-    ]);
-    let check = run(&[
-        "--json",
-        "surrogate",
-        "check",
-        "model.json",
-        "--x",
-        "export/check/X.csv",
-        "--y",
-        "export/check/Y.csv",
-    ]);
-    std::fs::write(dir.join("model.check.json"), &check).unwrap();
-    let c: serde_json::Value = serde_json::from_str(&check).unwrap();
-    println!("checking error: max {}, median {}", c["max"], c["median"]);
-
-    let fine = HertzProny::new(radius, rate, ramp, end, 5200);
-    let mut rng = Normal(20261122);
-    let log_uniform = |r: &mut Normal, lo: f64, hi: f64| lo * (hi / lo).powf(r.uniform());
-    let mut ok_issue = 0;
-    for case in 0..10u64 {
-        let (g1, g2) = loop {
-            let (a, b) = (0.01 + 0.99 * rng.uniform(), 0.01 + 0.99 * rng.uniform());
-            if a + b <= 0.99 {
-                break (a, b);
-            }
-        };
-        let truth = [
-            log_uniform(&mut rng, 80.0, 4000.0),
-            g1,
-            g2,
-            log_uniform(&mut rng, 0.01, 2.0),
-            log_uniform(&mut rng, 2.0, 40.0),
-        ];
-        let mut t = vec![0.0];
-        t.extend_from_slice(fine.time_grid());
-        let mut f = vec![0.0];
-        f.extend(fine.run(&truth).unwrap());
-        let peak = f.iter().copied().fold(0.0, f64::max);
-        let mut noise = Normal(100 + case);
-        let mut csv = String::from("time [s],piezo [um],deflection [V]\n");
-        for (t, f) in t.iter().zip(&f) {
-            let d = (f + 0.02 * peak * noise.sample()) / K;
-            let z = rate * t.min(ramp) + d;
-            csv.push_str(&format!("{t:.4},{:.9},{:.9}\n", z * 1e6, d / SENS));
-        }
-        let name = format!("long-{case}.csv");
-        std::fs::write(dir.join(&name), csv).unwrap();
-        let doc = json(&nlvid(&["--json", "fit", "fit.toml", &name], &dir));
-        let x = [
-            value(&doc, "G0"),
-            value(&doc, "g1"),
-            value(&doc, "g2"),
-            value(&doc, "tau1"),
-            value(&doc, "tau2"),
-        ];
-        let e_g0 = x[0] / truth[0] - 1.0;
-        let e_sum = x[1] + x[2] - truth[1] - truth[2];
-        let e52 = shear(&x, 52.0) / shear(&truth, 52.0) - 1.0;
-        let pass = e_g0.abs() <= 0.05 && e_sum.abs() <= 0.03 && e52.abs() <= 0.05;
-        ok_issue += usize::from(pass);
-        let exp = &doc["experiments"][0];
-        println!(
-            "case {case}: G0 {:+.1} %, Δsum {e_sum:+.3}, G(52) {:+.1} %; misfit surrogate {:.2} %, real {:.2} %, agree {} {}",
-            100.0 * e_g0,
-            100.0 * e52,
-            100.0 * exp["misfit_surrogate"].as_f64().unwrap(),
-            100.0 * exp["misfit_real"].as_f64().unwrap(),
-            exp["agree"],
-            if pass { "ok" } else { "FAIL" }
-        );
-    }
+    let mut st = nlvid_study::Study::load(dir.join("build.toml")).unwrap();
+    let real = nlvid_forward::from_study(&mut st).unwrap();
+    let data = HertzProny::new(2.5e-6, 10e-6, 0.2, 52.0, 52_000);
+    let r = ten_cases(&dir, &dir.join("fit.toml"), real.as_ref(), |case, truth| {
+        afm_csv_of(&data, truth, 100 + case)
+    });
+    let ok_issue = r.iter().filter(|c| c.pass()).count();
     println!("recovered (G0 5 %, sum 0.03, G(52 s) 5 %): {ok_issue}/10");
     assert!(ok_issue >= 9, "{ok_issue}/10 recovered");
 }

@@ -118,9 +118,19 @@ pub struct CheckArgs {
     /// Directory for SVG plots of the worst, median and best cases.
     #[arg(long)]
     pub plots: Option<PathBuf>,
+    /// Where to save the summary (JSON, as `--json` prints it); default
+    /// `<model stem>.check.json` next to the model, where `nlvid fit` looks.
+    #[arg(long, value_name = "FILE")]
+    pub summary: Option<PathBuf>,
     /// Set from the global `--json` flag.
     #[arg(skip)]
     pub json: bool,
+}
+
+/// `model.json` → `model.check.json`: where `nlvid surrogate check` saves
+/// its summary and `nlvid fit` looks for the model's checking error.
+pub fn checking_summary_path(model: &Path) -> PathBuf {
+    model.with_extension("check.json")
 }
 
 /// A numeric table read from CSV.
@@ -442,8 +452,20 @@ fn check_cmd(a: CheckArgs) -> anyhow::Result<ExitCode> {
             )?;
         }
     }
+    let summary = serde_json::to_string(&s)?;
+    let saved = a
+        .summary
+        .clone()
+        .unwrap_or_else(|| checking_summary_path(&a.model));
+    crate::output::write_atomic(&saved, format!("{summary}\n").as_bytes()).with_context(|| {
+        format!(
+            "cannot save the checking summary to {} (choose another place with --summary)",
+            saved.display()
+        )
+    })?;
+    eprintln!("checking summary saved to {}", saved.display());
     if a.json {
-        println!("{}", serde_json::to_string(&s)?);
+        println!("{summary}");
     } else {
         println!(
             "{} checking cases: range-normalised RMSE (eq. 4.4) min {:.4} %, median {:.4} %, max {:.4} % (case {})",

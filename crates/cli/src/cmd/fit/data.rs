@@ -146,10 +146,10 @@ fn load_surrogate(
     })
 }
 
-/// `model.json` → `model.check.json`: where `nlvid fit` looks for the
-/// output of `nlvid --json surrogate check model.json ...`.
+/// `model.json` → `model.check.json`: where `nlvid surrogate check
+/// model.json ...` saves its summary and `nlvid fit` looks for it.
 pub fn default_checking_path(model: &Path) -> PathBuf {
-    model.with_extension("check.json")
+    crate::cmd::surrogate::checking_summary_path(model)
 }
 
 /// The max eq. 4.4 RMSE of a `nlvid --json surrogate check` output.
@@ -158,7 +158,7 @@ fn read_checking_error(path: &Path) -> anyhow::Result<f64> {
         .with_context(|| format!("cannot read the checking summary {}", path.display()))?;
     let v: serde_json::Value = serde_json::from_str(&text).with_context(|| {
         format!(
-            "{}: not JSON (expected the output of `nlvid --json surrogate check`)",
+            "{}: not JSON (expected the summary `nlvid surrogate check` saves)",
             path.display()
         )
     })?;
@@ -166,7 +166,7 @@ fn read_checking_error(path: &Path) -> anyhow::Result<f64> {
         Some(e) if e.is_finite() && e >= 0.0 => Ok(e),
         _ => bail!(
             "{}: key `max` (largest eq. 4.4 checking error, a number >= 0) missing; \
-             expected the output of `nlvid --json surrogate check`",
+             expected the summary `nlvid surrogate check` saves",
             path.display()
         ),
     }

@@ -140,8 +140,8 @@ impl Outcome {
                 (Some(_), None) => (
                     Agreement::Unknown,
                     Some(format!(
-                        "no checking error: write `nlvid --json surrogate check {} ... > {}` \
-                         or set `checking` in [fit]",
+                        "no checking error: run `nlvid surrogate check {} --x X.csv --y Y.csv` \
+                         on independent checking runs (it saves {}), or set `checking` in [fit]",
                         e.surrogate.path.display(),
                         super::data::default_checking_path(&e.surrogate.path).display()
                     )),
