@@ -314,15 +314,7 @@ data = "afm"
 starts = 8
 seed = 1
 modulus_times = ["0 s", "1 s", "2 s", "5 s", "10 s"]
-{fit_extra}
-[fit.columns]
-time = "time"
-piezo = "piezo"
-deflection = "deflection"
-
-[fit.calibration]
-spring_constant = "1 N/m"
-{calibration}
+{fit_extra}{AFM_COLUMNS}{calibration}
 {tail}
 "#,
         w = dir.join("work").display()
@@ -347,6 +339,33 @@ fn multi_study(name: &str, experiments: &str) -> PathBuf {
     p
 }
 
+/// A `[[fit.experiment]]` table for a curve of the 1-µm protocol on the
+/// shared surrogate, re-checked with Lee–Radok; `extra` lines appended.
+fn shared_experiment(label: &str, extra: &str) -> String {
+    format!(
+        r#"
+[[fit.experiment]]
+label = "{label}"
+surrogate = "{w}/model.json"
+meta = "{w}/export/meta.json"
+protocol = {{ rate = "1 um/s", amplitude = "1 um" }}
+real_model = {{ model = "lee-radok", radius = "5 um" }}
+{extra}
+"#,
+        w = pipeline().join("work").display()
+    )
+}
+
+/// The AFM columns of the CSVs written here and their cantilever.
+const AFM_COLUMNS: &str = r#"
+[fit.columns]
+time = "time"
+piezo = "piezo"
+deflection = "deflection"
+
+[fit.calibration]
+spring_constant = "1 N/m"
+"#;
 const SENSITIVITY: &str = r#"deflection_sensitivity = "50 nm/V""#;
 const PROTOCOL: &str = r#"
 [fit.protocol]
@@ -784,25 +803,11 @@ fn several_experiments_are_fitted_with_one_parameter_set_and_summed_misfits() {
     std::fs::write(dir.join("rep-b.csv"), afm_csv(&TRUTH, 12)).unwrap();
     let multi = multi_study(
         "e2e-multi.toml",
-        &format!(
-            r#"
-[[fit.experiment]]
-label = "first"
-surrogate = "{w}/model.json"
-meta = "{w}/export/meta.json"
-protocol = {{ rate = "1 um/s", amplitude = "1 um" }}
-real_model = {{ model = "lee-radok", radius = "5 um" }}
-
-[[fit.experiment]]
-label = "second, ramp x4"
-surrogate = "{w}/model.json"
-meta = "{w}/export/meta.json"
-protocol = {{ rate = "1 um/s", amplitude = "1 um" }}
-real_model = {{ model = "lee-radok", radius = "5 um" }}
-segment = [{{ start = "0 s", end = "1 s", weight = 4.0 }}]
-"#,
-            w = dir.join("work").display()
-        ),
+        &(shared_experiment("first", "")
+            + &shared_experiment(
+                "second, ramp x4",
+                r#"segment = [{ start = "0 s", end = "1 s", weight = 4.0 }]"#,
+            )),
     );
 
     let doc = fit_json(dir, &multi, &["rep-a.csv", "rep-b.csv"], &[]);
@@ -833,13 +838,12 @@ segment = [{{ start = "0 s", end = "1 s", weight = 4.0 }}]
     );
 }
 
-#[test]
-fn the_real_model_can_be_the_forward_model_of_a_study_and_its_misfit_is_eq_5_3_of_its_run() {
-    let dir = pipeline();
-    let csv = afm_csv(&TRUTH, 9);
-    std::fs::write(dir.join("cell-fw.csv"), &csv).unwrap();
-    // Same protocol as `nlvid build --model hertz-prony --points 100`.
-    let forward = r#"
+/// The 1-µm [fit.protocol] with the study's own [forward] `hertz-prony`
+/// model (R = 5 µm, 1 µm/s for 1 s, then `hold`, `points` output times) as
+/// the real model.
+fn forward_real_model(hold: &str, points: usize) -> String {
+    format!(
+        r#"
 [fit.protocol]
 rate = "1 um/s"
 amplitude = "1 um"
@@ -852,10 +856,24 @@ model = "hertz-prony"
 probe_radius = "5 um"
 rate = "1 um/s"
 ramp = "1 s"
-hold = "9 s"
-points = 100
-"#;
-    let s = study("e2e-forward.toml", "", SENSITIVITY, forward);
+hold = "{hold}"
+points = {points}
+"#
+    )
+}
+
+#[test]
+fn the_real_model_can_be_the_forward_model_of_a_study_and_its_misfit_is_eq_5_3_of_its_run() {
+    let dir = pipeline();
+    let csv = afm_csv(&TRUTH, 9);
+    std::fs::write(dir.join("cell-fw.csv"), &csv).unwrap();
+    // Same protocol as `nlvid build --model hertz-prony --points 100`.
+    let s = study(
+        "e2e-forward.toml",
+        "",
+        SENSITIVITY,
+        &forward_real_model("9 s", 100),
+    );
     let doc = fit_json(dir, &s, &["cell-fw.csv"], &["--starts", "4"]);
     // Independently: run HertzProny at the fitted parameters, take the data
     // on the same grid, eq. 5.3 by hand.
@@ -887,15 +905,9 @@ fn two_ramp_hold_depths_are_fitted_together_with_one_parameter_set() {
 
     let depths = multi_study(
         "e2e-depths.toml",
-        &format!(
-            r#"
-[[fit.experiment]]
-label = "RH 1 um"
-surrogate = "{w}/model.json"
-meta = "{w}/export/meta.json"
-protocol = {{ rate = "1 um/s", amplitude = "1 um" }}
-real_model = {{ model = "lee-radok", radius = "5 um" }}
-
+        &(shared_experiment("RH 1 um", "")
+            + &format!(
+                r#"
 [[fit.experiment]]
 label = "RH 1.5 um"
 surrogate = "{w}/d15/model.json"
@@ -903,8 +915,8 @@ meta = "{w}/d15/export/train/meta.json"
 protocol = {{ rate = "1.5 um/s", amplitude = "1.5 um" }}
 real_model = {{ model = "forward", study = "{w}/d15/build.toml" }}
 "#,
-            w = w.display()
-        ),
+                w = w.display()
+            )),
     );
 
     let doc = fit_json(dir, &depths, &["depth-1.csv", "depth-1.5.csv"], &[]);
@@ -983,23 +995,12 @@ fn a_failing_real_model_is_reported_and_the_fit_still_printed() {
     let dir = pipeline();
     std::fs::write(dir.join("cell-fail.csv"), afm_csv(&TRUTH, 31)).unwrap();
     // A [forward] model whose grid ends at 6 s cannot score a 10-s curve.
-    let forward = r#"
-[fit.protocol]
-rate = "1 um/s"
-amplitude = "1 um"
-
-[fit.real_model]
-model = "forward"
-
-[forward]
-model = "hertz-prony"
-probe_radius = "5 um"
-rate = "1 um/s"
-ramp = "1 s"
-hold = "5 s"
-points = 60
-"#;
-    let s = study("e2e-fail.toml", "", SENSITIVITY, forward);
+    let s = study(
+        "e2e-fail.toml",
+        "",
+        SENSITIVITY,
+        &forward_real_model("5 s", 60),
+    );
     let doc = fit_json(dir, &s, &["cell-fail.csv"], &["--starts", "2"]);
     let e = &doc["experiments"][0];
     assert!(e["misfit_real"].is_null());
@@ -1186,21 +1187,14 @@ first_hold_step = "1 ms"
     // own study and names the build study for the re-check.
     std::fs::write(
         dir.join("fit.toml"),
-        r#"[fit]
+        format!(
+            r#"[fit]
 surrogate = "model.json"
 meta = "export/train/meta.json"
 domain = "table-5.3"
 data = "afm"
 modulus_times = ["10 s", "52 s"]
-
-[fit.columns]
-time = "time"
-piezo = "piezo"
-deflection = "deflection"
-
-[fit.calibration]
-spring_constant = "1 N/m"
-deflection_sensitivity = "50 nm/V"
+{AFM_COLUMNS}{SENSITIVITY}
 
 [fit.protocol]
 rate = "10 um/s"
@@ -1209,7 +1203,8 @@ amplitude = "2 um"
 [fit.real_model]
 model = "forward"
 study = "build.toml"
-"#,
+"#
+        ),
     )
     .unwrap();
     let mut st = nlvid_study::Study::load(dir.join("build.toml")).unwrap();
