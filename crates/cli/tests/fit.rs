@@ -1215,5 +1215,6 @@ study = "build.toml"
     });
     let ok_issue = r.iter().filter(|c| c.pass()).count();
     println!("recovered (G0 5 %, sum 0.03, G(52 s) 5 %): {ok_issue}/10");
+    let _ = std::fs::remove_dir_all(&dir); // ≈ 60 MB of runs and data
     assert!(ok_issue >= 9, "{ok_issue}/10 recovered");
 }
