@@ -619,6 +619,36 @@ fn without_a_checking_summary_the_agreement_is_unknown_and_says_how_to_get_one()
     );
 }
 
+#[test]
+fn surrogate_check_saves_its_summary_where_asked_and_fails_clearly_when_it_cannot() {
+    let dir = pipeline();
+    let args = |summary: &'static str| {
+        [
+            "--json",
+            "surrogate",
+            "check",
+            "work/model.json",
+            "--x",
+            "work/export-check/X.csv",
+            "--y",
+            "work/export-check/Y.csv",
+            "--summary",
+            summary,
+        ]
+    };
+    let printed = run(dir, &args("work/elsewhere.json"));
+    let saved = std::fs::read_to_string(dir.join("work/elsewhere.json")).unwrap();
+    assert_eq!(saved.trim_end(), printed.trim_end());
+    let out = nlvid(&args("no-such-dir/x.check.json"), dir);
+    assert!(!out.status.success());
+    let err = text(&out.stderr);
+    assert!(
+        err.contains("cannot save the checking summary to no-such-dir/x.check.json")
+            && err.contains("--summary"),
+        "{err}"
+    );
+}
+
 /// A data file derived from the good one by `edit`; the fit must fail with
 /// every `want` in its message (stderr).
 fn assert_fails(name: &str, csv: &str, study: &Path, want: &[&str]) {
