@@ -5,7 +5,8 @@
 //! fits evaluate.
 //!
 //! Models (`model = "…"`):
-//! * `hertz-prony` — analytic Lee–Radok ramp-hold indentation with a
+//! * `hertz-prony` — analytic Lee–Radok ramp-hold indentation (equally
+//!   spaced or graded output grid, [`HertzGrid`]) with a
 //!   2-term Prony G(t) ([`HertzPronySpec`]); parameters `[G0, g1, g2, τ1, τ2]`;
 //!   microseconds per run.
 //! * `afm-fe` — the axisymmetric finite-element AFM cell model of thesis
