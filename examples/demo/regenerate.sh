@@ -23,7 +23,8 @@ $NLVID surrogate fit --x "$WORK/export/train/X.csv" --y "$WORK/export/train/Y.cs
 cp "$WORK/export/train/meta.json" metamodel/meta.json
 # 3. checking errors (eq. 4.4) on the separate checking design
 $NLVID --json surrogate check metamodel/model.json \
-    --x "$WORK/export/check/X.csv" --y "$WORK/export/check/Y.csv" > metamodel/check.json
+    --x "$WORK/export/check/X.csv" --y "$WORK/export/check/Y.csv" \
+    --summary metamodel/check.json > /dev/null
 # 4. the cells' curves and their ground truth
 $NLVID demo --demo . --write-data
 rm -rf "$WORK"
