@@ -63,6 +63,7 @@ mod model;
 mod optimise;
 mod plot;
 mod prony;
+mod reduced;
 mod rerun;
 mod starts;
 mod surrogate;
@@ -82,9 +83,11 @@ pub use model::{FD_STEP_UNIT, Model, check_finite, check_jacobian, check_len, fd
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
 pub use plot::{FigureCurve, FitFigure};
 pub use prony::{ModulusPoint, ParameterTable, PronyShear, PronyTerm};
+pub use reduced::{Projection, ReducedExperiment, ReducedMisfit, ReducedModel, projection};
 pub use rerun::{Rerun, rerun};
 pub use starts::{feasible_starts, latin_hypercube};
 pub use surrogate::{Coordinates, ForwardFromModel, KrigingSurrogate, design_domain};
 pub use surrogate_file::{
-    SurrogateFit, SurrogateFitter, SurrogateMeta, load_kriging_surrogate, read_meta,
+    Precomputed, SurrogateCurve, SurrogateFit, SurrogateFitter, SurrogateMeta, SurrogateMisfit,
+    load_kriging_surrogate, read_meta,
 };

@@ -19,6 +19,7 @@ use crate::basis::BasisModel;
 use crate::domain::{Domain, Scale};
 use crate::error::{InverseError, Result};
 use crate::model::{Model, check_len};
+use crate::reduced::ReducedModel;
 
 /// What the surrogate's inputs are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -40,6 +41,8 @@ pub struct KrigingSurrogate {
     coordinates: Coordinates,
     b: DMatrix<f64>,
     mu: Vec<f64>,
+    /// Output map A of the reduced form ŷ = A c(x) (m × (q + 1)).
+    a: DMatrix<f64>,
 }
 
 fn model_err(x: &[f64], e: &SurrogateError) -> InverseError {
@@ -98,6 +101,10 @@ impl KrigingSurrogate {
         }
         let (b, mu) = kriging.basis_coefficients();
         let b = DMatrix::from_column_slice(kriging.n_basis(), kriging.n_outputs, &b);
+        let a = kriging.output_map().map_err(|e| {
+            InverseError::InvalidSetting(format!("the surrogate has no reduced form: {e}"))
+        })?;
+        let a = DMatrix::from_column_slice(kriging.n_outputs, kriging.n_output_coordinates(), &a);
         let s = Self {
             kriging,
             domain,
@@ -106,6 +113,7 @@ impl KrigingSurrogate {
             coordinates,
             b,
             mu,
+            a,
         };
         s.check_basis_form()?;
         Ok(s)
@@ -142,6 +150,13 @@ impl KrigingSurrogate {
     /// The wrapped Kriging model.
     pub fn kriging(&self) -> &KrigingModel {
         &self.kriging
+    }
+
+    /// True when the outputs are PCA-reduced (q + 1 < m coordinates): the
+    /// reduced misfit ([`crate::ReducedMisfit`]) then costs O(N·q·n) per
+    /// evaluation instead of O(N·m).
+    pub fn is_reduced(&self) -> bool {
+        self.kriging.pca.is_some() && self.a.ncols() < self.a.nrows()
     }
 
     /// Surrogate inputs at physical x (domain order) and d(input_k)/d(x_perm[k]).
@@ -201,6 +216,35 @@ impl BasisModel for KrigingSurrogate {
     }
     fn offset(&self) -> &[f64] {
         &self.mu
+    }
+}
+
+impl ReducedModel for KrigingSurrogate {
+    fn domain(&self) -> &Domain {
+        &self.domain
+    }
+    fn times(&self) -> &[f64] {
+        &self.times
+    }
+    fn output_map(&self) -> &DMatrix<f64> {
+        &self.a
+    }
+    /// c(x) = s(x)·[1; z(x)] with z the kriged outputs (PC scores),
+    /// O(N·q·n) (`KrigingModel::output_coordinates`).
+    fn coordinates(&self, x: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>)> {
+        let (xs, ds) = self.inputs(x)?;
+        let (c, dc_s) = self
+            .kriging
+            .output_coordinates(&xs)
+            .map_err(|e| model_err(x, &e))?;
+        let (r, d) = (c.len(), xs.len());
+        let mut dc = DMatrix::zeros(r, d);
+        for l in 0..r {
+            for (k, &i) in self.perm.iter().enumerate() {
+                dc[(l, i)] = dc_s[l * d + k] * ds[k];
+            }
+        }
+        Ok((DVector::from_vec(c), dc))
     }
 }
 
