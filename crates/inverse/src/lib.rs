@@ -11,8 +11,11 @@
 //! - [`Misfit`]: the range-normalised RMSE of eq. 5.3, with optional
 //!   per-segment weights, summed over experiments fitted with one
 //!   parameter set, and its gradient; [`BasisMisfit`] computes the same
-//!   value in O(N²) for Kriging-form models y = μ + Bᵀφ(x) ([`BasisModel`]);
-//!   both are [`Objective`]s;
+//!   value in O(N²) for Kriging-form models y = μ + Bᵀφ(x) ([`BasisModel`]),
+//!   [`ReducedMisfit`] in the reduced output space of a PCA-reduced
+//!   surrogate ŷ = A c(x) ([`ReducedModel`]: O(N·q·n + r²) per evaluation,
+//!   nothing growing with m), [`SurrogateMisfit`] picks the fast form per
+//!   surrogate; all are [`Objective`]s;
 //! - [`MultiStart`]: seeded feasible Latin-hypercube starts, SLSQP local
 //!   runs, clustering into distinct optima, alternatives within a misfit
 //!   tolerance, bound flags; [`verify`] re-scores the optimum with another

@@ -31,8 +31,17 @@ fn data() -> (Mat<f64>, Mat<f64>) {
 }
 
 fn fit(pca: Option<f64>, scaled: bool, log_inputs: bool) -> KrigingModel {
+    fit_with(Correlation::Gauss, pca, scaled, log_inputs)
+}
+
+fn fit_with(
+    correlation: Correlation,
+    pca: Option<f64>,
+    scaled: bool,
+    log_inputs: bool,
+) -> KrigingModel {
     let (x, y) = data();
-    let mut s = KrigingSettings::new(Regression::Poly1, Correlation::Gauss, 3);
+    let mut s = KrigingSettings::new(Regression::Poly1, correlation, 3);
     s.theta = ThetaSearch::Fixed(vec![0.3, 1.1, 0.7]);
     s.pca_energy = pca;
     if scaled {
@@ -48,10 +57,21 @@ const POINTS: [[f64; 3]; 3] = [[1.2, 0.3, 0.4], [2.7, -0.8, 1.9], [0.6, 0.05, 1.
 
 #[test]
 fn output_map_times_coordinates_is_the_predictor() {
-    for pca in [None, Some(0.9999)] {
-        for scaled in [false, true] {
-            for log_inputs in [false, true] {
-                let model = fit(pca, scaled, log_inputs);
+    // Gauss has its own fast path in output_coordinates; cubic takes the
+    // generic correlation code.
+    for (corr, pca, scaled, log_inputs) in [
+        (Correlation::Gauss, None, false, false),
+        (Correlation::Gauss, None, true, true),
+        (Correlation::Gauss, Some(0.9999), false, false),
+        (Correlation::Gauss, Some(0.9999), true, false),
+        (Correlation::Gauss, Some(0.9999), false, true),
+        (Correlation::Gauss, Some(0.9999), true, true),
+        (Correlation::Cubic, Some(0.9999), true, true),
+        (Correlation::Exp, None, true, false),
+    ] {
+        {
+            {
+                let model = fit_with(corr, pca, scaled, log_inputs);
                 let m = model.n_outputs;
                 let r = model.n_output_coordinates();
                 if pca.is_some() {

@@ -10,7 +10,11 @@
 //! deviations and s(x) the [`OutputScale`](super::OutputScale) (1 without).
 //! c(x) and ∂c/∂x cost O(n·q·d); A is shared by every evaluation.
 
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef, Par};
+
 use super::KrigingModel;
+use crate::correlation::Correlation;
 use crate::error::{Result, SurrogateError};
 
 impl KrigingModel {
@@ -71,20 +75,39 @@ impl KrigingModel {
         self.regression.eval(&xn, &mut f);
         let mut df = vec![0.0; d * p];
         self.regression.jacobian(&xn, &mut df);
-        // r_i and ∂r_i/∂xn_k, the latter column-major n × d.
-        let mut r = vec![0.0; n];
-        let mut dr = vec![0.0; n * d];
+        // M = [r, ∂r/∂xn_1, …, ∂r/∂xn_d], column-major n × (d + 1).
+        let mut rm = vec![0.0; n * (d + 1)];
         let mut dx = vec![0.0; d];
         let mut g = vec![0.0; d];
         for i in 0..n {
             for k in 0..d {
                 dx[k] = xn[k] - self.sites[k * n + i];
             }
-            r[i] = self.correlation.value_and_grad_d(&self.theta, &dx, &mut g);
+            let ri = if self.correlation == Correlation::Gauss {
+                // exp(−Σ θ_k d_k²) with one exp instead of one per dimension.
+                let ri = (-(0..d).map(|k| self.theta[k] * dx[k] * dx[k]).sum::<f64>()).exp();
+                for k in 0..d {
+                    g[k] = -2.0 * self.theta[k] * dx[k] * ri;
+                }
+                ri
+            } else {
+                self.correlation.value_and_grad_d(&self.theta, &dx, &mut g)
+            };
+            rm[i] = ri;
             for k in 0..d {
-                dr[k * n + i] = g[k];
+                rm[(k + 1) * n + i] = g[k];
             }
         }
+        // P = Mᵀγ ((d + 1) × q): row 0 is γᵀr, row k + 1 is γᵀ∂r/∂xn_k.
+        let mut pm = Mat::<f64>::zeros(d + 1, q);
+        matmul(
+            pm.as_mut(),
+            Accum::Replace,
+            MatRef::from_column_major_slice(&rm, n, d + 1).transpose(),
+            MatRef::from_column_major_slice(&self.gamma, n, q),
+            1.0,
+            Par::Seq,
+        );
         // ∂xn_k/∂x_k.
         let scale: Vec<f64> = (0..d)
             .map(|k| self.dinternal(x, k) / self.x_std[k])
@@ -94,10 +117,9 @@ impl KrigingModel {
         c[0] = 1.0;
         for j in 0..q {
             let b = &self.beta[j * p..(j + 1) * p];
-            let gm = &self.gamma[j * n..(j + 1) * n];
-            c[j + 1] = dot(b, &f) + dot(gm, &r);
+            c[j + 1] = dot(b, &f) + pm[(0, j)];
             for k in 0..d {
-                let dz = dot(&df[k * p..(k + 1) * p], b) + dot(&dr[k * n..(k + 1) * n], gm);
+                let dz = dot(&df[k * p..(k + 1) * p], b) + pm[(k + 1, j)];
                 dc[(j + 1) * d + k] = dz * scale[k];
             }
         }
