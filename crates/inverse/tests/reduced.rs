@@ -359,12 +359,11 @@ fn real_fe_meta_model_reduced_form_is_exact_and_its_basis_is_checked() {
         .map(|v| v + 0.02 * peak * normal(&mut rng))
         .collect();
     let reduced = ReducedMisfit::new(vec![
-        ReducedExperiment::new("FE", &sur, projection(&sur, None).expect("p"), &data)
-            .expect("e"),
+        ReducedExperiment::new("FE", &sur, projection(&sur, None).expect("p"), &data).expect("e"),
     ])
     .expect("reduced");
-    let direct = Misfit::new(vec![Experiment::new("FE", &sur, data, None).expect("e")])
-        .expect("direct");
+    let direct =
+        Misfit::new(vec![Experiment::new("FE", &sur, data, None).expect("e")]).expect("direct");
     let domain = Objective::domain(&reduced).clone();
     let mut worst: f64 = 0.0;
     for x in feasible_starts(&domain, 20, 17).expect("points") {
@@ -372,6 +371,8 @@ fn real_fe_meta_model_reduced_form_is_exact_and_its_basis_is_checked() {
         let v_ref = direct.value(&x).expect("direct");
         worst = worst.max((v - v_ref).abs() / v_ref);
     }
-    println!("reduced vs direct eq. 5.3 on the FE meta-model, 20 points: max relative difference {worst:.2e}");
+    println!(
+        "reduced vs direct eq. 5.3 on the FE meta-model, 20 points: max relative difference {worst:.2e}"
+    );
     assert!(worst <= 1e-12, "{worst}");
 }
