@@ -12,6 +12,8 @@
 //!   `nlvid_surrogate::build` can run it over a design;
 //!   [`design_domain`] gives the matching design box.
 
+use std::sync::OnceLock;
+
 use nalgebra::{DMatrix, DVector};
 use nlvid_surrogate::{ForwardModel, KrigingModel, RunFailure, SurrogateError, doe};
 
@@ -41,8 +43,9 @@ pub struct KrigingSurrogate {
     coordinates: Coordinates,
     b: DMatrix<f64>,
     mu: Vec<f64>,
-    /// Output map A of the reduced form ŷ = A c(x) (m × (q + 1)).
-    a: DMatrix<f64>,
+    /// Output map A of the reduced form ŷ = A c(x) (m × (q + 1)), built
+    /// on first use (without a PCA it is m × (m + 1) and rarely wanted).
+    a: OnceLock<DMatrix<f64>>,
 }
 
 fn model_err(x: &[f64], e: &SurrogateError) -> InverseError {
@@ -101,10 +104,6 @@ impl KrigingSurrogate {
         }
         let (b, mu) = kriging.basis_coefficients();
         let b = DMatrix::from_column_slice(kriging.n_basis(), kriging.n_outputs, &b);
-        let a = kriging.output_map().map_err(|e| {
-            InverseError::InvalidSetting(format!("the surrogate has no reduced form: {e}"))
-        })?;
-        let a = DMatrix::from_column_slice(kriging.n_outputs, kriging.n_output_coordinates(), &a);
         let s = Self {
             kriging,
             domain,
@@ -113,7 +112,7 @@ impl KrigingSurrogate {
             coordinates,
             b,
             mu,
-            a,
+            a: OnceLock::new(),
         };
         s.check_basis_form()?;
         Ok(s)
@@ -156,7 +155,7 @@ impl KrigingSurrogate {
     /// reduced misfit ([`crate::ReducedMisfit`]) then costs O(N·q·n) per
     /// evaluation instead of O(N·m).
     pub fn is_reduced(&self) -> bool {
-        self.kriging.pca.is_some() && self.a.ncols() < self.a.nrows()
+        self.kriging.pca.is_some() && self.kriging.n_output_coordinates() < self.kriging.n_outputs
     }
 
     /// Surrogate inputs at physical x (domain order) and d(input_k)/d(x_perm[k]).
@@ -227,7 +226,16 @@ impl ReducedModel for KrigingSurrogate {
         &self.times
     }
     fn output_map(&self) -> &DMatrix<f64> {
-        &self.a
+        self.a.get_or_init(|| {
+            let (m, r) = (self.kriging.n_outputs, self.kriging.n_output_coordinates());
+            match self.kriging.output_map() {
+                Ok(a) => DMatrix::from_column_slice(m, r, &a),
+                // Unreachable: `new` refuses models whose predictor is not
+                // linear (ln outputs); a NaN map makes `projection` fail
+                // with a typed error rather than fit silently.
+                Err(_) => DMatrix::from_element(m, r, f64::NAN),
+            }
+        })
     }
     /// c(x) = s(x)·[1; z(x)] with z the kriged outputs (PC scores),
     /// O(N·q·n) (`KrigingModel::output_coordinates`).
