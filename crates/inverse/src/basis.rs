@@ -212,7 +212,7 @@ impl<B: BasisModel> BasisExperiment<B> {
     /// [`CANCELLATION`] of its terms' magnitude (a good fit of data far from
     /// the mean curve μ: the terms cancel and round-off dominates — it can
     /// even turn negative) the residual is formed directly instead.
-    fn eval(&self, x: &[f64], with_gradient: bool) -> Result<(f64, Vec<f64>)> {
+    pub(crate) fn eval(&self, x: &[f64], with_gradient: bool) -> Result<(f64, Vec<f64>)> {
         let (phi, dphi) = self.model.basis(x)?;
         check_len("basis phi", self.h.len(), phi.len())?;
         // The direct residual costs ≈ 2·N·m, the Gram form N²: take the

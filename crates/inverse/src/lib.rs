@@ -11,8 +11,11 @@
 //! - [`Misfit`]: the range-normalised RMSE of eq. 5.3, with optional
 //!   per-segment weights, summed over experiments fitted with one
 //!   parameter set, and its gradient; [`BasisMisfit`] computes the same
-//!   value in O(N²) for Kriging-form models y = μ + Bᵀφ(x) ([`BasisModel`]);
-//!   both are [`Objective`]s;
+//!   value in O(N²) for Kriging-form models y = μ + Bᵀφ(x) ([`BasisModel`]),
+//!   [`ReducedMisfit`] in the reduced output space of a PCA-reduced
+//!   surrogate ŷ = A c(x) ([`ReducedModel`]: O(N·q·n + r²) per evaluation,
+//!   nothing growing with m), [`SurrogateMisfit`] picks the fast form per
+//!   surrogate; all are [`Objective`]s;
 //! - [`MultiStart`]: seeded feasible Latin-hypercube starts, SLSQP local
 //!   runs, clustering into distinct optima, alternatives within a misfit
 //!   tolerance, bound flags; [`verify`] re-scores the optimum with another
@@ -63,6 +66,7 @@ mod model;
 mod optimise;
 mod plot;
 mod prony;
+mod reduced;
 mod rerun;
 mod starts;
 mod surrogate;
@@ -82,9 +86,11 @@ pub use model::{FD_STEP_UNIT, Model, check_finite, check_jacobian, check_len, fd
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
 pub use plot::{FigureCurve, FitFigure};
 pub use prony::{ModulusPoint, ParameterTable, PronyShear, PronyTerm};
+pub use reduced::{Projection, ReducedExperiment, ReducedMisfit, ReducedModel, projection};
 pub use rerun::{Rerun, rerun};
 pub use starts::{feasible_starts, latin_hypercube};
 pub use surrogate::{Coordinates, ForwardFromModel, KrigingSurrogate, design_domain};
 pub use surrogate_file::{
-    SurrogateFit, SurrogateFitter, SurrogateMeta, load_kriging_surrogate, read_meta,
+    Precomputed, SurrogateCurve, SurrogateFit, SurrogateFitter, SurrogateMeta, SurrogateMisfit,
+    load_kriging_surrogate, read_meta,
 };

@@ -53,7 +53,7 @@ pub fn range_normalised_rmse(
     Ok((sum_wr2 / sum_w).sqrt() / range)
 }
 
-fn curve_range(reference: &[f64], what: &str) -> Result<f64> {
+pub(crate) fn curve_range(reference: &[f64], what: &str) -> Result<f64> {
     let (lo, hi) = reference
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
@@ -69,7 +69,7 @@ fn curve_range(reference: &[f64], what: &str) -> Result<f64> {
     }
 }
 
-fn check_weights(w: &[f64], m: usize) -> Result<()> {
+pub(crate) fn check_weights(w: &[f64], m: usize) -> Result<()> {
     check_len("weights", m, w.len())?;
     if let Some(j) = w.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
         return Err(InverseError::InvalidSetting(format!(
@@ -262,6 +262,17 @@ pub trait Objective {
     /// # Errors
     /// Model errors.
     fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>>;
+
+    /// The value reported for the end point of a local run (the fit's
+    /// misfit): [`Objective::value`] unless an objective searches with a
+    /// faster form and reports the directly computed one
+    /// ([`crate::ReducedMisfit`]).
+    ///
+    /// # Errors
+    /// Model errors.
+    fn final_value(&self, x: &[f64]) -> Result<f64> {
+        self.value(x)
+    }
 }
 
 impl<M: Model> Objective for Misfit<M> {

@@ -302,7 +302,7 @@ impl MultiStart {
         }
         // Re-evaluate: SLSQP reports the best feasible point it saw.
         let misfit_value = misfit
-            .value(&x)
+            .final_value(&x)
             .map_err(|e| (format!("start {x0:?}: {e}"), used + 1))?;
         Ok(LocalRun {
             x,

@@ -12,6 +12,8 @@
 //!   `nlvid_surrogate::build` can run it over a design;
 //!   [`design_domain`] gives the matching design box.
 
+use std::sync::OnceLock;
+
 use nalgebra::{DMatrix, DVector};
 use nlvid_surrogate::{ForwardModel, KrigingModel, RunFailure, SurrogateError, doe};
 
@@ -19,6 +21,7 @@ use crate::basis::BasisModel;
 use crate::domain::{Domain, Scale};
 use crate::error::{InverseError, Result};
 use crate::model::{Model, check_len};
+use crate::reduced::ReducedModel;
 
 /// What the surrogate's inputs are.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -40,6 +43,9 @@ pub struct KrigingSurrogate {
     coordinates: Coordinates,
     b: DMatrix<f64>,
     mu: Vec<f64>,
+    /// Output map A of the reduced form ŷ = A c(x) (m × (q + 1)), built
+    /// on first use (without a PCA it is m × (m + 1) and rarely wanted).
+    a: OnceLock<DMatrix<f64>>,
 }
 
 fn model_err(x: &[f64], e: &SurrogateError) -> InverseError {
@@ -106,6 +112,7 @@ impl KrigingSurrogate {
             coordinates,
             b,
             mu,
+            a: OnceLock::new(),
         };
         s.check_basis_form()?;
         Ok(s)
@@ -142,6 +149,13 @@ impl KrigingSurrogate {
     /// The wrapped Kriging model.
     pub fn kriging(&self) -> &KrigingModel {
         &self.kriging
+    }
+
+    /// True when the outputs are PCA-reduced (q + 1 < m coordinates): the
+    /// reduced misfit ([`crate::ReducedMisfit`]) then costs O(N·q·n) per
+    /// evaluation instead of O(N·m).
+    pub fn is_reduced(&self) -> bool {
+        self.kriging.pca.is_some() && self.kriging.n_output_coordinates() < self.kriging.n_outputs
     }
 
     /// Surrogate inputs at physical x (domain order) and d(input_k)/d(x_perm[k]).
@@ -201,6 +215,44 @@ impl BasisModel for KrigingSurrogate {
     }
     fn offset(&self) -> &[f64] {
         &self.mu
+    }
+}
+
+impl ReducedModel for KrigingSurrogate {
+    fn domain(&self) -> &Domain {
+        &self.domain
+    }
+    fn times(&self) -> &[f64] {
+        &self.times
+    }
+    fn output_map(&self) -> &DMatrix<f64> {
+        self.a.get_or_init(|| {
+            let (m, r) = (self.kriging.n_outputs, self.kriging.n_output_coordinates());
+            match self.kriging.output_map() {
+                Ok(a) => DMatrix::from_column_slice(m, r, &a),
+                // Unreachable: `new` refuses models whose predictor is not
+                // linear (ln outputs); a NaN map makes `projection` fail
+                // with a typed error rather than fit silently.
+                Err(_) => DMatrix::from_element(m, r, f64::NAN),
+            }
+        })
+    }
+    /// c(x) = s(x)·[1; z(x)] with z the kriged outputs (PC scores),
+    /// O(N·q·n) (`KrigingModel::output_coordinates`).
+    fn coordinates(&self, x: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>)> {
+        let (xs, ds) = self.inputs(x)?;
+        let (c, dc_s) = self
+            .kriging
+            .output_coordinates(&xs)
+            .map_err(|e| model_err(x, &e))?;
+        let (r, d) = (c.len(), xs.len());
+        let mut dc = DMatrix::zeros(r, d);
+        for l in 0..r {
+            for (k, &i) in self.perm.iter().enumerate() {
+                dc[(l, i)] = dc_s[l * d + k] * ds[k];
+            }
+        }
+        Ok((DVector::from_vec(c), dc))
     }
 }
 

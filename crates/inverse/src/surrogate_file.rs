@@ -4,10 +4,12 @@
 //! The files: the model file of `nlvid surrogate fit` (a serialised
 //! [`KrigingModel`]) and the `meta.json` sidecar of `nlvid build --export`
 //! (`parameter_names` in the surrogate's input order, `time_s` the output
-//! grid). [`SurrogateFitter`] holds the surrogate and its Gram matrix (the
-//! O(N²·m) part, computed once) and fits one cell's curves with the O(N²)
-//! basis form of the eq. 5.3 misfit ([`BasisMisfit`]) and a seeded
-//! [`MultiStart`]. `nlvid fit` and `nlvid cohort` both use it.
+//! grid). [`SurrogateMisfit`] is the eq. 5.3 objective on such surrogates,
+//! each through its fast form ([`Precomputed`]: the reduced PCA form of
+//! [`crate::ReducedMisfit`] for PCA-reduced surrogates, the Gram form of
+//! [`crate::BasisMisfit`] otherwise); `nlvid fit` uses it. [`SurrogateFitter`]
+//! holds one surrogate with its precomputation and fits one cell's curves
+//! with a seeded [`MultiStart`] (`nlvid cohort`).
 
 use std::path::Path;
 use std::sync::Arc;
@@ -15,11 +17,13 @@ use std::sync::Arc;
 use nalgebra::DMatrix;
 use nlvid_surrogate::KrigingModel;
 
-use crate::basis::{BasisExperiment, BasisMisfit, BasisModel, gram};
+use crate::basis::{BasisExperiment, BasisModel, gram};
 use crate::domain::Domain;
 use crate::error::{InverseError, Result};
+use crate::misfit::Objective;
 use crate::model::Model;
 use crate::optimise::{FitResult, MultiStart};
+use crate::reduced::{Projection, ReducedExperiment, ReducedModel, projection};
 use crate::surrogate::{Coordinates, KrigingSurrogate};
 
 /// The `meta.json` sidecar of `nlvid build --export`: what the surrogate's
@@ -91,13 +95,166 @@ pub fn load_kriging_surrogate(
     })
 }
 
-/// A surrogate ready to fit many cells: the Gram matrix B W Bᵀ of the
-/// basis misfit is computed once and shared by every fit (and thread).
+/// What a fit on one Kriging surrogate precomputes once per surrogate and
+/// weights, shared by every data set (and thread).
+#[derive(Debug, Clone)]
+pub enum Precomputed {
+    /// PCA-reduced surrogate: √W A = Q R of the reduced form (O(m·r²) once,
+    /// O(N·q·n + r²) per evaluation).
+    Reduced(Arc<Projection>),
+    /// Otherwise the Gram matrix B W Bᵀ of the basis form (O(N²·m) once;
+    /// [`crate::BasisMisfit`], which falls back to the direct O(N·m) residual
+    /// where its sum cancels).
+    Gram(Arc<DMatrix<f64>>),
+}
+
+impl Precomputed {
+    /// The reduced form when the surrogate is PCA-reduced
+    /// ([`KrigingSurrogate::is_reduced`]), else the Gram form.
+    ///
+    /// # Errors
+    /// Weights of the wrong length or negative.
+    pub fn new(surrogate: &KrigingSurrogate, weights: Option<&[f64]>) -> Result<Self> {
+        if surrogate.is_reduced() {
+            Ok(Self::Reduced(projection(surrogate, weights)?))
+        } else {
+            Ok(Self::Gram(gram(surrogate, weights)?))
+        }
+    }
+}
+
+enum Part<'a> {
+    Reduced(ReducedExperiment<&'a KrigingSurrogate>),
+    Basis(BasisExperiment<&'a KrigingSurrogate>),
+}
+
+/// The summed eq. 5.3 misfit of curves fitted with one parameter set on
+/// Kriging surrogates (one per curve, possibly different), each through
+/// its fast form ([`Precomputed`]). Reported values (the fit's misfit,
+/// per-curve misfits) are computed from the predicted curve directly.
+pub struct SurrogateMisfit<'a> {
+    parts: Vec<Part<'a>>,
+}
+
+/// One curve of a [`SurrogateMisfit`].
+pub struct SurrogateCurve<'a> {
+    /// Label for reports.
+    pub label: &'a str,
+    /// The surrogate predicting it.
+    pub surrogate: &'a KrigingSurrogate,
+    /// [`Precomputed::new`]`(surrogate, weights)`.
+    pub precomputed: &'a Precomputed,
+    /// The curve on the surrogate's time grid.
+    pub data: &'a [f64],
+    /// Per-point weights (None = all 1), the ones `precomputed` was made with.
+    pub weights: Option<&'a [f64]>,
+}
+
+impl<'a> SurrogateMisfit<'a> {
+    /// Combines curves (at least one, same parameter names).
+    ///
+    /// # Errors
+    /// Bad data (length, non-finite, zero range) naming the curve;
+    /// surrogates with different parameters.
+    pub fn new(curves: &[SurrogateCurve<'a>]) -> Result<Self> {
+        let first = curves.first().ok_or_else(|| {
+            InverseError::InvalidSetting("a fit needs at least one experiment".into())
+        })?;
+        let names = |s: &KrigingSurrogate| {
+            Model::domain(s)
+                .params()
+                .iter()
+                .map(|p| p.name.clone())
+                .collect::<Vec<_>>()
+        };
+        let reference = names(first.surrogate);
+        let mut parts = Vec::with_capacity(curves.len());
+        for c in curves {
+            if names(c.surrogate) != reference {
+                return Err(InverseError::InvalidSetting(format!(
+                    "experiment '{}' has parameters {:?}, the first has {:?}",
+                    c.label,
+                    names(c.surrogate),
+                    reference
+                )));
+            }
+            parts.push(match c.precomputed {
+                Precomputed::Reduced(p) => Part::Reduced(ReducedExperiment::new(
+                    c.label,
+                    c.surrogate,
+                    p.clone(),
+                    c.data,
+                )?),
+                Precomputed::Gram(g) => Part::Basis(BasisExperiment::new(
+                    c.label,
+                    c.surrogate,
+                    g.clone(),
+                    c.data,
+                    c.weights,
+                )?),
+            });
+        }
+        Ok(Self { parts })
+    }
+}
+
+impl Objective for SurrogateMisfit<'_> {
+    fn domain(&self) -> &Domain {
+        match &self.parts[0] {
+            Part::Reduced(e) => ReducedModel::domain(&e.model),
+            Part::Basis(e) => BasisModel::domain(&e.model),
+        }
+    }
+
+    fn value(&self, x: &[f64]) -> Result<f64> {
+        let mut total = 0.0;
+        for p in &self.parts {
+            total += match p {
+                Part::Reduced(e) => e.eval(x, false)?.0,
+                Part::Basis(e) => e.eval(x, false)?.0,
+            };
+        }
+        Ok(total)
+    }
+
+    fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
+        let mut total = 0.0;
+        let mut grad = vec![0.0; x.len()];
+        for p in &self.parts {
+            let (v, g) = match p {
+                Part::Reduced(e) => e.eval(x, true)?,
+                Part::Basis(e) => e.eval(x, true)?,
+            };
+            total += v;
+            for (a, b) in grad.iter_mut().zip(g) {
+                *a += b;
+            }
+        }
+        Ok((total, grad))
+    }
+
+    fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>> {
+        self.parts
+            .iter()
+            .map(|p| match p {
+                Part::Reduced(e) => e.direct(x),
+                Part::Basis(e) => e.eval(x, false).map(|(v, _)| v),
+            })
+            .collect()
+    }
+
+    fn final_value(&self, x: &[f64]) -> Result<f64> {
+        Ok(self.per_experiment(x)?.iter().sum())
+    }
+}
+
+/// A surrogate ready to fit many cells: the fast form's precomputation
+/// ([`Precomputed`]) is done once and shared by every fit (and thread).
 #[derive(Debug, Clone)]
 pub struct SurrogateFitter {
     surrogate: KrigingSurrogate,
     weights: Option<Vec<f64>>,
-    gram: Arc<DMatrix<f64>>,
+    precomputed: Precomputed,
 }
 
 /// One fit on the surrogate.
@@ -113,16 +270,17 @@ pub struct SurrogateFit {
 
 impl SurrogateFitter {
     /// Prepares `surrogate` for fitting with optional per-time-point
-    /// weights (eq. 5.3; None = all 1). Cost O(N²·m) once.
+    /// weights (eq. 5.3; None = all 1): O(m·r²) once for a PCA-reduced
+    /// surrogate, O(N²·m) otherwise.
     ///
     /// # Errors
     /// Weights of the wrong length.
     pub fn new(surrogate: KrigingSurrogate, weights: Option<Vec<f64>>) -> Result<Self> {
-        let gram = gram(&surrogate, weights.as_deref())?;
+        let precomputed = Precomputed::new(&surrogate, weights.as_deref())?;
         Ok(Self {
             surrogate,
             weights,
-            gram,
+            precomputed,
         })
     }
 
@@ -144,21 +302,19 @@ impl SurrogateFitter {
     /// Bad data (length, non-finite, zero range) naming the curve; no start
     /// converged.
     pub fn fit(&self, curves: &[(&str, &[f64])], multistart: &MultiStart) -> Result<SurrogateFit> {
-        let experiments = curves
+        let parts: Vec<SurrogateCurve<'_>> = curves
             .iter()
-            .map(|(label, force)| {
-                BasisExperiment::new(
-                    label,
-                    &self.surrogate,
-                    self.gram.clone(),
-                    force,
-                    self.weights.as_deref(),
-                )
+            .map(|(label, force)| SurrogateCurve {
+                label,
+                surrogate: &self.surrogate,
+                precomputed: &self.precomputed,
+                data: force,
+                weights: self.weights.as_deref(),
             })
-            .collect::<Result<Vec<_>>>()?;
-        let misfit = BasisMisfit::new(experiments)?;
+            .collect();
+        let misfit = SurrogateMisfit::new(&parts)?;
         let fit = multistart.fit(&misfit)?;
-        let per_curve = crate::misfit::Objective::per_experiment(&misfit, &fit.best.x)?;
+        let per_curve = misfit.per_experiment(&fit.best.x)?;
         let response = self.surrogate.response(&fit.best.x)?;
         Ok(SurrogateFit {
             fit,

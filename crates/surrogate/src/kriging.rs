@@ -26,6 +26,8 @@ use crate::regression::Regression;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+mod reduced;
+
 /// How θ is chosen.
 #[derive(Debug, Clone)]
 pub enum ThetaSearch {

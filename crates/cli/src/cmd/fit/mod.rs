@@ -16,7 +16,7 @@ mod report;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use nlvid_inverse::{BasisExperiment, BasisMisfit, MultiStart, gram};
+use nlvid_inverse::{MultiStart, Precomputed, SurrogateCurve, SurrogateMisfit};
 
 use super::{Context, Run};
 use config::FitSettings;
@@ -65,19 +65,26 @@ impl Run for Args {
 
     fn execute(c: Config, ctx: &Context) -> anyhow::Result<ExitCode> {
         let t0 = std::time::Instant::now();
-        let mut parts = Vec::with_capacity(c.experiments.len());
-        for e in &c.experiments {
-            // The Gram matrix depends on the surrogate and the weights only.
-            let g = gram(&e.surrogate.model, e.weights.as_deref())?;
-            parts.push(BasisExperiment::new(
-                &e.label,
-                &e.surrogate.model,
-                g,
-                &e.force,
-                e.weights.as_deref(),
-            )?);
-        }
-        let misfit = BasisMisfit::new(parts)?;
+        // Reduced (PCA) form for PCA-reduced surrogates, else the Gram form;
+        // both depend on the surrogate and the weights only.
+        let pre = c
+            .experiments
+            .iter()
+            .map(|e| Precomputed::new(&e.surrogate.model, e.weights.as_deref()))
+            .collect::<Result<Vec<_>, _>>()?;
+        let curves: Vec<SurrogateCurve<'_>> = c
+            .experiments
+            .iter()
+            .zip(&pre)
+            .map(|(e, p)| SurrogateCurve {
+                label: &e.label,
+                surrogate: &e.surrogate.model,
+                precomputed: p,
+                data: &e.force,
+                weights: e.weights.as_deref(),
+            })
+            .collect();
+        let misfit = SurrogateMisfit::new(&curves)?;
         let fit = MultiStart::new()
             .with_starts(c.settings.starts)?
             .with_seed(c.settings.seed)

@@ -1,0 +1,156 @@
+//! The predictor in its reduced (output-space) form, for fitters whose cost
+//! must not grow with n·m (thesis §5.4.1: one fit per cell on a surrogate
+//! with N ≈ 970 runs and m ≈ 5000 output times).
+//!
+//! Every linear-output model (no `log_outputs`) predicts
+//! `ŷ(x) = s(x)·(μ + σ ⊙ V z(x)) = A c(x)` with
+//! `A = [μ, diag(σ)·V]` (m × (q + 1), fixed) and `c(x) = s(x)·[1; z(x)]`
+//! (q + 1 values), where `z = βᵀf(x) + γᵀr(x)` are the q kriged outputs
+//! (PC scores with a PCA, V = I without), μ, σ the output means and
+//! deviations and s(x) the [`OutputScale`](super::OutputScale) (1 without).
+//! c(x) and ∂c/∂x cost O(n·q·d); A is shared by every evaluation.
+
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef, Par};
+
+use super::KrigingModel;
+use crate::correlation::Correlation;
+use crate::error::{Result, SurrogateError};
+
+impl KrigingModel {
+    /// Number of reduced coordinates q + 1 of [`KrigingModel::output_coordinates`].
+    pub fn n_output_coordinates(&self) -> usize {
+        self.n_kriged() + 1
+    }
+
+    /// The fixed output map A = [μ, diag(σ)·V] (m × (q + 1), column-major)
+    /// with ŷ(x) = A c(x) (DACE report eq. 2.16 with the output
+    /// normalisation, PCA rotation V and output scaling written out).
+    /// Without a PCA, V = I (q = m: then A has m + 1 columns and no
+    /// reduction is gained).
+    ///
+    /// # Errors
+    /// [`SurrogateError::InvalidSettings`] for a model with `log_outputs`
+    /// (its predictor exp(·) is not linear in c).
+    pub fn output_map(&self) -> Result<Vec<f64>> {
+        self.check_linear_outputs()?;
+        let (m, q) = (self.n_outputs, self.n_kriged());
+        let mut a = vec![0.0; m * (q + 1)];
+        a[..m].copy_from_slice(&self.y_mean);
+        match &self.pca {
+            Some(pca) => {
+                for k in 0..q {
+                    let v = &pca.basis[k * m..(k + 1) * m];
+                    let col = &mut a[(k + 1) * m..(k + 2) * m];
+                    for j in 0..m {
+                        col[j] = self.y_std[j] * v[j];
+                    }
+                }
+            }
+            None => {
+                for j in 0..m {
+                    a[(j + 1) * m + j] = self.y_std[j];
+                }
+            }
+        }
+        Ok(a)
+    }
+
+    /// Reduced coordinates c(x) = s(x)·[1; z(x)] of the prediction
+    /// (ŷ = A c, see [`KrigingModel::output_map`]) and ∂c/∂x with respect
+    /// to the caller's x (log inputs and normalisation included),
+    /// row-major (q + 1) × d. Cost O(n·q·d) — independent of m.
+    ///
+    /// # Errors
+    /// `x` of the wrong length or not finite, a log input ≤ 0, s(x) ≤ 0,
+    /// or a model with `log_outputs`.
+    pub fn output_coordinates(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
+        self.check_linear_outputs()?;
+        let xi = self.internal_x(x)?;
+        let (n, d, p, q) = (self.n_sites, self.dim, self.p(), self.n_kriged());
+        let xn: Vec<f64> = (0..d)
+            .map(|k| (xi[k] - self.x_mean[k]) / self.x_std[k])
+            .collect();
+        let mut f = vec![0.0; p];
+        self.regression.eval(&xn, &mut f);
+        let mut df = vec![0.0; d * p];
+        self.regression.jacobian(&xn, &mut df);
+        // M = [r, ∂r/∂xn_1, …, ∂r/∂xn_d], column-major n × (d + 1).
+        let mut rm = vec![0.0; n * (d + 1)];
+        let mut dx = vec![0.0; d];
+        let mut g = vec![0.0; d];
+        for i in 0..n {
+            for k in 0..d {
+                dx[k] = xn[k] - self.sites[k * n + i];
+            }
+            let ri = if self.correlation == Correlation::Gauss {
+                // exp(−Σ θ_k d_k²) with one exp instead of one per dimension.
+                let ri = (-(0..d).map(|k| self.theta[k] * dx[k] * dx[k]).sum::<f64>()).exp();
+                for k in 0..d {
+                    g[k] = -2.0 * self.theta[k] * dx[k] * ri;
+                }
+                ri
+            } else {
+                self.correlation.value_and_grad_d(&self.theta, &dx, &mut g)
+            };
+            rm[i] = ri;
+            for k in 0..d {
+                rm[(k + 1) * n + i] = g[k];
+            }
+        }
+        // P = Mᵀγ ((d + 1) × q): row 0 is γᵀr, row k + 1 is γᵀ∂r/∂xn_k.
+        let mut pm = Mat::<f64>::zeros(d + 1, q);
+        matmul(
+            pm.as_mut(),
+            Accum::Replace,
+            MatRef::from_column_major_slice(&rm, n, d + 1).transpose(),
+            MatRef::from_column_major_slice(&self.gamma, n, q),
+            1.0,
+            Par::Seq,
+        );
+        // ∂xn_k/∂x_k.
+        let scale: Vec<f64> = (0..d)
+            .map(|k| self.dinternal(x, k) / self.x_std[k])
+            .collect();
+        let mut c = vec![0.0; q + 1];
+        let mut dc = vec![0.0; (q + 1) * d];
+        c[0] = 1.0;
+        for j in 0..q {
+            let b = &self.beta[j * p..(j + 1) * p];
+            c[j + 1] = dot(b, &f) + pm[(0, j)];
+            for k in 0..d {
+                let dz = dot(&df[k * p..(k + 1) * p], b) + pm[(k + 1, j)];
+                dc[(j + 1) * d + k] = dz * scale[k];
+            }
+        }
+        if let Some(sc) = self.output_scale {
+            let s = sc.check(x, "the prediction point")?;
+            let (_, ds) = sc.eval(x);
+            let kk = sc.input();
+            for j in 0..=q {
+                for k in 0..d {
+                    dc[j * d + k] *= s;
+                }
+                dc[j * d + kk] += ds * c[j];
+                c[j] *= s;
+            }
+        }
+        Ok((c, dc))
+    }
+
+    fn check_linear_outputs(&self) -> Result<()> {
+        if self.log_outputs {
+            Err(SurrogateError::InvalidSettings(
+                "the model predicts exp(kriged ln y): it has no linear output map (refit \
+                 without --log-outputs to use the reduced form)"
+                    .into(),
+            ))
+        } else {
+            Ok(())
+        }
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
