@@ -22,8 +22,10 @@ pub const GAUSS: [(f64, f64); 4] = {
     [(-G, -G), (G, -G), (G, G), (-G, G)]
 };
 
+#[cfg(test)]
 /// Components of F stored by the element, and their index in the 3×3
-/// matrix (row-major `3i+J`): rR, rZ, zR, zZ, θθ.
+/// matrix (row-major `3i+J`): rR, rZ, zR, zZ, θθ
+/// (`nlvid_material::AXISYMMETRIC_COMPONENTS`).
 pub(crate) const FIDX: [(usize, usize); 5] = [(0, 0), (0, 1), (1, 0), (1, 1), (2, 2)];
 
 /// Shape functions N, their reference gradients ∂N/∂(R, Z) and det J at
@@ -135,6 +137,7 @@ pub(crate) fn jacobian_derivatives(f: &[f64; 5]) -> (f64, [f64; 5], [[f64; 5]; 5
     (j2 * h, dj, hj)
 }
 
+#[cfg(test)]
 /// The 3×3 matrix of the stored components.
 pub(crate) fn to_mat3(f: &[f64; 5]) -> nlvid_material::Mat3 {
     nlvid_material::Mat3::new(f[0], f[1], 0.0, f[2], f[3], 0.0, 0.0, 0.0, f[4])
@@ -424,13 +427,13 @@ pub(crate) fn fbar_element<M: nlvid_material::Material3>(
             *x *= a;
         }
         let resp = material
-            .update(&state_n[q], &to_mat3(&fbar_q), dt, &mut trial[q])
+            .update_axisymmetric(&state_n[q], &fbar_q, dt, &mut trial[q], tangent)
             .map_err(|e| (q, e))?;
-        for (i, &(i0, j0)) in FIDX.iter().enumerate() {
-            p5[q][i] = resp.first_piola[(i0, j0)];
-            if tangent {
-                for (k, &(k0, l0)) in FIDX.iter().enumerate() {
-                    m5[q][i][k] = w * resp.tangent[(3 * i0 + j0, 3 * k0 + l0)];
+        p5[q] = resp.first_piola;
+        if tangent {
+            for (mi, ti) in m5[q].iter_mut().zip(&resp.tangent) {
+                for (m, t) in mi.iter_mut().zip(ti) {
+                    *m = w * t;
                 }
             }
         }

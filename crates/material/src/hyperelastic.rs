@@ -99,7 +99,7 @@ impl MooneyRivlin {
     ///        = 2C1 J^{-2/3}(I − I1/3 C⁻¹) + 2C2 J^{-4/3}(I1 I − C − 2I2/3 C⁻¹)`.
     pub(crate) fn add_isochoric(&self, k: &Kin, scale: f64, out: &mut IsoStress) {
         let (c1, c2) = (scale * self.c1, scale * self.c2);
-        let j23 = 1.0 / (k.j.cbrt() * k.j.cbrt());
+        let j23 = k.j23;
         let j43 = j23 * j23;
         let ij = 1.0 / k.j;
         out.add(

@@ -23,6 +23,8 @@ pub(crate) struct Kin {
     pub fit: Mat3,
     pub b: Mat3,
     pub j: f64,
+    /// `J^{-2/3}`, computed once (every isochoric term uses it).
+    pub j23: f64,
     pub i1: f64,
     pub i2: f64,
 }
@@ -53,6 +55,51 @@ impl Kin {
             fit: finv.transpose(),
             b: f * f.transpose(),
             j,
+            j23: 1.0 / (j.cbrt() * j.cbrt()),
+            i1,
+            i2: 0.5 * (i1 * i1 - trc2),
+        })
+    }
+
+    /// [`Kin::new`] for an axisymmetric `F` given by its components
+    /// [`crate::AXISYMMETRIC_COMPONENTS`] (rR, rZ, zR, zZ, θθ): the same
+    /// quantities from 2×2 block algebra instead of general 3×3 operations.
+    pub fn axisymmetric(f5: &[f64; 5]) -> Result<Self> {
+        let [a, b, c, d, h] = *f5;
+        if f5.iter().any(|x| !x.is_finite()) {
+            return Err(MaterialError::Deformation(format!(
+                "deformation gradient has a non-finite entry: {f5:?} (rR, rZ, zR, zZ, θθ)"
+            )));
+        }
+        let j2 = a * d - b * c;
+        let j = j2 * h;
+        if j <= 0.0 || j.is_nan() {
+            return Err(MaterialError::Deformation(format!(
+                "det F = {j} ≤ 0 (inverted or degenerate element)"
+            )));
+        }
+        // F⁻¹ blocks.
+        let (ia, ib, ic, id) = (d / j2, -b / j2, -c / j2, a / j2);
+        let ih = 1.0 / h;
+        let (c00, c01, c11, c22) = (a * a + c * c, a * b + c * d, b * b + d * d, h * h);
+        let i1 = c00 + c11 + c22;
+        let trc2 = c00 * c00 + 2.0 * c01 * c01 + c11 * c11 + c22 * c22;
+        let block = |xx, xy, yx, yy, zz| Mat3::new(xx, xy, 0.0, yx, yy, 0.0, 0.0, 0.0, zz);
+        Ok(Self {
+            f: block(a, b, c, d, h),
+            c: block(c00, c01, c01, c11, c22),
+            // C⁻¹ = F⁻¹ F⁻ᵀ.
+            cinv: {
+                let x01 = ia * ic + ib * id;
+                block(ia * ia + ib * ib, x01, x01, ic * ic + id * id, ih * ih)
+            },
+            fit: block(ia, ic, ib, id, ih),
+            b: {
+                let x01 = a * c + b * d;
+                block(a * a + b * b, x01, x01, c * c + d * d, c22)
+            },
+            j,
+            j23: 1.0 / (j.cbrt() * j.cbrt()),
             i1,
             i2: 0.5 * (i1 * i1 - trc2),
         })
@@ -148,6 +195,56 @@ impl IsoStress {
             }
         }
         Tangent3::from_fn(|r, c| t[r][c])
+    }
+
+    /// The entries of [`IsoStress::tangent`] on the axisymmetric components
+    /// [`crate::AXISYMMETRIC_COMPONENTS`] (a 5×5 block of the 9×9 matrix),
+    /// term by term the same formula restricted to those rows and columns.
+    /// Exact for any `H`; `F` must be axisymmetric (zero off-block entries).
+    pub fn tangent_axisymmetric(&self, k: &Kin, s: &Mat3) -> [[f64; 5]; 5] {
+        use crate::AXISYMMETRIC_COMPONENTS as IDX;
+        let pick = |m: &Mat3| IDX.map(|(i, j)| m[(i, j)]);
+        let u = [
+            pick(&k.f),
+            pick(&(k.f * k.c)),
+            pick(&k.fit),
+            pick(&(k.f * self.h)),
+        ];
+        let mut v = [[0.0; 5]; 4];
+        for (va, ma) in v.iter_mut().zip(&self.m) {
+            for (ub, &m) in u.iter().zip(ma) {
+                if m != 0.0 {
+                    for (x, y) in va.iter_mut().zip(ub) {
+                        *x += m * y;
+                    }
+                }
+            }
+        }
+        let (sc, sci) = (self.s[XC], self.s[XCI]);
+        let diag = s - k.cinv * sci;
+        let mut t = [[0.0; 5]; 5];
+        for (a, (ua, va)) in u.iter().zip(&v).enumerate() {
+            if self.m[a].iter().all(|&m| m == 0.0) {
+                continue;
+            }
+            for (row, &x) in t.iter_mut().zip(ua) {
+                for (y, &z) in row.iter_mut().zip(va) {
+                    *y += x * z;
+                }
+            }
+        }
+        for (row, &(i, jj)) in t.iter_mut().zip(&IDX) {
+            for (y, &(kk, l)) in row.iter_mut().zip(&IDX) {
+                *y += sc * (k.f[(i, l)] * k.f[(kk, jj)]) - sci * (k.fit[(i, l)] * k.fit[(kk, jj)]);
+                if jj == l {
+                    *y += sc * k.b[(i, kk)];
+                }
+                if i == kk {
+                    *y += diag[(jj, l)];
+                }
+            }
+        }
+        t
     }
 }
 

@@ -69,7 +69,10 @@ pub use history::HistoryRule;
 pub use hyperelastic::MooneyRivlin;
 pub use model::Incompressible;
 pub use pipkin_rogers::{Eq256, PipkinRogers, PipkinRogersState};
-pub use point::{Mat3, Material3, MembraneMaterial, MembraneResponse, PointResponse3, Tangent3};
+pub use point::{
+    AXISYMMETRIC_COMPONENTS, AxisymmetricResponse, Mat3, Material3, MembraneMaterial,
+    MembraneResponse, PointResponse3, Tangent3,
+};
 pub use prony::{Prony, PronyTerm, Relaxation, ThreeParameterSolid};
 pub use prony_visco::{PronyViscoelastic, PronyViscoelasticState};
 pub use spec::{LoadingSpec, MaterialSpec, read_table};

@@ -141,7 +141,7 @@ impl Kernel for PronyViscoelastic {
     ) -> IsoStress {
         let mut iso = IsoStress::default();
         self.elastic.add_isochoric(k, 1.0, &mut iso);
-        let j23 = 1.0 / (k.j.cbrt() * k.j.cbrt());
+        let j23 = k.j23;
         let sbar = iso.pk2(k) / j23;
         let (frozen, sum_b1) = advance(
             self.rule,
