@@ -419,7 +419,7 @@ pub(crate) fn fbar_element<M: nlvid_material::Material3>(
             for c in 0..8 {
                 dlnalpha[q][c] = (dlnjbar[c] - dju[q][c] / jq[q]) / 3.0;
             }
-            alpha[q] = (jbar / jq[q]).cbrt();
+            alpha[q] = nlvid_material::cube_root(jbar / jq[q]);
         }
         let a = alpha[q];
         let mut fbar_q = f[q];

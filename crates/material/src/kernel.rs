@@ -55,7 +55,10 @@ impl Kin {
             fit: finv.transpose(),
             b: f * f.transpose(),
             j,
-            j23: 1.0 / (j.cbrt() * j.cbrt()),
+            j23: {
+                let c = crate::cube_root(j);
+                1.0 / (c * c)
+            },
             i1,
             i2: 0.5 * (i1 * i1 - trc2),
         })
@@ -99,7 +102,10 @@ impl Kin {
                 block(a * a + b * b, x01, x01, c * c + d * d, c22)
             },
             j,
-            j23: 1.0 / (j.cbrt() * j.cbrt()),
+            j23: {
+                let c = crate::cube_root(j);
+                1.0 / (c * c)
+            },
             i1,
             i2: 0.5 * (i1 * i1 - trc2),
         })

@@ -51,6 +51,7 @@
 
 #![warn(missing_docs)]
 
+mod cube_root;
 mod error;
 mod history;
 pub mod homogeneous;
@@ -64,6 +65,7 @@ mod prony_visco;
 pub mod reference;
 mod spec;
 
+pub use cube_root::cube_root;
 pub use error::{MaterialError, Result};
 pub use history::HistoryRule;
 pub use hyperelastic::MooneyRivlin;
