@@ -376,8 +376,7 @@ impl<M: Material3> Model<M> {
             }
             blocks.push(vec![dof_eq[wdof]]);
         }
-        let mut system = SparseSystem::new(neq, &blocks)?;
-        system.symmetric = settings.symmetric;
+        let system = SparseSystem::new(neq, &blocks, settings.symmetric)?;
         let mut elem_slots = Vec::with_capacity(64 * mesh.elements.len());
         let mut tmp = Vec::with_capacity(64);
         for conn in &mesh.elements {
