@@ -242,6 +242,8 @@ pub struct AfmRun {
     pub solve_seconds: f64,
     /// Global assemblies (Newton iterations + line-search trials).
     pub assemblies: usize,
+    /// Part of `assemblies` without the tangent (residual only).
+    pub residual_only_assemblies: usize,
     /// Factorisations that fell back from LDLᵀ to LU.
     pub lu_fallbacks: usize,
     /// Deformed node positions (r, z) at the end of the run (m).
@@ -488,6 +490,7 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
         element_seconds: model.counters().element_seconds,
         solve_seconds: model.counters().solve_seconds,
         assemblies: model.counters().assemblies,
+        residual_only_assemblies: model.counters().residual_only_assemblies,
         lu_fallbacks: model.counters().lu_fallbacks,
         deformed_nodes: model
             .mesh()

