@@ -15,7 +15,7 @@
 //! g_a the gap between surface node a and the sphere (or plane), so the
 //! tangent is the exact Hessian and symmetric for hyperelastic materials.
 
-use crate::element::{ElementOutput, PointGeometry, element_geometry, fbar_element};
+use crate::element::{ElementOutput, PointGeometry, TangentPart, element_geometry, fbar_element};
 use crate::history::History;
 use crate::sparse::{NO_SLOT, SparseSystem};
 use crate::{FemError, NonConvergence, Result};
@@ -391,7 +391,24 @@ impl<M: Material3> Model<M> {
         let mut tmp = Vec::with_capacity(64);
         for conn in &mesh.elements {
             system.block_slots(&elem_eqs(conn), &mut tmp)?;
-            elem_slots.extend_from_slice(&tmp);
+            if settings.symmetric {
+                // The element computes its lower triangle only
+                // (`TangentPart::Lower`): entry (a, b), b ≤ a, goes to the
+                // stored slot of the pair, whichever orientation is stored.
+                for a in 0..8 {
+                    for b in 0..8 {
+                        elem_slots.push(if b > a {
+                            NO_SLOT
+                        } else if tmp[8 * a + b] != NO_SLOT {
+                            tmp[8 * a + b]
+                        } else {
+                            tmp[8 * b + a]
+                        });
+                    }
+                }
+            } else {
+                elem_slots.extend_from_slice(&tmp);
+            }
         }
         // Shear modulus at F = I for the penalty scale.
         let g0 = {
@@ -565,6 +582,11 @@ impl<M: Material3> Model<M> {
         }
         let mut gross = 0.0;
         let fbar = self.settings.fbar;
+        let part = match (tangent, self.settings.symmetric) {
+            (false, _) => TangentPart::None,
+            (true, true) => TangentPart::Lower,
+            (true, false) => TangentPart::Full,
+        };
         let clock = cpu_time::ThreadTime::now();
         if let Some(pool) = &self.pool {
             let (committed, trial) = self.history.split();
@@ -590,7 +612,7 @@ impl<M: Material3> Model<M> {
                             tr,
                             dt,
                             fbar,
-                            tangent,
+                            part,
                             out,
                         )
                         .err()
@@ -634,7 +656,7 @@ impl<M: Material3> Model<M> {
                     trial,
                     dt,
                     fbar,
-                    tangent,
+                    part,
                     &mut self.element_out,
                 )
                 .map_err(|(point, source)| FemError::Material {
@@ -912,6 +934,9 @@ impl<M: Material3> Model<M> {
                             break;
                         }
                         last_err = format!("line search: residual {n:.3e} ≥ {norm:.3e}");
+                        if trace() {
+                            eprintln!("      line search: α = {alpha} rejected ({last_err})");
+                        }
                     }
                     Err(e) => last_err = e.to_string(),
                 }

@@ -82,7 +82,8 @@ impl Kin {
             )));
         }
         // F⁻¹ blocks.
-        let (ia, ib, ic, id) = (d / j2, -b / j2, -c / j2, a / j2);
+        let ij2 = 1.0 / j2;
+        let (ia, ib, ic, id) = (d * ij2, -b * ij2, -c * ij2, a * ij2);
         let ih = 1.0 / h;
         let (c00, c01, c11, c22) = (a * a + c * c, a * b + c * d, b * b + d * d, h * h);
         let i1 = c00 + c11 + c22;

@@ -142,7 +142,7 @@ impl Kernel for PronyViscoelastic {
         let mut iso = IsoStress::default();
         self.elastic.add_isochoric(k, 1.0, &mut iso);
         let j23 = k.j23;
-        let sbar = iso.pk2(k) / j23;
+        let sbar = iso.pk2(k) * (1.0 / j23);
         let (frozen, sum_b1) = advance(
             self.rule,
             &self.prony,
