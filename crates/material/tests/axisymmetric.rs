@@ -163,9 +163,10 @@ fn axisymmetric_fast_path_matches_general_update_and_finite_differences() {
 
 #[test]
 fn axisymmetric_fast_path_rejects_inverted_and_non_finite_gradients() {
-    let (mr, _, _) = models();
-    let s = Material3::initial_state(&mr);
-    let mut t = s;
+    let (_, visco, _) = models();
+    let mr = &visco[2];
+    let s = Material3::initial_state(mr);
+    let mut t = s.clone();
     for f in [
         [1.0, 0.0, 0.0, -1.0, 1.0],
         [1.0, 0.0, 0.0, 1.0, 0.0],
