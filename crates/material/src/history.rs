@@ -65,6 +65,7 @@ impl HistoryRule {
 /// `H_k(t_{n+1}) = E H_k(t_n) + β0 A_n + β1 A_{n+1}` to `h_out` and returns
 /// `(−Σ g_k (E H_k(t_n) + β0 A_n), Σ g_k β1_k)`: the part frozen at `t_n`
 /// and the weight of the current `A_{n+1}`.
+#[inline]
 pub(crate) fn advance(
     rule: HistoryRule,
     prony: &crate::Prony,
@@ -102,6 +103,7 @@ thread_local! {
 }
 
 /// [`HistoryRule::weights`] through the per-thread memo.
+#[inline]
 pub(crate) fn cached_weights(rule: HistoryRule, dt: f64, tau: f64) -> StepWeights {
     WEIGHTS.with(|memo| {
         let mut memo = memo.borrow_mut();

@@ -67,6 +67,7 @@ impl Kin {
     /// [`Kin::new`] for an axisymmetric `F` given by its components
     /// [`crate::AXISYMMETRIC_COMPONENTS`] (rR, rZ, zR, zZ, θθ): the same
     /// quantities from 2×2 block algebra instead of general 3×3 operations.
+    #[inline]
     pub fn axisymmetric(f5: &[f64; 5]) -> Result<Self> {
         let [a, b, c, d, h] = *f5;
         if f5.iter().any(|x| !x.is_finite()) {
@@ -114,6 +115,7 @@ impl Kin {
 
     /// Basis coefficients of `2∂s/∂C` for a scalar `s(I1, I2, J, H:C)` with
     /// the given partial derivatives.
+    #[inline]
     pub fn grad(&self, d_i1: f64, d_i2: f64, d_j: f64, d_hc: f64) -> [f64; 4] {
         [
             2.0 * (d_i1 + self.i1 * d_i2),
@@ -140,6 +142,7 @@ pub(crate) struct IsoStress {
 
 impl IsoStress {
     /// Adds `value · X_a` whose coefficient has gradient `grad` (from [`Kin::grad`]).
+    #[inline]
     pub fn add(&mut self, a: usize, value: f64, grad: [f64; 4]) {
         self.s[a] += value;
         for (m, g) in self.m[a].iter_mut().zip(grad) {
@@ -148,6 +151,7 @@ impl IsoStress {
     }
 
     /// Second Piola–Kirchhoff stress.
+    #[inline]
     pub fn pk2(&self, k: &Kin) -> Mat3 {
         Mat3::identity() * self.s[XI]
             + k.c * self.s[XC]
@@ -208,6 +212,7 @@ impl IsoStress {
     /// [`crate::AXISYMMETRIC_COMPONENTS`] (a 5×5 block of the 9×9 matrix),
     /// term by term the same formula restricted to those rows and columns.
     /// Exact for any `H`; `F` must be axisymmetric (zero off-block entries).
+    #[inline]
     pub fn tangent_axisymmetric(&self, k: &Kin, s: &Mat3) -> [[f64; 5]; 5] {
         use crate::AXISYMMETRIC_COMPONENTS as IDX;
         let pick = |m: &Mat3| IDX.map(|(i, j)| m[(i, j)]);
@@ -270,6 +275,7 @@ fn flat(m: &Mat3) -> [f64; 9] {
 
 impl IsoStress {
     /// Adds `scale ·` another stress that does not use the `H` basis tensor.
+    #[inline]
     pub fn add_scaled(&mut self, other: &IsoStress, scale: f64) {
         for a in 0..4 {
             self.s[a] += scale * other.s[a];
