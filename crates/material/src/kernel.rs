@@ -113,6 +113,21 @@ impl Kin {
         })
     }
 
+    /// The axisymmetric components ([`crate::AXISYMMETRIC_COMPONENTS`]) of
+    /// `F X` for an axisymmetric (block-diagonal) `F`: the products with
+    /// F's zero off-block entries are left out (they add exact zeros).
+    #[inline]
+    pub fn f_times_axisymmetric(&self, x: &Mat3) -> [f64; 5] {
+        let f = &self.f;
+        [
+            f[(0, 0)] * x[(0, 0)] + f[(0, 1)] * x[(1, 0)],
+            f[(0, 0)] * x[(0, 1)] + f[(0, 1)] * x[(1, 1)],
+            f[(1, 0)] * x[(0, 0)] + f[(1, 1)] * x[(1, 0)],
+            f[(1, 0)] * x[(0, 1)] + f[(1, 1)] * x[(1, 1)],
+            f[(2, 2)] * x[(2, 2)],
+        ]
+    }
+
     /// Basis coefficients of `2∂s/∂C` for a scalar `s(I1, I2, J, H:C)` with
     /// the given partial derivatives.
     #[inline]
@@ -218,9 +233,9 @@ impl IsoStress {
         let pick = |m: &Mat3| IDX.map(|(i, j)| m[(i, j)]);
         let u = [
             pick(&k.f),
-            pick(&(k.f * k.c)),
+            k.f_times_axisymmetric(&k.c),
             pick(&k.fit),
-            pick(&(k.f * self.h)),
+            k.f_times_axisymmetric(&self.h),
         ];
         let mut v = [[0.0; 5]; 4];
         for (va, ma) in v.iter_mut().zip(&self.m) {

@@ -92,9 +92,8 @@ pub(crate) fn update_axisymmetric<M: Kernel>(
     let k = Kin::axisymmetric(f)?;
     let iso = m.eval(state_n, &k, dt, trial, m.bulk());
     let s = iso.pk2(&k);
-    let p = k.f * s;
     Ok(AxisymmetricResponse {
-        first_piola: crate::AXISYMMETRIC_COMPONENTS.map(|(i, j)| p[(i, j)]),
+        first_piola: k.f_times_axisymmetric(&s),
         tangent: if tangent {
             iso.tangent_axisymmetric(&k, &s)
         } else {
