@@ -391,7 +391,11 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
         model.run_stage(&Stage {
             name: "engage ramp",
             end: ramp_end,
-            dt_initial: eng.ramp * 0.05,
+            // First touch under force control is the hardest step of the
+            // run: 0.05·ramp was cut back twice (×0.25) on the thesis run
+            // before converging at ramp/320, then grew ×1.5 per step; start
+            // there (saves the failed attempts, same step sequence after).
+            dt_initial: eng.ramp / 320.0,
             dt_max: eng.ramp * 0.25,
             control: &force_at,
         })?;
