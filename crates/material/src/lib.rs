@@ -30,6 +30,9 @@
 //! Cost: one update is O(number of Prony terms) (exact recursive update of
 //! the exponential kernels, [`HistoryRule`]) plus ~1.5 k flops for the 9×9
 //! tangent: about 0.3 µs per 3D update with tangent on one core. The
+//! axisymmetric path [`Material3::update_axisymmetric`] returns only the
+//! 5 components of `P` and the 5×5 block of the tangent an axisymmetric
+//! element reads (no 9×9 matrix, no Cauchy stress; tangent optional). The
 //! thesis's O(steps) trapezoidal sum (eq. 2.48) is kept in [`reference`].
 //!
 //! ```
