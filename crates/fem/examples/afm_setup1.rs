@@ -96,6 +96,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Ok(v) = std::env::var("NLVID_FEM_BULK") {
         setup.bulk_ratio = v.parse()?;
     }
+    if let Ok(v) = std::env::var("NLVID_FEM_LAZY") {
+        setup.settings.lazy_tangent = v.parse()?;
+    }
     if let Ok(v) = std::env::var("NLVID_FEM_LS") {
         setup.settings.residual_growth = v.parse()?;
     }
@@ -130,7 +133,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             run.iterations
         );
         println!(
-            "last run: CPU {:.3} s (wall {:.3} s) = assembly {:.3} s (elements {:.3} s, contact+loads {:.3} s) + factorise/solve {:.3} s + other {:.3} s; {} assemblies, {} LU fallbacks",
+            "last run: CPU {:.3} s (wall {:.3} s) = assembly {:.3} s (elements {:.3} s, contact+loads {:.3} s) + factorise/solve {:.3} s + other {:.3} s; {} assemblies ({} residual-only), {} LU fallbacks",
             run.cpu_seconds,
             run.wall_seconds,
             run.assembly_seconds,
@@ -139,6 +142,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             run.solve_seconds,
             run.cpu_seconds - run.assembly_seconds - run.solve_seconds,
             run.assemblies,
+            run.residual_only_assemblies,
             run.lu_fallbacks
         );
     }

@@ -22,8 +22,10 @@ pub const GAUSS: [(f64, f64); 4] = {
     [(-G, -G), (G, -G), (G, G), (-G, G)]
 };
 
+#[cfg(test)]
 /// Components of F stored by the element, and their index in the 3×3
-/// matrix (row-major `3i+J`): rR, rZ, zR, zZ, θθ.
+/// matrix (row-major `3i+J`): rR, rZ, zR, zZ, θθ
+/// (`nlvid_material::AXISYMMETRIC_COMPONENTS`).
 pub(crate) const FIDX: [(usize, usize); 5] = [(0, 0), (0, 1), (1, 0), (1, 1), (2, 2)];
 
 /// Shape functions N, their reference gradients ∂N/∂(R, Z) and det J at
@@ -71,6 +73,8 @@ pub struct PointGeometry {
     pub dn: [[f64; 2]; 4],
     /// Reference radius R.
     pub r: f64,
+    /// N/R (the hoop row of ∂F/∂u), precomputed for the element loop.
+    pub n_over_r: [f64; 4],
     /// Integration weight 2π R det J (m³).
     pub weight: f64,
 }
@@ -84,6 +88,7 @@ pub fn element_geometry(x: &[[f64; 2]; 4]) -> [PointGeometry; 4] {
             n,
             dn,
             r,
+            n_over_r: n.map(|na| na / r),
             weight: 2.0 * std::f64::consts::PI * r * det,
         }
     })
@@ -135,6 +140,7 @@ pub(crate) fn jacobian_derivatives(f: &[f64; 5]) -> (f64, [f64; 5], [[f64; 5]; 5
     (j2 * h, dj, hj)
 }
 
+#[cfg(test)]
 /// The 3×3 matrix of the stored components.
 pub(crate) fn to_mat3(f: &[f64; 5]) -> nlvid_material::Mat3 {
     nlvid_material::Mat3::new(f[0], f[1], 0.0, f[2], f[3], 0.0, 0.0, 0.0, f[4])
@@ -178,6 +184,7 @@ pub(crate) fn add_bt_m_b(out: &mut [[f64; 8]; 8], b: &[[f64; 8]; 5], m: &[[f64; 
     }
 }
 
+#[cfg(test)]
 /// out += w (a ⊗ b).
 pub(crate) fn add_outer(out: &mut [[f64; 8]; 8], a: &[f64; 8], b: &[f64; 8], w: f64) {
     for r in 0..8 {
@@ -222,7 +229,18 @@ mod tests {
         let mut out = ElementOutput::zero();
         let sn = [(); 4];
         let mut tr = [(); 4];
-        fbar_element(&mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut out).unwrap();
+        fbar_element(
+            &mat,
+            &geo,
+            &u,
+            &sn,
+            &mut tr,
+            0.1,
+            fbar,
+            TangentPart::Full,
+            &mut out,
+        )
+        .unwrap();
         let h = 1e-7;
         let mut op = ElementOutput::zero();
         let mut om = ElementOutput::zero();
@@ -231,8 +249,30 @@ mod tests {
             let mut um = u;
             up[c] += h;
             um[c] -= h;
-            fbar_element(&mat, &geo, &up, &sn, &mut tr, 0.1, fbar, false, &mut op).unwrap();
-            fbar_element(&mat, &geo, &um, &sn, &mut tr, 0.1, fbar, false, &mut om).unwrap();
+            fbar_element(
+                &mat,
+                &geo,
+                &up,
+                &sn,
+                &mut tr,
+                0.1,
+                fbar,
+                TangentPart::None,
+                &mut op,
+            )
+            .unwrap();
+            fbar_element(
+                &mat,
+                &geo,
+                &um,
+                &sn,
+                &mut tr,
+                0.1,
+                fbar,
+                TangentPart::None,
+                &mut om,
+            )
+            .unwrap();
             for r in 0..8 {
                 let fd = (op.r[r] - om.r[r]) / (2.0 * h);
                 assert!(
@@ -262,7 +302,18 @@ mod tests {
         let mut tr = sn.clone();
         let mut fast = ElementOutput::zero();
         let mut direct = ElementOutput::zero();
-        fbar_element(mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut fast).unwrap();
+        fbar_element(
+            mat,
+            &geo,
+            &u,
+            &sn,
+            &mut tr,
+            0.1,
+            fbar,
+            TangentPart::Full,
+            &mut fast,
+        )
+        .unwrap();
         fbar_element_reference(mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut direct).unwrap();
         let kmax = direct
             .k
@@ -299,6 +350,83 @@ mod tests {
     }
 
     #[test]
+    fn lower_tangent_is_the_lower_triangle_of_a_symmetric_full_tangent() {
+        // The AFM cell material with history and a time step, distorted
+        // element, large deformation: the full tangent is symmetric to
+        // round-off (it is the Hessian of the incremental potential), so the
+        // lower triangle carries all of it; `Lower` computes exactly that
+        // triangle and leaves the rest zero.
+        let cell =
+            nlvid_material::PronyViscoelastic::cell(0.5, 0.3, 0.5, 0.3, 10.0, 100.0).unwrap();
+        let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
+        let geo = element_geometry(&x);
+        let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
+        let s0: Vec<_> = (0..4)
+            .map(|_| nlvid_material::Material3::initial_state(&cell))
+            .collect();
+        let mut sn = s0.clone();
+        let mut tr = s0.clone();
+        let half = u.map(|x| 0.5 * x);
+        let mut out = ElementOutput::zero();
+        fbar_element(
+            &cell,
+            &geo,
+            &half,
+            &s0,
+            &mut sn,
+            0.3,
+            true,
+            TangentPart::None,
+            &mut out,
+        )
+        .unwrap();
+        let mut full = ElementOutput::zero();
+        let mut low = ElementOutput::zero();
+        fbar_element(
+            &cell,
+            &geo,
+            &u,
+            &sn,
+            &mut tr,
+            0.2,
+            true,
+            TangentPart::Full,
+            &mut full,
+        )
+        .unwrap();
+        fbar_element(
+            &cell,
+            &geo,
+            &u,
+            &sn,
+            &mut tr,
+            0.2,
+            true,
+            TangentPart::Lower,
+            &mut low,
+        )
+        .unwrap();
+        let kmax = full.k.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        assert_eq!(full.r, low.r);
+        for r in 0..8 {
+            for c in 0..8 {
+                assert!(
+                    (full.k[r][c] - full.k[c][r]).abs() <= 1e-12 * kmax,
+                    "asymmetric K[{r}][{c}]"
+                );
+                if c <= r {
+                    assert!(
+                        (low.k[r][c] - full.k[r][c]).abs() <= 1e-14 * kmax,
+                        "K[{r}][{c}]"
+                    );
+                } else {
+                    assert_eq!(low.k[r][c], 0.0);
+                }
+            }
+        }
+    }
+
+    #[test]
     fn weights_integrate_ring_volume() {
         // Square [1,2]×[0,1]: volume of the ring = π (2² − 1²) · 1.
         let x = [[1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0]];
@@ -323,6 +451,19 @@ impl ElementOutput {
             k: [[0.0; 8]; 8],
         }
     }
+}
+
+/// Which part of the element tangent to compute.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum TangentPart {
+    /// Residual only.
+    None,
+    /// The full 8×8 matrix.
+    Full,
+    /// Entries `k[r][c]` with `c ≤ r` only (the rest is left zero): for a
+    /// symmetric tangent stored as one triangle (test
+    /// `lower_tangent_is_the_lower_triangle_of_a_symmetric_full_tangent`).
+    Lower,
 }
 
 /// Where an element evaluation failed: Gauss point and the material error.
@@ -358,9 +499,11 @@ pub(crate) fn fbar_element<M: nlvid_material::Material3>(
     trial: &mut [M::State],
     dt: f64,
     fbar: bool,
-    tangent: bool,
+    part: TangentPart,
     out: &mut ElementOutput,
 ) -> std::result::Result<(), PointFailure> {
+    let tangent = part != TangentPart::None;
+    let lower = part == TangentPart::Lower;
     out.r = [0.0; 8];
     if tangent {
         out.k = [[0.0; 8]; 8];
@@ -409,6 +552,7 @@ pub(crate) fn fbar_element<M: nlvid_material::Material3>(
     let mut dlnalpha = [[0.0; 8]; 4];
     let mut p5 = [[0.0; 5]; 4];
     let mut s_q = [0.0; 4];
+    let mut bp = [[0.0; 8]; 4];
     for q in 0..4 {
         let g = &geometry[q];
         let w = g.weight;
@@ -416,7 +560,7 @@ pub(crate) fn fbar_element<M: nlvid_material::Material3>(
             for c in 0..8 {
                 dlnalpha[q][c] = (dlnjbar[c] - dju[q][c] / jq[q]) / 3.0;
             }
-            alpha[q] = (jbar / jq[q]).cbrt();
+            alpha[q] = nlvid_material::cube_root(jbar / jq[q]);
         }
         let a = alpha[q];
         let mut fbar_q = f[q];
@@ -424,18 +568,19 @@ pub(crate) fn fbar_element<M: nlvid_material::Material3>(
             *x *= a;
         }
         let resp = material
-            .update(&state_n[q], &to_mat3(&fbar_q), dt, &mut trial[q])
+            .update_axisymmetric(&state_n[q], &fbar_q, dt, &mut trial[q], tangent)
             .map_err(|e| (q, e))?;
-        for (i, &(i0, j0)) in FIDX.iter().enumerate() {
-            p5[q][i] = resp.first_piola[(i0, j0)];
-            if tangent {
-                for (k, &(k0, l0)) in FIDX.iter().enumerate() {
-                    m5[q][i][k] = w * resp.tangent[(3 * i0 + j0, 3 * k0 + l0)];
+        p5[q] = resp.first_piola;
+        if tangent {
+            for (mi, ti) in m5[q].iter_mut().zip(&resp.tangent) {
+                for (m, t) in mi.iter_mut().zip(ti) {
+                    *m = w * t;
                 }
             }
         }
         // r = w B̄ᵀ P = w α Bᵀ P + w (P : F) ∂α.
         let gp = bt_v_structured(g, &p5[q]);
+        bp[q] = gp;
         let pf: f64 = (0..5).map(|i| p5[q][i] * f[q][i]).sum();
         s_q[q] = w * a * pf;
         for c in 0..8 {
@@ -478,11 +623,11 @@ pub(crate) fn fbar_element<M: nlvid_material::Material3>(
                 }
             }
         }
-        add_bt_m_b_structured(&mut out.k, g, &mq);
+        add_bt_m_b_structured(&mut out.k, g, &mq, lower);
         if !fbar {
             continue;
         }
-        let bap = bt_v_structured(g, &p5[q]);
+        let bap = &bp[q];
         let baf = bt_v_structured(g, &af);
         let bfa = bt_v_structured(g, &fa);
         let mut v = [0.0; 8];
@@ -498,13 +643,21 @@ pub(crate) fn fbar_element<M: nlvid_material::Material3>(
         for r in 0..8 {
             let (vr, dlr, cdl, cjr) = (v[r], dl[r], cc * dl[r], cj * dj[r]);
             let row = &mut out.k[r];
-            for c in 0..8 {
+            let end = if lower { r + 1 } else { 8 };
+            for c in 0..end {
                 row[c] += vr * dl[c] + dlr * vt[c] + cdl * dl[c] + cjr * dj[c];
             }
         }
     }
     if fbar {
-        add_outer(&mut out.k, &dlnjbar, &dlnjbar, -s_total / 3.0);
+        let w = -s_total / 3.0;
+        for r in 0..8 {
+            let ar = dlnjbar[r] * w;
+            let end = if lower { r + 1 } else { 8 };
+            for c in 0..end {
+                out.k[r][c] += ar * dlnjbar[c];
+            }
+        }
     }
     Ok(())
 }
@@ -520,7 +673,7 @@ fn deformation_structured(g: &PointGeometry, u: &[f64; 8]) -> [f64; 5] {
         f[1] += g.dn[a][1] * ur;
         f[2] += g.dn[a][0] * uz;
         f[3] += g.dn[a][1] * uz;
-        f[4] += g.n[a] / g.r * ur;
+        f[4] += g.n_over_r[a] * ur;
     }
     f
 }
@@ -530,7 +683,7 @@ fn deformation_structured(g: &PointGeometry, u: &[f64; 8]) -> [f64; 5] {
 fn bt_v_structured(g: &PointGeometry, v: &[f64; 5]) -> [f64; 8] {
     let mut out = [0.0; 8];
     for a in 0..4 {
-        out[2 * a] = g.dn[a][0] * v[0] + g.dn[a][1] * v[1] + g.n[a] / g.r * v[4];
+        out[2 * a] = g.dn[a][0] * v[0] + g.dn[a][1] * v[1] + g.n_over_r[a] * v[4];
         out[2 * a + 1] = g.dn[a][0] * v[2] + g.dn[a][1] * v[3];
     }
     out
@@ -538,11 +691,16 @@ fn bt_v_structured(g: &PointGeometry, v: &[f64; 5]) -> [f64; 8] {
 
 /// out += Bᵀ M B using the sparsity of B.
 #[inline]
-fn add_bt_m_b_structured(out: &mut [[f64; 8]; 8], g: &PointGeometry, m: &[[f64; 5]; 5]) {
+fn add_bt_m_b_structured(
+    out: &mut [[f64; 8]; 8],
+    g: &PointGeometry,
+    m: &[[f64; 5]; 5],
+    lower: bool,
+) {
     // Column c of B as (row, value) pairs: even c → rows 0, 1, 4; odd c → 2, 3.
     let mut col = [[0.0; 3]; 4];
     for a in 0..4 {
-        col[a] = [g.dn[a][0], g.dn[a][1], g.n[a] / g.r];
+        col[a] = [g.dn[a][0], g.dn[a][1], g.n_over_r[a]];
     }
     // MB (5×8).
     let mut mb = [[0.0; 8]; 5];
@@ -555,12 +713,17 @@ fn add_bt_m_b_structured(out: &mut [[f64; 8]; 8], g: &PointGeometry, m: &[[f64; 
     }
     for a in 0..4 {
         let c = &col[a];
+        let (ee, eo) = if lower {
+            (2 * a + 1, 2 * a + 2)
+        } else {
+            (8, 8)
+        };
         let re = &mut out[2 * a];
-        for k in 0..8 {
+        for k in 0..ee {
             re[k] += c[0] * mb[0][k] + c[1] * mb[1][k] + c[2] * mb[4][k];
         }
         let ro = &mut out[2 * a + 1];
-        for k in 0..8 {
+        for k in 0..eo {
             ro[k] += c[0] * mb[2][k] + c[1] * mb[3][k];
         }
     }

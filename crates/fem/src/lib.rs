@@ -4,12 +4,13 @@
 //! between the sphere and a prescribed point, Newton with line search and
 //! adaptive time stepping with cut-backs (thesis §2.4, §4.3, §5.2.2, §5.3).
 //!
-//! Cost: one Newton iteration is one assembly (4 material updates per
-//! element, optionally on several threads) plus one sparse supernodal LDLᵀ
-//! factorisation whose symbolic analysis is reused for the whole run (LU
-//! fallback); the thesis-scale AFM run (1225 elements, ≈ 130 steps, ≈ 500
-//! iterations) takes ≈ 3 s of CPU time; see `docs/theory/fem.md` for the
-//! measured breakdown.
+//! Cost: one Newton iteration is one assembly (4 axisymmetric material
+//! updates per element, optionally on several threads; near convergence
+//! without the tangent) plus one sparse supernodal LDLᵀ factorisation of
+//! the lower triangle, stored in the fill-reducing order so the symbolic
+//! analysis is reused for the whole run (LU fallback); the thesis-scale AFM
+//! run (1225 elements, ≈ 130 steps, ≈ 500 iterations) takes ≈ 1.9 s of CPU
+//! time on one core; see `docs/theory/fem.md` for the measured breakdown.
 //!
 //! ```
 //! use nlvid_fem::{Component, Control, Mesh, Model, ProbeDrive, Settings, SphereProbe, Stage, Support};

@@ -98,6 +98,49 @@ fn parallel_element_loop_is_bitwise_serial() {
     assert_eq!((a.steps, a.iterations), (b.steps, b.iterations));
 }
 
+/// Residual-only trial assemblies near convergence (`lazy_tangent`) change
+/// which tangents are computed, not the Newton path: the residual of a
+/// residual-only assembly is bitwise the one of a full assembly, so the run
+/// is bitwise the same, with fewer tangent assemblies.
+#[test]
+fn lazy_tangent_is_bitwise_the_eager_run() {
+    let lazy = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    let mut eager = lazy.clone();
+    eager.settings.lazy_tangent = 0.0;
+    let a = afm::run(&params(), &lazy).unwrap();
+    let b = afm::run(&params(), &eager).unwrap();
+    assert_eq!(a.force, b.force);
+    assert_eq!(a.indentation, b.indentation);
+    assert_eq!((a.steps, a.iterations), (b.steps, b.iterations));
+    assert_eq!(b.residual_only_assemblies, 0);
+    assert!(a.residual_only_assemblies > 0);
+    let tangents = |r: &afm::AfmRun| r.assemblies - r.residual_only_assemblies;
+    assert!(tangents(&a) < tangents(&b));
+}
+
+/// The symmetric path (lower triangle of the element tangents, stored in
+/// AMD numbering, LDLᵀ) against the general one (full element tangents,
+/// full matrix, LU): the same run to the Newton tolerance.
+#[test]
+fn symmetric_lower_storage_agrees_with_full_lu() {
+    let sym = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    let mut full = sym.clone();
+    full.settings.symmetric = false;
+    let a = afm::run(&params(), &sym).unwrap();
+    let b = afm::run(&params(), &full).unwrap();
+    let fmax = b.force.iter().fold(0.0f64, |m, f| m.max(f.abs()));
+    let worst = a
+        .force
+        .iter()
+        .zip(&b.force)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    assert!(
+        worst <= 1e-7 * fmax,
+        "force differs by {worst:e} of {fmax:e}"
+    );
+    assert!(a.lu_fallbacks == 0 && b.lu_fallbacks == b.iterations);
+}
+
 #[test]
 fn rigid_cantilever_indentation_equals_piezo_travel() {
     let setup = short_setup(Cantilever::Rigid);

@@ -65,6 +65,7 @@ impl HistoryRule {
 /// `H_k(t_{n+1}) = E H_k(t_n) + β0 A_n + β1 A_{n+1}` to `h_out` and returns
 /// `(−Σ g_k (E H_k(t_n) + β0 A_n), Σ g_k β1_k)`: the part frozen at `t_n`
 /// and the weight of the current `A_{n+1}`.
+#[inline]
 pub(crate) fn advance(
     rule: HistoryRule,
     prony: &crate::Prony,
@@ -77,7 +78,7 @@ pub(crate) fn advance(
     let mut frozen = crate::Mat3::zeros();
     let mut sum_b1 = 0.0;
     for ((term, hn), ho) in prony.terms().iter().zip(h_n).zip(h_out.iter_mut()) {
-        let w = rule.weights(dt, term.tau);
+        let w = cached_weights(rule, dt, term.tau);
         let old = hn * w.decay + a_n * w.beta0;
         frozen -= old * term.weight;
         *ho = old + a_new * w.beta1;
@@ -86,9 +87,56 @@ pub(crate) fn advance(
     (frozen, sum_b1)
 }
 
+/// Entries of the per-thread memo of [`HistoryRule::weights`].
+const MEMO: usize = 8;
+
+type MemoEntry = Option<(HistoryRule, f64, f64, StepWeights)>;
+
+thread_local! {
+    /// The last step weights computed on this thread: a finite-element
+    /// assembly evaluates every material point with the same (Δt, τ_k), so
+    /// `exp`/`expm1` are computed once per step and term instead of once per
+    /// point (≈ 5 % of the AFM run). Values are bitwise those of
+    /// [`HistoryRule::weights`]; the key is the exact (rule, Δt, τ).
+    static WEIGHTS: std::cell::RefCell<([MemoEntry; MEMO], usize)> =
+        const { std::cell::RefCell::new(([None; MEMO], 0)) };
+}
+
+/// [`HistoryRule::weights`] through the per-thread memo.
+#[inline]
+pub(crate) fn cached_weights(rule: HistoryRule, dt: f64, tau: f64) -> StepWeights {
+    WEIGHTS.with(|memo| {
+        let mut memo = memo.borrow_mut();
+        for (r, d, t, w) in memo.0.iter().flatten() {
+            if *r == rule && d.to_bits() == dt.to_bits() && t.to_bits() == tau.to_bits() {
+                return *w;
+            }
+        }
+        let w = rule.weights(dt, tau);
+        let next = memo.1;
+        memo.0[next] = Some((rule, dt, tau, w));
+        memo.1 = (next + 1) % MEMO;
+        w
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn memoised_weights_equal_direct_weights() {
+        let rules = [HistoryRule::ExponentialLinear, HistoryRule::Trapezoid];
+        // More distinct keys than memo entries, revisited in another order.
+        for pass in 0..3 {
+            for k in 0..(2 * MEMO) {
+                let (dt, tau) = (0.01 * (k % 5) as f64 + 1e-3 * pass as f64, 0.5 + k as f64);
+                for rule in rules {
+                    assert_eq!(cached_weights(rule, dt, tau), rule.weights(dt, tau));
+                }
+            }
+        }
+    }
 
     #[test]
     fn exponential_linear_weights_integrate_linear_data_exactly() {

@@ -97,9 +97,10 @@ impl MooneyRivlin {
     /// Adds `scale ·` the isochoric second Piola–Kirchhoff stress
     /// `S_iso = 2∂/∂C [C1(Ī1−3) + C2(Ī2−3)]
     ///        = 2C1 J^{-2/3}(I − I1/3 C⁻¹) + 2C2 J^{-4/3}(I1 I − C − 2I2/3 C⁻¹)`.
+    #[inline]
     pub(crate) fn add_isochoric(&self, k: &Kin, scale: f64, out: &mut IsoStress) {
         let (c1, c2) = (scale * self.c1, scale * self.c2);
-        let j23 = 1.0 / (k.j.cbrt() * k.j.cbrt());
+        let j23 = k.j23;
         let j43 = j23 * j23;
         let ij = 1.0 / k.j;
         out.add(
@@ -132,6 +133,7 @@ impl MooneyRivlin {
 
 /// Adds the volumetric penalty `S_vol = K J (J − 1) C⁻¹` (Kirchhoff
 /// `K J (J − 1) I`, eqs. 2.50/D.5).
+#[inline]
 pub(crate) fn add_volumetric(k: &Kin, bulk: f64, out: &mut IsoStress) {
     if bulk != 0.0 {
         out.add(

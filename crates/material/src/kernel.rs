@@ -23,6 +23,8 @@ pub(crate) struct Kin {
     pub fit: Mat3,
     pub b: Mat3,
     pub j: f64,
+    /// `J^{-2/3}`, computed once (every isochoric term uses it).
+    pub j23: f64,
     pub i1: f64,
     pub i2: f64,
 }
@@ -53,13 +55,82 @@ impl Kin {
             fit: finv.transpose(),
             b: f * f.transpose(),
             j,
+            j23: {
+                let c = crate::cube_root(j);
+                1.0 / (c * c)
+            },
             i1,
             i2: 0.5 * (i1 * i1 - trc2),
         })
     }
 
+    /// [`Kin::new`] for an axisymmetric `F` given by its components
+    /// [`crate::AXISYMMETRIC_COMPONENTS`] (rR, rZ, zR, zZ, θθ): the same
+    /// quantities from 2×2 block algebra instead of general 3×3 operations.
+    #[inline]
+    pub fn axisymmetric(f5: &[f64; 5]) -> Result<Self> {
+        let [a, b, c, d, h] = *f5;
+        if f5.iter().any(|x| !x.is_finite()) {
+            return Err(MaterialError::Deformation(format!(
+                "deformation gradient has a non-finite entry: {f5:?} (rR, rZ, zR, zZ, θθ)"
+            )));
+        }
+        let j2 = a * d - b * c;
+        let j = j2 * h;
+        if j <= 0.0 || j.is_nan() {
+            return Err(MaterialError::Deformation(format!(
+                "det F = {j} ≤ 0 (inverted or degenerate element)"
+            )));
+        }
+        // F⁻¹ blocks.
+        let ij2 = 1.0 / j2;
+        let (ia, ib, ic, id) = (d * ij2, -b * ij2, -c * ij2, a * ij2);
+        let ih = 1.0 / h;
+        let (c00, c01, c11, c22) = (a * a + c * c, a * b + c * d, b * b + d * d, h * h);
+        let i1 = c00 + c11 + c22;
+        let trc2 = c00 * c00 + 2.0 * c01 * c01 + c11 * c11 + c22 * c22;
+        let block = |xx, xy, yx, yy, zz| Mat3::new(xx, xy, 0.0, yx, yy, 0.0, 0.0, 0.0, zz);
+        Ok(Self {
+            f: block(a, b, c, d, h),
+            c: block(c00, c01, c01, c11, c22),
+            // C⁻¹ = F⁻¹ F⁻ᵀ.
+            cinv: {
+                let x01 = ia * ic + ib * id;
+                block(ia * ia + ib * ib, x01, x01, ic * ic + id * id, ih * ih)
+            },
+            fit: block(ia, ic, ib, id, ih),
+            b: {
+                let x01 = a * c + b * d;
+                block(a * a + b * b, x01, x01, c * c + d * d, c22)
+            },
+            j,
+            j23: {
+                let c = crate::cube_root(j);
+                1.0 / (c * c)
+            },
+            i1,
+            i2: 0.5 * (i1 * i1 - trc2),
+        })
+    }
+
+    /// The axisymmetric components ([`crate::AXISYMMETRIC_COMPONENTS`]) of
+    /// `F X` for an axisymmetric (block-diagonal) `F`: the products with
+    /// F's zero off-block entries are left out (they add exact zeros).
+    #[inline]
+    pub fn f_times_axisymmetric(&self, x: &Mat3) -> [f64; 5] {
+        let f = &self.f;
+        [
+            f[(0, 0)] * x[(0, 0)] + f[(0, 1)] * x[(1, 0)],
+            f[(0, 0)] * x[(0, 1)] + f[(0, 1)] * x[(1, 1)],
+            f[(1, 0)] * x[(0, 0)] + f[(1, 1)] * x[(1, 0)],
+            f[(1, 0)] * x[(0, 1)] + f[(1, 1)] * x[(1, 1)],
+            f[(2, 2)] * x[(2, 2)],
+        ]
+    }
+
     /// Basis coefficients of `2∂s/∂C` for a scalar `s(I1, I2, J, H:C)` with
     /// the given partial derivatives.
+    #[inline]
     pub fn grad(&self, d_i1: f64, d_i2: f64, d_j: f64, d_hc: f64) -> [f64; 4] {
         [
             2.0 * (d_i1 + self.i1 * d_i2),
@@ -86,6 +157,7 @@ pub(crate) struct IsoStress {
 
 impl IsoStress {
     /// Adds `value · X_a` whose coefficient has gradient `grad` (from [`Kin::grad`]).
+    #[inline]
     pub fn add(&mut self, a: usize, value: f64, grad: [f64; 4]) {
         self.s[a] += value;
         for (m, g) in self.m[a].iter_mut().zip(grad) {
@@ -94,6 +166,7 @@ impl IsoStress {
     }
 
     /// Second Piola–Kirchhoff stress.
+    #[inline]
     pub fn pk2(&self, k: &Kin) -> Mat3 {
         Mat3::identity() * self.s[XI]
             + k.c * self.s[XC]
@@ -149,6 +222,57 @@ impl IsoStress {
         }
         Tangent3::from_fn(|r, c| t[r][c])
     }
+
+    /// The entries of [`IsoStress::tangent`] on the axisymmetric components
+    /// [`crate::AXISYMMETRIC_COMPONENTS`] (a 5×5 block of the 9×9 matrix),
+    /// term by term the same formula restricted to those rows and columns.
+    /// Exact for any `H`; `F` must be axisymmetric (zero off-block entries).
+    #[inline]
+    pub fn tangent_axisymmetric(&self, k: &Kin, s: &Mat3) -> [[f64; 5]; 5] {
+        use crate::AXISYMMETRIC_COMPONENTS as IDX;
+        let pick = |m: &Mat3| IDX.map(|(i, j)| m[(i, j)]);
+        let u = [
+            pick(&k.f),
+            k.f_times_axisymmetric(&k.c),
+            pick(&k.fit),
+            k.f_times_axisymmetric(&self.h),
+        ];
+        let mut v = [[0.0; 5]; 4];
+        for (va, ma) in v.iter_mut().zip(&self.m) {
+            for (ub, &m) in u.iter().zip(ma) {
+                if m != 0.0 {
+                    for (x, y) in va.iter_mut().zip(ub) {
+                        *x += m * y;
+                    }
+                }
+            }
+        }
+        let (sc, sci) = (self.s[XC], self.s[XCI]);
+        let diag = s - k.cinv * sci;
+        let mut t = [[0.0; 5]; 5];
+        for (a, (ua, va)) in u.iter().zip(&v).enumerate() {
+            if self.m[a].iter().all(|&m| m == 0.0) {
+                continue;
+            }
+            for (row, &x) in t.iter_mut().zip(ua) {
+                for (y, &z) in row.iter_mut().zip(va) {
+                    *y += x * z;
+                }
+            }
+        }
+        for (row, &(i, jj)) in t.iter_mut().zip(&IDX) {
+            for (y, &(kk, l)) in row.iter_mut().zip(&IDX) {
+                *y += sc * (k.f[(i, l)] * k.f[(kk, jj)]) - sci * (k.fit[(i, l)] * k.fit[(kk, jj)]);
+                if jj == l {
+                    *y += sc * k.b[(i, kk)];
+                }
+                if i == kk {
+                    *y += diag[(jj, l)];
+                }
+            }
+        }
+        t
+    }
 }
 
 /// Row-major copy of a 3×3 matrix.
@@ -166,6 +290,7 @@ fn flat(m: &Mat3) -> [f64; 9] {
 
 impl IsoStress {
     /// Adds `scale ·` another stress that does not use the `H` basis tensor.
+    #[inline]
     pub fn add_scaled(&mut self, other: &IsoStress, scale: f64) {
         for a in 0..4 {
             self.s[a] += scale * other.s[a];

@@ -30,6 +30,9 @@
 //! Cost: one update is O(number of Prony terms) (exact recursive update of
 //! the exponential kernels, [`HistoryRule`]) plus ~1.5 k flops for the 9×9
 //! tangent: about 0.3 µs per 3D update with tangent on one core. The
+//! axisymmetric path [`Material3::update_axisymmetric`] returns only the
+//! 5 components of `P` and the 5×5 block of the tangent an axisymmetric
+//! element reads (no 9×9 matrix, no Cauchy stress; tangent optional). The
 //! thesis's O(steps) trapezoidal sum (eq. 2.48) is kept in [`reference`].
 //!
 //! ```
@@ -51,6 +54,7 @@
 
 #![warn(missing_docs)]
 
+mod cube_root;
 mod error;
 mod history;
 pub mod homogeneous;
@@ -64,12 +68,16 @@ mod prony_visco;
 pub mod reference;
 mod spec;
 
+pub use cube_root::cube_root;
 pub use error::{MaterialError, Result};
 pub use history::HistoryRule;
 pub use hyperelastic::MooneyRivlin;
 pub use model::Incompressible;
 pub use pipkin_rogers::{Eq256, PipkinRogers, PipkinRogersState};
-pub use point::{Mat3, Material3, MembraneMaterial, MembraneResponse, PointResponse3, Tangent3};
+pub use point::{
+    AXISYMMETRIC_COMPONENTS, AxisymmetricResponse, Mat3, Material3, MembraneMaterial,
+    MembraneResponse, PointResponse3, Tangent3,
+};
 pub use prony::{Prony, PronyTerm, Relaxation, ThreeParameterSolid};
 pub use prony_visco::{PronyViscoelastic, PronyViscoelasticState};
 pub use spec::{LoadingSpec, MaterialSpec, read_table};

@@ -5,7 +5,7 @@
 //! the homogeneous drivers ([`Incompressible`]).
 
 use crate::kernel::{IsoStress, Kin};
-use crate::{Mat3, MaterialError, MembraneResponse, PointResponse3, Result};
+use crate::{AxisymmetricResponse, Mat3, MaterialError, MembraneResponse, PointResponse3, Result};
 
 /// A history-dependent, exactly incompressible material evaluated for an
 /// isochoric deformation gradient (`det F = 1`): returns the *extra* Cauchy
@@ -73,6 +73,32 @@ pub(crate) fn update3<M: Kernel>(
         cauchy: p * f.transpose() / k.j,
         first_piola: p,
         tangent: iso.tangent(&k, &s),
+    })
+}
+
+/// [`crate::Material3::update_axisymmetric`] for a kernel model: the
+/// kinematics from 2×2 block algebra ([`Kin::axisymmetric`]), the kernel
+/// unchanged, `P` and the 5×5 block of `∂P/∂F`
+/// ([`IsoStress::tangent_axisymmetric`]); no Cauchy stress, no 9×9 tangent.
+pub(crate) fn update_axisymmetric<M: Kernel>(
+    m: &M,
+    state_n: &M::State,
+    f: &[f64; 5],
+    dt: f64,
+    trial: &mut M::State,
+    tangent: bool,
+) -> Result<AxisymmetricResponse> {
+    check_dt(dt)?;
+    let k = Kin::axisymmetric(f)?;
+    let iso = m.eval(state_n, &k, dt, trial, m.bulk());
+    let s = iso.pk2(&k);
+    Ok(AxisymmetricResponse {
+        first_piola: k.f_times_axisymmetric(&s),
+        tangent: if tangent {
+            iso.tangent_axisymmetric(&k, &s)
+        } else {
+            [[0.0; 5]; 5]
+        },
     })
 }
 
@@ -151,6 +177,16 @@ macro_rules! impl_point_traits {
                 trial: &mut Self::State,
             ) -> $crate::Result<$crate::PointResponse3> {
                 $crate::model::update3(self, state_n, f, dt, trial)
+            }
+            fn update_axisymmetric(
+                &self,
+                state_n: &Self::State,
+                f: &[f64; 5],
+                dt: f64,
+                trial: &mut Self::State,
+                tangent: bool,
+            ) -> $crate::Result<$crate::AxisymmetricResponse> {
+                $crate::model::update_axisymmetric(self, state_n, f, dt, trial, tangent)
             }
         }
         impl $crate::MembraneMaterial for $t {

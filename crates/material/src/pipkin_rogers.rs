@@ -34,12 +34,31 @@ pub struct PipkinRogers {
 
 /// History of a Pipkin–Rogers point: one tensor per Prony term of G1 and G2
 /// plus `A1`, `A2` at the last converged step.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub struct PipkinRogersState {
     h1: Vec<Mat3>,
     h2: Vec<Mat3>,
     a1: Mat3,
     a2: Mat3,
+}
+
+/// `clone_from` reuses the history vectors (see `PronyViscoelasticState`).
+impl Clone for PipkinRogersState {
+    fn clone(&self) -> Self {
+        Self {
+            h1: self.h1.clone(),
+            h2: self.h2.clone(),
+            a1: self.a1,
+            a2: self.a2,
+        }
+    }
+
+    fn clone_from(&mut self, source: &Self) {
+        self.h1.clone_from(&source.h1);
+        self.h2.clone_from(&source.h2);
+        self.a1 = source.a1;
+        self.a2 = source.a2;
+    }
 }
 
 /// Ch. II's parametrisation (eqs. 2.56–2.57 in dimensional form): one

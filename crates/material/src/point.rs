@@ -53,6 +53,60 @@ pub trait Material3: Send + Sync {
         dt: f64,
         trial: &mut Self::State,
     ) -> Result<PointResponse3>;
+
+    /// The axisymmetric special case of [`Material3::update`]: `f` holds the
+    /// components [`AXISYMMETRIC_COMPONENTS`] of a deformation gradient
+    /// `F = [[F_rR, F_rZ, 0], [F_zR, F_zZ, 0], [0, 0, F_θθ]]` (frame r, z, θ),
+    /// and the response holds the same components of `P` and of `∂P/∂F` —
+    /// exactly the entries an axisymmetric element reads. With
+    /// `tangent = false` the tangent is left zero (residual-only updates).
+    ///
+    /// The default builds the 3×3 `F` and restricts [`Material3::update`];
+    /// the models of this crate override it with a path that never forms
+    /// the 9×9 tangent or the Cauchy stress (same values to round-off; test
+    /// `axisymmetric_fast_path_matches_general_update_and_finite_differences`).
+    ///
+    /// # Errors
+    /// As [`Material3::update`].
+    fn update_axisymmetric(
+        &self,
+        state_n: &Self::State,
+        f: &[f64; 5],
+        dt: f64,
+        trial: &mut Self::State,
+        tangent: bool,
+    ) -> Result<AxisymmetricResponse> {
+        let full = Mat3::new(f[0], f[1], 0.0, f[2], f[3], 0.0, 0.0, 0.0, f[4]);
+        let r = self.update(state_n, &full, dt, trial)?;
+        let mut out = AxisymmetricResponse {
+            first_piola: AXISYMMETRIC_COMPONENTS.map(|(i, j)| r.first_piola[(i, j)]),
+            tangent: [[0.0; 5]; 5],
+        };
+        if tangent {
+            for (row, &(i, j)) in out.tangent.iter_mut().zip(&AXISYMMETRIC_COMPONENTS) {
+                for (x, &(k, l)) in row.iter_mut().zip(&AXISYMMETRIC_COMPONENTS) {
+                    *x = r.tangent[(3 * i + j, 3 * k + l)];
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// The (row, column) indices in the 3×3 tensor of the five components an
+/// axisymmetric (r, z, θ) deformation gradient can have, in the order used
+/// by [`Material3::update_axisymmetric`]: rR, rZ, zR, zZ, θθ.
+pub const AXISYMMETRIC_COMPONENTS: [(usize, usize); 5] = [(0, 0), (0, 1), (1, 0), (1, 1), (2, 2)];
+
+/// Stress and tangent at one axisymmetric 3D material point (the entries of
+/// [`PointResponse3`] on [`AXISYMMETRIC_COMPONENTS`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AxisymmetricResponse {
+    /// First Piola–Kirchhoff stress components P_rR, P_rZ, P_zR, P_zZ, P_θθ.
+    pub first_piola: [f64; 5],
+    /// `tangent[p][q] = ∂P_p/∂F_q` over the same components (zero if not
+    /// requested).
+    pub tangent: [[f64; 5]; 5],
 }
 
 /// Principal stresses and tangent at one membrane (plane-stress) point.

@@ -26,10 +26,27 @@ pub struct PronyViscoelastic {
 
 /// History of a [`PronyViscoelastic`] point: `H_k` per Prony term and `S̄0`
 /// at the last converged step.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub struct PronyViscoelasticState {
     h: Vec<Mat3>,
     sbar: Mat3,
+}
+
+/// `clone_from` reuses the history vector: a finite-element model commits
+/// thousands of trial states per step (`clone_from_slice`), and the derived
+/// `clone_from` would allocate a new vector for each.
+impl Clone for PronyViscoelasticState {
+    fn clone(&self) -> Self {
+        Self {
+            h: self.h.clone(),
+            sbar: self.sbar,
+        }
+    }
+
+    fn clone_from(&mut self, source: &Self) {
+        self.h.clone_from(&source.h);
+        self.sbar = source.sbar;
+    }
 }
 
 impl PronyViscoelastic {
@@ -141,8 +158,8 @@ impl Kernel for PronyViscoelastic {
     ) -> IsoStress {
         let mut iso = IsoStress::default();
         self.elastic.add_isochoric(k, 1.0, &mut iso);
-        let j23 = 1.0 / (k.j.cbrt() * k.j.cbrt());
-        let sbar = iso.pk2(k) / j23;
+        let j23 = k.j23;
+        let sbar = iso.pk2(k) * (1.0 / j23);
         let (frozen, sum_b1) = advance(
             self.rule,
             &self.prony,
@@ -168,3 +185,24 @@ impl Kernel for PronyViscoelastic {
     }
 }
 impl_point_traits!(PronyViscoelastic, PronyViscoelasticState);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Material3;
+
+    #[test]
+    fn clone_from_copies_the_state_into_the_existing_allocation() {
+        let m = PronyViscoelastic::cell(500.0, 0.3, 0.5, 0.3, 10.0, 1e5).expect("valid");
+        let s0 = Material3::initial_state(&m);
+        let mut s1 = s0.clone();
+        let f = Mat3::new(1.1, 0.1, 0.0, 0.0, 0.95, 0.0, 0.0, 0.0, 0.97);
+        m.update(&s0, &f, 0.1, &mut s1).expect("update");
+        let mut target = s0.clone();
+        let ptr = target.h.as_ptr();
+        target.clone_from(&s1);
+        assert_eq!(target, s1);
+        assert_ne!(target, s0);
+        assert_eq!(target.h.as_ptr(), ptr, "history vector reallocated");
+    }
+}
