@@ -10,21 +10,14 @@ use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{Correlation, KrigingModel, KrigingSettings, Regression};
 
 mod common;
-use common::{CellProblem, cell_problem, kriging_inputs};
+use common::{cell_problem, kriging_inputs};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n: usize = std::env::args()
         .nth(1)
         .and_then(|a| a.parse().ok())
         .unwrap_or(300);
-    let CellProblem {
-        domain,
-        train,
-        check,
-        y_train: yt,
-        y_check: yc,
-        ..
-    } = cell_problem(n)?;
+    let (domain, train, check, yt, yc) = cell_problem(n)?;
     let unit = |x: &Vec<f64>| -> Vec<f64> {
         x.iter()
             .zip(&domain.axes)

@@ -15,7 +15,7 @@ use nlvid_surrogate::{
 };
 
 mod common;
-use common::{CellProblem, cell_problem, kriging_inputs};
+use common::{cell_problem, kriging_inputs};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -25,14 +25,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let percomp = args.iter().any(|a| a == "pc");
     let wide = args.iter().any(|a| a == "wide");
     let expg = args.iter().any(|a| a == "expg");
-    let CellProblem {
-        domain,
-        train,
-        check,
-        y_train: yt,
-        y_check: yc,
-        ..
-    } = cell_problem(n)?;
+    let (domain, train, check, yt, yc) = cell_problem(n)?;
     let tr = |x: &Vec<f64>| kriging_inputs(&domain, x);
     let m = 200;
     let xm = Mat::from_fn(n, 5, |i, k| tr(&train[i])[k]);

@@ -11,7 +11,7 @@ use nlvid_surrogate::{
 };
 
 mod common;
-use common::{CellProblem, cell_model, cell_problem, kriging_inputs};
+use common::{cell_model, cell_problem, kriging_inputs};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ns: Vec<usize> = std::env::args()
@@ -28,14 +28,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "N, correlation, regression, outputs, pcs, theta_search_s, rmse_min_%, rmse_median_%, rmse_max_%"
     );
     for &n in &ns {
-        let CellProblem {
-            domain,
-            train,
-            check,
-            y_train: yt,
-            y_check: yc,
-            ..
-        } = cell_problem(n)?;
+        let (domain, train, check, yt, yc) = cell_problem(n)?;
         // Kriging on log-scaled inputs for the log axes (as the design).
         let tr = |x: &Vec<f64>| kriging_inputs(&domain, x);
         let xt: Vec<Vec<f64>> = train.iter().map(tr).collect();

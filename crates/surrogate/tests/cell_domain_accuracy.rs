@@ -15,17 +15,10 @@ use nlvid_surrogate::{Correlation, KrigingModel, KrigingSettings, OutputScale, R
 // The problem of the rmse_vs_n example, written once for both.
 #[path = "../examples/common/mod.rs"]
 mod common;
-use common::{CellProblem, cell_problem, kriging_inputs};
+use common::{cell_problem, kriging_inputs};
 
 fn max_checking_error(n: usize, scale: bool) -> f64 {
-    let CellProblem {
-        domain,
-        train,
-        check,
-        y_train: yt,
-        y_check: yc,
-        ..
-    } = cell_problem(n).unwrap();
+    let (domain, train, check, yt, yc) = cell_problem(n).unwrap();
     let tr = |x: &Vec<f64>| kriging_inputs(&domain, x);
     let xm = Mat::from_fn(n, 5, |i, k| tr(&train[i])[k]);
     let ym = Mat::from_fn(n, 200, |i, j| yt[i][j]);

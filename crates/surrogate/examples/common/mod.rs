@@ -7,21 +7,15 @@
 use nlvid_surrogate::doe::{Domain, training_and_checking};
 use nlvid_surrogate::{ForwardModel, HertzProny};
 
-/// Design, model and responses of the rmse_vs_n problem.
-pub struct CellProblem {
-    /// The 5-parameter cell domain.
-    pub domain: Domain,
-    /// The forward model.
-    pub model: HertzProny,
-    /// Training sites (physical units).
-    pub train: Vec<Vec<f64>>,
-    /// Checking sites (physical units).
-    pub check: Vec<Vec<f64>>,
-    /// Model responses at the training sites.
-    pub y_train: Vec<Vec<f64>>,
-    /// Model responses at the checking sites.
-    pub y_check: Vec<Vec<f64>>,
-}
+/// Domain, training and checking sites (physical units) and the model's
+/// responses at them.
+pub type CellProblem = (
+    Domain,
+    Vec<Vec<f64>>,
+    Vec<Vec<f64>>,
+    Vec<Vec<f64>>,
+    Vec<Vec<f64>>,
+);
 
 /// Number of outputs (time points) of the model.
 pub const OUTPUTS: usize = 200;
@@ -34,23 +28,17 @@ pub fn cell_model() -> HertzProny {
     HertzProny::new(5e-6, 1e-6, 1.0, 10.0, OUTPUTS)
 }
 
-/// The problem with `n` training sites, the model run at every site.
+/// The problem with `n` training sites, the model run at every site:
+/// `(domain, train, check, y_train, y_check)`.
 pub fn cell_problem(n: usize) -> Result<CellProblem, Box<dyn std::error::Error>> {
     let domain = Domain::cell_study();
     let model = cell_model();
     let (train, check) = training_and_checking(&domain, n, N_CHECK, 42, 30, 1e-6)?;
     let run =
         |xs: &[Vec<f64>]| -> Result<Vec<Vec<f64>>, _> { xs.iter().map(|x| model.run(x)).collect() };
-    let y_train = run(&train)?;
-    let y_check = run(&check)?;
-    Ok(CellProblem {
-        domain,
-        model,
-        train,
-        check,
-        y_train,
-        y_check,
-    })
+    let yt = run(&train)?;
+    let yc = run(&check)?;
+    Ok((domain, train, check, yt, yc))
 }
 
 /// Kriging inputs of a site: natural log on the domain's log axes (as the
