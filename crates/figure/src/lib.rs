@@ -10,8 +10,9 @@
 //! same style. Every figure of `nlvid-report`, `nlvid-inverse`,
 //! `nlvid-membrane` and `nlvid-afm` is drawn here.
 //!
-//! Cost: one pass over the points; a chart of a few thousand points draws in
-//! about a millisecond.
+//! Cost: linear in the number of points (one pass to find the axis ranges,
+//! one to write them); the SVG holds every finite point, so thin very long
+//! records before plotting if file size matters.
 //!
 //! ```
 //! use nlvid_figure::{Chart, Mark, Series, palette};
