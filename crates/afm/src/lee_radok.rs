@@ -399,11 +399,13 @@ pub fn fit_lee_radok(
         });
     }
     let best = state.get_best_param().cloned().unwrap_or(start);
-    let (taus, g, sse) = unscaled.solve(&best).ok_or_else(|| AfmError::NotConverged {
-        fit: "Lee–Radok",
-        detail: "no non-negative Prony moduli fit the data".into(),
-        hint: "check the contact point and baseline (force must rise with indentation)",
-    })?;
+    let (taus, g, sse) = unscaled
+        .solve(&best)
+        .ok_or_else(|| AfmError::NotConverged {
+            fit: "Lee–Radok",
+            detail: "no non-negative Prony moduli fit the data".into(),
+            hint: "check the contact point and baseline (force must rise with indentation)",
+        })?;
     let prony = Prony {
         g_inf: g[0],
         terms: g[1..].iter().copied().zip(taus).collect(),

@@ -52,11 +52,7 @@ fn parse_xml(doc: &str) -> (Vec<Tag>, Vec<String>) {
         } else if !empty {
             open.push(name.clone());
         }
-        tags.push(Tag {
-            name,
-            attrs,
-            end,
-        });
+        tags.push(Tag { name, attrs, end });
     }
     check_text(rest);
     assert!(open.is_empty(), "unclosed: {open:?}");
