@@ -346,13 +346,19 @@ pub fn fit_lee_radok(
     if range <= 0.0 {
         return Err(AfmError::InvalidInput("force does not vary".into()));
     }
-    let problem = VarPro {
+    // Unscaled problem for the final solve; the search minimises the
+    // range-normalised RMSE² (the same problem, scaled).
+    let unscaled = VarPro {
         time,
         delta,
         force,
         r: settings.tip_radius,
         log_tau_bounds: (dt_min.ln(), (10.0 * span).ln()),
+        scale: 1.0,
+    };
+    let problem = VarPro {
         scale: 1.0 / (n as f64 * range * range),
+        ..unscaled
     };
     let m = settings.n_terms;
     let (lo, hi) = ((10.0 * dt_min).ln(), (span / 3.0).ln());
@@ -393,19 +399,13 @@ pub fn fit_lee_radok(
         });
     }
     let best = state.get_best_param().cloned().unwrap_or(start);
-    let problem = VarPro {
-        time,
-        delta,
-        force,
-        r: settings.tip_radius,
-        log_tau_bounds: (dt_min.ln(), (10.0 * span).ln()),
-        scale: 1.0,
-    };
-    let (taus, g, sse) = problem.solve(&best).ok_or_else(|| AfmError::NotConverged {
-        fit: "Lee–Radok",
-        detail: "no non-negative Prony moduli fit the data".into(),
-        hint: "check the contact point and baseline (force must rise with indentation)",
-    })?;
+    let (taus, g, sse) = unscaled
+        .solve(&best)
+        .ok_or_else(|| AfmError::NotConverged {
+            fit: "Lee–Radok",
+            detail: "no non-negative Prony moduli fit the data".into(),
+            hint: "check the contact point and baseline (force must rise with indentation)",
+        })?;
     let prony = Prony {
         g_inf: g[0],
         terms: g[1..].iter().copied().zip(taus).collect(),

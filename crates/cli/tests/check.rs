@@ -2,26 +2,14 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
-fn nlvid(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nlvid"))
-        .args(args)
-        .env_remove("NLVID_LOG")
-        .output()
-        .expect("run nlvid")
-}
+mod common;
+use common::{nlvid, text};
 
 fn write(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("nlvid-check-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let p = dir.join(name);
+    let p = common::temp_dir("check").join(name);
     std::fs::write(&p, text).unwrap();
     p
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
 }
 
 #[test]

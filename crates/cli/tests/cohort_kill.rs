@@ -2,18 +2,14 @@
 //! then re-run into the same directory; the results table must equal the
 //! one of an uninterrupted run byte for byte.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
 use nlvid_report::demo::{DemoSpec, write_demo_data};
 
-fn scratch(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("scratch");
-    d
-}
+mod common;
+use common::scratch;
 
 fn count_cells(out: &Path) -> usize {
     let Ok(groups) = std::fs::read_dir(out.join("cells")) else {

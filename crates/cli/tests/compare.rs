@@ -3,29 +3,17 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
+
+mod common;
+use common::{nlvid, text};
 
 const EXAMPLE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/../stats/tests/data/results_example.csv"
 );
 
-fn nlvid(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nlvid"))
-        .args(args)
-        .env_remove("NLVID_LOG")
-        .output()
-        .expect("run nlvid")
-}
-
 fn out_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("nlvid-compare-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
+    common::temp_dir(&format!("compare-{tag}"))
 }
 
 #[test]

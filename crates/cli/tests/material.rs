@@ -4,20 +4,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
-fn nlvid(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nlvid"))
-        .args(args)
-        .env_remove("NLVID_LOG")
-        .output()
-        .expect("run nlvid")
-}
+mod common;
+use common::nlvid;
 
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("nlvid-material-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    common::temp_dir("material").join(name)
 }
 
 fn example(name: &str) -> String {

@@ -4,24 +4,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
 
-fn nlvid(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_nlvid"))
-        .args(args)
-        .env_remove("NLVID_LOG")
-        .output()
-        .expect("run nlvid")
-}
+mod common;
+use common::{nlvid, text};
 
 fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("nlvid-surrogate-scale-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
+    common::temp_dir("surrogate-scale")
 }
 
 /// Deterministic scattered points (G0 log-uniform in [100, 5000]).

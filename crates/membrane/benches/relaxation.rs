@@ -13,13 +13,7 @@ use nlvid_protocol::{Quantity, programs};
 mod reference_pr;
 
 fn fig_2_6(c: &mut Criterion) {
-    let p = PipkinRogersParams {
-        g1: 0.2,
-        g2: 0.3,
-        c: 0.5,
-        gamma0: 0.1,
-        ..Default::default()
-    };
+    let p = PipkinRogersParams::chapter2(0.2, 0.3, 0.5);
     let mut g = c.benchmark_group("membrane");
     g.sample_size(10);
     for d in [0.53, 0.78] {

@@ -12,13 +12,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let which = args.get(1).map(String::as_str).unwrap_or("adapter");
     let n: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(5);
-    let p = PipkinRogersParams {
-        g1: 0.2,
-        g2: 0.3,
-        c: 0.5,
-        gamma0: 0.1,
-        ..Default::default()
-    };
+    let p = PipkinRogersParams::chapter2(0.2, 0.3, 0.5);
     for d in [0.53, 0.78] {
         let prog = programs::step(Quantity::Dimensionless, d, 10.0)?;
         let times = (0..=100).map(|k| 0.1 * k as f64).collect();

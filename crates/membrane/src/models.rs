@@ -135,6 +135,17 @@ impl Default for PipkinRogersParams {
 }
 
 impl PipkinRogersParams {
+    /// The dimensionless setting of the ch. II figures (Figs. 2.6–2.14:
+    /// C1 = τ1 = 1, γ0 = 0.1, a = 0) with the given g1, g2 and c = τ1/τ2.
+    pub fn chapter2(g1: f64, g2: f64, c: f64) -> Self {
+        Self {
+            g1,
+            g2,
+            c,
+            ..Self::default()
+        }
+    }
+
     /// γ∞ = (g2/g1) γ0 (eq. 2.57).
     pub fn gamma_inf(&self) -> f64 {
         self.g2 / self.g1 * self.gamma0

@@ -123,16 +123,6 @@ fn mr(gamma: f64) -> Result<MembraneSolver<MooneyRivlinMembrane>> {
     )
 }
 
-fn pr(g1: f64, g2: f64, c: f64) -> PipkinRogersParams {
-    PipkinRogersParams {
-        g1,
-        g2,
-        c,
-        gamma0: 0.1,
-        ..Default::default()
-    }
-}
-
 fn step_run(p: &PipkinRogersParams, d: f64, profiles: bool) -> Result<MembraneRun> {
     let prog = programs::step(Quantity::Dimensionless, d, 10.0).map_err(proto)?;
     let times: Vec<f64> = (0..=100).map(|k| 0.1 * k as f64).collect();
@@ -178,7 +168,7 @@ fn load_unload(
     let params = p.copied().unwrap_or(PipkinRogersParams {
         g1: 1.0,
         g2: 1.0,
-        ..pr(1.0, 1.0, 1.0)
+        ..PipkinRogersParams::chapter2(1.0, 1.0, 1.0)
     });
     // A step that fails (e.g. wrinkling late in a slow unloading) ends the
     // curve there; the failure is returned as a note.
@@ -260,7 +250,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
     ));
 
     // Fig. 2.5: NLE vs QLV at D = 2t, t, t/2.
-    let qlv = pr(0.2, 0.2, 1.0);
+    let qlv = PipkinRogersParams::chapter2(0.2, 0.2, 1.0);
     let mut series = vec![Series::line(
         "NLE γ = 0.1",
         ds.clone(),
@@ -290,7 +280,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
     ));
 
     // Fig. 2.6: relaxation at two displacements.
-    let nlv6 = pr(0.2, 0.3, 0.5);
+    let nlv6 = PipkinRogersParams::chapter2(0.2, 0.3, 0.5);
     let mut series = Vec::new();
     for d in [0.53, 0.78] {
         for (name, p) in [
@@ -315,14 +305,17 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
 
     // Figs. 2.7–2.11 at D/r0 = 0.78.
     let cases_c = [
-        ("c = 1 (QLV)", pr(0.2, 0.2, 1.0)),
-        ("c = 1/2", pr(0.2, 0.2, 0.5)),
-        ("c = 2", pr(0.2, 0.2, 2.0)),
+        ("c = 1 (QLV)", PipkinRogersParams::chapter2(0.2, 0.2, 1.0)),
+        ("c = 1/2", PipkinRogersParams::chapter2(0.2, 0.2, 0.5)),
+        ("c = 2", PipkinRogersParams::chapter2(0.2, 0.2, 2.0)),
     ];
     let cases_g = [
-        ("g2 = 0.2 (QLV)", pr(0.2, 0.2, 1.0)),
-        ("g2 = 0.1", pr(0.2, 0.1, 1.0)),
-        ("g2 = 0.3", pr(0.2, 0.3, 1.0)),
+        (
+            "g2 = 0.2 (QLV)",
+            PipkinRogersParams::chapter2(0.2, 0.2, 1.0),
+        ),
+        ("g2 = 0.1", PipkinRogersParams::chapter2(0.2, 0.1, 1.0)),
+        ("g2 = 0.3", PipkinRogersParams::chapter2(0.2, 0.3, 1.0)),
     ];
     let mut runs_c = Vec::new();
     for (n, p) in &cases_c {
@@ -441,7 +434,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
     ));
 
     // Figs. 2.13–2.14 and Table 2.1.
-    let nlv13 = pr(0.2, 0.6, 0.5);
+    let nlv13 = PipkinRogersParams::chapter2(0.2, 0.6, 0.5);
     let mut rows = Vec::new();
     let thesis = |d: f64, su: f64, m: &str| -> Option<f64> {
         match (d > 0.5, su < 0.5, m) {
@@ -465,7 +458,10 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
                 ("NLE", None),
                 ("QLV", Some(&qlv)),
                 ("NLV c=1/2", Some(&nlv13)),
-                ("NLV c=1", Some(&pr(0.2, 0.6, 1.0))),
+                (
+                    "NLV c=1",
+                    Some(&PipkinRogersParams::chapter2(0.2, 0.6, 1.0)),
+                ),
             ];
             for (m, p) in models {
                 if m == "NLE" && su < 0.5 {

@@ -36,29 +36,10 @@ fn run(p: PipkinRogersParams, dmax: f64, su: f64, label: &str) {
 #[test]
 #[ignore = "reproduction run, prints Table 2.1 slopes"]
 fn table_2_1_unloading_slopes() {
-    let nle = PipkinRogersParams {
-        g1: 1.0,
-        g2: 1.0,
-        ..Default::default()
-    };
-    let qlv = PipkinRogersParams {
-        g1: 0.2,
-        g2: 0.2,
-        c: 1.0,
-        ..Default::default()
-    };
-    let nlv1 = PipkinRogersParams {
-        g1: 0.2,
-        g2: 0.6,
-        c: 1.0,
-        ..Default::default()
-    };
-    let nlv2 = PipkinRogersParams {
-        g1: 0.2,
-        g2: 0.6,
-        c: 0.5,
-        ..Default::default()
-    };
+    let nle = PipkinRogersParams::chapter2(1.0, 1.0, 1.0);
+    let qlv = PipkinRogersParams::chapter2(0.2, 0.2, 1.0);
+    let nlv1 = PipkinRogersParams::chapter2(0.2, 0.6, 1.0);
+    let nlv2 = PipkinRogersParams::chapter2(0.2, 0.6, 0.5);
     for d in [0.28, 0.78] {
         run(nle, d, 1.0, "NLE");
         for su in [1.0, 0.2] {

@@ -9,13 +9,7 @@ use nlvid_membrane::{
 
 fn nlv() -> PipkinRogersParams {
     // Figs. 2.13–2.14 (captions): g1 = 0.2, g2 = 0.6, c = 1/2, γ0 = 0.1.
-    PipkinRogersParams {
-        g1: 0.2,
-        g2: 0.6,
-        c: 0.5,
-        gamma0: 0.1,
-        ..Default::default()
-    }
+    PipkinRogersParams::chapter2(0.2, 0.6, 0.5)
 }
 
 /// Load at s_l = 1 to `dmax` in `nl` steps, unload at `su` in steps of the
@@ -132,13 +126,7 @@ fn force_controlled_unloading_retraces_the_displacement_controlled_run() {
 #[test]
 fn fast_unloading_from_d078_slackens_the_crown_and_is_reported_as_wrinkling() {
     // QLV g1 = g2 = 0.2, c = 1 (Table 2.1 column 2), s_l = s_u = 1, D_max = 0.78.
-    let p = PipkinRogersParams {
-        g1: 0.2,
-        g2: 0.2,
-        c: 1.0,
-        gamma0: 0.1,
-        ..Default::default()
-    };
+    let p = PipkinRogersParams::chapter2(0.2, 0.2, 1.0);
     let g = grid(0.78, 1.0, 26, 0.45);
     let (sols, err) = run(&p, &g, false);
     match err {

@@ -28,13 +28,7 @@ fn step_run(
 }
 
 fn qlv_step(nodes: usize) -> nlvid_membrane::MembraneRun {
-    let p = PipkinRogersParams {
-        g1: 0.2,
-        g2: 0.2,
-        c: 1.0,
-        gamma0: 0.1,
-        ..Default::default()
-    };
+    let p = PipkinRogersParams::chapter2(0.2, 0.2, 1.0);
     let prog = programs::step(Quantity::Dimensionless, 0.78, 5.0).unwrap();
     let times = (0..=50).map(|k| 0.1 * k as f64).collect();
     let l = Loading::new(ControlKind::Displacement, prog, times).unwrap();
@@ -90,13 +84,7 @@ fn qlv_step_keeps_the_shape_and_scales_force_by_the_discrete_relaxation_function
 #[test]
 fn fig_2_12_case_matches_thesis_stretches_and_angles() {
     // D/r0 = 0.78, g1 = 0.2, g2 = 0.3, c = 1, γ0 = 0.1, t0 = 10.
-    let p = PipkinRogersParams {
-        g1: 0.2,
-        g2: 0.3,
-        c: 1.0,
-        gamma0: 0.1,
-        ..Default::default()
-    };
+    let p = PipkinRogersParams::chapter2(0.2, 0.3, 1.0);
     let run = step_run(p, 0.78, 10.0, 100);
     let sol = &run.profiles[0];
     assert_eq!(sol.time, 10.0);
@@ -125,13 +113,7 @@ fn psi_c_history(p: PipkinRogersParams) -> Vec<f64> {
 
 #[test]
 fn fig_2_9_contact_angle_trends() {
-    let base = PipkinRogersParams {
-        g1: 0.2,
-        g2: 0.2,
-        c: 1.0,
-        gamma0: 0.1,
-        ..Default::default()
-    };
+    let base = PipkinRogersParams::chapter2(0.2, 0.2, 1.0);
     // g2 < g1 (γ∞ = 0.05): ψc increases monotonically; g2 > g1: decreases.
     let up = psi_c_history(PipkinRogersParams { g2: 0.1, ..base });
     assert!(
@@ -170,13 +152,7 @@ fn fig_2_9_contact_angle_trends() {
 fn displacement_and_force_controlled_relaxation_agree() {
     // Drive the same NLV material by the force history of a displacement-
     // controlled run; the displacement must come back constant.
-    let p = PipkinRogersParams {
-        g1: 0.2,
-        g2: 0.3,
-        c: 2.0,
-        gamma0: 0.1,
-        ..Default::default()
-    };
+    let p = PipkinRogersParams::chapter2(0.2, 0.3, 2.0);
     let run = step_run(p, 0.53, 2.0, 20);
     let mut s = MembraneSolver::new(p.check().unwrap(), Geometry::default(), 1.0).unwrap();
     for r in &run.history {
@@ -191,13 +167,7 @@ fn pipkin_rogers_adapter_agrees_with_a_separate_principal_stretch_implementation
     // The crate's PipkinRogersMembrane delegates to nlvid_material::PipkinRogers
     // (3D kernel in plane stress); the reference is written directly in principal
     // stretches (tests/common/reference_pr.rs). Both use the trapezoid of eq. 2.48.
-    let p = PipkinRogersParams {
-        g1: 0.2,
-        g2: 0.3,
-        c: 2.0,
-        gamma0: 0.1,
-        ..Default::default()
-    };
+    let p = PipkinRogersParams::chapter2(0.2, 0.3, 2.0);
     let m = reference_pr::PipkinRogersMembrane { p };
     let prog = programs::ramp_hold(Quantity::Dimensionless, 0.53, 1.0, 1.0).unwrap();
     let times: Vec<f64> = (0..=30).map(|k| 1.53 * k as f64 / 30.0).collect();

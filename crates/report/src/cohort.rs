@@ -400,6 +400,17 @@ fn column(name: &str, unit: &str) -> String {
     }
 }
 
+/// `(name, unit)` of the fitted parameters, from the first cell that has
+/// any (all cells of a cohort share one model); `None` when none has.
+pub(crate) fn parameter_names(cells: &[CellResult]) -> Option<Vec<(String, String)>> {
+    cells.iter().find(|c| !c.parameters.is_empty()).map(|c| {
+        c.parameters
+            .iter()
+            .map(|p| (p.name.clone(), p.unit.clone()))
+            .collect()
+    })
+}
+
 /// The results table (docs/cli/compare.md format): `group, cell, file`,
 /// the parameters with unit-suffixed names, `misfit`, `alternatives`,
 /// `peak_force_N`, `relaxation_pct`, the Hertz baseline (`hertz_E_Pa`,
@@ -410,27 +421,18 @@ fn column(name: &str, unit: &str) -> String {
 /// # Errors
 /// Never in practice (CSV into memory).
 pub fn results_csv(cells: &[CellResult]) -> Result<String> {
-    let names: Vec<(String, String)> = cells
+    let names: Vec<(String, String)> = parameter_names(cells).unwrap_or_else(|| {
+        [
+            ("G0", "Pa"),
+            ("g1", ""),
+            ("tau1", "s"),
+            ("g2", ""),
+            ("tau2", "s"),
+        ]
         .iter()
-        .find(|c| !c.parameters.is_empty())
-        .map(|c| {
-            c.parameters
-                .iter()
-                .map(|p| (p.name.clone(), p.unit.clone()))
-                .collect()
-        })
-        .unwrap_or_else(|| {
-            [
-                ("G0", "Pa"),
-                ("g1", ""),
-                ("tau1", "s"),
-                ("g2", ""),
-                ("tau2", "s"),
-            ]
-            .iter()
-            .map(|(a, b)| (a.to_string(), b.to_string()))
-            .collect()
-        });
+        .map(|(a, b)| (a.to_string(), b.to_string()))
+        .collect()
+    });
     let mut w = csv::Writer::from_writer(Vec::new());
     let mut header = vec!["group".to_string(), "cell".into(), "file".into()];
     header.extend(names.iter().map(|(n, u)| column(n, u)));

@@ -18,7 +18,7 @@ use nlvid_stats::{
 };
 
 use crate::cell::{CellResult, CellStatus};
-use crate::cohort::{read_cells, read_record, write_atomic};
+use crate::cohort::{parameter_names, read_cells, read_record, write_atomic};
 use crate::error::{ReportError, Result};
 use crate::figures::{Band, FitPanel, Line, band_chart, fits_chart, pvalue_chart};
 
@@ -497,16 +497,7 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
 
     h.push_str("<h2 id=\"tables\">Per-cell results</h2>\n");
     let mut head = vec!["group".to_string(), "cell".into()];
-    let pnames: Vec<(String, String)> = cells
-        .iter()
-        .find(|c| !c.parameters.is_empty())
-        .map(|c| {
-            c.parameters
-                .iter()
-                .map(|p| (p.name.clone(), p.unit.clone()))
-                .collect()
-        })
-        .unwrap_or_default();
+    let pnames = parameter_names(&cells).unwrap_or_default();
     for (n, u) in &pnames {
         head.push(if u.is_empty() {
             n.clone()

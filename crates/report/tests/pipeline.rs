@@ -217,18 +217,16 @@ fn interrupted_then_resumed_run_gives_the_same_table_as_an_uninterrupted_one() {
     let settings = CohortSettings::load(&study).expect("settings");
     let cells = cohort::discover(&data).expect("discover");
     let out = scratch("resume");
-    let first = cohort::run_cohort(
-        &settings,
-        &study,
-        &data,
-        &cells,
-        &out,
+    let run = |opts: &RunOptions, what: &str| {
+        cohort::run_cohort(&settings, &study, &data, &cells, &out, opts).expect(what)
+    };
+    let first = run(
         &RunOptions {
             max_new_fits: Some(5),
             on_cell: None,
         },
-    )
-    .expect("first part");
+        "first part",
+    );
     assert_eq!(first.fitted, 5);
     assert_eq!(first.pending, 12);
     assert!(
@@ -245,15 +243,7 @@ fn interrupted_then_resumed_run_gives_the_same_table_as_an_uninterrupted_one() {
     std::fs::write(&p, b"{\"group\": \"B-so").expect("damaged file");
     std::fs::write(p.with_file_name(".x.json.999.tmp"), b"partial").expect("tmp");
 
-    let second = cohort::run_cohort(
-        &settings,
-        &study,
-        &data,
-        &cells,
-        &out,
-        &RunOptions::default(),
-    )
-    .expect("resume");
+    let second = run(&RunOptions::default(), "resume");
     assert_eq!((second.reused, second.fitted, second.pending), (5, 12, 0));
     let resumed = std::fs::read(out.join("results.csv")).expect("resumed table");
     let straight = std::fs::read(f.out.join("results.csv")).expect("table");
@@ -262,15 +252,7 @@ fn interrupted_then_resumed_run_gives_the_same_table_as_an_uninterrupted_one() {
         String::from_utf8_lossy(&straight)
     );
     // A third run fits nothing.
-    let third = cohort::run_cohort(
-        &settings,
-        &study,
-        &data,
-        &cells,
-        &out,
-        &RunOptions::default(),
-    )
-    .expect("again");
+    let third = run(&RunOptions::default(), "again");
     assert_eq!((third.reused, third.fitted), (17, 0));
 }
 

@@ -162,17 +162,16 @@ impl Section {
         dim: Dimension,
         bounds: impl Into<Bounds>,
     ) -> Result<Option<f64>> {
-        match self.take(key) {
-            None => Ok(None),
-            Some(i) => self
-                .quantity_of(
+        self.take(key)
+            .map(|i| {
+                self.quantity_of(
                     &self.entries[i].node,
                     &self.key_path(key),
                     dim,
                     bounds.into(),
                 )
-                .map(Some),
-        }
+            })
+            .transpose()
     }
 
     /// An optional quantity with a default (in SI) used when absent.
@@ -214,10 +213,9 @@ impl Section {
         dim: Dimension,
         bounds: impl Into<Bounds>,
     ) -> Result<Option<Vec<f64>>> {
-        match self.take(key) {
-            None => Ok(None),
-            Some(i) => self.quantities_of(i, key, dim, bounds.into()).map(Some),
-        }
+        self.take(key)
+            .map(|i| self.quantities_of(i, key, dim, bounds.into()))
+            .transpose()
     }
 
     // ---- plain values -----------------------------------------------------
@@ -268,10 +266,9 @@ impl Section {
     /// # Errors
     /// As [`Self::req_usize`], except for a missing key.
     pub fn opt_usize(&mut self, key: &str, bounds: impl Into<Bounds>) -> Result<Option<usize>> {
-        match self.take(key) {
-            None => Ok(None),
-            Some(i) => self.usize_of(i, key, bounds.into()).map(Some),
-        }
+        self.take(key)
+            .map(|i| self.usize_of(i, key, bounds.into()))
+            .transpose()
     }
 
     /// A required `u64` (e.g. a random seed).
@@ -288,10 +285,7 @@ impl Section {
     /// # Errors
     /// As [`Self::req_u64`], except for a missing key.
     pub fn opt_u64(&mut self, key: &str) -> Result<Option<u64>> {
-        match self.take(key) {
-            None => Ok(None),
-            Some(i) => self.u64_of(i, key).map(Some),
-        }
+        self.take(key).map(|i| self.u64_of(i, key)).transpose()
     }
 
     /// A required boolean.
@@ -308,10 +302,7 @@ impl Section {
     /// # Errors
     /// Not a boolean.
     pub fn opt_bool(&mut self, key: &str) -> Result<Option<bool>> {
-        match self.take(key) {
-            None => Ok(None),
-            Some(i) => self.bool_of(i, key).map(Some),
-        }
+        self.take(key).map(|i| self.bool_of(i, key)).transpose()
     }
 
     /// A required string.
@@ -328,10 +319,7 @@ impl Section {
     /// # Errors
     /// Not a string.
     pub fn opt_str(&mut self, key: &str) -> Result<Option<String>> {
-        match self.take(key) {
-            None => Ok(None),
-            Some(i) => self.str_of(i, key).map(Some),
-        }
+        self.take(key).map(|i| self.str_of(i, key)).transpose()
     }
 
     /// A required choice among named values, e.g.
@@ -350,10 +338,9 @@ impl Section {
     /// # Errors
     /// As [`Self::req_enum`], except for a missing key.
     pub fn opt_enum<T: Copy>(&mut self, key: &str, choices: &[(&str, T)]) -> Result<Option<T>> {
-        match self.take(key) {
-            None => Ok(None),
-            Some(i) => self.enum_of(i, key, choices).map(Some),
-        }
+        self.take(key)
+            .map(|i| self.enum_of(i, key, choices))
+            .transpose()
     }
 
     /// An optional choice with a default used when absent.
@@ -390,10 +377,9 @@ impl Section {
         dim: Dimension,
         bounds: impl Into<Bounds>,
     ) -> Result<Option<(f64, f64)>> {
-        match self.take(key) {
-            None => Ok(None),
-            Some(i) => self.range_of(i, key, dim, bounds.into()).map(Some),
-        }
+        self.take(key)
+            .map(|i| self.range_of(i, key, dim, bounds.into()))
+            .transpose()
     }
 
     /// A required path, resolved against the study file's directory.
@@ -445,10 +431,7 @@ impl Section {
     /// # Errors
     /// Not a table.
     pub fn opt_subsection(&mut self, key: &str) -> Result<Option<Section>> {
-        match self.take(key) {
-            None => Ok(None),
-            Some(i) => self.table_of(i, key).map(Some),
-        }
+        self.take(key).map(|i| self.table_of(i, key)).transpose()
     }
 
     /// Reads a required sub-table into `T` and reports its unknown keys.

@@ -6,20 +6,18 @@
 //! `cargo run --release -p nlvid-surrogate --example diagnose_worst [-- N]`
 
 use nlvid_surrogate::check::summarise;
-use nlvid_surrogate::doe::{Domain, training_and_checking};
 use nlvid_surrogate::faer::Mat;
-use nlvid_surrogate::{
-    Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, Regression,
-};
+use nlvid_surrogate::{Correlation, KrigingModel, KrigingSettings, Regression};
+
+mod common;
+use common::{cell_problem, kriging_inputs};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n: usize = std::env::args()
         .nth(1)
         .and_then(|a| a.parse().ok())
         .unwrap_or(300);
-    let domain = Domain::cell_study();
-    let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, 200);
-    let (train, check) = training_and_checking(&domain, n, 200, 42, 30, 1e-6)?;
+    let (domain, train, check, yt, yc) = cell_problem(n)?;
     let unit = |x: &Vec<f64>| -> Vec<f64> {
         x.iter()
             .zip(&domain.axes)
@@ -32,20 +30,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             })
             .collect()
     };
-    let tr = |x: &Vec<f64>| -> Vec<f64> {
-        x.iter()
-            .zip(&domain.axes)
-            .map(|(v, a)| if a.log { v.ln() } else { *v })
-            .collect()
-    };
-    let yt: Vec<Vec<f64>> = train
-        .iter()
-        .map(|x| model.run(x))
-        .collect::<Result<_, _>>()?;
-    let yc: Vec<Vec<f64>> = check
-        .iter()
-        .map(|x| model.run(x))
-        .collect::<Result<_, _>>()?;
+    let tr = |x: &Vec<f64>| kriging_inputs(&domain, x);
     let xm = Mat::from_fn(n, 5, |i, k| tr(&train[i])[k]);
     let ym = Mat::from_fn(n, 200, |i, j| yt[i][j]);
     let mut s = KrigingSettings::new(Regression::Poly1, Correlation::Gauss, 5);

@@ -9,12 +9,13 @@
 //!
 //! `cargo run --release -p nlvid-surrogate --example per_component -- 300 g0 pc`
 use nlvid_surrogate::check::summarise;
-use nlvid_surrogate::doe::{Domain, training_and_checking};
 use nlvid_surrogate::faer::{Mat, Side};
 use nlvid_surrogate::{
-    Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, OptimiserSettings,
-    Regression, ThetaSearch,
+    Correlation, KrigingModel, KrigingSettings, OptimiserSettings, Regression, ThetaSearch,
 };
+
+mod common;
+use common::{cell_problem, kriging_inputs};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -24,23 +25,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let percomp = args.iter().any(|a| a == "pc");
     let wide = args.iter().any(|a| a == "wide");
     let expg = args.iter().any(|a| a == "expg");
-    let domain = Domain::cell_study();
-    let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, 200);
-    let (train, check) = training_and_checking(&domain, n, 200, 42, 30, 1e-6)?;
-    let tr = |x: &Vec<f64>| -> Vec<f64> {
-        x.iter()
-            .zip(&domain.axes)
-            .map(|(v, a)| if a.log { v.ln() } else { *v })
-            .collect()
-    };
-    let yt: Vec<Vec<f64>> = train
-        .iter()
-        .map(|x| model.run(x))
-        .collect::<Result<_, _>>()?;
-    let yc: Vec<Vec<f64>> = check
-        .iter()
-        .map(|x| model.run(x))
-        .collect::<Result<_, _>>()?;
+    let (domain, train, check, yt, yc) = cell_problem(n)?;
+    let tr = |x: &Vec<f64>| kriging_inputs(&domain, x);
     let m = 200;
     let xm = Mat::from_fn(n, 5, |i, k| tr(&train[i])[k]);
     let ym = Mat::from_fn(n, m, |i, j| {

@@ -5,11 +5,13 @@
 //! `cargo run --release -p nlvid-surrogate --example rmse_vs_n [-- N1 N2 …]`
 
 use nlvid_surrogate::check::summarise;
-use nlvid_surrogate::doe::{Domain, training_and_checking};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
-    Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, OutputScale, Regression,
+    Correlation, ForwardModel, KrigingModel, KrigingSettings, OutputScale, Regression,
 };
+
+mod common;
+use common::{cell_model, cell_problem, kriging_inputs};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ns: Vec<usize> = std::env::args()
@@ -21,30 +23,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     } else {
         ns
     };
-    let domain = Domain::cell_study();
-    let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, 200);
-    let n_check = 200;
-    println!("model: {}", model.identity());
+    println!("model: {}", cell_model().identity());
     println!(
         "N, correlation, regression, outputs, pcs, theta_search_s, rmse_min_%, rmse_median_%, rmse_max_%"
     );
     for &n in &ns {
-        let (train, check) = training_and_checking(&domain, n, n_check, 42, 30, 1e-6)?;
+        let (domain, train, check, yt, yc) = cell_problem(n)?;
         // Kriging on log-scaled inputs for the log axes (as the design).
-        let tr = |x: &Vec<f64>| -> Vec<f64> {
-            x.iter()
-                .zip(&domain.axes)
-                .map(|(v, a)| if a.log { v.ln() } else { *v })
-                .collect()
-        };
-        let yt: Vec<Vec<f64>> = train
-            .iter()
-            .map(|x| model.run(x))
-            .collect::<Result<_, _>>()?;
-        let yc: Vec<Vec<f64>> = check
-            .iter()
-            .map(|x| model.run(x))
-            .collect::<Result<_, _>>()?;
+        let tr = |x: &Vec<f64>| kriging_inputs(&domain, x);
         let xt: Vec<Vec<f64>> = train.iter().map(tr).collect();
         let xm = Mat::from_fn(n, 5, |i, k| xt[i][k]);
         let ym = Mat::from_fn(n, 200, |i, j| yt[i][j]);

@@ -14,6 +14,9 @@ use nlvid_surrogate::{
 };
 use rayon::prelude::*;
 
+mod common;
+use common::kriging_inputs;
+
 /// CPU time (user + system) of this process so far [s], from
 /// /proc/self/stat (Linux; 0 elsewhere): wall time on a shared machine
 /// depends on the other users' load, CPU time much less.
@@ -56,15 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "design + {n} analytic runs (m = {m}): {:.2} s",
         t0.elapsed().as_secs_f64()
     );
-    let xs: Vec<Vec<f64>> = design
-        .iter()
-        .map(|x| {
-            x.iter()
-                .zip(&domain.axes)
-                .map(|(v, a)| if a.log { v.ln() } else { *v })
-                .collect()
-        })
-        .collect();
+    let xs: Vec<Vec<f64>> = design.iter().map(|x| kriging_inputs(&domain, x)).collect();
     let xm = Mat::from_fn(n, 5, |i, k| xs[i][k]);
     let ym = Mat::from_fn(n, m, |i, j| ys[i][j]);
     let fixed = ThetaSearch::Fixed(vec![1.0, 1.0, 1.0, 1.0, 1.0, 1.9]);

@@ -9,24 +9,17 @@
 #![allow(clippy::unwrap_used)]
 
 use nlvid_surrogate::check::summarise;
-use nlvid_surrogate::doe::{Domain, training_and_checking};
 use nlvid_surrogate::faer::Mat;
-use nlvid_surrogate::{
-    Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, OutputScale, Regression,
-};
+use nlvid_surrogate::{Correlation, KrigingModel, KrigingSettings, OutputScale, Regression};
+
+// The problem of the rmse_vs_n example, written once for both.
+#[path = "../examples/common/mod.rs"]
+mod common;
+use common::{cell_problem, kriging_inputs};
 
 fn max_checking_error(n: usize, scale: bool) -> f64 {
-    let domain = Domain::cell_study();
-    let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, 200);
-    let (train, check) = training_and_checking(&domain, n, 200, 42, 30, 1e-6).unwrap();
-    let tr = |x: &Vec<f64>| -> Vec<f64> {
-        x.iter()
-            .zip(&domain.axes)
-            .map(|(v, a)| if a.log { v.ln() } else { *v })
-            .collect()
-    };
-    let yt: Vec<Vec<f64>> = train.iter().map(|x| model.run(x).unwrap()).collect();
-    let yc: Vec<Vec<f64>> = check.iter().map(|x| model.run(x).unwrap()).collect();
+    let (domain, train, check, yt, yc) = cell_problem(n).unwrap();
+    let tr = |x: &Vec<f64>| kriging_inputs(&domain, x);
     let xm = Mat::from_fn(n, 5, |i, k| tr(&train[i])[k]);
     let ym = Mat::from_fn(n, 200, |i, j| yt[i][j]);
     let mut s = KrigingSettings::new(Regression::Poly1, Correlation::Gauss, 5);

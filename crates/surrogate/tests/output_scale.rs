@@ -83,6 +83,36 @@ fn scaled_model_equals_s_times_a_plain_model_of_y_over_s() {
     }
 }
 
+/// dy and dmse of `predict_full` at `p` against central differences
+/// (h = 1e-5) of y and mse, for every output and input.
+fn assert_gradients_match_central_differences(model: &KrigingModel, p: [f64; 3], what: &str) {
+    let a = model.predict_full(&p).unwrap();
+    for k in 0..3 {
+        let h = 1e-5;
+        let (mut xp, mut xm) = (p, p);
+        xp[k] += h;
+        xm[k] -= h;
+        let (pp, pm) = (
+            model.predict_full(&xp).unwrap(),
+            model.predict_full(&xm).unwrap(),
+        );
+        for j in 0..3 {
+            let fd = (pp.y[j] - pm.y[j]) / (2.0 * h);
+            let an = a.dy[j * 3 + k];
+            assert!(
+                (fd - an).abs() < 1e-6 * (1.0 + fd.abs()),
+                "{what} dy{j}/dx{k}: fd {fd} vs {an}"
+            );
+            let fd = (pp.mse[j] - pm.mse[j]) / (2.0 * h);
+            let an = a.dmse[j * 3 + k];
+            assert!(
+                (fd - an).abs() < 1e-5 * (fd.abs() + a.mse[j].abs()) + 1e-14,
+                "{what} dmse{j}/dx{k}: fd {fd} vs {an}"
+            );
+        }
+    }
+}
+
 #[test]
 fn scaled_gradients_match_central_differences() {
     for scale in SCALES {
@@ -93,31 +123,11 @@ fn scaled_gradients_match_central_differences() {
             set.log_outputs = log;
             let model = KrigingModel::fit(x.as_ref(), y.as_ref(), &set).unwrap();
             for p in [[1.2, 0.3, 0.4], [2.7, -0.8, 1.9]] {
-                let a = model.predict_full(&p).unwrap();
-                for k in 0..3 {
-                    let h = 1e-5;
-                    let (mut xp, mut xm) = (p, p);
-                    xp[k] += h;
-                    xm[k] -= h;
-                    let (pp, pm) = (
-                        model.predict_full(&xp).unwrap(),
-                        model.predict_full(&xm).unwrap(),
-                    );
-                    for j in 0..3 {
-                        let fd = (pp.y[j] - pm.y[j]) / (2.0 * h);
-                        let an = a.dy[j * 3 + k];
-                        assert!(
-                            (fd - an).abs() < 1e-6 * (1.0 + fd.abs()),
-                            "{scale:?} log {log} dy{j}/dx{k}: fd {fd} vs {an}"
-                        );
-                        let fd = (pp.mse[j] - pm.mse[j]) / (2.0 * h);
-                        let an = a.dmse[j * 3 + k];
-                        assert!(
-                            (fd - an).abs() < 1e-5 * (fd.abs() + a.mse[j].abs()) + 1e-14,
-                            "{scale:?} log {log} dmse{j}/dx{k}: fd {fd} vs {an}"
-                        );
-                    }
-                }
+                assert_gradients_match_central_differences(
+                    &model,
+                    p,
+                    &format!("{scale:?} log {log}"),
+                );
             }
         }
     }
@@ -225,31 +235,12 @@ fn log_inputs_equal_a_plain_model_on_ln_x_with_matching_gradients() {
                 p[0] * b[j]
             );
         }
+        assert_gradients_match_central_differences(&model, p, "log inputs");
         let (phi, dphi) = model.basis(&p).unwrap();
         let (bm, mu) = model.basis_coefficients();
         let nb = model.n_basis();
         for k in 0..3 {
-            let h = 1e-5;
-            let (mut xp, mut xm) = (p, p);
-            xp[k] += h;
-            xm[k] -= h;
-            let (pp, pm) = (
-                model.predict_full(&xp).unwrap(),
-                model.predict_full(&xm).unwrap(),
-            );
             for j in 0..3 {
-                let fd = (pp.y[j] - pm.y[j]) / (2.0 * h);
-                assert!(
-                    (fd - a.dy[j * 3 + k]).abs() < 1e-6 * (1.0 + fd.abs()),
-                    "dy{j}/dx{k}: {fd} vs {}",
-                    a.dy[j * 3 + k]
-                );
-                let fd = (pp.mse[j] - pm.mse[j]) / (2.0 * h);
-                let an = a.dmse[j * 3 + k];
-                assert!(
-                    (fd - an).abs() < 1e-5 * (fd.abs() + a.mse[j].abs()) + 1e-14,
-                    "dmse{j}/dx{k}: {fd} vs {an}"
-                );
                 let dv: f64 = (0..nb).map(|c| bm[j * nb + c] * dphi[c * 3 + k]).sum();
                 assert!((dv - a.dy[j * 3 + k]).abs() < 1e-9 * (1.0 + dv.abs()));
             }

@@ -1,0 +1,35 @@
+//! Helpers shared by the CLI's end-to-end tests (each test binary uses a
+//! subset, hence the `dead_code` allowance).
+#![allow(dead_code, clippy::expect_used)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs the `nlvid` binary with `args` (logging off) and waits for it.
+pub fn nlvid(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_nlvid"))
+        .args(args)
+        .env_remove("NLVID_LOG")
+        .output()
+        .expect("run nlvid")
+}
+
+/// Process output as text.
+pub fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// `<system temp>/nlvid-<tag>-<pid>`, created (kept between tests of one run).
+pub fn temp_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("nlvid-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+/// `<cargo target tmp>/cli-<name>`, emptied and created.
+pub fn scratch(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("cli-{name}"));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("scratch");
+    d
+}
