@@ -290,6 +290,38 @@ impl<M: Model> Objective for Misfit<M> {
     }
 }
 
+/// Checks that experiments fitted together share one parameter set (the
+/// same names in the same order); `experiments` yields (label, domain).
+///
+/// # Errors
+/// [`InverseError::InvalidSetting`] for no experiments or differing domains.
+pub(crate) fn check_shared_parameters<'a>(
+    mut experiments: impl Iterator<Item = (&'a str, &'a Domain)>,
+) -> Result<()> {
+    let names = |d: &Domain| {
+        d.params()
+            .iter()
+            .map(|p| p.name.clone())
+            .collect::<Vec<_>>()
+    };
+    let Some((_, first)) = experiments.next() else {
+        return Err(InverseError::InvalidSetting(
+            "a fit needs at least one experiment".into(),
+        ));
+    };
+    let reference = names(first);
+    for (label, domain) in experiments {
+        let other = names(domain);
+        if other != reference {
+            return Err(InverseError::InvalidSetting(format!(
+                "experiment '{label}' has parameters {other:?}, the first has {reference:?}: \
+                 experiments fitted together must share one parameter set"
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Sum of eq. 5.3 misfits of several experiments sharing one parameter set.
 #[derive(Debug, Clone)]
 pub struct Misfit<M> {
@@ -302,32 +334,11 @@ impl<M: Model> Misfit<M> {
     /// # Errors
     /// [`InverseError::InvalidSetting`] for no experiments or differing domains.
     pub fn new(experiments: Vec<Experiment<M>>) -> Result<Self> {
-        let first = experiments.first().ok_or_else(|| {
-            InverseError::InvalidSetting("a fit needs at least one experiment".into())
-        })?;
-        let names: Vec<&str> = first
-            .model
-            .domain()
-            .params()
-            .iter()
-            .map(|p| p.name.as_str())
-            .collect();
-        for e in &experiments[1..] {
-            let other: Vec<&str> = e
-                .model
-                .domain()
-                .params()
+        check_shared_parameters(
+            experiments
                 .iter()
-                .map(|p| p.name.as_str())
-                .collect();
-            if other != names {
-                return Err(InverseError::InvalidSetting(format!(
-                    "experiment '{}' has parameters {:?}, the first has {:?}: \
-                     experiments fitted together must share one parameter set",
-                    e.label, other, names
-                )));
-            }
-        }
+                .map(|e| (e.label.as_str(), e.model.domain())),
+        )?;
         Ok(Self { experiments })
     }
 
@@ -511,5 +522,26 @@ mod tests {
         .expect("model");
         let e = Misfit::new(vec![experiment(2e-6, &x_true, "a"), other]).expect_err("differ");
         assert!(e.to_string().contains("'b'"));
+    }
+
+    #[test]
+    fn experiments_with_other_parameters_are_refused_by_name() {
+        use crate::domain::{Parameter, Scale};
+        let a = Domain::prony2_table_5_3(0.01).unwrap();
+        let b = Domain::new(vec![Parameter::new("E", "Pa", 1.0, 2.0, Scale::Linear)]).unwrap();
+        assert!(check_shared_parameters([("rh1", &a), ("rh2", &a)].into_iter()).is_ok());
+        let msg = check_shared_parameters([("rh1", &a), ("rr", &b)].into_iter())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains("experiment 'rr' has parameters [\"E\"]"),
+            "{msg}"
+        );
+        assert!(msg.contains("must share one parameter set"), "{msg}");
+        let none = check_shared_parameters(std::iter::empty()).unwrap_err();
+        assert!(
+            none.to_string().contains("at least one experiment"),
+            "{none}"
+        );
     }
 }

@@ -24,7 +24,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::domain::Domain;
 use crate::error::{InverseError, Result};
-use crate::misfit::Objective;
+use crate::misfit::{Objective, check_shared_parameters};
 use crate::model::{check_jacobian, check_len};
 
 /// A model ŷ(x) = A c(x) on a fixed time grid with a fixed output map A
@@ -246,27 +246,11 @@ impl<R: ReducedModel> ReducedMisfit<R> {
     /// # Errors
     /// [`InverseError::InvalidSetting`].
     pub fn new(experiments: Vec<ReducedExperiment<R>>) -> Result<Self> {
-        let first = experiments.first().ok_or_else(|| {
-            InverseError::InvalidSetting("a fit needs at least one experiment".into())
-        })?;
-        let names = |d: &Domain| {
-            d.params()
+        check_shared_parameters(
+            experiments
                 .iter()
-                .map(|p| p.name.clone())
-                .collect::<Vec<_>>()
-        };
-        let reference = names(first.model.domain());
-        if let Some(e) = experiments
-            .iter()
-            .find(|e| names(e.model.domain()) != reference)
-        {
-            return Err(InverseError::InvalidSetting(format!(
-                "experiment '{}' has parameters {:?}, the first has {:?}",
-                e.label,
-                names(e.model.domain()),
-                reference
-            )));
-        }
+                .map(|e| (e.label.as_str(), e.model.domain())),
+        )?;
         Ok(Self { experiments })
     }
 

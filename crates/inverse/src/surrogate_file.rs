@@ -20,7 +20,7 @@ use nlvid_surrogate::KrigingModel;
 use crate::basis::{BasisExperiment, BasisModel, gram};
 use crate::domain::Domain;
 use crate::error::{InverseError, Result};
-use crate::misfit::Objective;
+use crate::misfit::{Objective, check_shared_parameters};
 use crate::model::Model;
 use crate::optimise::{FitResult, MultiStart};
 use crate::reduced::{Projection, ReducedExperiment, ReducedModel, projection};
@@ -157,27 +157,9 @@ impl<'a> SurrogateMisfit<'a> {
     /// Bad data (length, non-finite, zero range) naming the curve;
     /// surrogates with different parameters.
     pub fn new(curves: &[SurrogateCurve<'a>]) -> Result<Self> {
-        let first = curves.first().ok_or_else(|| {
-            InverseError::InvalidSetting("a fit needs at least one experiment".into())
-        })?;
-        let names = |s: &KrigingSurrogate| {
-            Model::domain(s)
-                .params()
-                .iter()
-                .map(|p| p.name.clone())
-                .collect::<Vec<_>>()
-        };
-        let reference = names(first.surrogate);
+        check_shared_parameters(curves.iter().map(|c| (c.label, Model::domain(c.surrogate))))?;
         let mut parts = Vec::with_capacity(curves.len());
         for c in curves {
-            if names(c.surrogate) != reference {
-                return Err(InverseError::InvalidSetting(format!(
-                    "experiment '{}' has parameters {:?}, the first has {:?}",
-                    c.label,
-                    names(c.surrogate),
-                    reference
-                )));
-            }
             parts.push(match c.precomputed {
                 Precomputed::Reduced(p) => Part::Reduced(ReducedExperiment::new(
                     c.label,
