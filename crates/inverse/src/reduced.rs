@@ -44,6 +44,15 @@ pub trait ReducedModel {
     /// # Errors
     /// When the model cannot be evaluated at x.
     fn coordinates(&self, x: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>)>;
+
+    /// c(x) alone, for value-only evaluations; override when it is cheaper
+    /// than [`ReducedModel::coordinates`].
+    ///
+    /// # Errors
+    /// When the model cannot be evaluated at x.
+    fn coordinate_values(&self, x: &[f64]) -> Result<DVector<f64>> {
+        Ok(self.coordinates(x)?.0)
+    }
 }
 
 impl<R: ReducedModel + ?Sized> ReducedModel for &R {
@@ -58,6 +67,9 @@ impl<R: ReducedModel + ?Sized> ReducedModel for &R {
     }
     fn coordinates(&self, x: &[f64]) -> Result<(DVector<f64>, DMatrix<f64>)> {
         (**self).coordinates(x)
+    }
+    fn coordinate_values(&self, x: &[f64]) -> Result<DVector<f64>> {
+        (**self).coordinate_values(x)
     }
 }
 
@@ -189,7 +201,11 @@ impl<R: ReducedModel> ReducedExperiment<R> {
 
     /// (e, ∂e/∂x) from the reduced form; ∂e/∂x only if `with_gradient`.
     pub(crate) fn eval(&self, x: &[f64], with_gradient: bool) -> Result<(f64, Vec<f64>)> {
-        let (c, dc) = self.model.coordinates(x)?;
+        let (c, dc) = if with_gradient {
+            self.model.coordinates(x)?
+        } else {
+            (self.model.coordinate_values(x)?, DMatrix::zeros(0, 0))
+        };
         check_len("reduced coordinates", self.b.len(), c.len())?;
         let res = &self.projection.r * &c - &self.b;
         let swr2 = res.norm_squared() + self.rho2;
@@ -220,7 +236,7 @@ impl<R: ReducedModel> ReducedExperiment<R> {
     /// # Errors
     /// Model errors; a non-finite prediction.
     pub fn direct(&self, x: &[f64]) -> Result<f64> {
-        let (c, _) = self.model.coordinates(x)?;
+        let c = self.model.coordinate_values(x)?;
         let y = self.model.output_map() * c;
         crate::model::check_finite(y.as_slice(), self.model.times(), x)?;
         crate::misfit::range_normalised_rmse(

@@ -254,6 +254,14 @@ impl ReducedModel for KrigingSurrogate {
         }
         Ok((DVector::from_vec(c), dc))
     }
+    fn coordinate_values(&self, x: &[f64]) -> Result<DVector<f64>> {
+        let (xs, _) = self.inputs(x)?;
+        let c = self
+            .kriging
+            .output_coordinate_values(&xs)
+            .map_err(|e| model_err(x, &e))?;
+        Ok(DVector::from_vec(c))
+    }
 }
 
 impl Model for KrigingSurrogate {

@@ -85,6 +85,16 @@ fn output_map_times_coordinates_is_the_predictor() {
                     let y = model.predict(&p).unwrap();
                     let (c, dc) = model.output_coordinates(&p).unwrap();
                     assert_eq!((c.len(), dc.len()), (r, r * 3));
+                    // The value-only path (one correlation column) gives the same c.
+                    let values = model.output_coordinate_values(&p).unwrap();
+                    let cscale = c.iter().fold(0.0_f64, |s, v| s.max(v.abs()));
+                    for (k, (v, w)) in values.iter().zip(&c).enumerate() {
+                        assert!(
+                            (v - w).abs() <= 1e-13 * cscale,
+                            "pca {pca:?} scaled {scaled} log {log_inputs} at {p:?}, coordinate {k}: value-only {v}, with derivatives {w}"
+                        );
+                    }
+                    assert_eq!(values.len(), r);
                     let scale = y.iter().fold(0.0_f64, |s, v| s.max(v.abs()));
                     for j in 0..m {
                         let ac: f64 = (0..r).map(|k| a[k * m + j] * c[k]).sum();

@@ -65,6 +65,21 @@ impl KrigingModel {
     /// `x` of the wrong length or not finite, a log input ≤ 0, s(x) ≤ 0,
     /// or a model with `log_outputs`.
     pub fn output_coordinates(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
+        self.coordinates_at(x, true)
+    }
+
+    /// c(x) of [`KrigingModel::output_coordinates`] without the derivative:
+    /// one correlation column instead of d + 1, for value-only evaluations
+    /// (line-search trials, reported misfits).
+    ///
+    /// # Errors
+    /// As [`KrigingModel::output_coordinates`].
+    pub fn output_coordinate_values(&self, x: &[f64]) -> Result<Vec<f64>> {
+        Ok(self.coordinates_at(x, false)?.0)
+    }
+
+    /// c(x) and, if `derivatives`, ∂c/∂x (else an empty vector).
+    fn coordinates_at(&self, x: &[f64], derivatives: bool) -> Result<(Vec<f64>, Vec<f64>)> {
         self.check_linear_outputs()?;
         let xi = self.internal_x(x)?;
         let (n, d, p, q) = (self.n_sites, self.dim, self.p(), self.n_kriged());
@@ -73,10 +88,14 @@ impl KrigingModel {
             .collect();
         let mut f = vec![0.0; p];
         self.regression.eval(&xn, &mut f);
-        let mut df = vec![0.0; d * p];
-        self.regression.jacobian(&xn, &mut df);
-        // M = [r, ∂r/∂xn_1, …, ∂r/∂xn_d], column-major n × (d + 1).
-        let mut rm = vec![0.0; n * (d + 1)];
+        let mut df = vec![0.0; if derivatives { d * p } else { 0 }];
+        if derivatives {
+            self.regression.jacobian(&xn, &mut df);
+        }
+        // M = [r, ∂r/∂xn_1, …, ∂r/∂xn_dd], column-major n × (dd + 1); dd = 0
+        // for values only.
+        let dd = if derivatives { d } else { 0 };
+        let mut rm = vec![0.0; n * (dd + 1)];
         let mut dx = vec![0.0; d];
         let mut g = vec![0.0; d];
         for i in 0..n {
@@ -86,7 +105,7 @@ impl KrigingModel {
             let ri = if self.correlation == Correlation::Gauss {
                 // exp(−Σ θ_k d_k²) with one exp instead of one per dimension.
                 let ri = (-(0..d).map(|k| self.theta[k] * dx[k] * dx[k]).sum::<f64>()).exp();
-                for k in 0..d {
+                for k in 0..dd {
                     g[k] = -2.0 * self.theta[k] * dx[k] * ri;
                 }
                 ri
@@ -94,31 +113,31 @@ impl KrigingModel {
                 self.correlation.value_and_grad_d(&self.theta, &dx, &mut g)
             };
             rm[i] = ri;
-            for k in 0..d {
+            for k in 0..dd {
                 rm[(k + 1) * n + i] = g[k];
             }
         }
-        // P = Mᵀγ ((d + 1) × q): row 0 is γᵀr, row k + 1 is γᵀ∂r/∂xn_k.
-        let mut pm = Mat::<f64>::zeros(d + 1, q);
+        // P = Mᵀγ ((dd + 1) × q): row 0 is γᵀr, row k + 1 is γᵀ∂r/∂xn_k.
+        let mut pm = Mat::<f64>::zeros(dd + 1, q);
         matmul(
             pm.as_mut(),
             Accum::Replace,
-            MatRef::from_column_major_slice(&rm, n, d + 1).transpose(),
+            MatRef::from_column_major_slice(&rm, n, dd + 1).transpose(),
             MatRef::from_column_major_slice(&self.gamma, n, q),
             1.0,
             Par::Seq,
         );
         // ∂xn_k/∂x_k.
-        let scale: Vec<f64> = (0..d)
+        let scale: Vec<f64> = (0..dd)
             .map(|k| self.dinternal(x, k) / self.x_std[k])
             .collect();
         let mut c = vec![0.0; q + 1];
-        let mut dc = vec![0.0; (q + 1) * d];
+        let mut dc = vec![0.0; (q + 1) * dd];
         c[0] = 1.0;
         for j in 0..q {
             let b = &self.beta[j * p..(j + 1) * p];
             c[j + 1] = dot(b, &f) + pm[(0, j)];
-            for k in 0..d {
+            for k in 0..dd {
                 let dz = dot(&df[k * p..(k + 1) * p], b) + pm[(k + 1, j)];
                 dc[(j + 1) * d + k] = dz * scale[k];
             }
@@ -128,10 +147,12 @@ impl KrigingModel {
             let (_, ds) = sc.eval(x);
             let kk = sc.input();
             for j in 0..=q {
-                for k in 0..d {
-                    dc[j * d + k] *= s;
+                if derivatives {
+                    for k in 0..d {
+                        dc[j * d + k] *= s;
+                    }
+                    dc[j * d + kk] += ds * c[j];
                 }
-                dc[j * d + kk] += ds * c[j];
                 c[j] *= s;
             }
         }
