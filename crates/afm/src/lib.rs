@@ -38,6 +38,7 @@ mod jpk;
 mod lee_radok;
 pub mod plot;
 mod prepare;
+mod ramp_hold;
 
 pub use curve::{Calibration, CalibrationSource, Channel, ForceCurve, Segment, SegmentKind};
 pub use error::{AfmError, Result};
@@ -55,3 +56,4 @@ pub use prepare::{
     Baseline, ContactMethod, ContactPoint, contact_point, contact_point_from_baseline, indentation,
     tip_sample_separation,
 };
+pub use ramp_hold::read_ramp_hold;

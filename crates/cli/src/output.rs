@@ -167,15 +167,74 @@ pub fn provenance(study: &nlvid_study::Study) -> Value {
     })
 }
 
+/// `<stem>.<suffix>` next to `study` (`cell.toml` → `cell.simulate.csv`):
+/// where commands write their outputs by default.
+pub fn next_to(study: &Path, suffix: &str) -> std::path::PathBuf {
+    let stem = study
+        .file_stem()
+        .map_or_else(|| "study".into(), |s| s.to_string_lossy().into_owned());
+    study.with_file_name(format!("{stem}.{suffix}"))
+}
+
+/// A curve as JSON: `{"time_s": [...], "<header>": [...], ...}`, the
+/// headers of its CSV (unit-suffixed, as [`Table::to_json`]).
+pub fn curve_json(curve: &nlvid_model::Curve) -> Value {
+    let mut m = Map::new();
+    m.insert("time_s".into(), Value::from(curve.time().to_vec()));
+    for c in curve.channels() {
+        m.insert(c.header(), Value::from(c.values.clone()));
+    }
+    Value::Object(m)
+}
+
+/// Named parameters as JSON with unit-suffixed keys: `{"G0_Pa": 1000,
+/// "g1": 0.3, "tau1_s": 0.5}`.
+pub fn parameters_json(params: &[(String, f64, String)]) -> Value {
+    params
+        .iter()
+        .map(|(n, v, u)| {
+            let key = if u.is_empty() || u == "1" {
+                n.clone()
+            } else {
+                Column::new(n, u).header()
+            };
+            (key, Value::from(*v))
+        })
+        .collect::<Map<_, _>>()
+        .into()
+}
+
 /// Prints one JSON document on stdout (the `--json` convention).
 ///
 /// # Errors
 /// Writing to stdout fails (e.g. a closed pipe).
 pub fn print_json(value: &Value) -> anyhow::Result<()> {
+    let mut text = serde_json::to_string_pretty(value)?;
+    text.push('\n');
+    print_text(&text)
+}
+
+/// Writes `text` to stdout. A closed pipe (`nlvid … | head`) is an
+/// `io::Error` that [`crate::report`] turns into a quiet exit, never a
+/// panic as `print!` would.
+///
+/// # Errors
+/// Writing to stdout fails.
+pub fn print_text(text: &str) -> anyhow::Result<()> {
     let mut out = std::io::stdout().lock();
-    serde_json::to_writer_pretty(&mut out, value)?;
-    writeln!(out)?;
+    out.write_all(text.as_bytes())?;
+    out.flush()?;
     Ok(())
+}
+
+/// `println!` that returns the write error instead of panicking on a
+/// closed stdout: `say!("{x} N")?;`.
+#[macro_export]
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout(), $($arg)*)
+    }};
 }
 
 #[cfg(test)]

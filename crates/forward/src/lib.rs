@@ -47,6 +47,7 @@ mod afm_fe;
 mod error;
 mod hertz;
 mod membrane;
+pub mod simulate;
 
 use std::time::Duration;
 
@@ -60,6 +61,7 @@ pub use error::{ForwardError, Result};
 pub use hertz::{HertzGrid, HertzPronyModel, HertzPronySpec};
 pub use membrane::{MembraneModel, MembraneSpec, membrane_failure};
 pub use nlvid_surrogate::HertzProny;
+pub use simulate::{SimulateStudy, Simulation};
 
 /// Which forward model, with all its settings.
 #[derive(Debug, Clone, PartialEq)]
@@ -136,17 +138,9 @@ impl ForwardSettings {
             Kind::AfmFe => {
                 let mut ps = study.section("protocol")?;
                 let settings = ProtocolSettings::from_section(&mut ps)?;
-                let ProtocolLoading::Afm(script) = &settings.loading else {
-                    return Err(ps
-                        .invalid(
-                            "kind",
-                            "model `afm-fe` needs kind = \"afm\" (the two-step AFM script)",
-                        )
-                        .into());
-                };
                 let m = points(&mut f, Some((&ps, &settings)))?;
                 ps.finish()?;
-                ForwardSpec::AfmFe(AfmFeSpec::from_section(&mut f, script.clone(), m)?)
+                ForwardSpec::AfmFe(AfmFeSpec::from_section(&mut f, settings.loading, m)?)
             }
             Kind::Membrane => {
                 let mut ps = study.section("protocol")?;

@@ -21,6 +21,7 @@ use nlvid_surrogate::{
 };
 
 use super::surrogate::read_table;
+use crate::say;
 
 /// Arguments of `build`.
 #[derive(Debug, Args)]
@@ -141,7 +142,7 @@ fn do_export(store: &Path, dir: &Path, filt: &Admissibility) -> anyhow::Result<(
     let mm = load(store, filt)?;
     export(&mm, dir)?;
     let c = &mm.counts;
-    println!(
+    say!(
         "exported {} of {} runs to {} (failed {}, missing {}, below peak force {}, non-repulsive {})",
         c.kept,
         c.design,
@@ -150,7 +151,7 @@ fn do_export(store: &Path, dir: &Path, filt: &Admissibility) -> anyhow::Result<(
         c.missing,
         c.below_peak,
         c.non_repulsive
-    );
+    )?;
     Ok(())
 }
 
@@ -186,10 +187,13 @@ fn run_set(
     } else {
         String::new()
     };
-    println!(
+    say!(
         "{name}: {} runs in shard: {} already done, {} run now ({} failed) in {secs:.2} s{per_run}",
-        s.in_shard, s.skipped, s.ran, s.failed
-    );
+        s.in_shard,
+        s.skipped,
+        s.ran,
+        s.failed
+    )?;
     if s.failed > 0 {
         report_failures(store)?;
     }
@@ -304,11 +308,11 @@ impl MergeArgs {
             let dirs: Vec<PathBuf> = self.shards.iter().map(|d| sub(d)).collect();
             let out = sub(&self.out);
             let n = merge(&dirs, &out)?;
-            println!(
+            say!(
                 "merged {} shards into {} ({n} runs copied)",
                 dirs.len(),
                 out.display()
-            );
+            )?;
             if let Some(dir) = &self.export {
                 do_export(&out, &sub(dir), &filt)?;
             }

@@ -11,6 +11,7 @@ use nlvid_report::settings::CohortSettings;
 use serde_json::json;
 
 use super::{Context, Run};
+use crate::say;
 
 /// Raw arguments of `nlvid cohort`.
 #[derive(Debug, clap::Args)]
@@ -132,8 +133,8 @@ pub fn print_outcome(
         }))?;
         return Ok(());
     }
-    println!("forward model: {}", settings.model.describe());
-    println!(
+    say!("forward model: {}", settings.model.describe())?;
+    say!(
         "{} cells: {} fitted now, {} reused from an earlier run; {} ok, {} suspicious, {} failed",
         run.cells.len(),
         run.fitted,
@@ -141,12 +142,12 @@ pub fn print_outcome(
         count(run, CellStatus::Ok),
         count(run, CellStatus::Suspicious),
         count(run, CellStatus::Failed)
-    );
+    )?;
     for c in listed {
-        println!("  {} {}: {}", c.status.as_str(), c.file, c.reason);
+        say!("  {} {}: {}", c.status.as_str(), c.file, c.reason)?;
     }
     if let Some(r) = results {
-        println!("wrote {r}");
+        say!("wrote {r}")?;
     }
     Ok(())
 }

@@ -10,10 +10,11 @@ use std::time::Instant;
 
 use nlvid_report::cohort;
 use nlvid_report::demo::{DemoSpec, write_demo_data};
-use nlvid_report::report::{ReportOptions, write_report};
+use nlvid_report::report::{ReportOptions, write_report_of};
 use nlvid_report::settings::CohortSettings;
 
 use super::{Context, Run};
+use crate::say;
 
 /// Raw arguments of `nlvid demo`.
 #[derive(Debug, clap::Args)]
@@ -65,7 +66,7 @@ impl Run for Args {
         Ok(self)
     }
 
-    fn execute(a: Args, ctx: &Context) -> anyhow::Result<ExitCode> {
+    fn execute(a: Args, _ctx: &Context) -> anyhow::Result<ExitCode> {
         let start = Instant::now();
         let demo = demo_dir(a.demo)?;
         let study = demo.join("study.toml");
@@ -73,58 +74,53 @@ impl Run for Args {
         if a.write_data {
             let spec = DemoSpec::default();
             let files = write_demo_data(&spec, &study, &demo.join("metamodel.toml"))?;
-            println!(
+            say!(
                 "wrote {} groups × {} cells from known parameters into {} (truth: {})",
                 spec.groups.len(),
                 spec.cells_per_group,
                 files.data.display(),
                 files.truth.display()
-            );
+            )?;
             return Ok(ExitCode::SUCCESS);
         }
         let settings = CohortSettings::load(&study)?;
         let cells = cohort::discover(&data)?;
-        println!(
+        say!(
             "1. bundled study {}: {} cells made by the forward model from known parameters \
              (truth: {})",
             study.display(),
             cells.len(),
             demo.join("ground_truth.csv").display()
-        );
+        )?;
         if let Some(f) = &settings.surrogate {
-            println!(
+            say!(
                 "   fitted on the pre-built meta-model {} of `{}`",
                 f.model.display(),
                 f.forward
-            );
+            )?;
         }
         let out = a.out.join("cohort");
-        println!(
+        say!(
             "2. nlvid cohort {} {} --out {}",
             study.display(),
             data.display(),
             out.display()
-        );
+        )?;
         let run = super::cohort::run_with_progress(&settings, &study, &data, &cells, &out)?;
         super::cohort::print_outcome(&settings, &out, &run, false)?;
+        // The results table and the report use the cells in memory.
+        let table = cohort::results_table(&run.cells)?;
         let results = out.join("results.csv");
-        println!("3. nlvid compare {}", results.display());
-        super::compare::Args {
-            results,
-            groups: None,
-            t_end: settings.hold_end,
-            points: 53,
-            method: "matlab".into(),
-            out_dir: None,
-        }
-        .run(ctx)?;
-        println!("4. nlvid report {}", out.display());
-        let page = write_report(&out, &ReportOptions::default())?;
-        println!(
+        say!("3. nlvid compare {}", results.display())?;
+        let times = nlvid_protocol::grid::uniform(0.0, settings.hold_end, 53)?;
+        super::compare::compare(&results, &table, None, &times, "matlab", &out, false)?;
+        say!("4. nlvid report {}", out.display())?;
+        let page = write_report_of(&out, &run.record, &run.cells, &ReportOptions::default())?;
+        say!(
             "done in {:.1} s. Report: {}",
             start.elapsed().as_secs_f64(),
             page.html.display()
-        );
+        )?;
         Ok(ExitCode::SUCCESS)
     }
 }

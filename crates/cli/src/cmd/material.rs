@@ -14,6 +14,7 @@ use serde_json::json;
 
 use super::{Context, Run};
 use crate::output::{Column, Table, print_json, provenance};
+use crate::say;
 
 /// Raw arguments of `nlvid material`.
 #[derive(Debug, clap::Args)]
@@ -124,7 +125,7 @@ impl Run for Args {
             }))?;
         } else {
             let last = samples.last().context("no samples")?;
-            println!(
+            say!(
                 "{model}, {}: {} points to t = {} s; final {} = {}, sigma_1 = {} Pa",
                 c.loading.mode.name(),
                 samples.len(),
@@ -132,8 +133,8 @@ impl Run for Args {
                 if shear { "shear" } else { "stretch" },
                 last.value,
                 last.principal[0]
-            );
-            println!("wrote {}", c.output.display());
+            )?;
+            say!("wrote {}", c.output.display())?;
         }
         Ok(ExitCode::SUCCESS)
     }

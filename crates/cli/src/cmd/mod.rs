@@ -9,6 +9,7 @@
 //!    arm in [`Command::run`].
 //! 3. `docs/cli/foo.md`.
 
+use crate::say;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -126,7 +127,7 @@ impl Command {
                         "version": env!("CARGO_PKG_VERSION"),
                     }))?;
                 } else {
-                    println!("nlvid {}", env!("CARGO_PKG_VERSION"));
+                    say!("nlvid {}", env!("CARGO_PKG_VERSION"))?;
                 }
                 Ok(ExitCode::SUCCESS)
             }

@@ -8,6 +8,7 @@ use nlvid_report::report::{ReportOptions, write_report};
 use serde_json::json;
 
 use super::{Context, Run};
+use crate::say;
 
 /// Raw arguments of `nlvid report`.
 #[derive(Debug, clap::Args)]
@@ -57,11 +58,11 @@ impl Run for Args {
                 "svgs": files.svgs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
             }))?;
         } else {
-            println!(
+            say!(
                 "report: {} ({} figures)",
                 files.html.display(),
                 files.figure_ids.len()
-            );
+            )?;
         }
         Ok(ExitCode::SUCCESS)
     }

@@ -8,6 +8,7 @@ use clap::Args;
 use nlvid_surrogate::doe::{Domain, training_and_checking};
 
 use super::surrogate::write_table;
+use crate::say;
 
 /// Arguments of `sample`.
 #[derive(Debug, Args)]
@@ -70,12 +71,12 @@ impl SampleArgs {
         if !check.is_empty() {
             write_table(Some(&self.out.join("check.csv")), &header, &check)?;
         }
-        println!(
+        say!(
             "wrote {} training and {} checking points to {}",
             train.len(),
             check.len(),
             self.out.display()
-        );
+        )?;
         Ok(ExitCode::SUCCESS)
     }
 }

@@ -1,5 +1,6 @@
 //! `nlvid surrogate fit | predict | check`: Kriging on any table.
 
+use crate::say;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -342,12 +343,12 @@ fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
     std::fs::write(&a.out, bytes).with_context(|| format!("cannot write {}", a.out.display()))?;
     let r = &model.report;
     if a.json {
-        println!(
+        say!(
             "{}",
             serde_json::json!({"report": r, "seconds": secs, "model": a.out})
-        );
+        )?;
     } else {
-        println!(
+        say!(
             "fitted {} sites × {} inputs → {} outputs ({} kriged, energy {:.8}) in {secs:.2} s\n\
              θ = {:?}\nψ = {:.6e} after {} evaluations ({}), nugget {:e}\nmodel written to {}",
             model.n_sites,
@@ -361,7 +362,7 @@ fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
             r.search,
             r.nugget,
             a.out.display()
-        );
+        )?;
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -465,16 +466,16 @@ fn check_cmd(a: CheckArgs) -> anyhow::Result<ExitCode> {
     })?;
     eprintln!("checking summary saved to {}", saved.display());
     if a.json {
-        println!("{summary}");
+        say!("{summary}")?;
     } else {
-        println!(
+        say!(
             "{} checking cases: range-normalised RMSE (eq. 4.4) min {:.4} %, median {:.4} %, max {:.4} % (case {})",
             s.rmse.len(),
             100.0 * s.min,
             100.0 * s.median,
             100.0 * s.max,
             s.worst
-        );
+        )?;
     }
     Ok(ExitCode::SUCCESS)
 }
