@@ -34,6 +34,7 @@ mod curve;
 mod error;
 pub mod geometry;
 mod hertz;
+mod inspect;
 mod jpk;
 mod lee_radok;
 pub mod plot;
@@ -45,6 +46,7 @@ pub use error::{AfmError, Result};
 pub use hertz::{
     Approach, HertzFit, HertzSettings, fit_hertz, hertz_baseline, hertz_force, prepare_approach,
 };
+pub use inspect::{QuickFit, QuickFitKind, quick_fit, range, summary_text, write_plot};
 pub use jpk::{
     ReadOptions, read_force_curve, read_force_curve_with, read_force_map, read_jpk_bytes,
 };

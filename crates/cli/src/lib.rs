@@ -8,7 +8,7 @@
 //!   ([`output::Table`], [`output::write_atomic`]);
 //! - progress bars on stderr, hidden off-terminal and in CI ([`progress::bar`]);
 //! - logs on stderr via `tracing` (`-v`, `NLVID_LOG`);
-//! - `--shard i/n` for batches split over a cluster ([`args::Shard`]);
+//! - `--shard i/n` for batches split over a cluster (`nlvid_surrogate::Shard`);
 //! - outputs record the study hash ([`output::provenance`]).
 //!
 //! Cost: negligible; the work is in the pipeline crates.

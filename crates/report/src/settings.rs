@@ -139,16 +139,10 @@ impl ExperimentSettings {
         self.check.clone().or_else(|| {
             self.surrogate
                 .as_deref()
-                .map(checking_summary_path)
+                .map(nlvid_surrogate::check::summary_path)
                 .filter(|p| p.is_file())
         })
     }
-}
-
-/// `model.json` → `model.check.json`: where `nlvid surrogate check` saves
-/// its summary and fits look for the model's checking error.
-pub fn checking_summary_path(model: &Path) -> PathBuf {
-    model.with_extension("check.json")
 }
 
 /// Everything `[fit]` says.

@@ -217,7 +217,7 @@ mod tests {
         ]);
         let c =
             compare_groups(&t, Some(("a", "b")), &[0.0, 0.5, 4.0], Method::Exact).expect("compare");
-        let p = c.pair.expect("pair");
+        let p = c.pair.as_ref().expect("pair");
         for r in &p.over_time {
             assert!(
                 (r.shear.p - 0.1).abs() < 1e-15,

@@ -89,6 +89,62 @@ pub fn summarise(references: &[Vec<f64>], predictions: &[Vec<f64>]) -> Result<Ch
     })
 }
 
+/// Time from a `F(t=1.0e0 s) [N]` header as written by `nlvid build --export`.
+fn header_time(h: &str) -> Option<f64> {
+    let a = h.find("t=")? + 2;
+    let rest = &h[a..];
+    let b = rest.find(' ')?;
+    rest[..b].parse().ok()
+}
+
+/// Writes `worst_case<i>.svg`, `median_case<i>.svg` and `best_case<i>.svg`
+/// into `dir`: the checking cases of `summary` with the largest, median and
+/// smallest RMSE, reference against prediction, on the times of the
+/// outputs' headers (`F(t=… s) [N]`; the column index where a header has
+/// none).
+///
+/// # Errors
+/// The directory or a file cannot be written.
+pub fn plot_cases(
+    dir: &Path,
+    header: &[String],
+    references: &[Vec<f64>],
+    predictions: &[Vec<f64>],
+    summary: &CheckSummary,
+) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(crate::error::io_err(dir))?;
+    let t: Vec<f64> = header
+        .iter()
+        .enumerate()
+        .map(|(j, h)| header_time(h).unwrap_or(j as f64))
+        .collect();
+    let best = summary
+        .rmse
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(b.1))
+        .map_or(0, |(i, _)| i);
+    for (label, i) in [
+        ("worst", summary.worst),
+        ("median", summary.median_case),
+        ("best", best),
+    ] {
+        let title = format!(
+            "checking case {i} ({label}): RMSE = {:.3} %",
+            100.0 * summary.rmse[i]
+        );
+        let path = dir.join(format!("{label}_case{i}.svg"));
+        plot_svg(&path, &title, &t, &references[i], &predictions[i])?;
+    }
+    Ok(())
+}
+
+/// `model.json` → `model.check.json`: where `nlvid surrogate check` saves
+/// its summary and fits look for the model's checking error.
+pub fn summary_path(model: &Path) -> std::path::PathBuf {
+    model.with_extension("check.json")
+}
+
 /// Write an SVG plot of reference (solid) and surrogate (dashed) curves.
 pub fn plot_svg(
     path: &Path,

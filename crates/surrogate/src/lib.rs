@@ -48,6 +48,8 @@ mod likelihood;
 pub mod optimise;
 mod regression;
 mod store;
+mod table;
+mod trend;
 
 pub use boxmin::{SearchResult, boxmin};
 pub use build::{
@@ -65,3 +67,5 @@ pub use kriging::{
 pub use optimise::OptimiserSettings;
 pub use regression::Regression;
 pub use store::{RunOutcome, RunRecord, RunStore, StoreMeta, merge};
+pub use table::{NamedModel, Table, read_table, write_table};
+pub use trend::{Trend, TrendTerm};

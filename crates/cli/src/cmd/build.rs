@@ -17,10 +17,9 @@ use nlvid_forward::{ForwardSettings, HertzPronySpec};
 use nlvid_study::Study;
 use nlvid_surrogate::doe::DesignSettings;
 use nlvid_surrogate::{
-    Admissibility, BuildOptions, ForwardModel, Shard, build, export, load, merge,
+    Admissibility, BuildOptions, ForwardModel, Shard, build, export, load, merge, read_table,
 };
 
-use super::surrogate::read_table;
 use crate::say;
 
 /// Arguments of `build`.

@@ -7,8 +7,8 @@ use anyhow::{Context, bail};
 use clap::Args;
 use nlvid_surrogate::doe::{Domain, training_and_checking};
 
-use super::surrogate::write_table;
 use crate::say;
+use nlvid_surrogate::write_table;
 
 /// Arguments of `sample`.
 #[derive(Debug, Args)]
@@ -67,9 +67,12 @@ impl SampleArgs {
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("cannot create {}", self.out.display()))?;
         let header: Vec<String> = domain.axes.iter().map(|a| a.name.clone()).collect();
-        write_table(Some(&self.out.join("train.csv")), &header, &train)?;
-        if !check.is_empty() {
-            write_table(Some(&self.out.join("check.csv")), &header, &check)?;
+        for (name, rows) in [("train.csv", &train), ("check.csv", &check)] {
+            if !rows.is_empty() {
+                let mut buf = Vec::new();
+                write_table(&mut buf, &header, rows)?;
+                crate::output::write_atomic(&self.out.join(name), &buf)?;
+            }
         }
         say!(
             "wrote {} training and {} checking points to {}",

@@ -1,16 +1,17 @@
 //! `nlvid surrogate fit | predict | check`: Kriging on any table.
 
-use crate::say;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
-use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
-    Correlation, KrigingModel, KrigingSettings, OptimiserSettings, OutputScale, Regression,
-    ThetaSearch, check,
+    Correlation, KrigingModel, KrigingSettings, NamedModel, OptimiserSettings, OutputScale,
+    Regression, Table, ThetaSearch, check, read_table, write_table,
 };
+
+use crate::output::{print_json, print_text, write_atomic};
+use crate::say;
 
 /// Kriging surrogates (DACE-equivalent).
 #[derive(Debug, Subcommand)]
@@ -97,10 +98,10 @@ pub struct PredictArgs {
     /// Points: CSV with a header.
     #[arg(long)]
     pub x: PathBuf,
-    /// Output CSV (default: stdout).
+    /// Output CSV (default: stdout; with --json, one JSON document with the output names).
     #[arg(long, short)]
     pub out: Option<PathBuf>,
-    /// Also write the MSE of every output (columns `mse_<j>`).
+    /// Also write the MSE of every output (columns `mse_<output name>`).
     #[arg(long)]
     pub mse: bool,
 }
@@ -128,108 +129,28 @@ pub struct CheckArgs {
     pub json: bool,
 }
 
-/// `model.json` → `model.check.json`: where `nlvid surrogate check` saves
-/// its summary and `nlvid fit` looks for the model's checking error.
-pub fn checking_summary_path(model: &Path) -> PathBuf {
-    model.with_extension("check.json")
-}
-
-/// A numeric table read from CSV.
-pub struct Table {
-    /// Column names.
-    pub header: Vec<String>,
-    /// Rows.
-    pub rows: Vec<Vec<f64>>,
-}
-
-impl Table {
-    /// As a faer matrix.
-    pub fn mat(&self) -> Mat<f64> {
-        Mat::from_fn(self.rows.len(), self.header.len(), |i, j| self.rows[i][j])
+/// CSV `rows` with `header` to `out`, or to stdout.
+fn write_csv(out: Option<&Path>, header: &[String], rows: &[Vec<f64>]) -> anyhow::Result<()> {
+    let mut buf = Vec::new();
+    write_table(&mut buf, header, rows)?;
+    match out {
+        Some(p) => write_atomic(p, &buf),
+        None => print_text(&String::from_utf8_lossy(&buf)),
     }
 }
 
-/// A column by its full header (`G0 [Pa]`) or by its name without the unit
-/// suffix that `nlvid build --export` writes (`G0`).
-fn column_index(header: &[String], name: &str) -> Option<usize> {
-    header.iter().position(|h| h == name).or_else(|| {
-        header
-            .iter()
-            .position(|h| h.split_once(" [").is_some_and(|(bare, _)| bare == name))
-    })
-}
-
-/// Read a numeric CSV with a header; a column named `index` is dropped.
-/// Errors name the file, row (1-based line) and column.
-pub fn read_table(path: &Path) -> anyhow::Result<Table> {
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .from_path(path)
-        .with_context(|| format!("cannot open {}", path.display()))?;
-    let head: Vec<String> = rdr
-        .headers()
-        .with_context(|| format!("{}: no header", path.display()))?
-        .iter()
-        .map(String::from)
-        .collect();
-    let keep: Vec<usize> = (0..head.len()).filter(|&j| head[j] != "index").collect();
-    let mut rows = Vec::new();
-    for (r, rec) in rdr.records().enumerate() {
-        let line = r + 2;
-        let rec = rec.with_context(|| format!("{}:{line}: bad CSV record", path.display()))?;
-        if rec.len() != head.len() {
-            bail!(
-                "{}:{line}: {} fields, header has {}",
-                path.display(),
-                rec.len(),
-                head.len()
-            );
-        }
-        let mut row = Vec::with_capacity(keep.len());
-        for &j in &keep {
-            let v: f64 = rec[j].parse().with_context(|| {
-                format!(
-                    "{}:{line}: column `{}`: `{}` is not a number",
-                    path.display(),
-                    head[j],
-                    &rec[j]
-                )
-            })?;
-            row.push(v);
-        }
-        rows.push(row);
+fn read_pair(x: &Path, y: &Path) -> anyhow::Result<(Table, Table)> {
+    let (tx, ty) = (read_table(x)?, read_table(y)?);
+    if tx.rows.len() != ty.rows.len() {
+        bail!(
+            "{} has {} rows but {} has {}",
+            x.display(),
+            tx.rows.len(),
+            y.display(),
+            ty.rows.len()
+        );
     }
-    if rows.is_empty() {
-        bail!("{}: no data rows", path.display());
-    }
-    Ok(Table {
-        header: keep.iter().map(|&j| head[j].clone()).collect(),
-        rows,
-    })
-}
-
-/// Write rows as CSV with a header.
-pub fn write_table(out: Option<&Path>, header: &[String], rows: &[Vec<f64>]) -> anyhow::Result<()> {
-    let w: Box<dyn std::io::Write> = match out {
-        Some(p) => Box::new(
-            std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
-        ),
-        None => Box::new(std::io::stdout()),
-    };
-    let mut w = csv::Writer::from_writer(w);
-    w.write_record(header)?;
-    for r in rows {
-        w.write_record(r.iter().map(|v| format!("{v:e}")))?;
-    }
-    w.flush()?;
-    Ok(())
-}
-
-fn load_model(path: &Path) -> anyhow::Result<KrigingModel> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    serde_json::from_str(&text)
-        .with_context(|| format!("{}: not a Kriging model file", path.display()))
+    Ok((tx, ty))
 }
 
 impl SurrogateCmd {
@@ -240,7 +161,7 @@ impl SurrogateCmd {
                 a.json = json;
                 fit(*a)
             }
-            SurrogateCmd::Predict(a) => predict(a),
+            SurrogateCmd::Predict(a) => predict(a, json),
             SurrogateCmd::Check(mut a) => {
                 a.json = json;
                 check_cmd(a)
@@ -250,17 +171,7 @@ impl SurrogateCmd {
 }
 
 fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
-    let x = read_table(&a.x)?;
-    let y = read_table(&a.y)?;
-    if x.rows.len() != y.rows.len() {
-        bail!(
-            "{} has {} rows but {} has {}",
-            a.x.display(),
-            x.rows.len(),
-            a.y.display(),
-            y.rows.len()
-        );
-    }
+    let (x, y) = read_pair(&a.x, &a.y)?;
     let reg = Regression::parse(&a.regression).with_context(|| {
         format!(
             "--regression {}: expected poly0, poly1 or poly2",
@@ -274,32 +185,27 @@ fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
         )
     })?;
     let d = x.header.len();
+    let column = |flag: &str, col: &str| {
+        x.column(col).with_context(|| {
+            format!(
+                "--{flag} {col}: no such column in {} (columns: {:?})",
+                a.x.display(),
+                x.header
+            )
+        })
+    };
     let mut s = KrigingSettings::new(reg, corr, d);
     s.nugget = a.nugget;
     s.pca_energy = a.pca;
     s.log_outputs = a.log_outputs;
     if let Some(cols) = &a.log_inputs {
-        let mut flags = vec![false; d];
+        s.log_inputs = vec![false; d];
         for col in cols {
-            let k = column_index(&x.header, col).with_context(|| {
-                format!(
-                    "--log-inputs {col}: no such column in {} (columns: {:?})",
-                    a.x.display(),
-                    x.header
-                )
-            })?;
-            flags[k] = true;
+            s.log_inputs[column("log-inputs", col)?] = true;
         }
-        s.log_inputs = flags;
     }
     if let Some(col) = &a.proportional_to {
-        let input = column_index(&x.header, col).with_context(|| {
-            format!(
-                "--proportional-to {col}: no such column in {} (columns: {:?})",
-                a.x.display(),
-                x.header
-            )
-        })?;
+        let input = column("proportional-to", col)?;
         s.output_scale = Some(match a.log_coded {
             Some(slope) => OutputScale::Exp { input, slope },
             None => OutputScale::Linear { input },
@@ -314,9 +220,11 @@ fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
         ..
     } = ThetaSearch::default_for(corr, d)
     {
-        let theta0 = a.theta0.unwrap_or(theta0);
-        let lower = a.lower.unwrap_or(lower);
-        let upper = a.upper.unwrap_or(upper);
+        let (theta0, lower, upper) = (
+            a.theta0.unwrap_or(theta0),
+            a.lower.unwrap_or(lower),
+            a.upper.unwrap_or(upper),
+        );
         s.theta = if a.boxmin {
             ThetaSearch::Boxmin {
                 theta0,
@@ -324,51 +232,97 @@ fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
                 upper,
             }
         } else {
+            let settings = OptimiserSettings {
+                starts: a.starts,
+                screen_sites: a.screen_sites,
+                ..Default::default()
+            };
             ThetaSearch::Optimise {
                 theta0,
                 lower,
                 upper,
-                settings: OptimiserSettings {
-                    starts: a.starts,
-                    screen_sites: a.screen_sites,
-                    ..Default::default()
-                },
+                settings,
             }
         };
     }
     let t0 = std::time::Instant::now();
     let model = KrigingModel::fit(x.mat().as_ref(), y.mat().as_ref(), &s)?;
     let secs = t0.elapsed().as_secs_f64();
-    let bytes = serde_json::to_vec(&model)?;
-    std::fs::write(&a.out, bytes).with_context(|| format!("cannot write {}", a.out.display()))?;
-    let r = &model.report;
+    let named = NamedModel {
+        model,
+        input_names: x.header.clone(),
+        output_names: y.header.clone(),
+    };
+    named.save(&a.out)?;
+    let (model, r) = (&named.model, &named.model.report);
+    // β of the trend and σ² of each output in the outputs' own units.
+    let trend = model.trend();
+    let inputs = |t: &nlvid_surrogate::TrendTerm| -> String {
+        let f: Vec<&str> = t.inputs.iter().map(|&k| x.header[k].as_str()).collect();
+        if f.is_empty() {
+            "1".into()
+        } else {
+            f.join("*")
+        }
+    };
+    let sigma2 = model.process_variance();
+    let outputs = named.outputs();
+    let units = match (model.log_outputs, &model.output_scale) {
+        (true, _) => "trend and σ² of ln y (--log-outputs)",
+        (false, Some(_)) => "trend and σ² of y divided by the --proportional-to factor",
+        (false, None) => "trend in output units, σ² in output units squared",
+    };
     if a.json {
+        let beta: Vec<_> = trend
+            .terms
+            .iter()
+            .zip(&trend.coefficients)
+            .map(|(t, c)| serde_json::json!({ "term": inputs(t), "coefficients": c }))
+            .collect();
+        print_json(&serde_json::json!({
+            "report": r, "seconds": secs, "model": a.out, "outputs": outputs,
+            "units": units, "beta": beta, "sigma2": sigma2,
+        }))?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    say!(
+        "fitted {} sites × {} inputs → {} outputs ({} kriged, energy {:.8}) in {secs:.2} s\n\
+         θ = {:?}\nψ = {:.6e} after {} evaluations ({}), nugget {:e}",
+        model.n_sites,
+        model.dim,
+        model.n_outputs,
+        r.kriged_outputs,
+        r.energy,
+        r.theta,
+        r.psi,
+        r.evaluations,
+        r.search,
+        r.nugget,
+    )?;
+    say!("{units} (inputs in ln x for --log-inputs columns):")?;
+    let shown = outputs.len().min(3);
+    for (j, name) in outputs.iter().enumerate().take(shown) {
+        let terms: Vec<String> = trend
+            .terms
+            .iter()
+            .zip(&trend.coefficients)
+            .map(|(t, c)| format!("{:+.6e}·{}", c[j], inputs(t)))
+            .collect();
+        say!("  {name}: β: {}; σ² = {:.6e}", terms.join(" "), sigma2[j])?;
+    }
+    if outputs.len() > shown {
         say!(
-            "{}",
-            serde_json::json!({"report": r, "seconds": secs, "model": a.out})
-        )?;
-    } else {
-        say!(
-            "fitted {} sites × {} inputs → {} outputs ({} kriged, energy {:.8}) in {secs:.2} s\n\
-             θ = {:?}\nψ = {:.6e} after {} evaluations ({}), nugget {:e}\nmodel written to {}",
-            model.n_sites,
-            model.dim,
-            model.n_outputs,
-            r.kriged_outputs,
-            r.energy,
-            r.theta,
-            r.psi,
-            r.evaluations,
-            r.search,
-            r.nugget,
-            a.out.display()
+            "  … {} more outputs (all with --json)",
+            outputs.len() - shown
         )?;
     }
+    say!("model written to {}", a.out.display())?;
     Ok(ExitCode::SUCCESS)
 }
 
-fn predict(a: PredictArgs) -> anyhow::Result<ExitCode> {
-    let model = load_model(&a.model)?;
+fn predict(a: PredictArgs, json: bool) -> anyhow::Result<ExitCode> {
+    let named = NamedModel::load(&a.model)?;
+    let model = &named.model;
     let x = read_table(&a.x)?;
     if x.header.len() != model.dim {
         bail!(
@@ -378,87 +332,84 @@ fn predict(a: PredictArgs) -> anyhow::Result<ExitCode> {
             model.dim
         );
     }
-    let mut header: Vec<String> = (0..model.n_outputs).map(|j| format!("y_{j}")).collect();
-    if a.mse {
-        header.extend((0..model.n_outputs).map(|j| format!("mse_{j}")));
-    }
-    let mut rows = Vec::with_capacity(x.rows.len());
+    let mut ys = Vec::with_capacity(x.rows.len());
+    let mut mses = Vec::with_capacity(x.rows.len());
     for (i, xi) in x.rows.iter().enumerate() {
-        let row = if a.mse {
-            let p = model
-                .predict_full(xi)
-                .with_context(|| format!("{}:{}", a.x.display(), i + 2))?;
-            let mut r = p.y;
-            r.extend(p.mse);
-            r
+        let at = || format!("{}:{}", a.x.display(), i + 2);
+        if a.mse {
+            let p = model.predict_full(xi).with_context(at)?;
+            ys.push(p.y);
+            mses.push(p.mse);
         } else {
-            model
-                .predict(xi)
-                .with_context(|| format!("{}:{}", a.x.display(), i + 2))?
-        };
-        rows.push(row);
+            ys.push(model.predict(xi).with_context(at)?);
+        }
     }
-    write_table(a.out.as_deref(), &header, &rows)?;
+    let names = named.outputs();
+    if json {
+        let points: Vec<_> = x
+            .rows
+            .iter()
+            .enumerate()
+            .map(|(i, xi)| {
+                let input: serde_json::Map<_, _> = x
+                    .header
+                    .iter()
+                    .zip(xi)
+                    .map(|(h, v)| (h.clone(), serde_json::json!(v)))
+                    .collect();
+                let output: serde_json::Map<_, _> = names
+                    .iter()
+                    .zip(&ys[i])
+                    .map(|(h, v)| (h.clone(), serde_json::json!(v)))
+                    .collect();
+                let mut p = serde_json::json!({ "x": input, "y": output });
+                if let Some(m) = mses.get(i) {
+                    p["mse"] = names
+                        .iter()
+                        .zip(m)
+                        .map(|(h, v)| (h.clone(), serde_json::json!(v)))
+                        .collect::<serde_json::Map<_, _>>()
+                        .into();
+                }
+                p
+            })
+            .collect();
+        print_json(&serde_json::json!({ "model": a.model, "outputs": names, "points": points }))?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    let mut header = names.clone();
+    if a.mse {
+        header.extend(names.iter().map(|n| format!("mse_{n}")));
+    }
+    let rows: Vec<Vec<f64>> = ys
+        .into_iter()
+        .enumerate()
+        .map(|(i, mut y)| {
+            y.extend(mses.get(i).into_iter().flatten());
+            y
+        })
+        .collect();
+    write_csv(a.out.as_deref(), &header, &rows)?;
     Ok(ExitCode::SUCCESS)
 }
 
 fn check_cmd(a: CheckArgs) -> anyhow::Result<ExitCode> {
-    let model = load_model(&a.model)?;
-    let x = read_table(&a.x)?;
-    let y = read_table(&a.y)?;
-    if x.rows.len() != y.rows.len() {
-        bail!(
-            "{} has {} rows but {} has {}",
-            a.x.display(),
-            x.rows.len(),
-            a.y.display(),
-            y.rows.len()
-        );
-    }
+    let model = NamedModel::load(&a.model)?.model;
+    let (x, y) = read_pair(&a.x, &a.y)?;
     let pred = model.predict_many(x.mat().as_ref())?;
     let preds: Vec<Vec<f64>> = (0..pred.nrows())
         .map(|i| (0..pred.ncols()).map(|j| pred[(i, j)]).collect())
         .collect();
     let s = check::summarise(&y.rows, &preds)?;
     if let Some(dir) = &a.plots {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        let t: Vec<f64> = y
-            .header
-            .iter()
-            .enumerate()
-            .map(|(j, h)| parse_time(h).unwrap_or(j as f64))
-            .collect();
-        let best = s
-            .rmse
-            .iter()
-            .enumerate()
-            .min_by(|a, b| a.1.total_cmp(b.1))
-            .map(|(i, _)| i)
-            .unwrap_or(0);
-        for (label, i) in [
-            ("worst", s.worst),
-            ("median", s.median_case),
-            ("best", best),
-        ] {
-            let title = format!(
-                "checking case {i} ({label}): RMSE = {:.3} %",
-                100.0 * s.rmse[i]
-            );
-            check::plot_svg(
-                &dir.join(format!("{label}_case{i}.svg")),
-                &title,
-                &t,
-                &y.rows[i],
-                &preds[i],
-            )?;
-        }
+        check::plot_cases(dir, &y.header, &y.rows, &preds, &s)?;
     }
     let summary = serde_json::to_string(&s)?;
     let saved = a
         .summary
         .clone()
-        .unwrap_or_else(|| checking_summary_path(&a.model));
-    crate::output::write_atomic(&saved, format!("{summary}\n").as_bytes()).with_context(|| {
+        .unwrap_or_else(|| check::summary_path(&a.model));
+    write_atomic(&saved, format!("{summary}\n").as_bytes()).with_context(|| {
         format!(
             "cannot save the checking summary to {} (choose another place with --summary)",
             saved.display()
@@ -478,30 +429,4 @@ fn check_cmd(a: CheckArgs) -> anyhow::Result<ExitCode> {
         )?;
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// Time from a `F(t=1.0e0 s) [N]` header as written by `nlvid build --export`.
-fn parse_time(h: &str) -> Option<f64> {
-    let a = h.find("t=")? + 2;
-    let rest = &h[a..];
-    let b = rest.find(' ')?;
-    rest[..b].parse().ok()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::column_index;
-
-    #[test]
-    fn columns_are_found_with_or_without_their_unit_suffix() {
-        let header: Vec<String> = ["index", "G0 [Pa]", "g1 [1]", "tau1 [s]"]
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
-        assert_eq!(column_index(&header, "G0 [Pa]"), Some(1));
-        assert_eq!(column_index(&header, "G0"), Some(1));
-        assert_eq!(column_index(&header, "tau1"), Some(3));
-        assert_eq!(column_index(&header, "tau"), None);
-        assert_eq!(column_index(&header, "Pa"), None);
-    }
 }

@@ -15,7 +15,7 @@ use serde_json::json;
 
 use super::data::LoadedExperiment;
 use crate::error::{ReportError, Result};
-use crate::settings::{FitSettings, checking_summary_path};
+use crate::settings::FitSettings;
 
 /// Whether the surrogate and real-model misfits agree within the checking
 /// error (issue 6): `yes`, `no`, or `unknown` (no real model or no
@@ -143,7 +143,7 @@ impl Outcome {
                         "no checking error: run `nlvid surrogate check {} --x X.csv --y Y.csv` \
                          on independent checking runs (it saves {}), or set `checking` in [fit]",
                         e.surrogate.path.display(),
-                        checking_summary_path(&e.surrogate.path).display()
+                        nlvid_surrogate::check::summary_path(&e.surrogate.path).display()
                     )),
                 ),
             };
