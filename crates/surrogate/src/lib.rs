@@ -48,6 +48,7 @@ mod likelihood;
 pub mod optimise;
 mod regression;
 mod store;
+mod study;
 mod table;
 mod trend;
 
@@ -67,5 +68,6 @@ pub use kriging::{
 pub use optimise::OptimiserSettings;
 pub use regression::Regression;
 pub use store::{RunOutcome, RunRecord, RunStore, StoreMeta, merge};
+pub use study::{BuildSettings, set_dir, shard_sets};
 pub use table::{NamedModel, Table, read_table, write_table};
 pub use trend::{Trend, TrendTerm};

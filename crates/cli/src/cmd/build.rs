@@ -15,9 +15,9 @@ use anyhow::{Context, bail};
 use clap::Args;
 use nlvid_forward::{ForwardSettings, HertzPronySpec};
 use nlvid_study::Study;
-use nlvid_surrogate::doe::DesignSettings;
 use nlvid_surrogate::{
-    Admissibility, BuildOptions, ForwardModel, Shard, build, export, load, merge, read_table,
+    Admissibility, BuildOptions, BuildSettings, ForwardModel, Shard, build, export, load, merge,
+    read_table, set_dir, shard_sets,
 };
 
 use crate::say;
@@ -83,58 +83,26 @@ pub struct MergeArgs {
     pub reject_non_repulsive: bool,
 }
 
-/// A study file read for a meta-model build.
+/// A study read for a meta-model build: the forward model of `[forward]`
+/// and the `[design]` and `[build]` sections (library calls only).
 pub struct BuildStudy {
     /// The forward model.
     pub model: Box<dyn ForwardModel>,
-    /// `[design]`.
-    pub design: DesignSettings,
-    /// `[build] store`.
-    pub store: Option<PathBuf>,
-    /// `[build] export`.
-    pub export: Option<PathBuf>,
-    /// `[build]` filters.
-    pub filters: Admissibility,
+    /// `[design]` and `[build]`.
+    pub settings: BuildSettings,
 }
 
-/// Reads `[forward]` (+ `[protocol]`), `[design]` and `[build]`; unknown
-/// sections or keys are errors naming file and line.
+/// Reads `[forward]` (+ `[protocol]`), `[design]` and `[build]`; sections
+/// of other stages are left alone, unknown ones are errors.
 ///
 /// # Errors
-/// Any study error.
+/// Any study error (file, line, key).
 pub fn read_study(path: &Path) -> anyhow::Result<BuildStudy> {
     let mut study = Study::load(path)?;
-    let _ = study.root().opt_str("title")?;
     let model = ForwardSettings::from_study(&mut study)?.build()?;
-    let mut ds = study.section("design")?;
-    let design =
-        DesignSettings::from_section(&mut ds, &model.parameter_names(), &model.parameter_units())?;
-    ds.finish()?;
-    let (store, export, filters) = match study.opt_section("build")? {
-        Some(mut b) => {
-            let store = b.opt_path("store")?;
-            let export = b.opt_path("export")?;
-            let filters = Admissibility::from_section(&mut b, model.contact_index())?;
-            b.finish()?;
-            (store, export, filters)
-        }
-        None => (
-            None,
-            None,
-            Admissibility {
-                contact_index: model.contact_index(),
-                ..Default::default()
-            },
-        ),
-    };
-    study.finish()?;
-    Ok(BuildStudy {
-        model,
-        design,
-        store,
-        export,
-        filters,
-    })
+    let (names, units) = (model.parameter_names(), model.parameter_units());
+    let settings = BuildSettings::from_study(study, &names, &units, model.contact_index())?;
+    Ok(BuildStudy { model, settings })
 }
 
 fn do_export(store: &Path, dir: &Path, filt: &Admissibility) -> anyhow::Result<()> {
@@ -205,14 +173,14 @@ impl BuildArgs {
         let shard = self.shard.as_deref().map(Shard::parse).transpose()?;
         if let Some(path) = &self.study {
             let st = read_study(path)?;
-            let Some(store) = self.store.clone().or(st.store.clone()) else {
+            let Some(store) = self.store.clone().or(st.settings.store.clone()) else {
                 bail!(
                     "{}: no store directory: give --store DIR or `store = \"DIR\"` in [build]",
                     path.display()
                 );
             };
-            let export_dir = self.export.clone().or(st.export.clone());
-            let (train, check) = st.design.designs()?;
+            let export_dir = self.export.clone().or(st.settings.export.clone());
+            let (train, check) = st.settings.design.designs()?;
             let mut sets = vec![("train", train)];
             if !check.is_empty() {
                 sets.push(("check", check));
@@ -229,7 +197,7 @@ impl BuildArgs {
             }
             if let Some(dir) = &export_dir {
                 for (name, _) in &sets {
-                    do_export(&store.join(name), &dir.join(name), &st.filters)?;
+                    do_export(&store.join(name), &dir.join(name), &st.settings.filters)?;
                 }
             }
             return Ok(ExitCode::SUCCESS);
@@ -272,6 +240,7 @@ impl MergeArgs {
             Some(p) => {
                 read_study(p)
                     .with_context(|| format!("--study {}", p.display()))?
+                    .settings
                     .filters
             }
             None => Admissibility {
@@ -280,32 +249,9 @@ impl MergeArgs {
                 contact_index: 0,
             },
         };
-        // A study build's shards hold `train/` (and `check/`) stores.
-        let sets: Vec<Option<&str>> = if self.shards.iter().all(|d| d.join("meta.json").is_file()) {
-            vec![None]
-        } else if self
-            .shards
-            .iter()
-            .all(|d| d.join("train/meta.json").is_file())
-        {
-            let mut v = vec![Some("train")];
-            if self
-                .shards
-                .iter()
-                .all(|d| d.join("check/meta.json").is_file())
-            {
-                v.push(Some("check"));
-            }
-            v
-        } else {
-            bail!(
-                "each shard directory must be a store (meta.json) or hold train/ (and check/) stores"
-            );
-        };
-        for set in sets {
-            let sub = |d: &Path| set.map_or_else(|| d.to_path_buf(), |s| d.join(s));
-            let dirs: Vec<PathBuf> = self.shards.iter().map(|d| sub(d)).collect();
-            let out = sub(&self.out);
+        for set in shard_sets(&self.shards)? {
+            let dirs: Vec<PathBuf> = self.shards.iter().map(|d| set_dir(d, set)).collect();
+            let out = set_dir(&self.out, set);
             let n = merge(&dirs, &out)?;
             say!(
                 "merged {} shards into {} ({n} runs copied)",
@@ -313,7 +259,7 @@ impl MergeArgs {
                 out.display()
             )?;
             if let Some(dir) = &self.export {
-                do_export(&out, &sub(dir), &filt)?;
+                do_export(&out, &set_dir(dir, set), &filt)?;
             }
         }
         Ok(ExitCode::SUCCESS)

@@ -40,8 +40,8 @@ impl SampleArgs {
     pub fn run(self) -> anyhow::Result<ExitCode> {
         let (domain, train, check) = if let Some(path) = &self.study {
             let st = super::build::read_study(path)?;
-            let (train, check) = st.design.designs()?;
-            (st.design.domain, train, check)
+            let (train, check) = st.settings.design.designs()?;
+            (st.settings.design.domain, train, check)
         } else {
             let (Some(dpath), Some(n)) = (&self.domain, self.n) else {
                 bail!("give a study file, or --domain FILE and -n N");

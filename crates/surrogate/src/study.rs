@@ -1,0 +1,109 @@
+//! What `nlvid build`, `nlvid sample` and `nlvid merge` read from a study
+//! besides the forward model: `[design]` (training and checking designs)
+//! and `[build]` (store, export, admissibility filters). The study's other
+//! stages (`[parameters]` of `nlvid simulate`, `[fit]`, …) may share the
+//! file; they are left to their commands.
+
+use std::path::{Path, PathBuf};
+
+use nlvid_study::Study;
+
+use crate::build::Admissibility;
+use crate::doe::DesignSettings;
+use crate::error::{Result, SurrogateError};
+
+/// Sections of the other pipeline stages a build study may hold.
+const OTHER_STAGES: [&str; 6] = ["parameters", "fit", "probe", "material", "loading", "cell"];
+
+/// `[design]` and `[build]` of a study.
+#[derive(Debug, Clone)]
+pub struct BuildSettings {
+    /// `[design]`.
+    pub design: DesignSettings,
+    /// `[build] store`.
+    pub store: Option<PathBuf>,
+    /// `[build] export`.
+    pub export: Option<PathBuf>,
+    /// `[build]` filters.
+    pub filters: Admissibility,
+}
+
+impl BuildSettings {
+    /// Reads `[design]` for parameters `names` in `units` and `[build]`
+    /// (filters look from `contact_index` on), then checks the study for
+    /// unknown sections (call after the forward model has read its own).
+    ///
+    /// # Errors
+    /// Missing, unknown or invalid keys (file, line, key).
+    pub fn from_study(
+        mut study: Study,
+        names: &[String],
+        units: &[String],
+        contact_index: usize,
+    ) -> nlvid_study::Result<Self> {
+        let _ = study.root().opt_str("title")?;
+        let mut ds = study.section("design")?;
+        let design = DesignSettings::from_section(&mut ds, names, units)?;
+        ds.finish()?;
+        let (store, export, filters) = match study.opt_section("build")? {
+            Some(mut b) => {
+                let store = b.opt_path("store")?;
+                let export = b.opt_path("export")?;
+                let filters = Admissibility::from_section(&mut b, contact_index)?;
+                b.finish()?;
+                (store, export, filters)
+            }
+            None => (
+                None,
+                None,
+                Admissibility {
+                    contact_index,
+                    ..Default::default()
+                },
+            ),
+        };
+        for other in OTHER_STAGES {
+            study.root().skip(other);
+        }
+        study.finish()?;
+        Ok(Self {
+            design,
+            store,
+            export,
+            filters,
+        })
+    }
+}
+
+/// The stores to merge: `[None]` when every shard directory is a store
+/// (`meta.json`), `[Some("train")]` (and `Some("check")`) when every one
+/// holds the `train/` (and `check/`) stores of a study build.
+///
+/// # Errors
+/// Shard directories of neither kind.
+pub fn shard_sets(shards: &[PathBuf]) -> Result<Vec<Option<&'static str>>> {
+    let all = |sub: &str| {
+        shards
+            .iter()
+            .all(|d| d.join(sub).join("meta.json").is_file())
+    };
+    if shards.iter().all(|d| d.join("meta.json").is_file()) {
+        Ok(vec![None])
+    } else if all("train") {
+        Ok(if all("check") {
+            vec![Some("train"), Some("check")]
+        } else {
+            vec![Some("train")]
+        })
+    } else {
+        Err(SurrogateError::InvalidInput(
+            "each shard directory must be a store (meta.json) or hold train/ (and check/) stores"
+                .into(),
+        ))
+    }
+}
+
+/// `dir`, or its sub-directory `set`.
+pub fn set_dir(dir: &Path, set: Option<&str>) -> PathBuf {
+    set.map_or_else(|| dir.to_path_buf(), |s| dir.join(s))
+}
