@@ -92,6 +92,59 @@ pub struct CohortOutcome {
     pub record: CohortRecord,
 }
 
+impl CohortOutcome {
+    fn count(&self, s: CellStatus) -> usize {
+        self.cells.iter().filter(|c| c.status == s).count()
+    }
+
+    fn listed(&self) -> impl Iterator<Item = &CellResult> {
+        self.cells.iter().filter(|c| c.status != CellStatus::Ok)
+    }
+
+    /// The `--json` summary of the run written into `out`.
+    pub fn to_json(&self, out: &Path) -> serde_json::Value {
+        let s = &self.record.settings;
+        serde_json::json!({
+            "study_sha256": s.study_hash,
+            "forward_model": s.model.describe(),
+            "out": out,
+            "cells": self.cells.len(),
+            "fitted": self.fitted,
+            "reused": self.reused,
+            "ok": self.count(CellStatus::Ok),
+            "suspicious": self.count(CellStatus::Suspicious),
+            "failed": self.count(CellStatus::Failed),
+            "listed": self.listed().map(|c| serde_json::json!({
+                "group": c.group, "file": c.file, "status": c.status.as_str(), "reason": c.reason,
+            })).collect::<Vec<_>>(),
+            "results_csv": self.results_csv,
+        })
+    }
+
+    /// What the run did, for people: counts, cells not ok with the reason.
+    pub fn text(&self) -> String {
+        use std::fmt::Write as _;
+        let mut t = format!(
+            "forward model: {}\n{} cells: {} fitted now, {} reused from an earlier run; \
+             {} ok, {} suspicious, {} failed\n",
+            self.record.settings.model.describe(),
+            self.cells.len(),
+            self.fitted,
+            self.reused,
+            self.count(CellStatus::Ok),
+            self.count(CellStatus::Suspicious),
+            self.count(CellStatus::Failed)
+        );
+        for c in self.listed() {
+            let _ = writeln!(t, "  {} {}: {}", c.status.as_str(), c.file, c.reason);
+        }
+        if let Some(r) = &self.results_csv {
+            let _ = writeln!(t, "wrote {}", r.display());
+        }
+        t
+    }
+}
+
 /// The run record written as `cohort.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CohortRecord {

@@ -51,6 +51,7 @@
 
 pub mod cell;
 pub mod cohort;
+pub mod compare;
 pub mod demo;
 mod error;
 mod figures;

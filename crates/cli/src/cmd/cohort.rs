@@ -5,13 +5,11 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use nlvid_report::cell::{CellResult, CellStatus};
+use nlvid_report::cell::CellResult;
 use nlvid_report::cohort::{self, CellInput, CohortOutcome, RunOptions};
 use nlvid_report::settings::CohortSettings;
-use serde_json::json;
 
 use super::{Context, Run};
-use crate::say;
 
 /// Raw arguments of `nlvid cohort`.
 #[derive(Debug, clap::Args)]
@@ -62,7 +60,11 @@ impl Run for Args {
 
     fn execute(c: Config, ctx: &Context) -> anyhow::Result<ExitCode> {
         let run = run_with_progress(&c.settings, &c.study, &c.input, &c.cells, &c.out)?;
-        print_outcome(&c.settings, &c.out, &run, ctx.json)?;
+        if ctx.json {
+            crate::output::print_json(&run.to_json(&c.out))?;
+        } else {
+            crate::output::print_text(&run.text())?;
+        }
         Ok(ExitCode::SUCCESS)
     }
 }
@@ -93,61 +95,4 @@ pub fn run_with_progress(
     )?;
     bar.finish_and_clear();
     Ok(run)
-}
-
-fn count(run: &CohortOutcome, s: CellStatus) -> usize {
-    run.cells.iter().filter(|c| c.status == s).count()
-}
-
-/// Prints what a cohort run did (text or one JSON document).
-///
-/// # Errors
-/// stdout cannot be written.
-pub fn print_outcome(
-    settings: &CohortSettings,
-    out: &Path,
-    run: &CohortOutcome,
-    json: bool,
-) -> anyhow::Result<()> {
-    let listed: Vec<&CellResult> = run
-        .cells
-        .iter()
-        .filter(|c| c.status != CellStatus::Ok)
-        .collect();
-    let results = run.results_csv.as_ref().map(|p| p.display().to_string());
-    if json {
-        crate::output::print_json(&json!({
-            "study_sha256": settings.study_hash,
-            "forward_model": settings.model.describe(),
-            "out": out.display().to_string(),
-            "cells": run.cells.len(),
-            "fitted": run.fitted,
-            "reused": run.reused,
-            "ok": count(run, CellStatus::Ok),
-            "suspicious": count(run, CellStatus::Suspicious),
-            "failed": count(run, CellStatus::Failed),
-            "listed": listed.iter().map(|c| json!({
-                "group": c.group, "file": c.file, "status": c.status.as_str(), "reason": c.reason,
-            })).collect::<Vec<_>>(),
-            "results_csv": results,
-        }))?;
-        return Ok(());
-    }
-    say!("forward model: {}", settings.model.describe())?;
-    say!(
-        "{} cells: {} fitted now, {} reused from an earlier run; {} ok, {} suspicious, {} failed",
-        run.cells.len(),
-        run.fitted,
-        run.reused,
-        count(run, CellStatus::Ok),
-        count(run, CellStatus::Suspicious),
-        count(run, CellStatus::Failed)
-    )?;
-    for c in listed {
-        say!("  {} {}: {}", c.status.as_str(), c.file, c.reason)?;
-    }
-    if let Some(r) = results {
-        say!("wrote {r}")?;
-    }
-    Ok(())
 }

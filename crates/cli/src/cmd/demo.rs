@@ -107,13 +107,14 @@ impl Run for Args {
             out.display()
         )?;
         let run = super::cohort::run_with_progress(&settings, &study, &data, &cells, &out)?;
-        super::cohort::print_outcome(&settings, &out, &run, false)?;
+        crate::output::print_text(&run.text())?;
         // The results table and the report use the cells in memory.
         let table = cohort::results_table(&run.cells)?;
         let results = out.join("results.csv");
         say!("3. nlvid compare {}", results.display())?;
         let times = nlvid_protocol::grid::uniform(0.0, settings.hold_end, 53)?;
-        super::compare::compare(&results, &table, None, &times, "matlab", &out, false)?;
+        let cmp = nlvid_report::compare::compare(&results, table, None, &times, "matlab", &out)?;
+        crate::output::print_text(&cmp.text())?;
         say!("4. nlvid report {}", out.display())?;
         let page = write_report_of(&out, &run.record, &run.cells, &ReportOptions::default())?;
         say!(
