@@ -82,10 +82,12 @@ impl Run for Args {
             write_atomic(path, csv.as_bytes())?;
         }
         let force = curve.values("force").unwrap_or_default();
-        let (peak, last) = (
-            force.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-            force.last().copied().unwrap_or(f64::NAN),
+        // afm-fe: the peak over every solver step (the output grid may miss it).
+        let peak = fe.map_or_else(
+            || force.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            |r| r.peak_force,
         );
+        let last = force.last().copied().unwrap_or(f64::NAN);
         let min = force.iter().copied().fold(f64::INFINITY, f64::min);
         if ctx.json {
             let mut doc = json!({
