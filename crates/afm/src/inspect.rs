@@ -5,6 +5,8 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use serde_json::json;
+
 use crate::error::Result;
 use crate::{
     ContactMethod, ForceCurve, HertzSettings, LeeRadokSettings, fit_hertz, fit_lee_radok,
@@ -46,6 +48,28 @@ pub struct QuickFit {
     pub model_force: Vec<f64>,
     /// Abscissa label.
     pub x_label: &'static str,
+}
+
+impl QuickFit {
+    /// JSON: `model`, the values by their unit-suffixed keys, and `terms`
+    /// (`g_Pa`, `tau_s`) of a Lee–Radok fit.
+    pub fn to_json(&self) -> serde_json::Value {
+        let mut m: serde_json::Map<_, _> = self
+            .values
+            .iter()
+            .map(|(k, x)| (k.clone(), json!(x)))
+            .collect();
+        m.insert("model".into(), json!(self.model));
+        if !self.terms.is_empty() {
+            let t: Vec<_> = self
+                .terms
+                .iter()
+                .map(|(g, t)| json!({"g_Pa": g, "tau_s": t}))
+                .collect();
+            m.insert("terms".into(), json!(t));
+        }
+        m.into()
+    }
 }
 
 /// Runs a quick fit with probe radius `r` (m).
@@ -246,4 +270,43 @@ pub fn summary_text(c: &ForceCurve, n_curves: usize) -> String {
         }
     }
     out
+}
+
+/// The JSON summary of a curve (`n_curves`: curves in its file); with
+/// `samples`, every segment's `time_s` and every channel's `values` too.
+pub fn summary_json(c: &ForceCurve, n_curves: usize, samples: bool) -> serde_json::Value {
+    let source = |s| format!("{s:?}").to_lowercase();
+    json!({
+        "source": c.source,
+        "curves_in_file": n_curves,
+        "format_version": c.format_version,
+        "instrument": c.instrument,
+        "position_m": c.position.map(|(x, y)| [x, y]),
+        "calibration": {
+            "spring_constant_N_per_m": c.calibration.spring_constant,
+            "spring_constant_source": source(c.calibration.spring_constant_source),
+            "sensitivity_m_per_V": c.calibration.sensitivity,
+            "sensitivity_source": source(c.calibration.sensitivity_source),
+        },
+        "segments": c.segments.iter().map(|s| {
+            let mut seg = json!({
+                "index": s.index, "kind": s.kind.as_str(), "name": s.name,
+                "points": s.len(), "duration_s": s.duration,
+                "t_start_s": s.time.first(), "t_end_s": s.time.last(),
+                "channels": s.channels.iter().map(|ch| {
+                    let (min, max) = range(&ch.values);
+                    let mut v = json!({ "name": ch.name, "unit": ch.unit,
+                        "conversion": ch.conversion, "min": min, "max": max });
+                    if samples {
+                        v["values"] = json!(ch.values);
+                    }
+                    v
+                }).collect::<Vec<_>>(),
+            });
+            if samples {
+                seg["time_s"] = json!(s.time);
+            }
+            seg
+        }).collect::<Vec<_>>(),
+    })
 }

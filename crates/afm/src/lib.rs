@@ -46,7 +46,9 @@ pub use error::{AfmError, Result};
 pub use hertz::{
     Approach, HertzFit, HertzSettings, fit_hertz, hertz_baseline, hertz_force, prepare_approach,
 };
-pub use inspect::{QuickFit, QuickFitKind, quick_fit, range, summary_text, write_plot};
+pub use inspect::{
+    QuickFit, QuickFitKind, quick_fit, range, summary_json, summary_text, write_plot,
+};
 pub use jpk::{
     ReadOptions, read_force_curve, read_force_curve_with, read_force_map, read_jpk_bytes,
 };

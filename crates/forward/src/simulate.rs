@@ -265,6 +265,24 @@ impl Simulation {
         }
     }
 
+    /// afm-fe: the deformed mesh at the end of the run, `node,r_m,z_m`
+    /// rows then the element connectivity (counter-clockwise) as `#`
+    /// comment lines; `None` for the other models.
+    pub fn mesh_csv(&self) -> Option<String> {
+        let Simulation::AfmFe(r) = self else {
+            return None;
+        };
+        let mut csv = String::from("node,r_m,z_m\n");
+        for (i, p) in r.deformed_nodes.iter().enumerate() {
+            csv.push_str(&format!("{i},{:e},{:e}\n", p[0], p[1]));
+        }
+        csv.push_str("# elements: node indices, counter-clockwise\n");
+        for e in &r.elements_connectivity {
+            csv.push_str(&format!("# {},{},{},{}\n", e[0], e[1], e[2], e[3]));
+        }
+        Some(csv)
+    }
+
     /// The membrane profiles kept by the run, as `(time s, CSV)`: one row
     /// per material node, `psi_rad, rho_m, eta_m, lambda1, lambda2,
     /// sigma1_Pa, sigma2_Pa, T1_N_per_m, T2_N_per_m, theta_rad, in_contact`.

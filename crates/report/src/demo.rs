@@ -371,3 +371,26 @@ mod tests {
         assert_eq!(keep[200], 209);
     }
 }
+
+/// The bundled example: `given`, else `examples/demo` in the current
+/// directory, else `built` (the source tree the binary was built from).
+///
+/// # Errors
+/// None of them holds a `study.toml`.
+pub fn demo_dir(given: Option<PathBuf>, built: &Path) -> Result<PathBuf> {
+    if let Some(d) = given {
+        return Ok(d);
+    }
+    let here = PathBuf::from("examples/demo");
+    if here.join("study.toml").is_file() {
+        return Ok(here);
+    }
+    if built.join("study.toml").is_file() {
+        // Print `/…/examples/demo`, not `/…/crates/cli/../../examples/demo`.
+        return Ok(std::fs::canonicalize(built).unwrap_or_else(|_| built.to_path_buf()));
+    }
+    Err(ReportError::InvalidSetting(format!(
+        "no bundled example: neither ./examples/demo nor {} has a study.toml; give --demo DIR",
+        built.display()
+    )))
+}

@@ -69,5 +69,5 @@ pub use optimise::OptimiserSettings;
 pub use regression::Regression;
 pub use store::{RunOutcome, RunRecord, RunStore, StoreMeta, merge};
 pub use study::{BuildSettings, set_dir, shard_sets};
-pub use table::{NamedModel, Table, read_table, write_table};
+pub use table::{NamedModel, Predictions, Table, read_table, write_table};
 pub use trend::{Trend, TrendTerm};

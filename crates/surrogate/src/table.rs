@@ -176,6 +176,184 @@ impl NamedModel {
     }
 }
 
+/// Predictions of a [`NamedModel`] at the rows of a table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Predictions {
+    /// Output names.
+    pub names: Vec<String>,
+    /// ŷ per point.
+    pub y: Vec<Vec<f64>>,
+    /// MSE per point, when asked for.
+    pub mse: Option<Vec<Vec<f64>>>,
+}
+
+impl Predictions {
+    /// CSV header (`<name>`…, then `mse_<name>`…) and rows.
+    pub fn table(&self) -> (Vec<String>, Vec<Vec<f64>>) {
+        let mut header = self.names.clone();
+        let mut rows = self.y.clone();
+        if let Some(m) = &self.mse {
+            header.extend(self.names.iter().map(|n| format!("mse_{n}")));
+            rows.iter_mut().zip(m).for_each(|(r, m)| r.extend(m));
+        }
+        (header, rows)
+    }
+
+    /// JSON: `outputs` and per point `x`, `y` (and `mse`) keyed by name.
+    pub fn to_json(&self, x: &Table) -> serde_json::Value {
+        let named = |names: &[String], v: &[f64]| -> serde_json::Value {
+            names
+                .iter()
+                .zip(v)
+                .map(|(n, v)| (n.clone(), serde_json::json!(v)))
+                .collect::<serde_json::Map<_, _>>()
+                .into()
+        };
+        let points: Vec<_> = (0..self.y.len())
+            .map(|i| {
+                let mut p = serde_json::json!({
+                    "x": named(&x.header, &x.rows[i]),
+                    "y": named(&self.names, &self.y[i]),
+                });
+                if let Some(m) = &self.mse {
+                    p["mse"] = named(&self.names, &m[i]);
+                }
+                p
+            })
+            .collect();
+        serde_json::json!({ "outputs": self.names, "points": points })
+    }
+}
+
+impl NamedModel {
+    /// Predicts at every row of `x` (and the MSE with `mse`).
+    ///
+    /// # Errors
+    /// A column count that is not the model's; a point it cannot take,
+    /// naming its 1-based line.
+    pub fn predict_table(&self, x: &Table, mse: bool) -> Result<Predictions> {
+        if x.header.len() != self.model.dim {
+            return Err(SurrogateError::InvalidInput(format!(
+                "{} input columns, the model has {}",
+                x.header.len(),
+                self.model.dim
+            )));
+        }
+        let at = |i: usize, e: SurrogateError| {
+            SurrogateError::InvalidInput(format!("line {}: {e}", i + 2))
+        };
+        let (mut y, mut m) = (Vec::new(), Vec::new());
+        for (i, xi) in x.rows.iter().enumerate() {
+            if mse {
+                let p = self.model.predict_full(xi).map_err(|e| at(i, e))?;
+                y.push(p.y);
+                m.push(p.mse);
+            } else {
+                y.push(self.model.predict(xi).map_err(|e| at(i, e))?);
+            }
+        }
+        Ok(Predictions {
+            names: self.outputs(),
+            y,
+            mse: mse.then_some(m),
+        })
+    }
+
+    /// What the trend and σ² are of, in words (their units).
+    fn units(&self) -> &'static str {
+        match (self.model.log_outputs, &self.model.output_scale) {
+            (true, _) => "trend and σ² of ln y (log outputs)",
+            (false, Some(_)) => "trend and σ² of y divided by its proportionality factor",
+            (false, None) => "trend in output units, σ² in output units squared",
+        }
+    }
+
+    /// `(term, coefficients per output)` of the trend, terms named by the
+    /// inputs (`1`, `a`, `a*b`).
+    fn beta(&self) -> Vec<(String, Vec<f64>)> {
+        let t = self.model.trend();
+        let name = |k: usize| {
+            self.input_names
+                .get(k)
+                .cloned()
+                .unwrap_or_else(|| format!("x_{k}"))
+        };
+        t.terms
+            .iter()
+            .zip(t.coefficients)
+            .map(|(term, c)| {
+                let f: Vec<String> = term.inputs.iter().map(|&k| name(k)).collect();
+                (
+                    if f.is_empty() {
+                        "1".into()
+                    } else {
+                        f.join("*")
+                    },
+                    c,
+                )
+            })
+            .collect()
+    }
+
+    /// The fit report as JSON: the fit's `report`, `outputs`, `units`,
+    /// `beta` (per term `term`, `coefficients` per output) and `sigma2`
+    /// (per output, [`KrigingModel::process_variance`]), both in the
+    /// outputs' own units.
+    pub fn report_json(&self) -> serde_json::Value {
+        let beta: Vec<_> = self
+            .beta()
+            .into_iter()
+            .map(|(term, c)| serde_json::json!({ "term": term, "coefficients": c }))
+            .collect();
+        serde_json::json!({
+            "report": self.model.report, "outputs": self.outputs(), "units": self.units(),
+            "beta": beta, "sigma2": self.model.process_variance(),
+        })
+    }
+
+    /// The fit report for people: sizes, θ, ψ, and β, σ² of the first
+    /// outputs in their own units.
+    pub fn report_text(&self) -> String {
+        let (m, r) = (&self.model, &self.model.report);
+        let mut s = format!(
+            "fitted {} sites × {} inputs → {} outputs ({} kriged, energy {:.8})\n\
+             θ = {:?}\nψ = {:.6e} after {} evaluations ({}), nugget {:e}\n{} \
+             (inputs in ln x for log inputs):\n",
+            m.n_sites,
+            m.dim,
+            m.n_outputs,
+            r.kriged_outputs,
+            r.energy,
+            r.theta,
+            r.psi,
+            r.evaluations,
+            r.search,
+            r.nugget,
+            self.units()
+        );
+        let (beta, sigma2, outputs) = (self.beta(), m.process_variance(), self.outputs());
+        let shown = outputs.len().min(3);
+        for (j, name) in outputs.iter().enumerate().take(shown) {
+            let terms: Vec<String> = beta
+                .iter()
+                .map(|(t, c)| format!("{:+.6e}·{t}", c[j]))
+                .collect();
+            s.push_str(&format!(
+                "  {name}: β: {}; σ² = {:.6e}\n",
+                terms.join(" "),
+                sigma2[j]
+            ));
+        }
+        if outputs.len() > shown {
+            s.push_str(&format!(
+                "  … {} more outputs (all with --json)\n",
+                outputs.len() - shown
+            ));
+        }
+        s
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

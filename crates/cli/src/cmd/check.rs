@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context as _;
-use nlvid_study::{LeafValue, Quantity, Section, Study, StudyError, UnitError, fmt_number};
+use nlvid_study::{LeafValue, Section, Study, StudyError, fmt_number};
 use serde_json::json;
 
 use super::{Context, Run};
@@ -61,43 +61,11 @@ impl Run for Args {
                 schema_checked.push(*name);
             }
         }
-        let leaves = study.leaves();
-        let mut warnings = Vec::new();
-        for leaf in &leaves {
-            match &leaf.value {
-                LeafValue::Number(x) if !x.is_finite() => {
-                    anyhow::bail!(
-                        "{}:{}:{}: key `{}`: `{x}` is not a finite number",
-                        study.name(),
-                        leaf.line,
-                        leaf.column,
-                        leaf.key
-                    );
-                }
-                LeafValue::Text(t) => match Quantity::parse(t) {
-                    Err(UnitError::NotFinite) => anyhow::bail!(
-                        "{}:{}:{}: key `{}`: `{t}` is not a finite number",
-                        study.name(),
-                        leaf.line,
-                        leaf.column,
-                        leaf.key
-                    ),
-                    Err(
-                        e @ (UnitError::UnknownUnit(_)
-                        | UnitError::BadExponent(_)
-                        | UnitError::Syntax(..)),
-                    ) => warnings.push(format!(
-                        "{}:{}:{}: key `{}`: `{t}` looks like a quantity but cannot be read: {e}",
-                        study.name(),
-                        leaf.line,
-                        leaf.column,
-                        leaf.key
-                    )),
-                    _ => {}
-                },
-                _ => {}
-            }
+        let lint = study.lint();
+        if let Some(e) = lint.errors.first() {
+            anyhow::bail!("{e}");
         }
+        let (leaves, warnings) = (study.leaves(), lint.warnings);
         Ok(Config {
             path: self.study,
             hash: study.hash().to_string(),

@@ -35,25 +35,6 @@ pub struct Args {
     pub write_data: bool,
 }
 
-fn demo_dir(given: Option<PathBuf>) -> anyhow::Result<PathBuf> {
-    if let Some(d) = given {
-        return Ok(d);
-    }
-    let here = PathBuf::from("examples/demo");
-    if here.join("study.toml").is_file() {
-        return Ok(here);
-    }
-    let built = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/demo"));
-    if built.join("study.toml").is_file() {
-        // Print `/…/examples/demo`, not `/…/crates/cli/../../examples/demo`.
-        return Ok(std::fs::canonicalize(&built).unwrap_or(built));
-    }
-    anyhow::bail!(
-        "no bundled example: neither ./examples/demo nor {} has a study.toml; give --demo DIR",
-        built.display()
-    )
-}
-
 impl Run for Args {
     type Config = Args;
 
@@ -68,7 +49,8 @@ impl Run for Args {
 
     fn execute(a: Args, _ctx: &Context) -> anyhow::Result<ExitCode> {
         let start = Instant::now();
-        let demo = demo_dir(a.demo)?;
+        let built = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/demo"));
+        let demo = nlvid_report::demo::demo_dir(a.demo, &built)?;
         let study = demo.join("study.toml");
         let data = demo.join("data");
         if a.write_data {

@@ -8,9 +8,8 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use clap::{Args as ClapArgs, ValueEnum};
-use nlvid_afm::{ContactMethod, ForceCurve, QuickFitKind, ReadOptions, quick_fit, range};
+use nlvid_afm::{ContactMethod, QuickFitKind, ReadOptions, quick_fit};
 use nlvid_study::Dimension;
-use serde_json::json;
 
 use crate::output::{print_json, print_text};
 
@@ -129,23 +128,9 @@ impl Args {
             nlvid_afm::write_plot(path, &curve, fit.as_ref())?;
         }
         if self.json {
-            let mut v = summary_json(&curve, n_curves, self.samples);
+            let mut v = nlvid_afm::summary_json(&curve, n_curves, self.samples);
             if let Some(f) = &fit {
-                let mut m: serde_json::Map<_, _> = f
-                    .values
-                    .iter()
-                    .map(|(k, x)| (k.clone(), json!(x)))
-                    .collect();
-                m.insert("model".into(), json!(f.model));
-                if !f.terms.is_empty() {
-                    let t: Vec<_> = f
-                        .terms
-                        .iter()
-                        .map(|(g, t)| json!({"g_Pa": g, "tau_s": t}))
-                        .collect();
-                    m.insert("terms".into(), json!(t));
-                }
-                v["fit"] = m.into();
+                v["fit"] = f.to_json();
             }
             print_json(&v)?;
             return Ok(ExitCode::SUCCESS);
@@ -162,42 +147,4 @@ impl Args {
         print_text(&out)?;
         Ok(ExitCode::SUCCESS)
     }
-}
-
-/// The `--json` summary; `samples`: with every segment's times and values.
-fn summary_json(c: &ForceCurve, n_curves: usize, samples: bool) -> serde_json::Value {
-    let source = |s| format!("{s:?}").to_lowercase();
-    json!({
-        "source": c.source,
-        "curves_in_file": n_curves,
-        "format_version": c.format_version,
-        "instrument": c.instrument,
-        "position_m": c.position.map(|(x, y)| [x, y]),
-        "calibration": {
-            "spring_constant_N_per_m": c.calibration.spring_constant,
-            "spring_constant_source": source(c.calibration.spring_constant_source),
-            "sensitivity_m_per_V": c.calibration.sensitivity,
-            "sensitivity_source": source(c.calibration.sensitivity_source),
-        },
-        "segments": c.segments.iter().map(|s| {
-            let mut seg = json!({
-                "index": s.index, "kind": s.kind.as_str(), "name": s.name,
-                "points": s.len(), "duration_s": s.duration,
-                "t_start_s": s.time.first(), "t_end_s": s.time.last(),
-                "channels": s.channels.iter().map(|ch| {
-                    let (min, max) = range(&ch.values);
-                    let mut v = json!({ "name": ch.name, "unit": ch.unit,
-                        "conversion": ch.conversion, "min": min, "max": max });
-                    if samples {
-                        v["values"] = json!(ch.values);
-                    }
-                    v
-                }).collect::<Vec<_>>(),
-            });
-            if samples {
-                seg["time_s"] = json!(s.time);
-            }
-            seg
-        }).collect::<Vec<_>>(),
-    })
 }

@@ -15,7 +15,9 @@ use nlvid_study::{Dimension, Study};
 use serde_json::json;
 
 use crate::args::quantity;
-use crate::output::{curve_json, next_to, parameters_json, print_json, provenance, write_atomic};
+use crate::output::{
+    curve_json, next_to, parameters_json, print_json, print_text, provenance, write_atomic,
+};
 use crate::say;
 
 /// Arguments of `nlvid membrane`.
@@ -135,35 +137,14 @@ fn run_reproduce(args: &MembraneArgs) -> anyhow::Result<ExitCode> {
     create(&out)?;
     let mut files = Vec::new();
     for f in &figs {
-        let mut csv = String::from("series,x,y\n");
-        for ser in &f.series {
-            for (x, y) in ser.x.iter().zip(&ser.y) {
-                csv.push_str(&format!("\"{}\",{x},{y}\n", ser.label.replace('"', "'")));
-            }
-        }
         let svg = nlvid_membrane::plot::svg(f).with_context(|| format!("drawing {}", f.id))?;
-        for (ext, text) in [("csv", csv.as_str()), ("svg", svg.as_str())] {
+        for (ext, text) in [("csv", f.to_csv()), ("svg", svg)] {
             write_atomic(&out.join(format!("{}.{ext}", f.id)), text.as_bytes())?;
             files.push(format!("{}.{ext}", f.id));
         }
     }
-    let opt = |v: Option<f64>| v.map(|v| v.to_string()).unwrap_or_default();
-    let mut t = String::from(
-        "D_over_r0,unloading_rate,model,thesis_slope,tangent_slope,secant_slope_dD_0.01,secant_over_2_div_thesis\n",
-    );
-    for r in &rows {
-        t.push_str(&format!(
-            "{},{},{},{},{},{},{}\n",
-            r.d_max,
-            r.unload_rate,
-            r.model,
-            opt(r.thesis),
-            r.slope,
-            r.secant,
-            opt(r.ratio)
-        ));
-    }
-    write_atomic(&out.join("table2_1.csv"), t.as_bytes())?;
+    let table = nlvid_membrane::table2_1_csv(&rows);
+    write_atomic(&out.join("table2_1.csv"), table.as_bytes())?;
     let notes_text: String = notes.iter().map(|n| format!("{n}\n")).collect();
     write_atomic(&out.join("notes.txt"), notes_text.as_bytes())?;
     files.extend(["table2_1.csv".to_string(), "notes.txt".into()]);
@@ -187,21 +168,7 @@ fn run_reproduce(args: &MembraneArgs) -> anyhow::Result<ExitCode> {
         )
         .map(|()| ExitCode::SUCCESS);
     }
-    say!(
-        "Table 2.1 (initial unloading slope dF̄/dD̄: tangent over the first step, secant over ΔD/r0 = 0.01; ratio = secant/2 ÷ thesis):"
-    )?;
-    for r in &rows {
-        say!(
-            "  D/r0 = {:.2}, s_u = {:.1}, {:<10} thesis {:>7}  tangent {:8.2}  secant {:8.2}  ratio {}",
-            r.d_max,
-            r.unload_rate,
-            r.model,
-            r.thesis.map_or("-".into(), |v| v.to_string()),
-            r.slope,
-            r.secant,
-            r.ratio.map_or("-".into(), |v| format!("{v:.3}"))
-        )?;
-    }
+    print_text(&nlvid_membrane::table2_1_text(&rows))?;
     say!("wrote {} files to {}", files.len(), out.display())?;
     Ok(ExitCode::SUCCESS)
 }

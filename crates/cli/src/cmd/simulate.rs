@@ -70,15 +70,7 @@ impl Run for Args {
             Simulation::AfmFe(r) => Some(r),
             _ => None,
         };
-        if let (Some(path), Some(r)) = (&c.mesh_output, fe) {
-            let mut csv = String::from("node,r_m,z_m\n");
-            for (i, p) in r.deformed_nodes.iter().enumerate() {
-                csv.push_str(&format!("{i},{:e},{:e}\n", p[0], p[1]));
-            }
-            csv.push_str("# elements: node indices, counter-clockwise\n");
-            for e in &r.elements_connectivity {
-                csv.push_str(&format!("# {},{},{},{}\n", e[0], e[1], e[2], e[3]));
-            }
+        if let (Some(path), Some(csv)) = (&c.mesh_output, run.mesh_csv()) {
             write_atomic(path, csv.as_bytes())?;
         }
         let force = curve.values("force").unwrap_or_default();

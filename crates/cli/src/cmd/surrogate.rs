@@ -254,141 +254,30 @@ fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
         output_names: y.header.clone(),
     };
     named.save(&a.out)?;
-    let (model, r) = (&named.model, &named.model.report);
-    // β of the trend and σ² of each output in the outputs' own units.
-    let trend = model.trend();
-    let inputs = |t: &nlvid_surrogate::TrendTerm| -> String {
-        let f: Vec<&str> = t.inputs.iter().map(|&k| x.header[k].as_str()).collect();
-        if f.is_empty() {
-            "1".into()
-        } else {
-            f.join("*")
-        }
-    };
-    let sigma2 = model.process_variance();
-    let outputs = named.outputs();
-    let units = match (model.log_outputs, &model.output_scale) {
-        (true, _) => "trend and σ² of ln y (--log-outputs)",
-        (false, Some(_)) => "trend and σ² of y divided by the --proportional-to factor",
-        (false, None) => "trend in output units, σ² in output units squared",
-    };
     if a.json {
-        let beta: Vec<_> = trend
-            .terms
-            .iter()
-            .zip(&trend.coefficients)
-            .map(|(t, c)| serde_json::json!({ "term": inputs(t), "coefficients": c }))
-            .collect();
-        print_json(&serde_json::json!({
-            "report": r, "seconds": secs, "model": a.out, "outputs": outputs,
-            "units": units, "beta": beta, "sigma2": sigma2,
-        }))?;
-        return Ok(ExitCode::SUCCESS);
+        let mut v = named.report_json();
+        v["seconds"] = serde_json::json!(secs);
+        v["model"] = serde_json::json!(a.out);
+        print_json(&v)?;
+    } else {
+        print_text(&named.report_text())?;
+        say!("in {secs:.2} s; model written to {}", a.out.display())?;
     }
-    say!(
-        "fitted {} sites × {} inputs → {} outputs ({} kriged, energy {:.8}) in {secs:.2} s\n\
-         θ = {:?}\nψ = {:.6e} after {} evaluations ({}), nugget {:e}",
-        model.n_sites,
-        model.dim,
-        model.n_outputs,
-        r.kriged_outputs,
-        r.energy,
-        r.theta,
-        r.psi,
-        r.evaluations,
-        r.search,
-        r.nugget,
-    )?;
-    say!("{units} (inputs in ln x for --log-inputs columns):")?;
-    let shown = outputs.len().min(3);
-    for (j, name) in outputs.iter().enumerate().take(shown) {
-        let terms: Vec<String> = trend
-            .terms
-            .iter()
-            .zip(&trend.coefficients)
-            .map(|(t, c)| format!("{:+.6e}·{}", c[j], inputs(t)))
-            .collect();
-        say!("  {name}: β: {}; σ² = {:.6e}", terms.join(" "), sigma2[j])?;
-    }
-    if outputs.len() > shown {
-        say!(
-            "  … {} more outputs (all with --json)",
-            outputs.len() - shown
-        )?;
-    }
-    say!("model written to {}", a.out.display())?;
     Ok(ExitCode::SUCCESS)
 }
 
 fn predict(a: PredictArgs, json: bool) -> anyhow::Result<ExitCode> {
     let named = NamedModel::load(&a.model)?;
-    let model = &named.model;
     let x = read_table(&a.x)?;
-    if x.header.len() != model.dim {
-        bail!(
-            "{}: {} input columns, the model has {}",
-            a.x.display(),
-            x.header.len(),
-            model.dim
-        );
-    }
-    let mut ys = Vec::with_capacity(x.rows.len());
-    let mut mses = Vec::with_capacity(x.rows.len());
-    for (i, xi) in x.rows.iter().enumerate() {
-        let at = || format!("{}:{}", a.x.display(), i + 2);
-        if a.mse {
-            let p = model.predict_full(xi).with_context(at)?;
-            ys.push(p.y);
-            mses.push(p.mse);
-        } else {
-            ys.push(model.predict(xi).with_context(at)?);
-        }
-    }
-    let names = named.outputs();
+    let p = named
+        .predict_table(&x, a.mse)
+        .with_context(|| format!("{}", a.x.display()))?;
     if json {
-        let points: Vec<_> = x
-            .rows
-            .iter()
-            .enumerate()
-            .map(|(i, xi)| {
-                let input: serde_json::Map<_, _> = x
-                    .header
-                    .iter()
-                    .zip(xi)
-                    .map(|(h, v)| (h.clone(), serde_json::json!(v)))
-                    .collect();
-                let output: serde_json::Map<_, _> = names
-                    .iter()
-                    .zip(&ys[i])
-                    .map(|(h, v)| (h.clone(), serde_json::json!(v)))
-                    .collect();
-                let mut p = serde_json::json!({ "x": input, "y": output });
-                if let Some(m) = mses.get(i) {
-                    p["mse"] = names
-                        .iter()
-                        .zip(m)
-                        .map(|(h, v)| (h.clone(), serde_json::json!(v)))
-                        .collect::<serde_json::Map<_, _>>()
-                        .into();
-                }
-                p
-            })
-            .collect();
-        print_json(&serde_json::json!({ "model": a.model, "outputs": names, "points": points }))?;
-        return Ok(ExitCode::SUCCESS);
+        let mut v = p.to_json(&x);
+        v["model"] = serde_json::json!(a.model);
+        return print_json(&v).map(|()| ExitCode::SUCCESS);
     }
-    let mut header = names.clone();
-    if a.mse {
-        header.extend(names.iter().map(|n| format!("mse_{n}")));
-    }
-    let rows: Vec<Vec<f64>> = ys
-        .into_iter()
-        .enumerate()
-        .map(|(i, mut y)| {
-            y.extend(mses.get(i).into_iter().flatten());
-            y
-        })
-        .collect();
+    let (header, rows) = p.table();
     write_csv(a.out.as_deref(), &header, &rows)?;
     Ok(ExitCode::SUCCESS)
 }
