@@ -46,6 +46,7 @@ mod forward;
 mod kriging;
 mod likelihood;
 pub mod optimise;
+mod options;
 mod regression;
 mod store;
 mod study;
@@ -66,8 +67,9 @@ pub use kriging::{
     likelihood_psi,
 };
 pub use optimise::OptimiserSettings;
+pub use options::FitOptions;
 pub use regression::Regression;
 pub use store::{RunOutcome, RunRecord, RunStore, StoreMeta, merge};
-pub use study::{BuildSettings, set_dir, shard_sets};
+pub use study::{BuildSettings, build_report, export_report, set_dir, shard_sets};
 pub use table::{NamedModel, Predictions, Table, read_table, write_table};
 pub use trend::{Trend, TrendTerm};

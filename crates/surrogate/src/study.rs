@@ -8,9 +8,10 @@ use std::path::{Path, PathBuf};
 
 use nlvid_study::Study;
 
-use crate::build::Admissibility;
+use crate::build::{Admissibility, BuildOptions, build, export, load};
 use crate::doe::DesignSettings;
 use crate::error::{Result, SurrogateError};
+use crate::forward::ForwardModel;
 
 /// Sections of the other pipeline stages a build study may hold.
 const OTHER_STAGES: [&str; 6] = ["parameters", "fit", "probe", "material", "loading", "cell"];
@@ -106,4 +107,60 @@ pub fn shard_sets(shards: &[PathBuf]) -> Result<Vec<Option<&'static str>>> {
 /// `dir`, or its sub-directory `set`.
 pub fn set_dir(dir: &Path, set: Option<&str>) -> PathBuf {
     set.map_or_else(|| dir.to_path_buf(), |s| dir.join(s))
+}
+
+/// Builds the set `name` of `design` into `store` ([`build`]) and reports
+/// it for people: runs in the shard, done before, run now, failed, time per
+/// run, then each failure with its reason.
+///
+/// # Errors
+/// As [`build`]; the store cannot be read back.
+pub fn build_report(
+    name: &str,
+    model: &dyn ForwardModel,
+    design: &[Vec<f64>],
+    store: &Path,
+    opts: &BuildOptions<'_>,
+) -> Result<String> {
+    let t0 = std::time::Instant::now();
+    let s = build(model, design, store, opts)?;
+    let secs = t0.elapsed().as_secs_f64();
+    let per_run = if s.ran > 0 {
+        format!(", {:.3} s per run", secs / s.ran as f64)
+    } else {
+        String::new()
+    };
+    let mut text = format!(
+        "{name}: {} runs in shard: {} already done, {} run now ({} failed) in {secs:.2} s{per_run}\n",
+        s.in_shard, s.skipped, s.ran, s.failed
+    );
+    if s.failed > 0 {
+        for (i, status, reason, secs) in &load(store, &Admissibility::default())?.status {
+            if status == "failed" {
+                text.push_str(&format!("run {i} failed after {secs:.3} s: {reason}\n"));
+            }
+        }
+    }
+    Ok(text)
+}
+
+/// Exports the admissible runs of `store` to `dir` ([`export`]) and says
+/// how many each filter removed.
+///
+/// # Errors
+/// As [`load`] and [`export`].
+pub fn export_report(store: &Path, dir: &Path, filters: &Admissibility) -> Result<String> {
+    let mm = load(store, filters)?;
+    export(&mm, dir)?;
+    let c = &mm.counts;
+    Ok(format!(
+        "exported {} of {} runs to {} (failed {}, missing {}, below peak force {}, non-repulsive {})\n",
+        c.kept,
+        c.design,
+        dir.display(),
+        c.failed,
+        c.missing,
+        c.below_peak,
+        c.non_repulsive
+    ))
 }

@@ -16,10 +16,11 @@ use clap::Args;
 use nlvid_forward::{ForwardSettings, HertzPronySpec};
 use nlvid_study::Study;
 use nlvid_surrogate::{
-    Admissibility, BuildOptions, BuildSettings, ForwardModel, Shard, build, export, load, merge,
-    read_table, set_dir, shard_sets,
+    Admissibility, BuildOptions, BuildSettings, ForwardModel, Shard, build_report, export_report,
+    merge, read_table, set_dir, shard_sets,
 };
 
+use crate::output::print_text;
 use crate::say;
 
 /// Arguments of `build`.
@@ -105,31 +106,8 @@ pub fn read_study(path: &Path) -> anyhow::Result<BuildStudy> {
     Ok(BuildStudy { model, settings })
 }
 
-fn do_export(store: &Path, dir: &Path, filt: &Admissibility) -> anyhow::Result<()> {
-    let mm = load(store, filt)?;
-    export(&mm, dir)?;
-    let c = &mm.counts;
-    say!(
-        "exported {} of {} runs to {} (failed {}, missing {}, below peak force {}, non-repulsive {})",
-        c.kept,
-        c.design,
-        dir.display(),
-        c.failed,
-        c.missing,
-        c.below_peak,
-        c.non_repulsive
-    )?;
-    Ok(())
-}
-
-fn report_failures(store: &Path) -> anyhow::Result<()> {
-    let mm = load(store, &Admissibility::default())?;
-    for (i, status, reason, secs) in &mm.status {
-        if status == "failed" {
-            eprintln!("run {i} failed after {secs:.3} s: {reason}");
-        }
-    }
-    Ok(())
+fn do_export(store: &Path, dir: &Path, filters: &Admissibility) -> anyhow::Result<()> {
+    print_text(&export_report(store, dir, filters)?)
 }
 
 fn run_set(
@@ -140,31 +118,12 @@ fn run_set(
     shard: Option<Shard>,
     quiet: bool,
 ) -> anyhow::Result<()> {
-    let hide = std::env::var_os("NLVID_NO_PROGRESS").is_some() || std::env::var_os("CI").is_some();
     let opts = BuildOptions {
         shard,
-        progress: !quiet && !hide,
+        progress: !quiet && crate::progress::progress_enabled(),
         cancel: None,
     };
-    let t0 = std::time::Instant::now();
-    let s = build(model, design, store, &opts)?;
-    let secs = t0.elapsed().as_secs_f64();
-    let per_run = if s.ran > 0 {
-        format!(", {:.3} s per run", secs / s.ran as f64)
-    } else {
-        String::new()
-    };
-    say!(
-        "{name}: {} runs in shard: {} already done, {} run now ({} failed) in {secs:.2} s{per_run}",
-        s.in_shard,
-        s.skipped,
-        s.ran,
-        s.failed
-    )?;
-    if s.failed > 0 {
-        report_failures(store)?;
-    }
-    Ok(())
+    print_text(&build_report(name, model, design, store, &opts)?)
 }
 
 impl BuildArgs {

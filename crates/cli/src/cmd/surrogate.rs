@@ -6,8 +6,8 @@ use std::process::ExitCode;
 use anyhow::{Context, bail};
 use clap::{Args, Subcommand};
 use nlvid_surrogate::{
-    Correlation, KrigingModel, KrigingSettings, NamedModel, OptimiserSettings, OutputScale,
-    Regression, Table, ThetaSearch, check, read_table, write_table,
+    Correlation, FitOptions, KrigingModel, NamedModel, OptimiserSettings, Regression, Table, check,
+    read_table, write_table,
 };
 
 use crate::output::{print_json, print_text, write_atomic};
@@ -34,11 +34,13 @@ pub struct FitArgs {
     #[arg(long)]
     pub y: PathBuf,
     /// Regression: poly0, poly1, poly2.
-    #[arg(long, default_value = "poly1")]
-    pub regression: String,
+    #[arg(long, default_value = "poly1", value_parser = |s: &str| Regression::parse(s)
+          .ok_or_else(|| format!("`{s}`: expected poly0, poly1 or poly2")))]
+    pub regression: Regression,
     /// Correlation: gauss, exp, expg, lin, spherical, cubic, spline.
-    #[arg(long, default_value = "gauss")]
-    pub correlation: String,
+    #[arg(long, default_value = "gauss", value_parser = |s: &str| Correlation::parse(s)
+          .ok_or_else(|| format!("`{s}`: expected gauss, exp, expg, lin, spherical, cubic or spline")))]
+    pub correlation: Correlation,
     /// Fixed θ (comma separated, one per input; expg: + power). Skips the search.
     #[arg(long, value_delimiter = ',')]
     pub theta: Option<Vec<f64>>,
@@ -172,79 +174,28 @@ impl SurrogateCmd {
 
 fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
     let (x, y) = read_pair(&a.x, &a.y)?;
-    let reg = Regression::parse(&a.regression).with_context(|| {
-        format!(
-            "--regression {}: expected poly0, poly1 or poly2",
-            a.regression
-        )
-    })?;
-    let corr = Correlation::parse(&a.correlation).with_context(|| {
-        format!(
-            "--correlation {}: expected gauss, exp, expg, lin, spherical, cubic or spline",
-            a.correlation
-        )
-    })?;
-    let d = x.header.len();
-    let column = |flag: &str, col: &str| {
-        x.column(col).with_context(|| {
-            format!(
-                "--{flag} {col}: no such column in {} (columns: {:?})",
-                a.x.display(),
-                x.header
-            )
-        })
+    let options = FitOptions {
+        regression: a.regression,
+        correlation: a.correlation,
+        theta: a.theta,
+        theta0: a.theta0,
+        lower: a.lower,
+        upper: a.upper,
+        boxmin: a.boxmin,
+        optimiser: OptimiserSettings {
+            starts: a.starts,
+            screen_sites: a.screen_sites,
+            ..Default::default()
+        },
+        pca: a.pca,
+        nugget: a.nugget,
+        log_outputs: a.log_outputs,
+        proportional_to: a.proportional_to.map(|c| (c, a.log_coded)),
+        log_inputs: a.log_inputs.unwrap_or_default(),
     };
-    let mut s = KrigingSettings::new(reg, corr, d);
-    s.nugget = a.nugget;
-    s.pca_energy = a.pca;
-    s.log_outputs = a.log_outputs;
-    if let Some(cols) = &a.log_inputs {
-        s.log_inputs = vec![false; d];
-        for col in cols {
-            s.log_inputs[column("log-inputs", col)?] = true;
-        }
-    }
-    if let Some(col) = &a.proportional_to {
-        let input = column("proportional-to", col)?;
-        s.output_scale = Some(match a.log_coded {
-            Some(slope) => OutputScale::Exp { input, slope },
-            None => OutputScale::Linear { input },
-        });
-    }
-    if let Some(t) = a.theta {
-        s.theta = ThetaSearch::Fixed(t);
-    } else if let ThetaSearch::Optimise {
-        theta0,
-        lower,
-        upper,
-        ..
-    } = ThetaSearch::default_for(corr, d)
-    {
-        let (theta0, lower, upper) = (
-            a.theta0.unwrap_or(theta0),
-            a.lower.unwrap_or(lower),
-            a.upper.unwrap_or(upper),
-        );
-        s.theta = if a.boxmin {
-            ThetaSearch::Boxmin {
-                theta0,
-                lower,
-                upper,
-            }
-        } else {
-            let settings = OptimiserSettings {
-                starts: a.starts,
-                screen_sites: a.screen_sites,
-                ..Default::default()
-            };
-            ThetaSearch::Optimise {
-                theta0,
-                lower,
-                upper,
-                settings,
-            }
-        };
-    }
+    let s = options
+        .settings(&x)
+        .with_context(|| format!("{}", a.x.display()))?;
     let t0 = std::time::Instant::now();
     let model = KrigingModel::fit(x.mat().as_ref(), y.mat().as_ref(), &s)?;
     let secs = t0.elapsed().as_secs_f64();
