@@ -19,22 +19,3 @@ pub fn quantity(text: &str, dim: nlvid_study::Dimension) -> Result<f64, String> 
         Err(format!("`{text}` is a {}, expected a {dim}", q.dim))
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn command_line_quantities_are_checked_and_converted() {
-        use nlvid_study::Dimension;
-        assert_eq!(quantity("1ms", Dimension::TIME), Ok(1e-3));
-        assert_eq!(
-            quantity("2", Dimension::TIME).unwrap_err(),
-            "`2` has no unit; expected a time (s), e.g. \"2 s\""
-        );
-        assert_eq!(
-            quantity("2 um", Dimension::TIME).unwrap_err(),
-            "`2 um` is a length (m), expected a time (s)"
-        );
-    }
-}
