@@ -355,23 +355,6 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn sampling_keeps_every_fast_sample_then_every_tenth() {
-        let spec = DemoSpec::default();
-        let (n, keep) = sampling(&spec, 52.0).unwrap();
-        assert_eq!(n, 5200);
-        // 200 samples in (0, 2] s, then 10 Hz to 52 s: 500 more.
-        assert_eq!(keep.len(), 200 + 500);
-        assert_eq!(*keep.last().unwrap(), 5199);
-        assert_eq!(keep[199], 199);
-        assert_eq!(keep[200], 209);
-    }
-}
-
 /// The bundled example: `given`, else `examples/demo` in the current
 /// directory, else `built` (the source tree the binary was built from).
 ///
@@ -393,4 +376,21 @@ pub fn demo_dir(given: Option<PathBuf>, built: &Path) -> Result<PathBuf> {
         "no bundled example: neither ./examples/demo nor {} has a study.toml; give --demo DIR",
         built.display()
     )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sampling_keeps_every_fast_sample_then_every_tenth() {
+        let spec = DemoSpec::default();
+        let (n, keep) = sampling(&spec, 52.0).unwrap();
+        assert_eq!(n, 5200);
+        // 200 samples in (0, 2] s, then 10 Hz to 52 s: 500 more.
+        assert_eq!(keep.len(), 200 + 500);
+        assert_eq!(*keep.last().unwrap(), 5199);
+        assert_eq!(keep[199], 199);
+        assert_eq!(keep[200], 209);
+    }
 }
