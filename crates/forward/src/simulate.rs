@@ -265,6 +265,69 @@ impl Simulation {
         }
     }
 
+    /// Peak, final and smallest force (N) — for afm-fe the peak over every
+    /// solver step, which the output grid may miss — and the curve's last
+    /// row by column header (`final`), plus the solver's counts for afm-fe.
+    ///
+    /// # Errors
+    /// As [`Simulation::curve`].
+    pub fn summary_json(&self) -> Result<serde_json::Value> {
+        let curve = self.curve()?;
+        let force = curve.values("force").unwrap_or_default();
+        let peak = match self {
+            Simulation::AfmFe(r) => r.peak_force,
+            _ => force.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        };
+        let min = force.iter().copied().fold(f64::INFINITY, f64::min);
+        let last: serde_json::Map<String, serde_json::Value> = curve
+            .time()
+            .last()
+            .map(|t| ("time_s".to_string(), serde_json::json!(t)))
+            .into_iter()
+            .chain(
+                curve
+                    .channels()
+                    .iter()
+                    .filter_map(|c| c.values.last().map(|v| (c.header(), serde_json::json!(v)))),
+            )
+            .collect();
+        let mut v = serde_json::json!({
+            "peak_force_N": peak, "final_force_N": force.last(), "min_force_N": min,
+            "final": last,
+        });
+        if let Simulation::AfmFe(r) = self {
+            v["solver"] = serde_json::json!({
+                "elements": r.elements, "steps": r.steps, "cutbacks": r.cutbacks,
+                "newton_iterations": r.iterations, "wall_time_s": r.wall_seconds,
+            });
+        }
+        Ok(v)
+    }
+
+    /// The summary for people: for afm-fe the solver's counts, then the
+    /// peak, final and smallest force.
+    ///
+    /// # Errors
+    /// As [`Simulation::curve`].
+    pub fn summary_text(&self, name: &str) -> Result<String> {
+        let v = self.summary_json()?;
+        let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+        let mut s = String::new();
+        if let Simulation::AfmFe(r) = self {
+            s.push_str(&format!(
+                "{name}: {} elements, {} steps ({} cut-backs, {} Newton iterations) in {:.2} s\n",
+                r.elements, r.steps, r.cutbacks, r.iterations, r.wall_seconds
+            ));
+        }
+        s.push_str(&format!(
+            "peak force {:.4e} N, final force {:.4e} N, min force {:.4e} N",
+            f("peak_force_N"),
+            f("final_force_N"),
+            f("min_force_N")
+        ));
+        Ok(s)
+    }
+
     /// afm-fe: the deformed mesh at the end of the run, `node,r_m,z_m`
     /// rows then the element connectivity (counter-clockwise) as `#`
     /// comment lines; `None` for the other models.

@@ -15,7 +15,6 @@ use serde_json::json;
 use super::{Context, Run};
 use crate::output::{curve_json, next_to, parameters_json, print_json, provenance, write_atomic};
 use crate::say;
-use nlvid_model::Curve;
 
 /// Raw arguments of `nlvid material`.
 #[derive(Debug, clap::Args)]
@@ -60,27 +59,7 @@ impl Run for Args {
             .drive(c.loading.mode, &c.loading.history, c.loading.max_dt)
             .with_context(|| format!("{}: driving the material", c.study.name()))?;
         let shear = c.loading.mode == Mode::SimpleShear;
-        let col = |f: &dyn Fn(&nlvid_material::homogeneous::Sample) -> f64| {
-            samples.iter().map(f).collect::<Vec<f64>>()
-        };
-        let mut curve = Curve::new(col(&|s| s.time))?.with(
-            if shear { "shear" } else { "stretch" },
-            "1",
-            col(&|s| s.value),
-        )?;
-        for k in 0..3 {
-            curve = curve.with(&format!("sigma_{}", k + 1), "Pa", col(&|s| s.principal[k]))?;
-        }
-        if shear {
-            let m = |i: usize, j: usize| col(&|s| s.cauchy[(i, j)]);
-            let diff = |a: Vec<f64>, b: Vec<f64>| a.iter().zip(&b).map(|(x, y)| x - y).collect();
-            curve = curve
-                .with("sigma_11", "Pa", m(0, 0))?
-                .with("sigma_22", "Pa", m(1, 1))?
-                .with("sigma_12", "Pa", m(0, 1))?
-                .with("N_1", "Pa", diff(m(0, 0), m(1, 1)))?
-                .with("N_2", "Pa", diff(m(1, 1), m(2, 2)))?;
-        }
+        let curve = nlvid_material::samples_curve(&samples, c.loading.mode)?;
         write_atomic(&c.output, curve.to_csv().as_bytes())?;
         let (model, params) = c.material.parameters();
         if ctx.json {

@@ -10,14 +10,12 @@ use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
-use nlvid_forward::SimulateStudy;
+use nlvid_forward::{ForwardSpec, SimulateStudy};
 use nlvid_study::{Dimension, Study};
 use serde_json::json;
 
 use crate::args::quantity;
-use crate::output::{
-    curve_json, next_to, parameters_json, print_json, print_text, provenance, write_atomic,
-};
+use crate::output::{next_to, print_json, print_text, provenance, write_atomic};
 use crate::say;
 
 /// Arguments of `nlvid membrane`.
@@ -56,75 +54,33 @@ fn create(dir: &Path) -> anyhow::Result<()> {
 
 fn run_study(args: &MembraneArgs, path: &Path) -> anyhow::Result<ExitCode> {
     let study = Study::load(path)?;
-    let prov = provenance(&study);
+    let (name, prov) = (study.name().to_string(), provenance(&study));
     let sim = SimulateStudy::from_study(study)?;
-    if sim.model() != "membrane" {
+    let ForwardSpec::Membrane(spec) = &sim.forward.spec else {
         bail!(
-            "{}: [forward] model = \"{}\"; `nlvid membrane` runs model = \"membrane\" \
+            "{name}: [forward] model = \"{}\"; `nlvid membrane` runs model = \"membrane\" \
              (use `nlvid simulate` for the other models)",
-            path.display(),
             sim.model()
         );
-    }
+    };
     let out = args
         .out
         .clone()
         .unwrap_or_else(|| next_to(path, "membrane"));
-    let t_end = match &sim.forward.spec {
-        nlvid_forward::ForwardSpec::Membrane(m) => m.program.end(),
-        _ => 0.0,
-    };
-    let profile_times = args.profile_times.clone().unwrap_or_else(|| vec![t_end]);
+    let profile_times = args.profile_times.clone();
     let run = sim
-        .run(&profile_times)
-        .with_context(|| format!("study {}", path.display()))?;
-    let history = run.curve()?;
+        .run(&profile_times.unwrap_or_else(|| vec![spec.program.end()]))
+        .with_context(|| format!("study {name}"))?;
     create(&out)?;
-    write_atomic(&out.join("history.csv"), history.to_csv().as_bytes())?;
+    write_atomic(&out.join("history.csv"), run.curve()?.to_csv().as_bytes())?;
     let mut files = vec!["history.csv".to_string()];
     for (time, csv) in run.profiles_csv() {
-        let name = format!("profile_t{time:.4}s.csv");
-        write_atomic(&out.join(&name), csv.as_bytes())?;
-        files.push(name);
+        files.push(format!("profile_t{time:.4}s.csv"));
+        write_atomic(&out.join(&files[files.len() - 1]), csv.as_bytes())?;
     }
-    let last: serde_json::Map<String, serde_json::Value> =
-        std::iter::once(("time_s", history.time()))
-            .map(|(h, v)| (h.to_string(), v))
-            .chain(
-                history
-                    .channels()
-                    .iter()
-                    .map(|c| (c.header(), c.values.as_slice())),
-            )
-            .filter_map(|(h, v)| v.last().map(|x| (h, json!(x))))
-            .collect();
-    if args.json {
-        print_json(&json!({
-            "provenance": prov,
-            "model": "membrane",
-            "parameters": parameters_json(&sim.parameters()),
-            "final": last,
-            "curve": curve_json(&history),
-            "files": files,
-            "out": out,
-        }))?;
-    } else {
-        let v = |k: &str| {
-            last.get(k)
-                .and_then(serde_json::Value::as_f64)
-                .unwrap_or(f64::NAN)
-        };
-        say!(
-            "t = {:.4} s: D = {:.5e} m, F = {:.5e} N, ψc = {:.5} rad, p = {:.5e} Pa; wrote {} files to {}",
-            v("time_s"),
-            v("displacement_m"),
-            v("force_N"),
-            v("contact_angle_rad"),
-            v("pressure_Pa"),
-            files.len(),
-            out.display()
-        )?;
-    }
+    let wrote = format!("{} files in {}", files.len(), out.display());
+    let files = json!({ "files": files, "out": out });
+    super::simulate::report(args.json, &name, &prov, &sim, &run, files, &wrote)?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -66,55 +66,54 @@ impl Run for Args {
             .with_context(|| format!("{}: simulation failed", c.name))?;
         let curve = run.curve()?;
         write_atomic(&c.output, curve.to_csv().as_bytes())?;
-        let fe = match &run {
-            Simulation::AfmFe(r) => Some(r),
-            _ => None,
-        };
         if let (Some(path), Some(csv)) = (&c.mesh_output, run.mesh_csv()) {
             write_atomic(path, csv.as_bytes())?;
         }
-        let force = curve.values("force").unwrap_or_default();
-        // afm-fe: the peak over every solver step (the output grid may miss it).
-        let peak = fe.map_or_else(
-            || force.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-            |r| r.peak_force,
-        );
-        let last = force.last().copied().unwrap_or(f64::NAN);
-        let min = force.iter().copied().fold(f64::INFINITY, f64::min);
-        if ctx.json {
-            let mut doc = json!({
-                "provenance": c.provenance,
-                "model": c.sim.model(),
-                "parameters": parameters_json(&c.sim.parameters()),
-                "csv": c.output,
-                "peak_force_N": peak, "final_force_N": last, "min_force_N": min,
-                "curve": curve_json(&curve),
-            });
-            if let Some(r) = fe {
-                doc["solver"] = json!({
-                    "elements": r.elements, "steps": r.steps, "cutbacks": r.cutbacks,
-                    "newton_iterations": r.iterations, "wall_time_s": r.wall_seconds,
-                });
-            }
-            print_json(&doc)?;
-            return Ok(ExitCode::SUCCESS);
-        }
-        if let Some(r) = fe {
-            say!(
-                "{}: {} elements, {} steps ({} cut-backs, {} Newton iterations) in {:.2} s",
-                c.name,
-                r.elements,
-                r.steps,
-                r.cutbacks,
-                r.iterations,
-                r.wall_seconds
-            )?;
-        }
-        say!(
-            "{}: peak force {peak:.4e} N, final force {last:.4e} N, min force {min:.4e} N → {}",
-            c.sim.model(),
-            c.output.display()
+        let files = json!({ "csv": c.output });
+        let wrote = c.output.display().to_string();
+        report(
+            ctx.json,
+            &c.name,
+            &c.provenance,
+            &c.sim,
+            &run,
+            files,
+            &wrote,
         )?;
         Ok(ExitCode::SUCCESS)
     }
+}
+
+/// Prints one run: with `json`, provenance, model, parameters (unit
+/// suffixed), the curve, the summary and `files`; else the summary and
+/// `wrote` (where the files went).
+///
+/// # Errors
+/// A non-finite value in the run; stdout cannot be written.
+pub fn report(
+    json: bool,
+    name: &str,
+    provenance: &serde_json::Value,
+    sim: &SimulateStudy,
+    run: &Simulation,
+    files: serde_json::Value,
+    wrote: &str,
+) -> anyhow::Result<()> {
+    if json {
+        let mut doc = json!({
+            "provenance": provenance,
+            "model": sim.model(),
+            "parameters": parameters_json(&sim.parameters()),
+            "curve": curve_json(&run.curve()?),
+        });
+        for (k, v) in run.summary_json()?.as_object().into_iter().flatten() {
+            doc[k] = v.clone();
+        }
+        for (k, v) in files.as_object().into_iter().flatten() {
+            doc[k] = v.clone();
+        }
+        return print_json(&doc);
+    }
+    say!("{} → {wrote}", run.summary_text(name)?)?;
+    Ok(())
 }
