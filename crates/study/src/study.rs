@@ -192,6 +192,34 @@ impl Study {
     }
 }
 
+impl Study {
+    /// Every value as the program reads it, for people: a header with the
+    /// file and its hash, then `line  key  value (SI)  as written`, one
+    /// leaf per row.
+    pub fn values_table(&self) -> String {
+        use std::fmt::Write as _;
+        let leaves = self.leaves();
+        let mut out = format!("{}  sha256 {}\n", self.name(), self.hash());
+        let kw = leaves.iter().map(|l| l.key.len()).max().unwrap_or(3).max(3);
+        let _ = writeln!(
+            out,
+            "{:>4}  {:kw$}  {:20}  as written",
+            "line", "key", "value (SI)"
+        );
+        for l in &leaves {
+            let (si, written) = match &l.value {
+                LeafValue::Quantity { text, si } => (si.to_string(), text.clone()),
+                LeafValue::Number(x) => (crate::units::fmt_number(*x), String::new()),
+                LeafValue::Integer(i) => (i.to_string(), String::new()),
+                LeafValue::Bool(b) => (b.to_string(), String::new()),
+                LeafValue::Text(t) | LeafValue::Datetime(t) => (t.clone(), String::new()),
+            };
+            let _ = writeln!(out, "{:>4}  {:kw$}  {:20}  {written}", l.line, l.key, si);
+        }
+        out
+    }
+}
+
 /// One leaf of a study file as the program reads it (see [`Study::leaves`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Leaf {

@@ -139,6 +139,49 @@ pub fn plot_cases(
     Ok(())
 }
 
+/// Checks `model` on the checking runs `x` → `y` (eq. 4.4 per case), saves
+/// the summary as JSON to `summary` (default [`summary_path`] of
+/// `model_path`) and, with `plots`, the worst, median and best cases there
+/// ([`plot_cases`]). Returns the summary and where it was saved.
+///
+/// # Errors
+/// Tables of different lengths, a prediction failure, unwritable files
+/// (naming the path and how to choose another).
+pub fn check_and_save(
+    model: &crate::KrigingModel,
+    model_path: &Path,
+    x: &crate::Table,
+    y: &crate::Table,
+    plots: Option<&Path>,
+    summary: Option<&Path>,
+) -> Result<(CheckSummary, std::path::PathBuf)> {
+    if x.rows.len() != y.rows.len() {
+        return Err(SurrogateError::InvalidInput(format!(
+            "{} checking inputs but {} checking outputs",
+            x.rows.len(),
+            y.rows.len()
+        )));
+    }
+    let pred = model.predict_many(x.mat().as_ref())?;
+    let preds: Vec<Vec<f64>> = (0..pred.nrows())
+        .map(|i| (0..pred.ncols()).map(|j| pred[(i, j)]).collect())
+        .collect();
+    let s = summarise(&y.rows, &preds)?;
+    if let Some(dir) = plots {
+        plot_cases(dir, &y.header, &y.rows, &preds, &s)?;
+    }
+    let saved = summary.map_or_else(|| summary_path(model_path), Path::to_path_buf);
+    let text = serde_json::to_string(&s)
+        .map_err(|e| SurrogateError::InvalidInput(format!("serialising the summary: {e}")))?;
+    nlvid_study::write_atomic(&saved, format!("{text}\n").as_bytes()).map_err(|e| {
+        SurrogateError::InvalidInput(format!(
+            "cannot save the checking summary to {}: {e} (choose another place with --summary)",
+            saved.display()
+        ))
+    })?;
+    Ok((s, saved))
+}
+
 /// `model.json` → `model.check.json`: where `nlvid surrogate check` saves
 /// its summary and fits look for the model's checking error.
 pub fn summary_path(model: &Path) -> std::path::PathBuf {

@@ -106,6 +106,15 @@ pub fn read_study(path: &Path) -> anyhow::Result<BuildStudy> {
     Ok(BuildStudy { model, settings })
 }
 
+/// The admissibility filters of the flags.
+fn filters(min_peak_force: Option<f64>, reject_non_repulsive: bool) -> Admissibility {
+    Admissibility {
+        min_peak_force,
+        reject_non_repulsive,
+        contact_index: 0,
+    }
+}
+
 fn do_export(store: &Path, dir: &Path, filters: &Admissibility) -> anyhow::Result<()> {
     print_text(&export_report(store, dir, filters)?)
 }
@@ -181,12 +190,11 @@ impl BuildArgs {
         }
         run_set("design", &model, &design.rows, store, shard, self.quiet)?;
         if let Some(dir) = &self.export {
-            let filt = Admissibility {
-                min_peak_force: self.min_peak_force,
-                reject_non_repulsive: self.reject_non_repulsive,
-                contact_index: 0,
-            };
-            do_export(store, dir, &filt)?;
+            do_export(
+                store,
+                dir,
+                &filters(self.min_peak_force, self.reject_non_repulsive),
+            )?;
         }
         Ok(ExitCode::SUCCESS)
     }
@@ -202,11 +210,7 @@ impl MergeArgs {
                     .settings
                     .filters
             }
-            None => Admissibility {
-                min_peak_force: self.min_peak_force,
-                reject_non_repulsive: self.reject_non_repulsive,
-                contact_index: 0,
-            },
+            None => filters(self.min_peak_force, self.reject_non_repulsive),
         };
         for set in shard_sets(&self.shards)? {
             let dirs: Vec<PathBuf> = self.shards.iter().map(|d| set_dir(d, set)).collect();

@@ -2,11 +2,11 @@
 //! (parallel, progress bar, resumable), one row per cell in `results.csv`
 //! (format of docs/cli/compare.md). See docs/cli/cohort.md.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use nlvid_report::cell::CellResult;
-use nlvid_report::cohort::{self, CellInput, CohortOutcome, RunOptions};
+use nlvid_report::cohort::{self, CellInput, RunOptions};
 use nlvid_report::settings::CohortSettings;
 
 use super::{Context, Run};
@@ -59,7 +59,14 @@ impl Run for Args {
     }
 
     fn execute(c: Config, ctx: &Context) -> anyhow::Result<ExitCode> {
-        let run = run_with_progress(&c.settings, &c.study, &c.input, &c.cells, &c.out)?;
+        let bar = crate::progress::bar(c.cells.len() as u64, "cells");
+        let tick = |_: &CellResult| bar.inc(1);
+        let opts = RunOptions {
+            max_new_fits: None,
+            on_cell: Some(&tick),
+        };
+        let run = cohort::run_cohort(&c.settings, &c.study, &c.input, &c.cells, &c.out, &opts)?;
+        bar.finish_and_clear();
         if ctx.json {
             crate::output::print_json(&run.to_json(&c.out))?;
         } else {
@@ -67,32 +74,4 @@ impl Run for Args {
         }
         Ok(ExitCode::SUCCESS)
     }
-}
-
-/// Runs a cohort with a progress bar on stderr.
-///
-/// # Errors
-/// The output directory cannot be written.
-pub fn run_with_progress(
-    settings: &CohortSettings,
-    study: &Path,
-    input: &Path,
-    cells: &[CellInput],
-    out: &Path,
-) -> anyhow::Result<CohortOutcome> {
-    let bar = crate::progress::bar(cells.len() as u64, "cells");
-    let tick = |_: &CellResult| bar.inc(1);
-    let run = cohort::run_cohort(
-        settings,
-        study,
-        input,
-        cells,
-        out,
-        &RunOptions {
-            max_new_fits: None,
-            on_cell: Some(&tick),
-        },
-    )?;
-    bar.finish_and_clear();
-    Ok(run)
 }

@@ -8,10 +8,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use nlvid_report::cohort;
-use nlvid_report::demo::{DemoSpec, write_demo_data};
-use nlvid_report::report::{ReportOptions, write_report_of};
-use nlvid_report::settings::CohortSettings;
+use nlvid_report::demo::{DemoSpec, run_demo, write_demo_data};
 
 use super::{Context, Run};
 use crate::say;
@@ -52,7 +49,6 @@ impl Run for Args {
         let built = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/demo"));
         let demo = nlvid_report::demo::demo_dir(a.demo, &built)?;
         let study = demo.join("study.toml");
-        let data = demo.join("data");
         if a.write_data {
             let spec = DemoSpec::default();
             let files = write_demo_data(&spec, &study, &demo.join("metamodel.toml"))?;
@@ -65,40 +61,14 @@ impl Run for Args {
             )?;
             return Ok(ExitCode::SUCCESS);
         }
-        let settings = CohortSettings::load(&study)?;
-        let cells = cohort::discover(&data)?;
-        say!(
-            "1. bundled study {}: {} cells made by the forward model from known parameters \
-             (truth: {})",
-            study.display(),
-            cells.len(),
-            demo.join("ground_truth.csv").display()
-        )?;
-        if let Some(f) = &settings.surrogate {
-            say!(
-                "   fitted on the pre-built meta-model {} of `{}`",
-                f.model.display(),
-                f.forward
-            )?;
-        }
-        let out = a.out.join("cohort");
-        say!(
-            "2. nlvid cohort {} {} --out {}",
-            study.display(),
-            data.display(),
-            out.display()
-        )?;
-        let run = super::cohort::run_with_progress(&settings, &study, &data, &cells, &out)?;
-        crate::output::print_text(&run.text())?;
-        // The results table and the report use the cells in memory.
-        let table = cohort::results_table(&run.cells)?;
-        let results = out.join("results.csv");
-        say!("3. nlvid compare {}", results.display())?;
-        let times = nlvid_protocol::grid::uniform(0.0, settings.hold_end, 53)?;
-        let cmp = nlvid_report::compare::compare(&results, table, None, &times, "matlab", &out)?;
-        crate::output::print_text(&cmp.text())?;
-        say!("4. nlvid report {}", out.display())?;
-        let page = write_report_of(&out, &run.record, &run.cells, &ReportOptions::default())?;
+        let n = nlvid_report::cohort::discover(&demo.join("data"))?.len();
+        let bar = crate::progress::bar(n as u64, "cells");
+        let tick = |_: &nlvid_report::cell::CellResult| bar.inc(1);
+        let page = run_demo(&demo, &a.out, Some(&tick), &mut |t| {
+            use std::io::Write as _;
+            bar.suspend(|| std::io::stdout().lock().write_all(t.as_bytes()))
+        })?;
+        bar.finish_and_clear();
         say!(
             "done in {:.1} s. Report: {}",
             start.elapsed().as_secs_f64(),

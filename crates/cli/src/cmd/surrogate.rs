@@ -87,9 +87,6 @@ pub struct FitArgs {
     /// Model file to write (JSON).
     #[arg(long, short)]
     pub out: PathBuf,
-    /// Set from the global `--json` flag.
-    #[arg(skip)]
-    pub json: bool,
 }
 
 /// Arguments of `surrogate predict`.
@@ -126,19 +123,6 @@ pub struct CheckArgs {
     /// `<model stem>.check.json` next to the model, where `nlvid fit` looks.
     #[arg(long, value_name = "FILE")]
     pub summary: Option<PathBuf>,
-    /// Set from the global `--json` flag.
-    #[arg(skip)]
-    pub json: bool,
-}
-
-/// CSV `rows` with `header` to `out`, or to stdout.
-fn write_csv(out: Option<&Path>, header: &[String], rows: &[Vec<f64>]) -> anyhow::Result<()> {
-    let mut buf = Vec::new();
-    write_table(&mut buf, header, rows)?;
-    match out {
-        Some(p) => write_atomic(p, &buf),
-        None => print_text(&String::from_utf8_lossy(&buf)),
-    }
 }
 
 fn read_pair(x: &Path, y: &Path) -> anyhow::Result<(Table, Table)> {
@@ -159,20 +143,14 @@ impl SurrogateCmd {
     /// Run.
     pub fn run(self, json: bool) -> anyhow::Result<ExitCode> {
         match self {
-            SurrogateCmd::Fit(mut a) => {
-                a.json = json;
-                fit(*a)
-            }
+            SurrogateCmd::Fit(a) => fit(*a, json),
             SurrogateCmd::Predict(a) => predict(a, json),
-            SurrogateCmd::Check(mut a) => {
-                a.json = json;
-                check_cmd(a)
-            }
+            SurrogateCmd::Check(a) => check_cmd(a, json),
         }
     }
 }
 
-fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
+fn fit(a: FitArgs, json: bool) -> anyhow::Result<ExitCode> {
     let (x, y) = read_pair(&a.x, &a.y)?;
     let options = FitOptions {
         regression: a.regression,
@@ -205,7 +183,7 @@ fn fit(a: FitArgs) -> anyhow::Result<ExitCode> {
         output_names: y.header.clone(),
     };
     named.save(&a.out)?;
-    if a.json {
+    if json {
         let mut v = named.report_json();
         v["seconds"] = serde_json::json!(secs);
         v["model"] = serde_json::json!(a.out);
@@ -229,34 +207,29 @@ fn predict(a: PredictArgs, json: bool) -> anyhow::Result<ExitCode> {
         return print_json(&v).map(|()| ExitCode::SUCCESS);
     }
     let (header, rows) = p.table();
-    write_csv(a.out.as_deref(), &header, &rows)?;
+    let mut buf = Vec::new();
+    write_table(&mut buf, &header, &rows)?;
+    match &a.out {
+        Some(path) => write_atomic(path, &buf)?,
+        None => print_text(&String::from_utf8_lossy(&buf))?,
+    }
     Ok(ExitCode::SUCCESS)
 }
 
-fn check_cmd(a: CheckArgs) -> anyhow::Result<ExitCode> {
+fn check_cmd(a: CheckArgs, json: bool) -> anyhow::Result<ExitCode> {
     let model = NamedModel::load(&a.model)?.model;
     let (x, y) = read_pair(&a.x, &a.y)?;
-    let pred = model.predict_many(x.mat().as_ref())?;
-    let preds: Vec<Vec<f64>> = (0..pred.nrows())
-        .map(|i| (0..pred.ncols()).map(|j| pred[(i, j)]).collect())
-        .collect();
-    let s = check::summarise(&y.rows, &preds)?;
-    if let Some(dir) = &a.plots {
-        check::plot_cases(dir, &y.header, &y.rows, &preds, &s)?;
-    }
+    let (s, saved) = check::check_and_save(
+        &model,
+        &a.model,
+        &x,
+        &y,
+        a.plots.as_deref(),
+        a.summary.as_deref(),
+    )?;
     let summary = serde_json::to_string(&s)?;
-    let saved = a
-        .summary
-        .clone()
-        .unwrap_or_else(|| check::summary_path(&a.model));
-    write_atomic(&saved, format!("{summary}\n").as_bytes()).with_context(|| {
-        format!(
-            "cannot save the checking summary to {} (choose another place with --summary)",
-            saved.display()
-        )
-    })?;
     eprintln!("checking summary saved to {}", saved.display());
-    if a.json {
+    if json {
         say!("{summary}")?;
     } else {
         say!(
