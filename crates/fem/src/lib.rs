@@ -38,6 +38,7 @@
 pub mod afm;
 pub mod element;
 mod error;
+pub mod hex;
 mod history;
 pub mod mesh;
 mod model;
