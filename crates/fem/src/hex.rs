@@ -139,8 +139,9 @@ pub fn element_geometry(x: &[[f64; 3]; 8]) -> std::result::Result<[HexPoint; 8],
 }
 
 /// Residual and tangent of one hexahedron.
+#[doc(hidden)]
 #[derive(Debug, Clone)]
-pub(crate) struct HexOutput {
+pub struct HexOutput {
     /// Internal force ∂W/∂u (N), dof `3a + i`.
     pub r: [f64; DOFS],
     /// Tangent ∂r/∂u (N/m).
@@ -148,7 +149,8 @@ pub(crate) struct HexOutput {
 }
 
 impl HexOutput {
-    pub(crate) fn zero() -> Self {
+    /// All zero.
+    pub fn zero() -> Self {
         Self {
             r: [0.0; DOFS],
             k: [[0.0; DOFS]; DOFS],
