@@ -95,6 +95,44 @@ pub(crate) fn segment_volume(x: &[[f64; 2]; 2]) -> (f64, [f64; 4], [[f64; 4]; 4]
     (v, grad, hess)
 }
 
+/// Area-weighted normals `∫ N_a n dA` of the nodes of one bilinear face
+/// (dof `3a + i`; exact by 2×2 Gauss): the consistent nodal forces of a
+/// unit pressure. For a node free to move they equal ∂V/∂x_a; at a node on
+/// a symmetry plane they are the physical force normal to the plane, where
+/// the volume formula's derivative is not (module docs).
+pub(crate) fn quad_area_normals(x: &[[f64; 3]; 4]) -> [f64; 12] {
+    let g = 0.577_350_269_189_625_8;
+    let mut out = [0.0; 12];
+    for (s, t) in [(-g, -g), (g, -g), (g, g), (-g, g)] {
+        let (n, ns, nt) = quad_shape(s, t);
+        let (mut ps, mut pt) = ([0.0; 3], [0.0; 3]);
+        for a in 0..4 {
+            for i in 0..3 {
+                ps[i] += ns[a] * x[a][i];
+                pt[i] += nt[a] * x[a][i];
+            }
+        }
+        let c = cross(&ps, &pt);
+        for a in 0..4 {
+            for i in 0..3 {
+                out[3 * a + i] += n[a] * c[i];
+            }
+        }
+    }
+    out
+}
+
+/// Area-weighted normals `2π ∫ N_a r (dz, −dr)` of the two nodes of one
+/// (r, z) segment of a surface of revolution (dofs r₁, z₁, r₂, z₂); see
+/// [`quad_area_normals`].
+pub(crate) fn segment_area_normals(x: &[[f64; 2]; 2]) -> [f64; 4] {
+    let ([r1, z1], [r2, z2]) = (x[0], x[1]);
+    let c = 2.0 * std::f64::consts::PI / 6.0;
+    let (w1, w2) = (c * (2.0 * r1 + r2), c * (r1 + 2.0 * r2));
+    let (dr, dz) = (r2 - r1, z2 - z1);
+    [w1 * dz, -w1 * dr, w2 * dz, -w2 * dr]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -186,6 +224,57 @@ mod tests {
                 })
                 .sum();
             assert!((v - exact).abs() < 1e-14, "{v} vs {exact}");
+        }
+    }
+
+    #[test]
+    fn area_normals_are_the_volume_gradient_on_a_closed_surface() {
+        // Faces of a distorted hexahedron: the gradient of the enclosed
+        // volume w.r.t. a node is the sum of its area-weighted normals over
+        // the faces around it; the normals of a closed surface sum to zero.
+        let mut x: Vec<[f64; 3]> = crate::hex::CORNERS
+            .iter()
+            .map(|c| [0.5 * (c[0] + 1.0), 0.5 * (c[1] + 1.0), 0.5 * (c[2] + 1.0)])
+            .collect();
+        x[6] = [1.2, 1.1, 1.3];
+        x[1] = [0.9, -0.1, 0.05];
+        let faces = [
+            [0, 3, 2, 1],
+            [4, 5, 6, 7],
+            [0, 1, 5, 4],
+            [1, 2, 6, 5],
+            [2, 3, 7, 6],
+            [3, 0, 4, 7],
+        ];
+        let mut grad = [[0.0; 3]; 8];
+        let mut normal = [[0.0; 3]; 8];
+        for f in faces {
+            let p = f.map(|a| x[a]);
+            let (_, g, _) = quad_volume(&p);
+            let n = quad_area_normals(&p);
+            for k in 0..4 {
+                for i in 0..3 {
+                    grad[f[k]][i] += g[3 * k + i];
+                    normal[f[k]][i] += n[3 * k + i];
+                }
+            }
+        }
+        let total: [f64; 3] = std::array::from_fn(|i| normal.iter().map(|n| n[i]).sum());
+        for a in 0..8 {
+            for i in 0..3 {
+                assert!((grad[a][i] - normal[a][i]).abs() < 1e-14, "node {a}");
+                assert!(total[i].abs() < 1e-14);
+            }
+        }
+        // Revolution: the frustum's profile closed by the axis and z = 0;
+        // interior node of the profile: gradient = area normal.
+        let profile = [[0.0, 3.0], [2.0, 3.0], [1.0, 0.0]];
+        let (_, g1, _) = segment_volume(&[profile[0], profile[1]]);
+        let (_, g2, _) = segment_volume(&[profile[1], profile[2]]);
+        let n1 = segment_area_normals(&[profile[0], profile[1]]);
+        let n2 = segment_area_normals(&[profile[1], profile[2]]);
+        for i in 0..2 {
+            assert!((g1[2 + i] + g2[i] - n1[2 + i] - n2[i]).abs() < 1e-13);
         }
     }
 

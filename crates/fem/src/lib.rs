@@ -50,6 +50,7 @@ pub mod mesh;
 pub mod mesh3;
 mod model;
 pub mod reference;
+pub mod shell;
 mod sparse;
 
 pub use error::{FemError, NonConvergence, Result};

@@ -25,7 +25,7 @@
 //! exact Hessian and symmetric for hyperelastic materials (indefinite with
 //! a cavity: p is a Lagrange multiplier).
 
-use crate::cavity::{quad_volume, segment_volume};
+use crate::cavity::{quad_area_normals, quad_volume, segment_area_normals, segment_volume};
 use crate::element::TangentPart;
 use crate::history::History;
 use crate::kind::{Axisymmetric, CavityCells, ElementKind, Solid, Topology};
@@ -381,8 +381,14 @@ struct CavityModel {
     dof: usize,
     /// Per cell, its local tangent slots (row-major, local dof count²).
     cell_slots: Vec<usize>,
-    /// Per boundary dof d: (d, slot of (d, s), slot of (s, d)).
+    /// Per free boundary dof d: (d, slot of (d, s), slot of (s, d)).
     coupling: Vec<(usize, usize, usize)>,
+    /// Dofs the pressure acts on, and whether the force is p × the area
+    /// normal (a supported dof normal to a symmetry plane) rather than
+    /// −p ∂V/∂u (all others), so that reactions are physical.
+    loaded: Vec<(usize, bool)>,
+    /// Scratch: area-weighted normals over all dofs.
+    normals: Vec<f64>,
     /// Slot of (s, s).
     diagonal: usize,
     /// Scratch: ∂V/∂u over all dofs.
@@ -580,6 +586,7 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
             }
         };
         let mut cavity_dofs = Vec::new();
+        let mut loaded_dofs = Vec::new();
         if let Some(cells) = &cavity_cells {
             let cn = cell_nodes(cells);
             for nodes in &cn {
@@ -596,6 +603,15 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
             nodes.sort_unstable();
             nodes.dedup();
             for a in nodes {
+                // The pressure's force −p ∂V/∂u on every dof except a
+                // supported one normal to a coordinate plane the node lies
+                // on: there ∂V/∂u is that of the volume formula with the
+                // symmetry plane moved, and the physical force is p × the
+                // area-weighted normal (`crate::cavity`).
+                for i in 0..dim {
+                    let on_plane = dof_eq[dim * a + i] == NO_SLOT && mesh.position(a)[i] == 0.0;
+                    loaded_dofs.push((dim * a + i, on_plane));
+                }
                 let mut b: Vec<usize> = (0..dim)
                     .map(|i| dim * a + i)
                     .filter(|&d| dof_eq[d] != NO_SLOT)
@@ -726,6 +742,8 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
                     dof: sdof,
                     cell_slots,
                     coupling,
+                    loaded: loaded_dofs,
+                    normals: vec![0.0; ndof],
                     diagonal: system.slot(seq, seq)?,
                     dvdu: vec![0.0; ndof],
                 };
@@ -1508,60 +1526,67 @@ impl CavityModel {
         let s = u[self.dof];
         let p = self.k * s;
         let sign = self.sign;
-        let (dvdu, cell_slots) = (&mut self.dvdu, &self.cell_slots);
+        let (dvdu, normals, cell_slots) = (&mut self.dvdu, &mut self.normals, &self.cell_slots);
         dvdu.fill(0.0);
+        normals.fill(0.0);
         let mut x = [0.0; 12];
         let mut volume = 0.0;
         let mut cell = 0;
         // One cell's volume v, gradient and Hessian (local dofs, node-major).
-        let mut add_cell =
-            |nodes: &[usize], v: f64, grad: &[f64], hess: &dyn Fn(usize, usize) -> f64| {
-                volume += v;
-                let n = grad.len();
-                for (k, &g) in grad.iter().enumerate() {
-                    dvdu[dim * nodes[k / dim] + k % dim] += sign * g;
-                }
-                if tangent {
-                    let slots = &cell_slots[cell..cell + n * n];
-                    for r in 0..n {
-                        for c in 0..n {
-                            let slot = slots[n * r + c];
-                            if slot != NO_SLOT {
-                                values[slot] -= p * sign * hess(r, c);
-                            }
+        let mut add_cell = |nodes: &[usize],
+                            v: f64,
+                            grad: &[f64],
+                            hess: &dyn Fn(usize, usize) -> f64,
+                            normal: &[f64]| {
+            volume += v;
+            let n = grad.len();
+            for (k, (&g, &a)) in grad.iter().zip(normal).enumerate() {
+                dvdu[dim * nodes[k / dim] + k % dim] += sign * g;
+                normals[dim * nodes[k / dim] + k % dim] += sign * a;
+            }
+            if tangent {
+                let slots = &cell_slots[cell..cell + n * n];
+                for r in 0..n {
+                    for c in 0..n {
+                        let slot = slots[n * r + c];
+                        if slot != NO_SLOT {
+                            values[slot] -= p * sign * hess(r, c);
                         }
                     }
                 }
-                cell += n * n;
-            };
+            }
+            cell += n * n;
+        };
         match &self.cells {
             CavityCells::Segments(cells) => {
                 for c in cells {
                     Self::positions(mesh, dim, u, c, &mut x);
-                    let (v, g, h) = segment_volume(&[[x[0], x[1]], [x[2], x[3]]]);
-                    add_cell(c, v, &g, &|r, c| h[r][c]);
+                    let seg = [[x[0], x[1]], [x[2], x[3]]];
+                    let (v, g, h) = segment_volume(&seg);
+                    add_cell(c, v, &g, &|r, c| h[r][c], &segment_area_normals(&seg));
                 }
             }
             CavityCells::Quads(cells) => {
                 for c in cells {
                     Self::positions(mesh, dim, u, c, &mut x);
-                    let (v, g, h) = quad_volume(&[
+                    let quad = [
                         [x[0], x[1], x[2]],
                         [x[3], x[4], x[5]],
                         [x[6], x[7], x[8]],
                         [x[9], x[10], x[11]],
-                    ]);
-                    add_cell(c, v, &g, &|r, c| h[r][c]);
+                    ];
+                    let (v, g, h) = quad_volume(&quad);
+                    add_cell(c, v, &g, &|r, c| h[r][c], &quad_area_normals(&quad));
                 }
             }
         }
         let volume = self.sign * volume;
-        // All dofs, so that reactions on supported boundary nodes include
-        // the pressure.
-        for (r, &g) in residual.iter_mut().zip(&self.dvdu) {
-            if g != 0.0 {
-                *r -= p * g;
-            }
+        for &(d, on_plane) in &self.loaded {
+            residual[d] -= p * if on_plane {
+                self.normals[d]
+            } else {
+                self.dvdu[d]
+            };
         }
         for &(d, rs, sr) in &self.coupling {
             if tangent {
@@ -1610,4 +1635,124 @@ fn scatter<K: ElementKind>(
 
 fn trace() -> bool {
     std::env::var_os("NLVID_FEM_TRACE").is_some()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shell::{ShellPart, ShellSpec, ellipsoidal_shell};
+
+    /// A coarse eighth of a spherical shell (R = 1 mm, wall 0.2 mm) on
+    /// rollers, a plate above and a fluid cavity.
+    fn shell_model(fluid: Fluid, symmetric: bool) -> Model<nlvid_material::MooneyRivlin, Solid> {
+        let mesh = ellipsoidal_shell(&ShellSpec::sphere(
+            1e-3,
+            0.2e-3,
+            2,
+            0.6e-3,
+            ShellPart::Eighth,
+        ))
+        .unwrap();
+        let parts = Parts {
+            supports: vec![
+                Support::fixed("x0", Component::X),
+                Support::fixed("y0", Component::Y),
+                Support::fixed("z0", Component::Z),
+            ],
+            planes: vec![RigidPlane::above("outer")],
+            cavity: Some(Cavity {
+                boundary: "inner".into(),
+                fluid,
+            }),
+            ..Parts::default()
+        };
+        let material = nlvid_material::MooneyRivlin::with_ratio(1e6, 0.3, 1e8).unwrap();
+        let settings = Settings {
+            symmetric,
+            ..Settings::default()
+        };
+        Model::build(mesh, material, &parts, settings).unwrap()
+    }
+
+    /// Central differences of the assembled residual against the assembled
+    /// tangent (full storage), over every free equation.
+    fn check_tangent(fluid: Fluid) {
+        let mut model = shell_model(fluid, false);
+        let ctl = Control {
+            plane_z: 0.93e-3,
+            ..Control::default()
+        };
+        // A smooth, non-uniform displacement (flattening + bulge), a
+        // pressure, supports respected.
+        let nn = model.mesh.nodes.len();
+        for a in 0..nn {
+            let x = model.mesh.nodes[a];
+            let w = [
+                0.03 * x[0] * (1.0 + 300.0 * x[2]),
+                0.02 * x[1] * (1.0 - 200.0 * x[0]),
+                -0.05 * x[2] * (1.0 + 400.0 * x[1]),
+            ];
+            for i in 0..3 {
+                model.u[3 * a + i] = w[i];
+            }
+        }
+        model.apply_prescribed(&ctl);
+        let sdof = model.cavity.as_ref().unwrap().dof;
+        model.u[sdof] = 2e-5;
+        model.assemble(&ctl, 0.0, true).unwrap();
+        let neq = model.system.dim();
+        let free: Vec<usize> = (0..model.u.len())
+            .filter(|&d| model.dof_eq[d] != NO_SLOT)
+            .collect();
+        assert_eq!(free.len(), neq);
+        let k = |r: usize, c: usize| {
+            model
+                .system
+                .slot(r, c)
+                .map(|s| model.system.values[s])
+                .unwrap_or(0.0)
+        };
+        let kd: Vec<Vec<f64>> = (0..neq)
+            .map(|r| (0..neq).map(|c| k(r, c)).collect())
+            .collect();
+        let kmax = kd.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        let active = model
+            .mesh
+            .nodes_in("outer")
+            .unwrap()
+            .iter()
+            .filter(|&&a| model.mesh.nodes[a][2] + model.u[3 * a + 2] > ctl.plane_z)
+            .count();
+        let u0 = model.u.clone();
+        let h = 1e-9;
+        for (c, &d) in free.iter().enumerate() {
+            model.u.copy_from_slice(&u0);
+            model.u[d] += h;
+            model.assemble(&ctl, 0.0, false).unwrap();
+            let rp = model.rhs.clone();
+            model.u[d] -= 2.0 * h;
+            model.assemble(&ctl, 0.0, false).unwrap();
+            for r in 0..neq {
+                let fd = -(rp[r] - model.rhs[r]) / (2.0 * h);
+                assert!(
+                    (fd - kd[r][c]).abs() < 1e-6 * kmax,
+                    "K[{r}][{c}] = {} vs fd {fd} (kmax {kmax})",
+                    kd[r][c]
+                );
+            }
+        }
+        // The check covered contact and the fluid coupling.
+        assert!(kd.iter().all(|row| row.len() == neq));
+        assert!(active > 0, "no node in contact");
+    }
+
+    #[test]
+    fn tangent_with_plate_and_incompressible_cavity_matches_finite_differences() {
+        check_tangent(Fluid::Incompressible);
+    }
+
+    #[test]
+    fn tangent_with_plate_and_compressible_cavity_matches_finite_differences() {
+        check_tangent(Fluid::Compressible { bulk_modulus: 2e7 });
+    }
 }
