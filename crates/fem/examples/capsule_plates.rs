@@ -8,6 +8,7 @@
 //! ```text
 //! cargo run -p nlvid-fem --release --example capsule_plates              # default mesh (0.3 mm), median of 5
 //! cargo run -p nlvid-fem --release --example capsule_plates -- 0.2 1     # element size 0.2 mm, one run
+//! cargo run -p nlvid-fem --release --example capsule_plates -- 0.3 1 8   # eight elements through the wall
 //! ```
 
 #![allow(clippy::unwrap_used)]
@@ -23,12 +24,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let size_mm: f64 = args.get(1).map(|s| s.parse()).transpose()?.unwrap_or(0.3);
     let repeats: usize = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(5);
+    let layers: usize = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(4);
     let (c1, alpha) = (21.2546e6, 0.3720);
     let g0 = 2.0 * c1 * (1.0 + alpha);
     let d = 1.5e-3;
     let mut cpu = Vec::new();
     for _ in 0..repeats {
-        let spec = ShellSpec::thesis_capsule(size_mm * 1e-3);
+        let spec = ShellSpec {
+            layers,
+            ..ShellSpec::thesis_capsule(size_mm * 1e-3)
+        };
         let c = spec.semi_axes[2];
         let mesh = ellipsoidal_shell(&spec)?;
         let (elements, nodes) = (mesh.elements.len(), mesh.nodes.len());
@@ -77,7 +82,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .filter(|f| f.1 > 0.0)
             .count();
         println!(
-            "size {size_mm} mm: {elements} elements, {nodes} nodes, {} equations; force (whole capsule) {:.4} N, \
+            "size {size_mm} mm, {layers} layers: {elements} elements, {nodes} nodes, {} equations; force (whole capsule) {:.4} N, \
              p = {:.4} MPa, V/V0 − 1 = {:.1e}, {contact} nodes in contact; {} steps, {} cut-backs, {} iterations, \
              {} assemblies; CPU {total:.2} s (setup {setup:.2}, assembly {:.2} of which elements {:.2}, solve {:.2}), wall {wall:.2} s",
             model.equations(),

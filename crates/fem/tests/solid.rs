@@ -525,3 +525,45 @@ fn unsupported_parts_are_rejected_with_clear_errors() {
     let e = Model::<_, Solid>::build(mesh(), mat, &parts, Settings::default()).unwrap_err();
     assert!(e.to_string().contains("no face set named `top`"), "{e}");
 }
+
+#[test]
+fn parallel_hexahedron_loop_is_bitwise_serial() {
+    let run_with = |threads: usize| {
+        let mesh = Mesh3::structured([3, 3, 3], |i, j, k| {
+            [
+                1e-3 * i as f64 / 3.0,
+                1e-3 * j as f64 / 3.0,
+                0.8e-3 * k as f64 / 3.0,
+            ]
+        })
+        .unwrap();
+        let parts = Parts {
+            supports: vec![
+                Support::fixed("x0", Component::X),
+                Support::fixed("y0", Component::Y),
+                Support::fixed("z0", Component::Z),
+            ],
+            planes: vec![RigidPlane::above("z1")],
+            ..Parts::default()
+        };
+        let material =
+            nlvid_material::PronyViscoelastic::capsule(1e6, 0.3, (0.5, 0.1), (0.2, 2.0), 1e9)
+                .unwrap();
+        let settings = Settings {
+            threads,
+            ..Settings::default()
+        };
+        let mut model = Model::<_, Solid>::build(mesh, material, &parts, settings).unwrap();
+        let ctl = |t: f64| Control {
+            plane_z: 0.8e-3 * (1.0 - 0.1 * t),
+            ..Control::default()
+        };
+        run(&mut model, 1.0, 0.25, &ctl);
+        model
+            .records()
+            .iter()
+            .map(|r| (r.plane_force, r.iterations))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(run_with(1), run_with(2));
+}
