@@ -12,7 +12,9 @@ use std::hint::black_box;
 
 use criterion::measurement::{Measurement, ValueFormatter, WallTime};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use nlvid_material::{Mat3, Material3, MembraneMaterial, MooneyRivlin, PipkinRogers, PronyViscoelastic};
+use nlvid_material::{
+    Mat3, Material3, MembraneMaterial, MooneyRivlin, PipkinRogers, PronyViscoelastic,
+};
 use nlvid_model::{Prony, Relaxation};
 
 fn bench_3d<T: Measurement, M: Material3>(c: &mut Criterion<T>, clock: &str, name: &str, m: &M) {

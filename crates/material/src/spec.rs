@@ -92,7 +92,10 @@ fn read_elastic(s: &mut Section, neo: bool, bulk: f64) -> Result<MooneyRivlin, S
     }
     if neo && (s.has("alpha") || s.has(names::C2)) {
         let key = if s.has("alpha") { "alpha" } else { names::C2 };
-        return Err(s.invalid(key, "a neo-Hookean material has C2 = 0; use model = \"mooney-rivlin\""));
+        return Err(s.invalid(
+            key,
+            "a neo-Hookean material has C2 = 0; use model = \"mooney-rivlin\"",
+        ));
     }
     if s.has("alpha") && s.has(names::C2) {
         return Err(s.invalid("alpha", "give either `C2` or `alpha` (= C2/C1), not both"));
@@ -147,7 +150,11 @@ impl FromSection for MaterialSpec {
                 MaterialSpec::PronyViscoelastic(PronyViscoelastic::new(el, prony))
             }
             Model::Qlv => {
-                s.renamed("G", "G1", "QLV takes G1(t) with `G10`, and G2 = beta G1 (eq. 2.16)")?;
+                s.renamed(
+                    "G",
+                    "G1",
+                    "QLV takes G1(t) with `G10`, and G2 = beta G1 (eq. 2.16)",
+                )?;
                 let a = s.f64_or("a", Bounds::non_negative(), 0.0)?;
                 let beta = s.req_f64("beta", Bounds::non_negative())?;
                 let g = read_relaxation(s, "G1", names::G10)?;

@@ -3,7 +3,10 @@
 //! the same history) and against central finite differences of its own
 //! first Piola stress.
 
-use nlvid_material::{AXISYMMETRIC_COMPONENTS, HistoryRule, Mat3, Material3, MooneyRivlin, PipkinRogers, PronyViscoelastic};
+use nlvid_material::{
+    AXISYMMETRIC_COMPONENTS, HistoryRule, Mat3, Material3, MooneyRivlin, PipkinRogers,
+    PronyViscoelastic,
+};
 use nlvid_model::{Prony, Relaxation};
 
 fn models() -> (MooneyRivlin, Vec<PronyViscoelastic>, Vec<PipkinRogers>) {

@@ -177,8 +177,8 @@ fn cell_model_parameters_are_checked_and_named() {
 
 #[test]
 fn penalty_3d_updates_reproduce_the_incompressible_response_under_ramp_hold() {
-    use nlvid_material::homogeneous::drive_uniaxial_3d;
     use nlvid_material::PipkinRogers;
+    use nlvid_material::homogeneous::drive_uniaxial_3d;
     use nlvid_model::Prony;
     let hist = History::RampHold {
         value: 2.5,
