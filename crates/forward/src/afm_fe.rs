@@ -4,7 +4,8 @@
 //! of Fig. 5.2), parameters `[G0, g1, g2, τ1, τ2]` of eq. 5.1 / Table 5.3.
 
 use nlvid_fem::FemError;
-use nlvid_fem::afm::{AfmParams, AfmSetup, Cantilever, Engagement, MeshSpec};
+use nlvid_fem::afm::{AfmSetup, Cantilever, Engagement, MeshSpec};
+use nlvid_model::{Relaxation, names};
 use nlvid_protocol::{AfmScript, Program};
 use nlvid_study::{Bounds, Dimension, Section};
 use nlvid_surrogate::{FailureKind, ForwardModel, RunFailure};
@@ -223,23 +224,12 @@ impl ForwardModel for AfmFeModel {
         self.identity.clone()
     }
     fn run(&self, p: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
-        let &[g0, g1, g2, tau1, tau2] = p else {
-            return Err(RunFailure {
-                kind: FailureKind::InvalidParameters,
-                time: None,
-                message: format!(
-                    "afm-fe expects 5 parameters [G0, g1, g2, tau1, tau2], got {}",
-                    p.len()
-                ),
-            });
-        };
-        let params = AfmParams {
-            g0,
-            g1,
-            tau1,
-            g2,
-            tau2,
-        };
+        // Parameters in `names::PRONY2` order (G0 the shear modulus).
+        let params = Relaxation::from_named(&names::PRONY2, p).map_err(|e| RunFailure {
+            kind: FailureKind::InvalidParameters,
+            time: None,
+            message: format!("afm-fe: {e}"),
+        })?;
         nlvid_fem::afm::run(&params, &self.setup)
             .map(|r| r.force)
             .map_err(|e| fem_failure(&e))

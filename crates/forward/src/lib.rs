@@ -15,7 +15,9 @@
 //!   `[G0, g1, g2, τ1, τ2]` (eq. 5.1, Table 5.3); seconds to minutes per run.
 //! * `membrane` — the ch. II membrane solver (`nlvid_membrane::simulate`)
 //!   ([`MembraneSpec`], [`MembraneModel`]); parameters
-//!   `[C1, γ0, g1, g2, τ1, τ2]` (eq. 2.56); tenths of a second per run.
+//!   `[G10, gamma0, g1_long_term, g2_long_term, tau1, tau2]`
+//!   ([`MEMBRANE_PARAMETERS`], eq. 2.56: ch. II's G1(0) and long-term
+//!   fractions); tenths of a second per run.
 //!
 //! Every model reports SI units (`parameter_units`) and an `identity`
 //! string holding every setting, which enters the build's study hash.
@@ -58,7 +60,9 @@ use nlvid_surrogate::{ForwardModel, RunFailure};
 pub use afm_fe::{AfmFeModel, AfmFeSpec, fem_failure};
 pub use error::{ForwardError, Result};
 pub use hertz::{HertzGrid, HertzPronyModel, HertzPronySpec};
-pub use membrane::{MembraneModel, MembraneSpec, membrane_failure};
+pub use membrane::{
+    MembraneModel, MembraneSpec, PARAMETERS as MEMBRANE_PARAMETERS, membrane_failure,
+};
 pub use nlvid_surrogate::HertzProny;
 
 /// Which forward model, with all its settings.

@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used)]
 
-use nlvid_fem::afm::{AfmParams, AfmSetup, Cantilever, Engagement, MeshSpec};
+use nlvid_fem::afm::{AfmSetup, Cantilever, Engagement, MeshSpec};
 use nlvid_fem::{FemError, NonConvergence};
 use nlvid_forward::{ForwardSettings, ForwardSpec, fem_failure, from_study};
 use nlvid_membrane::{ControlKind, Geometry, Loading, PipkinRogersParams, simulate};
@@ -75,19 +75,26 @@ fn membrane_adapter_equals_a_dimensionless_simulation_scaled_by_hand() {
     s.finish().unwrap();
     assert_eq!(
         model.parameter_names(),
-        ["C1", "gamma0", "g1", "g2", "tau1", "tau2"]
+        [
+            "G10",
+            "gamma0",
+            "g1_long_term",
+            "g2_long_term",
+            "tau1",
+            "tau2"
+        ]
     );
-    let (c1, gamma0, g1, g2, tau1, tau2) = (3000.0, 0.1, 0.3, 0.3, 0.5, 0.25);
-    let f = model.run(&[c1, gamma0, g1, g2, tau1, tau2]).unwrap();
+    let (g10, gamma0, g1, g2, tau1, tau2) = (3000.0, 0.1, 0.3, 0.3, 0.5, 0.25);
+    let f = model.run(&[g10, gamma0, g1, g2, tau1, tau2]).unwrap();
     let t = model.time_grid().to_vec();
     // 12 points on [0, 1.5] s; the ramp end (0.5 s) is not on it and is added.
     assert_eq!(t.len(), 13);
     assert!(t.iter().any(|&x| (x - 0.5).abs() < 1e-12));
 
-    // Independent path: eq. 2.47 units (C1 = 1, τ1 = 1), D/r0 = 0.5 reached
-    // at t0 = 0.5 s / τ1 = 1, hold to t0 = 3; F = F̄ C1 h0 r0.
+    // Independent path: eq. 2.47 units (G10 = 1, τ1 = 1), D/r0 = 0.5 reached
+    // at t0 = 0.5 s / τ1 = 1, hold to t0 = 3; F = F̄ G10 h0 r0.
     let p = PipkinRogersParams {
-        c1: 1.0,
+        g10: 1.0,
         gamma0,
         g1,
         g2,
@@ -108,7 +115,7 @@ fn membrane_adapter_equals_a_dimensionless_simulation_scaled_by_hand() {
         &loading,
     )
     .unwrap();
-    let scale = c1 * 40e-6 * 1.5e-3;
+    let scale = g10 * 40e-6 * 1.5e-3;
     let peak = f.iter().copied().fold(0.0, f64::max);
     assert!(peak > 0.0);
     for (a, b) in f.iter().zip(run.force()) {
@@ -223,17 +230,13 @@ fn afm_fe_run_equals_a_direct_fem_call() {
     let model = from_study(&mut study(AFM)).unwrap();
     let (g0, g1, g2, tau1, tau2) = (1000.0, 0.3, 0.2, 0.1, 5.0);
     let f = model.run(&[g0, g1, g2, tau1, tau2]).unwrap();
-    let direct = nlvid_fem::afm::run(
-        &AfmParams {
-            g0,
-            g1,
-            tau1,
-            g2,
-            tau2,
-        },
-        &afm_setup_by_hand(),
+    let shear = nlvid_model::Relaxation::new(
+        "G0",
+        g0,
+        nlvid_model::Prony::new("G", &[(g1, tau1), (g2, tau2)]).unwrap(),
     )
     .unwrap();
+    let direct = nlvid_fem::afm::run(&shear, &afm_setup_by_hand()).unwrap();
     assert_eq!(f.len(), 12);
     let peak = direct.peak_force;
     assert!(peak > 0.2e-9, "peak {peak}");

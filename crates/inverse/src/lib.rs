@@ -26,7 +26,8 @@
 //! - [`KrigingSurrogate`]: a `nlvid-surrogate` Kriging model as a [`Model`]
 //!   and [`BasisModel`]; [`ForwardFromModel`] runs any [`Model`] through
 //!   `nlvid_surrogate::build`;
-//! - [`PronyShear`]: G(t) of eq. 5.1 and E(t) = 3G(t);
+//! - [`relaxation`], [`FitResult::relaxation`]: G(t) of eq. 5.1 as the
+//!   shared `nlvid_model::Relaxation` (E(t) = 3G(t));
 //! - [`read_afm_csv`] / [`read_compression_csv`]: measured curves in, with
 //!   protocol checks and resampling onto a model grid.
 //!
@@ -36,7 +37,7 @@
 //!
 //! ```
 //! use nlvid_inverse::{Domain, Experiment, LeeRadokHertz, Misfit, Model, MultiStart,
-//!                     PronyShear, ramp_hold_grid, ramp_hold_indentation};
+//!                     ramp_hold_grid, ramp_hold_indentation};
 //! # fn main() -> nlvid_inverse::Result<()> {
 //! let domain = Domain::prony2_table_5_3(0.01)?;
 //! let t = ramp_hold_grid(0.2, 40, 52.0, 120, 1e-3)?;
@@ -47,8 +48,8 @@
 //! let misfit = Misfit::new(vec![Experiment::new("RH", model, data, None)?])?;
 //! let fit = MultiStart::new().with_starts(4)?.with_seed(1).fit(&misfit)?;
 //! assert!(fit.best.misfit < 1e-4);
-//! let g = PronyShear::from_parameters(&domain, &fit.best.x)?;
-//! assert!((g.shear(0.0) / 900.0 - 1.0).abs() < 1e-2);
+//! let g = fit.relaxation()?;
+//! assert!((g.value(0.0) / 900.0 - 1.0).abs() < 1e-2);
 //! # Ok(())
 //! # }
 //! ```
@@ -85,7 +86,7 @@ pub use misfit::{Experiment, Misfit, Objective, Segment, range_normalised_rmse, 
 pub use model::{FD_STEP_UNIT, Model, check_finite, check_jacobian, check_len, fd_jacobian};
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
 pub use plot::{FigureCurve, FitFigure};
-pub use prony::{ModulusPoint, ParameterTable, PronyShear, PronyTerm};
+pub use prony::{ParameterTable, relaxation};
 pub use reduced::{Projection, ReducedExperiment, ReducedMisfit, ReducedModel, projection};
 pub use rerun::{Rerun, rerun};
 pub use starts::{feasible_starts, latin_hypercube};

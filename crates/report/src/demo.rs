@@ -324,8 +324,8 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
                 csv.as_bytes(),
             )?;
             let end = settings.hold_end;
-            let ginf = 1.0 - x[1] - x[3];
-            let g_end = x[0] * (ginf + x[1] * (-end / x[2]).exp() + x[3] * (-end / x[4]).exp());
+            // G(t) of eq. 5.1 through the one Prony type, by parameter name.
+            let g_end = nlvid_inverse::relaxation(&domain, &x)?.value(end);
             let _ = writeln!(
                 truth,
                 "{},{cell},{},{},{},{},{},{},{}",

@@ -12,8 +12,9 @@ use std::fmt::Write as _;
 use std::fs;
 use std::path::{Path, PathBuf};
 
+use nlvid_model::Relaxation;
 use nlvid_stats::{
-    Method, Prony, ResultsTable, compare_over_time, effect, group_curves, mean_sd, rank_sum,
+    Method, ResultsTable, compare_over_time, effect, group_curves, mean_sd, rank_sum,
     read_results, relaxation_amounts,
 };
 
@@ -331,7 +332,7 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
     let mut tests_rows = Vec::new();
     if usable.len() >= 2 {
         let (a, b) = (&usable[0], &usable[1]);
-        let (ca, cb): (Vec<Prony>, Vec<Prony>) = (table.group(a), table.group(b));
+        let (ca, cb): (Vec<Relaxation>, Vec<Relaxation>) = (table.group(a), table.group(b));
         let cmp = compare_over_time(&ca, &cb, &times, opts.method)?;
         let x: Vec<f64> = cmp.iter().map(|r| r.t).collect();
         figures.push(Figure {
@@ -359,7 +360,7 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
                 ],
             )?,
         });
-        let g = |cells: &[Prony], t: f64| cells.iter().map(|p| p.shear(t)).collect::<Vec<_>>();
+        let g = |cells: &[Relaxation], t: f64| cells.iter().map(|p| p.value(t)).collect::<Vec<_>>();
         type Quantity<'a> = (String, Vec<f64>, Vec<f64>, f64, &'a str);
         let quantities: [Quantity; 3] = [
             ("G(0)".into(), g(&ca, 0.0), g(&cb, 0.0), 1.0, "Pa"),

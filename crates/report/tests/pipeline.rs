@@ -11,7 +11,8 @@ use nlvid_report::cohort::{self, RunOptions};
 use nlvid_report::demo::{DemoSpec, write_demo_data};
 use nlvid_report::report::{ReportOptions, write_report};
 use nlvid_report::settings::CohortSettings;
-use nlvid_stats::{Method, Prony, rank_sum, read_results, relaxation_amounts};
+use nlvid_model::Relaxation;
+use nlvid_stats::{Method, rank_sum, read_results, relaxation_amounts};
 
 fn repo_demo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo")
@@ -112,10 +113,10 @@ fn demo_recovers_its_group_ordering_with_p_below_0_05() {
         "{}",
         table.excluded[0].reason
     );
-    let a: Vec<Prony> = table.group("A-stiff");
-    let b: Vec<Prony> = table.group("B-soft");
+    let a: Vec<Relaxation> = table.group("A-stiff");
+    let b: Vec<Relaxation> = table.group("B-soft");
     let t_end = 52.0;
-    let g = |c: &[Prony], t: f64| c.iter().map(|p| p.shear(t)).collect::<Vec<_>>();
+    let g = |c: &[Relaxation], t: f64| c.iter().map(|p| p.value(t)).collect::<Vec<_>>();
     let m = Method::MATLAB_RANKSUM;
     // Known ordering (DemoSpec::default): A stiffer at 0 and 52 s, relaxes less.
     let tests = [
@@ -181,6 +182,44 @@ fn recovered_moduli_match_the_ground_truth_per_cell() {
         }
         assert!(c.misfit.expect("misfit") < 0.02, "{}", c.cell);
     }
+}
+
+/// One meaning of G0 from the fit to the comparison: the cohort's fitted
+/// parameters (named `G0`, `g1`, …) and the results table `nlvid compare`
+/// reads back give the same `nlvid_model::Relaxation` (shortest round-trip
+/// numbers: bit for bit), and that G(t) is eq. 5.1 by hand with G0 as the
+/// shear modulus (no factor 2 between the stages).
+#[test]
+fn the_fit_and_the_results_table_give_one_g_of_t() {
+    let f = fixture();
+    let cells = cohort::read_cells(&f.out).expect("cells");
+    let table = read_results(&f.out.join("results.csv")).expect("results");
+    let mut checked = 0;
+    for c in cells.iter().filter(|c| c.status == CellStatus::Ok) {
+        let names: Vec<&str> = c.parameters.iter().map(|p| p.name.as_str()).collect();
+        let x: Vec<f64> = c.parameters.iter().map(|p| p.value).collect();
+        let fitted = Relaxation::from_named(&names, &x).expect("a Prony cell");
+        let row = table
+            .cells
+            .iter()
+            .find(|r| r.cell == c.cell)
+            .expect("every fitted cell is in results.csv");
+        assert_eq!(row.relaxation, fitted, "{}", c.cell);
+        let at = |n: &str| x[names.iter().position(|m| *m == n).expect("named")];
+        for t in [0.0, 1.0, 52.0] {
+            let by_hand = at("G0")
+                * (1.0 - at("g1") - at("g2")
+                    + at("g1") * (-t / at("tau1")).exp()
+                    + at("g2") * (-t / at("tau2")).exp());
+            assert!(
+                (row.relaxation.value(t) / by_hand - 1.0).abs() < 1e-12,
+                "{} G({t})",
+                c.cell
+            );
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 16);
 }
 
 /// The Hertz baseline of a viscoelastic cell: on the ramp the Lee–Radok

@@ -7,8 +7,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::bail;
+use nlvid_model::Relaxation;
 use nlvid_stats::{
-    Effect, Method, Policy, Prony, RankSum, ResultsTable, compare_over_time, effect, group_curves,
+    Effect, Method, Policy, RankSum, ResultsTable, compare_over_time, effect, group_curves,
     mean_sd, rank_sum, read_results, relaxation_amounts, write_group_curves,
     write_time_comparisons,
 };
@@ -178,7 +179,7 @@ fn execute(c: Config, json_out: bool) -> anyhow::Result<ExitCode> {
     let mut curves = Vec::with_capacity(names.len());
     let mut group_json = Vec::new();
     for g in &names {
-        let cells: Vec<Prony> = c.table.group(g);
+        let cells: Vec<Relaxation> = c.table.group(g);
         let cur = group_curves(g, &cells, &c.times)?;
         let relax = mean_sd(g, &relaxation_amounts(&cells, t_end))?;
         let last = cur.times.len() - 1;
@@ -206,7 +207,7 @@ fn execute(c: Config, json_out: bool) -> anyhow::Result<ExitCode> {
         let mut buf = Vec::new();
         write_time_comparisons(&mut buf, &rows)?;
         write_atomic(&c.pvalues_csv, &buf)?;
-        let g = |cells: &[Prony], t: f64| cells.iter().map(|p| p.shear(t)).collect::<Vec<_>>();
+        let g = |cells: &[Relaxation], t: f64| cells.iter().map(|p| p.value(t)).collect::<Vec<_>>();
         contrasts.push(contrast(
             "G(0)".into(),
             "Pa",

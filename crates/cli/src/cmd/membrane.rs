@@ -37,12 +37,12 @@ pub enum Reproduce {
     Thesis,
 }
 
-/// Optional dimensional scales: r0, h0, C1, τ1.
+/// Optional dimensional scales: r0, h0, G10 = G1(0), τ1.
 #[derive(Debug, Clone, Copy)]
 struct Scales {
     r0: f64,
     h0: f64,
-    c1: f64,
+    g10: f64,
     tau1: f64,
 }
 
@@ -111,22 +111,45 @@ fn read_study(path: &Path) -> anyhow::Result<MembraneStudy> {
         vec![t_end]
     };
     let mut m = s.subsection("material")?;
+    // One name, one quantity (docs/theory/model.md): g1, g2 name Prony
+    // weights elsewhere; here they are eq. 2.56's long-term fractions.
+    for k in ["g1", "g2"] {
+        m.renamed(
+            k,
+            &format!("{k}_long_term"),
+            "eq. 2.56's long-term fraction G(∞)/G(0); `g1`, `g2` name Prony weights",
+        )?;
+    }
+    for k in ["C1", "G10"] {
+        m.renamed(
+            k,
+            "[membrane.scale] G10",
+            "the material is dimensionless (G10 = G1(0) = 1, eq. 2.47); a modulus sets the scale",
+        )?;
+    }
     let params = PipkinRogersParams {
-        c1: 1.0,
+        g10: 1.0,
         tau1: 1.0,
         gamma0: m.f64_or("gamma0", Bounds::non_negative(), 0.1)?,
-        g1: m.f64_or("g1", Bounds::open_closed(0.0, 1.0), 1.0)?,
-        g2: m.f64_or("g2", Bounds::open_closed(0.0, 1.0), 1.0)?,
+        g1: m.f64_or("g1_long_term", Bounds::open_closed(0.0, 1.0), 1.0)?,
+        g2: m.f64_or("g2_long_term", Bounds::open_closed(0.0, 1.0), 1.0)?,
         c: m.f64_or("c", Bounds::positive(), 1.0)?,
         a: m.f64_or("a", Bounds::non_negative(), 0.0)?,
     };
     m.finish()?;
     let scales = match s.opt_subsection("scale")? {
         Some(mut sc) => {
+            for k in ["c1", "C1"] {
+                sc.renamed(
+                    k,
+                    "G10",
+                    "ch. II's stress scale is G1(0) = G10; `C1` names the constant of eq. 4.1",
+                )?;
+            }
             let v = Scales {
                 r0: sc.req_quantity("r0", Dimension::LENGTH, Bounds::positive())?,
                 h0: sc.req_quantity("h0", Dimension::LENGTH, Bounds::positive())?,
-                c1: sc.req_quantity("c1", Dimension::PRESSURE, Bounds::positive())?,
+                g10: sc.req_quantity("G10", Dimension::PRESSURE, Bounds::positive())?,
                 tau1: sc.req_quantity("tau1", Dimension::TIME, Bounds::positive())?,
             };
             sc.finish()?;
@@ -153,7 +176,7 @@ fn write_atomic(path: &Path, text: &str) -> anyhow::Result<()> {
 
 fn history_csv(run: &MembraneRun, sc: Option<Scales>) -> String {
     let mut s = String::from(
-        "t0,D_over_r0,H1_over_r0,F_over_C1h0r0,p_r0_over_C1h0,psi_c_rad,lambda0,a_over_r0,r_eq_over_r0,min_tension_over_C1h0",
+        "t0,D_over_r0,H1_over_r0,F_over_G10h0r0,p_r0_over_G10h0,psi_c_rad,lambda0,a_over_r0,r_eq_over_r0,min_tension_over_G10h0",
     );
     if sc.is_some() {
         s.push_str(",t_s,D_m,F_N,p_Pa,a_m");
@@ -180,8 +203,8 @@ fn history_csv(run: &MembraneRun, sc: Option<Scales>) -> String {
                 ",{},{},{},{},{}",
                 r.time * c.tau1,
                 r.displacement * c.r0,
-                r.force * c.c1 * c.h0 * c.r0,
-                r.pressure * c.c1 * c.h0 / c.r0,
+                r.force * c.g10 * c.h0 * c.r0,
+                r.pressure * c.g10 * c.h0 / c.r0,
                 r.contact_radius * c.r0
             );
         }
@@ -192,7 +215,7 @@ fn history_csv(run: &MembraneRun, sc: Option<Scales>) -> String {
 
 fn profile_csv(sol: &nlvid_membrane::Solution) -> String {
     let mut s = String::from(
-        "psi_rad,rho_over_r0,eta_over_r0,lambda1,lambda2,sigma1_over_C1,sigma2_over_C1,T1_over_C1h0,T2_over_C1h0,theta_rad,in_contact\n",
+        "psi_rad,rho_over_r0,eta_over_r0,lambda1,lambda2,sigma1_over_G10,sigma2_over_G10,T1_over_G10h0,T2_over_G10h0,theta_rad,in_contact\n",
     );
     for v in &sol.profile {
         let _ = writeln!(
@@ -241,7 +264,7 @@ fn run_study(args: &MembraneArgs, path: &Path) -> anyhow::Result<ExitCode> {
         println!("{}", serde_json::to_string_pretty(&summary)?);
     } else if let Some(l) = last {
         println!(
-            "t0 = {:.4}: D/r0 = {:.5}, F/(C1 h0 r0) = {:.6}, ψc = {:.5} rad, p = {:.5}; wrote {} files to {}",
+            "t0 = {:.4}: D/r0 = {:.5}, F/(G10 h0 r0) = {:.6}, ψc = {:.5} rad, p = {:.5}; wrote {} files to {}",
             l.time,
             l.displacement,
             l.force,

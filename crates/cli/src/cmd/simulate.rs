@@ -7,7 +7,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context as _;
-use nlvid_fem::afm::{self, AfmParams, AfmSetup, Cantilever, Engagement, MeshSpec};
+use nlvid_fem::afm::{self, AfmSetup, Cantilever, Engagement, MeshSpec};
+use nlvid_model::{Prony, Relaxation, names};
 use nlvid_protocol::{Loading, ProtocolSettings};
 use nlvid_study::{Bounds, Dimension, Study};
 use serde_json::json;
@@ -34,11 +35,11 @@ pub struct Config {
     study: PathBuf,
     output: PathBuf,
     mesh_output: Option<PathBuf>,
-    params: AfmParams,
+    params: Relaxation,
     setup: AfmSetup,
 }
 
-fn read(study_path: &PathBuf) -> anyhow::Result<(AfmParams, AfmSetup)> {
+fn read(study_path: &PathBuf) -> anyhow::Result<(Relaxation, AfmSetup)> {
     let mut study = Study::load(study_path)?;
     let pos = Bounds::positive();
     let mut setup = AfmSetup::thesis_setup1();
@@ -117,13 +118,10 @@ fn read(study_path: &PathBuf) -> anyhow::Result<(AfmParams, AfmSetup)> {
             taus.len()
         );
     }
-    let params = AfmParams {
-        g0,
-        g1: gs[0],
-        tau1: taus[0],
-        g2: gs[1],
-        tau2: taus[1],
-    };
+    // G0 is the shear modulus of eq. 5.1 (docs/theory/model.md).
+    let params = Prony::new("G", &[(gs[0], taus[0]), (gs[1], taus[1])])
+        .and_then(|p| Relaxation::new(names::G0, g0, p))
+        .with_context(|| format!("{}: [material.prony]", study.name()))?;
 
     if let Some(mut f) = study.opt_section("fem")? {
         setup.mesh = MeshSpec {
