@@ -12,7 +12,7 @@
 use nlvid_membrane::{ControlKind, Geometry, Loading, MembraneError, PipkinRogersParams, simulate};
 use nlvid_protocol::{Program, ProgramBuilder, Quantity};
 use nlvid_study::{Bounds, Dimension, Section};
-use nlvid_surrogate::{FailureKind, ForwardModel, RunFailure};
+use nlvid_model::{FailureKind, ForwardModel, RunFailure};
 
 use crate::error::{ForwardError, Result};
 

@@ -17,7 +17,7 @@ use std::fmt;
 
 use serde::Serialize;
 
-use crate::domain::{BoundHit, BoundSide, Domain};
+use nlvid_model::{BoundHit, BoundSide, Domain};
 use crate::error::{InverseError, Result};
 use crate::misfit::{Misfit, Objective};
 use crate::model::Model;

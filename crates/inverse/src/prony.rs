@@ -9,7 +9,7 @@ use std::fmt;
 
 use serde::Serialize;
 
-use crate::domain::Domain;
+use nlvid_model::Domain;
 use crate::error::{InverseError, Result};
 
 /// One Prony term (weight g_k, time τ_k in s).
@@ -132,7 +132,7 @@ impl ParameterTable {
     /// Pairs values with the domain's names and units.
     ///
     /// # Errors
-    /// [`InverseError::ParameterCount`].
+    /// [`InverseError::Vocabulary`] (wrong length).
     pub fn new(domain: &Domain, x: &[f64]) -> Result<Self> {
         domain.check_len(x)?;
         Ok(Self {
@@ -149,7 +149,7 @@ impl ParameterTable {
 impl fmt::Display for ParameterTable {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         for (name, value, unit) in &self.rows {
-            if unit.is_empty() {
+            if unit.is_empty() || unit == "1" {
                 writeln!(f, "{name:>8} = {value:.6e}")?;
             } else {
                 writeln!(f, "{name:>8} = {value:.6e} {unit}")?;
@@ -165,8 +165,8 @@ mod tests {
 
     #[test]
     fn shear_modulus_follows_eq_5_1_and_young_is_three_times_it() {
-        let d = Domain::prony2_table_5_3(0.01).expect("domain");
-        let x = [2940.0, 0.5, 0.1, 0.3, 10.0];
+        let d = Domain::table_5_3(0.01).expect("domain");
+        let x = [2940.0, 0.5, 0.3, 0.1, 10.0];
         let g = PronyShear::from_parameters(&d, &x).expect("g");
         assert!((g.shear(0.0) - 2940.0).abs() < 1e-9);
         assert!((g.g_inf() - 0.2).abs() < 1e-15);
@@ -179,8 +179,8 @@ mod tests {
 
     #[test]
     fn parameter_table_prints_names_and_units() {
-        let d = Domain::prony2_table_5_3(0.01).expect("domain");
-        let s = ParameterTable::new(&d, &[2940.0, 0.5, 0.1, 0.3, 10.0])
+        let d = Domain::table_5_3(0.01).expect("domain");
+        let s = ParameterTable::new(&d, &[2940.0, 0.5, 0.3, 0.1, 10.0])
             .expect("t")
             .to_string();
         assert!(s.contains("G0 = 2.940000e3 Pa"), "{s}");

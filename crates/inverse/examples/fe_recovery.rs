@@ -16,7 +16,7 @@
 //! nlvid build examples/metamodel/afm-fe-setup1.toml --store S --export E
 //! nlvid surrogate fit --x E/train/X.csv --y E/train/Y.csv --proportional-to G0 \
 //!     --log-inputs G0,tau1,tau2 --out fe.model.json
-//! cargo run --release -p nlvid-forward --example fe_recovery -- \
+//! cargo run --release -p nlvid-inverse --example fe_recovery -- \
 //!     examples/metamodel/afm-fe-setup1.toml fe.model.json E
 //! ```
 
