@@ -15,7 +15,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
 
-use nlvid_surrogate::{ForwardModel, HertzProny};
+use nlvid_forward::HertzProny;
+use nlvid_model::ForwardModel;
 
 /// Truth in the `hertz-prony` order (G0, g1, g2, tau1, tau2).
 const TRUTH: [f64; 5] = [1200.0, 0.35, 0.3, 0.3, 6.0];
@@ -152,6 +153,8 @@ fn pipeline() -> &'static Path {
                     "hertz-prony",
                     "--points",
                     "100",
+                    "--domain",
+                    domain,
                     "--store",
                     store,
                     "--export",
@@ -226,7 +229,7 @@ impl Normal {
 
 /// The data model of the 10-s build protocol: t = 0.01, …, 10 s.
 fn data_model() -> HertzProny {
-    HertzProny::new(RADIUS, RATE, RAMP, END, 1000)
+    HertzProny::new(RADIUS, RATE, RAMP, END, 1000).unwrap()
 }
 
 /// Clean force of `model` at `truth`, with t = 0 (F = 0) prepended.
@@ -264,7 +267,7 @@ fn afm_csv_with_piezo(
 
 /// [`afm_csv_with_piezo`] with the model's own ramp.
 fn afm_csv_of(model: &HertzProny, truth: &[f64; 5], seed: u64) -> String {
-    afm_csv_with_piezo(model, truth, seed, model.rate, model.ramp_time)
+    afm_csv_with_piezo(model, truth, seed, model.rate(), model.ramp_time())
 }
 
 /// [`afm_csv_of`] the 10-s build protocol.
@@ -308,8 +311,6 @@ fn study(name: &str, fit_extra: &str, calibration: &str, tail: &str) -> PathBuf 
 surrogate = "{w}/model.json"
 meta = "{w}/export/meta.json"
 inputs = "physical"
-domain = "table-5.3"
-epsilon = 0.01
 data = "afm"
 starts = 8
 seed = 1
@@ -438,7 +439,7 @@ fn misfit_of(model: &dyn ForwardModel, x: &[f64; 5], csv: &str) -> f64 {
 /// Eq. 5.3 of the forward model at TRUTH (ramp at `rate` for 1 s) against
 /// the force in an AFM CSV, on the surrogate grid (0.1 … 10 s).
 fn misfit_at_truth(csv: &Path, rate: f64) -> f64 {
-    let model = HertzProny::new(RADIUS, rate, RAMP, END, 100);
+    let model = HertzProny::new(RADIUS, rate, RAMP, END, 100).unwrap();
     misfit_of(&model, &TRUTH, &std::fs::read_to_string(csv).unwrap())
 }
 
@@ -907,7 +908,7 @@ fn the_real_model_can_be_the_forward_model_of_a_study_and_its_misfit_is_eq_5_3_o
     let doc = fit_json(dir, &s, &["cell-fw.csv"], &["--starts", "4"]);
     // Independently: run HertzProny at the fitted parameters, take the data
     // on the same grid, eq. 5.3 by hand.
-    let model = HertzProny::new(RADIUS, RATE, RAMP, END, 100);
+    let model = HertzProny::new(RADIUS, RATE, RAMP, END, 100).unwrap();
     let want = misfit_of(&model, &fitted(&doc), &csv);
     let got = doc["experiments"][0]["misfit_real"].as_f64().unwrap();
     assert!((got - want).abs() <= 1e-9 * want, "{got} vs {want}");
@@ -930,7 +931,7 @@ fn two_ramp_hold_depths_are_fitted_together_with_one_parameter_set() {
     );
 
     std::fs::write(dir.join("depth-1.csv"), afm_csv(&TRUTH, 21)).unwrap();
-    let deep = HertzProny::new(RADIUS, s * RATE, RAMP, END, 1000);
+    let deep = HertzProny::new(RADIUS, s * RATE, RAMP, END, 1000).unwrap();
     std::fs::write(dir.join("depth-1.5.csv"), afm_csv_of(&deep, &TRUTH, 22)).unwrap();
 
     let depths = multi_study(
@@ -1177,7 +1178,7 @@ fn ten_cases(
 fn ten_seeded_cases_recover_g0_sum_and_g52_through_the_cli() {
     let dir = pipeline();
     let study = study("e2e-ten.toml", "", SENSITIVITY, PROTOCOL);
-    let real = HertzProny::new(RADIUS, RATE, RAMP, END, 100);
+    let real = HertzProny::new(RADIUS, RATE, RAMP, END, 100).unwrap();
     let r = ten_cases(dir, &study, &real, |case, truth| afm_csv(truth, 100 + case));
     let ok_issue = r.iter().filter(|c| c.pass()).count();
     let ok_g10 = r
@@ -1221,7 +1222,6 @@ first_hold_step = "1 ms"
             r#"[fit]
 surrogate = "model.json"
 meta = "export/train/meta.json"
-domain = "table-5.3"
 data = "afm"
 modulus_times = ["10 s", "52 s"]
 {AFM_COLUMNS}{SENSITIVITY}
@@ -1239,7 +1239,7 @@ study = "build.toml"
     .unwrap();
     let mut st = nlvid_study::Study::load(dir.join("build.toml")).unwrap();
     let real = nlvid_forward::from_study(&mut st).unwrap();
-    let data = HertzProny::new(2.5e-6, 10e-6, 0.2, 52.0, 52_000);
+    let data = HertzProny::new(2.5e-6, 10e-6, 0.2, 52.0, 52_000).unwrap();
     let r = ten_cases(&dir, &dir.join("fit.toml"), real.as_ref(), |case, truth| {
         afm_csv_of(&data, truth, 100 + case)
     });

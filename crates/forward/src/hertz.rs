@@ -206,6 +206,9 @@ fn identity(radius: f64, rate: f64, ramp: f64, m: usize, end: f64) -> String {
 #[derive(Debug, Clone)]
 pub struct HertzProny {
     kernel: LeeRadok,
+    radius: f64,
+    rate: f64,
+    ramp_time: f64,
     identity: String,
 }
 
@@ -249,6 +252,9 @@ impl HertzProny {
     ) -> Result<Self> {
         Ok(Self {
             kernel: LeeRadok::ramp_hold(radius, 0.5, rate, ramp_time, times)?,
+            radius,
+            rate,
+            ramp_time,
             identity,
         })
     }
@@ -256,6 +262,21 @@ impl HertzProny {
     /// The kernel (for its Jacobian, [`LeeRadok::force_and_jacobian`]).
     pub fn kernel(&self) -> &LeeRadok {
         &self.kernel
+    }
+
+    /// Probe radius R (m).
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// Indentation rate on the ramp (m/s).
+    pub fn rate(&self) -> f64 {
+        self.rate
+    }
+
+    /// Ramp duration (s).
+    pub fn ramp_time(&self) -> f64 {
+        self.ramp_time
     }
 }
 

@@ -493,6 +493,7 @@ mod tests {
 
     /// A model under another domain (G0 renamed C1): same curve, other
     /// parameter set.
+    #[derive(Debug)]
     struct Renamed(LeeRadokHertz, Domain);
 
     impl Model for Renamed {

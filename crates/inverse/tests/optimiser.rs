@@ -1,9 +1,7 @@
 //! Multistart optimiser on analytic problems with known optima.
 
-use nlvid_inverse::{
-    BoundSide, Domain, Experiment, InverseError, Misfit, Model, MultiStart, Parameter, Result,
-    Scale, verify,
-};
+use nlvid_inverse::{Experiment, InverseError, Misfit, Model, MultiStart, Result, verify};
+use nlvid_model::{BoundSide, Domain, Parameter, Scale};
 
 /// y_j = x0 φ0(t_j) + x1 φ1(t_j): least squares with a closed-form answer.
 struct Linear2 {

@@ -4,10 +4,11 @@
 //!
 //! `cargo run --release -p nlvid-surrogate --example rmse_vs_n [-- N1 N2 …]`
 
+use nlvid_model::ForwardModel;
 use nlvid_surrogate::check::summarise;
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
-    Correlation, ForwardModel, KrigingModel, KrigingSettings, OutputScale, Regression,
+    Correlation, KrigingModel, KrigingSettings, OutputScale, Regression,
 };
 
 mod common;

@@ -6,10 +6,11 @@
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use nlvid_surrogate::doe::{Axis, Domain, LinearConstraint, SampleSettings, sample};
+use nlvid_forward::HertzProny;
+use nlvid_model::{Domain, FailureKind, ForwardModel, Parameter, RunFailure, Scale, names};
+use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::{
-    Admissibility, BuildOptions, FailureKind, ForwardModel, HertzProny, RunFailure, RunStore,
-    Shard, build, export, load, merge,
+    Admissibility, BuildOptions, RunStore, Shard, build, export, load, merge,
 };
 
 fn tmp(name: &str) -> PathBuf {
@@ -19,30 +20,27 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 fn cell_domain() -> Domain {
-    let ax = |name: &str, unit: &str, lower: f64, upper: f64, log: bool| Axis {
-        name: name.into(),
-        unit: unit.into(),
-        lower,
-        upper,
-        log,
-    };
-    Domain {
-        axes: vec![
-            ax("G0", "Pa", 100.0, 5000.0, true),
-            ax("g1", "1", 0.0, 0.9, false),
-            ax("g2", "1", 0.0, 0.9, false),
-            ax("tau1", "s", 0.01, 1.0, true),
-            ax("tau2", "s", 1.0, 100.0, true),
-        ],
-        constraints: vec![LinearConstraint {
-            coeffs: vec![0.0, 1.0, 1.0, 0.0, 0.0],
-            bound: 0.95,
-        }],
-    }
+    let bounds = [
+        (100.0, 5000.0, Scale::Log),
+        (0.0, 0.9, Scale::Linear),
+        (0.0, 0.9, Scale::Linear),
+        (0.01, 1.0, Scale::Log),
+        (1.0, 100.0, Scale::Log),
+    ];
+    Domain::new(
+        names::PRONY2
+            .iter()
+            .zip(names::PRONY2_UNITS)
+            .zip(bounds)
+            .map(|((n, u), (lo, hi, s))| Parameter::new(n, u, lo, hi, s))
+            .collect(),
+    )
+    .and_then(|d| d.with_sum_constraint(&["g1", "g2"], 0.95))
+    .unwrap()
 }
 
 fn model() -> HertzProny {
-    HertzProny::new(5e-6, 1e-6, 1.0, 10.0, 40)
+    HertzProny::new(5e-6, 1e-6, 1.0, 10.0, 40).unwrap()
 }
 
 fn records(dir: &std::path::Path) -> Vec<(usize, Vec<f64>, String)> {
@@ -275,7 +273,19 @@ fn failures_and_filters_are_counted_and_exported() {
     assert!(below > 0 && rep > 0, "{c:?}");
     assert_eq!(c.kept + c.failed + c.below_peak + c.non_repulsive, 40);
     let out = dir.join("export");
-    export(&mm, &out).unwrap();
+    export(&mm, &out, Some(&cell_domain())).unwrap();
+    // meta.json stores the domain; it reads back equal (and checked).
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("meta.json")).unwrap()).unwrap();
+    let back: Domain = serde_json::from_value(meta["domain"].clone()).unwrap();
+    assert_eq!(back, cell_domain());
+    // A domain of other parameters, or one the runs lie outside, is refused.
+    let other = Domain::new(vec![Parameter::new("E", "Pa", 1.0, 2.0, Scale::Linear)]).unwrap();
+    let e = export(&mm, &out, Some(&other)).unwrap_err().to_string();
+    assert!(e.contains("do not match the domain"), "{e}");
+    let narrow = Domain::table_5_3(0.01).unwrap();
+    let e = export(&mm, &out, Some(&narrow)).unwrap_err().to_string();
+    assert!(e.contains("lies outside it"), "{e}");
     let y = std::fs::read(out.join("Y.npy")).unwrap();
     assert_eq!(&y[..6], b"\x93NUMPY");
     let hl = u16::from_le_bytes([y[8], y[9]]) as usize;

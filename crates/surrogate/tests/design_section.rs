@@ -7,7 +7,8 @@
 
 use nlvid_study::Study;
 use nlvid_surrogate::Admissibility;
-use nlvid_surrogate::doe::{Axis, DesignSettings, Domain, LinearConstraint, training_and_checking};
+use nlvid_model::Domain;
+use nlvid_surrogate::doe::{DesignSettings, training_and_checking};
 
 fn names() -> Vec<String> {
     ["G0", "g1", "g2", "tau1", "tau2"]
@@ -47,34 +48,18 @@ fn read(text: &str) -> Result<DesignSettings, String> {
 #[test]
 fn design_section_gives_the_hand_built_domain_and_its_designs() {
     let d = read(DESIGN).unwrap();
-    let ax = |name: &str, unit: &str, lower: f64, upper: f64, log: bool| Axis {
-        name: name.into(),
-        unit: unit.into(),
-        lower,
-        upper,
-        log,
-    };
-    let want = Domain {
-        axes: vec![
-            ax("G0", "Pa", 80.0, 4000.0, true),
-            ax("g1", "1", 0.01, 1.0, false),
-            ax("g2", "1", 0.01, 1.0, false),
-            ax("tau1", "s", 0.01, 2.0, true),
-            ax("tau2", "s", 2.0, 40.0, true),
-        ],
-        constraints: vec![LinearConstraint {
-            coeffs: vec![0.0, 1.0, 1.0, 0.0, 0.0],
-            bound: 0.99,
-        }],
-    };
+    // The Table 5.3 domain built by hand (nlvid_model).
+    let want = Domain::table_5_3(0.01).unwrap();
     // Unit conversion may differ from the literal in the last bit.
-    assert_eq!(d.domain.axes.len(), 5);
-    for (a, b) in d.domain.axes.iter().zip(&want.axes) {
-        assert_eq!((&a.name, &a.unit, a.log), (&b.name, &b.unit, b.log));
+    assert_eq!(d.domain.len(), 5);
+    for (a, b) in d.domain.params().iter().zip(want.params()) {
+        assert_eq!((&a.name, &a.unit, a.scale), (&b.name, &b.unit, b.scale));
         assert!((a.lower - b.lower).abs() <= 1e-15 * b.lower.abs());
         assert!((a.upper - b.upper).abs() <= 1e-15 * b.upper.abs());
     }
-    assert_eq!(d.domain.constraints, want.constraints);
+    assert_eq!(d.domain.constraints().len(), 1);
+    let (c, w) = (&d.domain.constraints()[0], &want.constraints()[0]);
+    assert_eq!((&c.coefficients, c.rhs), (&w.coefficients, w.rhs));
     assert_eq!(
         (d.n_train, d.n_check, d.seed, d.ese_iterations),
         (24, 9, 5, 5)
