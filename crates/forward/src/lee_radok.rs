@@ -406,9 +406,10 @@ mod tests {
 
     #[test]
     fn sampled_history_is_exact_when_delta_to_three_halves_is_linear() {
-        // ε = c·min(t, t_r): F = P G0 [g∞ ε + Σ g_k τ_k c (e^{−(t−m)/τ_k} − e^{−t/τ_k})].
+        // ε = c·min(t, t_r): F = P G0 [g∞ ε + Σ g_k τ_k c (e^{−(t−m)/τ_k} − e^{−t/τ_k})],
+        // with t_r on the grid (t = i/20 s) so that ε is linear between samples.
         let (tr, c, nu, r) = (0.5, 4e-9, 0.3, 2.5e-6);
-        let times: Vec<f64> = (0..=400).map(|i| 0.075 * i as f64).collect();
+        let times: Vec<f64> = (0..=600).map(|i| i as f64 / 20.0).collect();
         let delta: Vec<f64> = times
             .iter()
             .map(|&t| (c * t.min(tr)).powf(2.0 / 3.0))

@@ -32,7 +32,7 @@ fn data(n: usize, m: usize) -> (Mat<f64>, Mat<f64>) {
     let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, m).expect("valid settings");
     let ys: Vec<Vec<f64>> = design.iter().map(|x| model.run(x).expect("run")).collect();
     let x = Mat::from_fn(n, 5, |i, k| {
-        if domain.axes[k].log {
+        if domain.params()[k].is_log() {
             design[i][k].ln()
         } else {
             design[i][k]

@@ -161,3 +161,34 @@ fn build_section_filters_in_si() {
         "{e}"
     );
 }
+
+/// The bundled demo meta-model (`examples/demo/metamodel/`) was built from
+/// `examples/demo/metamodel.toml` before the parameter domain moved to
+/// `nlvid_model`: its training design — hence the study hash of its run
+/// store, which a resumed build compares — is reproduced bit for bit, and
+/// the domain stored in its `meta.json` is the one of its `[design]`.
+#[test]
+fn the_bundled_demo_design_reproduces_its_study_hash_and_domain() {
+    use nlvid_model::ForwardModel as _;
+    let demo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo");
+    let mut study = Study::load(demo.join("metamodel.toml")).unwrap();
+    let model = nlvid_forward::from_study(&mut study).unwrap();
+    let mut ds = study.section("design").unwrap();
+    let d = DesignSettings::from_section(&mut ds, &model.parameter_names(), &model.parameter_units())
+        .unwrap();
+    ds.finish().unwrap();
+    let (train, _) = d.designs().unwrap();
+    let meta = nlvid_surrogate::StoreMeta::new(
+        model.parameter_names(),
+        model.parameter_units(),
+        model.time_grid().to_vec(),
+        train,
+        model.identity(),
+    );
+    let committed: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(demo.join("metamodel/meta.json")).unwrap())
+            .unwrap();
+    assert_eq!(meta.study_hash, committed["study_hash"].as_str().unwrap());
+    let stored: Domain = serde_json::from_value(committed["domain"].clone()).unwrap();
+    assert_eq!(stored, d.domain);
+}
