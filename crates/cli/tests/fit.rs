@@ -451,7 +451,7 @@ fn fit_recovers_the_truth_and_reports_units_modulus_misfits_flags_and_a_plotters
     let study = study("e2e.toml", "", SENSITIVITY, PROTOCOL);
     let doc = fit_json(dir, &study, &["cell1.csv"], &["--plot", "plots"]);
 
-    // Parameters with units, in the Table 5.3 order.
+    // Parameters with units, in the one order G0, g1, g2, tau1, tau2.
     let units: Vec<(String, String)> = doc["parameters"]
         .as_array()
         .unwrap()
@@ -466,8 +466,8 @@ fn fit_recovers_the_truth_and_reports_units_modulus_misfits_flags_and_a_plotters
     let want = [
         ("G0", "Pa"),
         ("g1", ""),
-        ("tau1", "s"),
         ("g2", ""),
+        ("tau1", "s"),
         ("tau2", "s"),
     ];
     assert_eq!(units.len(), 5);
@@ -679,6 +679,48 @@ fn set_field(l: &str, k: usize, v: &str) -> String {
     f.join(",")
 }
 
+/// The domain is read from meta.json: the old `[fit] domain`/`epsilon` keys
+/// are refused naming the key and what to do, and a meta.json without a
+/// domain names the command that re-exports it.
+#[test]
+fn the_domain_comes_from_meta_json_and_old_keys_or_files_say_what_to_do() {
+    let dir = pipeline();
+    std::fs::write(dir.join("cell-dom.csv"), afm_csv(&TRUTH, 6)).unwrap();
+    for extra in ["domain = \"table-5.3\"\n", "epsilon = 0.01\n"] {
+        let study = study("e2e-old-domain.toml", extra, SENSITIVITY, PROTOCOL);
+        let out = nlvid(&["fit", study.to_str().unwrap(), "cell-dom.csv"], dir);
+        let err = text(&out.stderr);
+        assert!(!out.status.success(), "{extra}: fit succeeded");
+        let key = extra.split(' ').next().unwrap();
+        assert!(
+            err.contains("e2e-old-domain.toml:") && err.contains(&format!("fit.{key}"))
+                && err.contains("read from the meta-model's meta.json"),
+            "{err}"
+        );
+    }
+    // A meta.json as written before it stored the domain.
+    let mut meta: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(dir.join("work/export/meta.json")).unwrap(),
+    )
+    .unwrap();
+    meta.as_object_mut().unwrap().remove("domain");
+    let old = dir.join("work/old-meta.json");
+    std::fs::write(&old, meta.to_string()).unwrap();
+    let study = study("e2e-old-meta.toml", "", SENSITIVITY, PROTOCOL);
+    let text_ = std::fs::read_to_string(&study).unwrap().replace(
+        &format!("{}", dir.join("work/export/meta.json").display()),
+        &format!("{}", old.display()),
+    );
+    std::fs::write(&study, text_).unwrap();
+    let out = nlvid(&["fit", study.to_str().unwrap(), "cell-dom.csv"], dir);
+    let err = text(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("old-meta.json") && err.contains("`domain` missing") && err.contains("--export"),
+        "{err}"
+    );
+}
+
 #[test]
 fn malformed_data_fails_naming_the_file_row_and_column() {
     let good = afm_csv(&TRUTH, 6);
@@ -727,7 +769,7 @@ fn malformed_data_fails_naming_the_file_row_and_column() {
         &furlong,
         &study,
         &[
-            "bad-unit.csv: row 1, column 'deflection': unit 'furlong' is not a unit of [Voltage, Length, Force]",
+            "bad-unit.csv: row 1, column 'deflection': unit 'furlong' is not a unit of a voltage (V) or length (m) or force (N)",
         ],
     );
 
