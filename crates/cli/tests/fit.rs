@@ -693,16 +693,16 @@ fn the_domain_comes_from_meta_json_and_old_keys_or_files_say_what_to_do() {
         assert!(!out.status.success(), "{extra}: fit succeeded");
         let key = extra.split(' ').next().unwrap();
         assert!(
-            err.contains("e2e-old-domain.toml:") && err.contains(&format!("fit.{key}"))
+            err.contains("e2e-old-domain.toml:")
+                && err.contains(&format!("fit.{key}"))
                 && err.contains("read from the meta-model's meta.json"),
             "{err}"
         );
     }
     // A meta.json as written before it stored the domain.
-    let mut meta: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(dir.join("work/export/meta.json")).unwrap(),
-    )
-    .unwrap();
+    let mut meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("work/export/meta.json")).unwrap())
+            .unwrap();
     meta.as_object_mut().unwrap().remove("domain");
     let old = dir.join("work/old-meta.json");
     std::fs::write(&old, meta.to_string()).unwrap();
@@ -716,7 +716,9 @@ fn the_domain_comes_from_meta_json_and_old_keys_or_files_say_what_to_do() {
     let err = text(&out.stderr);
     assert!(!out.status.success());
     assert!(
-        err.contains("old-meta.json") && err.contains("`domain` missing") && err.contains("--export"),
+        err.contains("old-meta.json")
+            && err.contains("`domain` missing")
+            && err.contains("--export"),
         "{err}"
     );
 }

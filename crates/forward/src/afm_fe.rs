@@ -5,9 +5,9 @@
 
 use nlvid_fem::FemError;
 use nlvid_fem::afm::{AfmParams, AfmSetup, Cantilever, Engagement, MeshSpec};
+use nlvid_model::{FailureKind, ForwardModel, RunFailure};
 use nlvid_protocol::{AfmScript, Program};
 use nlvid_study::{Bounds, Dimension, Section};
-use nlvid_model::{FailureKind, ForwardModel, RunFailure};
 
 use crate::error::{ForwardError, Result};
 

@@ -353,7 +353,9 @@ mod tests {
 
     #[test]
     fn phi_and_chi_match_quadrature_on_both_sides_of_the_series_switch() {
-        for x in [1e-6, 1e-3, 0.3, 1.0, 7.5, 25.0, 39.9, 40.0, 40.1, 80.0, 400.0] {
+        for x in [
+            1e-6, 1e-3, 0.3, 1.0, 7.5, 25.0, 39.9, 40.0, 40.1, 80.0, 400.0,
+        ] {
             let (p, c) = phi_chi(x);
             let (pq, cq) = phi_quadrature(x);
             assert!((p / pq - 1.0).abs() < 1e-12, "phi({x}) = {p} vs {pq}");
@@ -419,7 +421,8 @@ mod tests {
         let p = 8.0 * r.sqrt() / (3.0 * (1.0 - nu));
         for (t, f) in times.iter().zip(k.force(&g)) {
             let m = t.min(tr);
-            let term = |gk: f64, tau: f64| gk * tau * c * ((-(t - m) / tau).exp() - (-t / tau).exp());
+            let term =
+                |gk: f64, tau: f64| gk * tau * c * ((-(t - m) / tau).exp() - (-t / tau).exp());
             let exact = p * 700.0 * (0.2 * c * m + term(0.5, 0.07) + term(0.3, 8.0));
             assert!((f - exact).abs() <= 1e-12 * exact.abs() + 1e-30, "t = {t}");
         }
@@ -465,7 +468,11 @@ mod tests {
             pp[col] += h;
             pm[col] -= h;
             let (fp, fm) = (eval(&pp), eval(&pm));
-            let fd: Vec<f64> = fp.iter().zip(&fm).map(|(a, b)| (a - b) / (2.0 * h)).collect();
+            let fd: Vec<f64> = fp
+                .iter()
+                .zip(&fm)
+                .map(|(a, b)| (a - b) / (2.0 * h))
+                .collect();
             let norm = fd.iter().map(|v| v * v).sum::<f64>().sqrt();
             let diff = fd
                 .iter()
@@ -489,7 +496,9 @@ mod tests {
 
     #[test]
     fn sampled_jacobian_matches_central_differences() {
-        let times: Vec<f64> = (0..=500).map(|i| 0.01 * i as f64 * (1.0 + 0.01 * i as f64)).collect();
+        let times: Vec<f64> = (0..=500)
+            .map(|i| 0.01 * i as f64 * (1.0 + 0.01 * i as f64))
+            .collect();
         let delta: Vec<f64> = times.iter().map(|t| 2e-6 * (t / 0.3).min(1.0)).collect();
         let k = LeeRadok::sampled(2.5e-6, 0.5, times, &delta).expect("kernel");
         fd_check(&k, 650.0, &[(0.45, 0.08), (0.35, 9.0)]);

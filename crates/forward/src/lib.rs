@@ -53,10 +53,10 @@ mod membrane;
 
 use std::time::Duration;
 
+use nlvid_model::{ForwardModel, RunFailure};
 use nlvid_protocol::{Loading as ProtocolLoading, ProtocolSettings};
 use nlvid_study::FromSection as _;
 use nlvid_study::{Bounds, Dimension, Section, Study};
-use nlvid_model::{ForwardModel, RunFailure};
 
 pub use afm_fe::{AfmFeModel, AfmFeSpec, fem_failure};
 pub use error::{ForwardError, Result};

@@ -10,9 +10,9 @@
 //! dimensionless force F/(C1 h0 r0) (eq. 2.47) is multiplied back to newtons.
 
 use nlvid_membrane::{ControlKind, Geometry, Loading, MembraneError, PipkinRogersParams, simulate};
+use nlvid_model::{FailureKind, ForwardModel, RunFailure};
 use nlvid_protocol::{Program, ProgramBuilder, Quantity};
 use nlvid_study::{Bounds, Dimension, Section};
-use nlvid_model::{FailureKind, ForwardModel, RunFailure};
 
 use crate::error::{ForwardError, Result};
 

@@ -7,9 +7,9 @@ use nlvid_fem::afm::{AfmParams, AfmSetup, Cantilever, Engagement, MeshSpec};
 use nlvid_fem::{FemError, NonConvergence};
 use nlvid_forward::{ForwardSettings, ForwardSpec, HertzProny, fem_failure, from_study};
 use nlvid_membrane::{ControlKind, Geometry, Loading, PipkinRogersParams, simulate};
+use nlvid_model::{FailureKind, ForwardModel};
 use nlvid_protocol::{Quantity, programs};
 use nlvid_study::Study;
-use nlvid_model::{FailureKind, ForwardModel};
 
 fn study(text: &str) -> Study {
     Study::parse("s.toml", text).unwrap()

@@ -24,8 +24,12 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use nlvid_inverse::{BasisExperiment, BasisMisfit, BasisModel, Coordinates, FitResult, KrigingSurrogate, LeeRadokHertz, Model, MultiStart, Objective, Precomputed, ReducedModel, Result, SurrogateCurve, SurrogateMisfit, gram, ramp_hold_grid, ramp_hold_indentation, read_meta};
-use nlvid_model::{Domain};
+use nlvid_inverse::{
+    BasisExperiment, BasisMisfit, BasisModel, Coordinates, FitResult, KrigingSurrogate,
+    LeeRadokHertz, Model, MultiStart, Objective, Precomputed, ReducedModel, Result, SurrogateCurve,
+    SurrogateMisfit, gram, ramp_hold_grid, ramp_hold_indentation, read_meta,
+};
+use nlvid_model::Domain;
 use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{

@@ -8,8 +8,11 @@ use std::time::Instant;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{DMatrix, DVector};
-use nlvid_inverse::{AsModel, BasisExperiment, BasisMisfit, BasisModel, Experiment, LeeRadokHertz, Misfit, Model, MultiStart, Objective, Result, gram, ramp_hold_grid, ramp_hold_indentation};
-use nlvid_model::{Domain};
+use nlvid_inverse::{
+    AsModel, BasisExperiment, BasisMisfit, BasisModel, Experiment, LeeRadokHertz, Misfit, Model,
+    MultiStart, Objective, Result, gram, ramp_hold_grid, ramp_hold_indentation,
+};
+use nlvid_model::Domain;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -8,8 +8,11 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use nlvid_inverse::{BasisExperiment, BasisMisfit, Coordinates, KrigingSurrogate, LeeRadokHertz, Model, MultiStart, gram, ramp_hold_grid, ramp_hold_indentation};
-use nlvid_model::{Domain};
+use nlvid_inverse::{
+    BasisExperiment, BasisMisfit, Coordinates, KrigingSurrogate, LeeRadokHertz, Model, MultiStart,
+    gram, ramp_hold_grid, ramp_hold_indentation,
+};
+use nlvid_model::Domain;
 use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{Correlation, KrigingModel, KrigingSettings, Regression};

@@ -5,8 +5,11 @@
 
 use std::time::Instant;
 
-use nlvid_inverse::{Experiment, LeeRadokHertz, Misfit, Model, feasible_starts, ramp_hold_grid, ramp_hold_indentation};
-use nlvid_model::{Domain};
+use nlvid_inverse::{
+    Experiment, LeeRadokHertz, Misfit, Model, feasible_starts, ramp_hold_grid,
+    ramp_hold_indentation,
+};
+use nlvid_model::Domain;
 
 /// f(u, ∇f) or c(u, ∇c) in scaled coordinates.
 type ScaledFn<'a> = Box<dyn Fn(&[f64], Option<&mut [f64]>) -> f64 + 'a>;

@@ -4,8 +4,11 @@
 //!
 //! Run: `cargo run -p nlvid-inverse --release --example identifiability_lee_radok`
 
-use nlvid_inverse::{Experiment, LeeRadokHertz, Misfit, Model, MultiStart, SensitivityScaling, identifiability, ramp_hold_grid, ramp_hold_indentation};
-use nlvid_model::{Domain};
+use nlvid_inverse::{
+    Experiment, LeeRadokHertz, Misfit, Model, MultiStart, SensitivityScaling, identifiability,
+    ramp_hold_grid, ramp_hold_indentation,
+};
+use nlvid_model::Domain;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -8,8 +8,8 @@
 //! piecewise linearly) + 2 % noise.
 //! Run: `cargo run -p nlvid-inverse --release --example recovery_cli_protocol`
 
-use nlvid_inverse::{Experiment, LeeRadokHertz, Misfit, MultiStart, PronyShear, Result};
 use nlvid_forward::HertzProny;
+use nlvid_inverse::{Experiment, LeeRadokHertz, Misfit, MultiStart, PronyShear, Result};
 use nlvid_model::{Domain, ForwardModel};
 
 /// SplitMix64 + Box–Muller, as in the CLI test.

@@ -43,9 +43,9 @@ impl LeeRadokHertz {
         radius: f64,
         poisson: f64,
     ) -> Result<Self> {
-        domain.check_names(&names::PRONY2).map_err(|e| {
-            InverseError::InvalidSetting(format!("the Lee-Radok Prony model: {e}"))
-        })?;
+        domain
+            .check_names(&names::PRONY2)
+            .map_err(|e| InverseError::InvalidSetting(format!("the Lee-Radok Prony model: {e}")))?;
         if times.len() < 2 {
             return Err(InverseError::InvalidSetting(format!(
                 "the Lee-Radok model needs a time grid of >= 2 points, got {}",

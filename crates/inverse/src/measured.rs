@@ -141,20 +141,16 @@ impl Table {
             .strip_prefix(name)
             .and_then(|r| r.strip_prefix('_'))
             .map(|u| u.replace("_per_", "/"));
-        let unit = self.headers[i]
-            .1
-            .clone()
-            .or(from_suffix)
-            .ok_or_else(|| {
-                self.err(
-                    1,
-                    name,
-                    format!(
-                        "header has no unit; write it as '{name} [unit]' (expected a {})",
-                        dims_text(dims)
-                    ),
-                )
-            })?;
+        let unit = self.headers[i].1.clone().or(from_suffix).ok_or_else(|| {
+            self.err(
+                1,
+                name,
+                format!(
+                    "header has no unit; write it as '{name} [unit]' (expected a {})",
+                    dims_text(dims)
+                ),
+            )
+        })?;
         let (factor, dim) = unit_factor(&unit, dims).ok_or_else(|| {
             self.err(
                 1,

@@ -9,8 +9,8 @@
 //! S = Σ w_j r_j² / W, computed from the model Jacobian J.
 
 use nalgebra::DMatrix;
-
 use nlvid_model::Domain;
+
 use crate::error::{InverseError, Result};
 use crate::measured::MeasuredCurve;
 use crate::model::{Model, check_finite, check_jacobian, check_len};

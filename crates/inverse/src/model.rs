@@ -6,8 +6,8 @@
 //! never knows which one it calls (argmin's problem-trait shape).
 
 use nalgebra::DMatrix;
-
 use nlvid_model::Domain;
+
 use crate::error::{InverseError, Result};
 
 /// Step in scaled coordinates u ∈ [0, 1] of the default central differences.

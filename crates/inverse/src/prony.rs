@@ -7,9 +7,9 @@
 
 use std::fmt;
 
+use nlvid_model::Domain;
 use serde::Serialize;
 
-use nlvid_model::Domain;
 use crate::error::{InverseError, Result};
 
 /// One Prony term (weight g_k, time τ_k in s).

@@ -16,10 +16,10 @@ use std::path::Path;
 use std::sync::Arc;
 
 use nalgebra::DMatrix;
+use nlvid_model::Domain;
 use nlvid_surrogate::KrigingModel;
 
 use crate::basis::{BasisExperiment, BasisModel, gram};
-use nlvid_model::Domain;
 use crate::error::{InverseError, Result};
 use crate::misfit::{Objective, check_shared_parameters};
 use crate::model::Model;
@@ -366,7 +366,10 @@ mod tests {
             "{e}"
         );
         let swapped = r#""parameter_names": ["G0","g1","tau1","g2","tau2"]"#;
-        let text = format!(r#"{{{swapped}, "time_s": [0.5, 1.0], "domain": {}}}"#, domain_json());
+        let text = format!(
+            r#"{{{swapped}, "time_s": [0.5, 1.0], "domain": {}}}"#,
+            domain_json()
+        );
         std::fs::write(&p, text).unwrap();
         let e = read_meta(&p).unwrap_err().to_string();
         assert!(e.contains("do not match the domain"), "{e}");
@@ -375,7 +378,10 @@ mod tests {
         std::fs::write(&p, text).unwrap();
         let e = read_meta(&p).unwrap_err().to_string();
         assert!(e.contains("key `domain`") && e.contains("G0"), "{e}");
-        let text = format!(r#"{{{names}, "time_s": [0.5, 1.0], "domain": {}}}"#, domain_json());
+        let text = format!(
+            r#"{{{names}, "time_s": [0.5, 1.0], "domain": {}}}"#,
+            domain_json()
+        );
         std::fs::write(&p, text).unwrap();
         let m = read_meta(&p).unwrap();
         assert_eq!(m.parameter_names, nlvid_model::names::PRONY2);

@@ -1,8 +1,11 @@
 //! The Gram-matrix misfit of basis models against the direct misfit.
 
 use nalgebra::{DMatrix, DVector};
-use nlvid_inverse::{AsModel, BasisExperiment, BasisMisfit, BasisModel, Experiment, Misfit, Model, MultiStart, Objective, Result, fd_jacobian, gram};
-use nlvid_model::{Domain};
+use nlvid_inverse::{
+    AsModel, BasisExperiment, BasisMisfit, BasisModel, Experiment, Misfit, Model, MultiStart,
+    Objective, Result, fd_jacobian, gram,
+};
+use nlvid_model::Domain;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -2,7 +2,10 @@
 
 use std::path::PathBuf;
 
-use nlvid_inverse::{AfmColumns, Calibration, CompressionColumns, InverseError, ProtocolTolerance, read_afm_csv, read_compression_csv};
+use nlvid_inverse::{
+    AfmColumns, Calibration, CompressionColumns, InverseError, ProtocolTolerance, read_afm_csv,
+    read_compression_csv,
+};
 
 fn write(name: &str, text: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("nlvid-inverse-tests-{}", std::process::id()));
@@ -260,7 +263,7 @@ fn resampling_is_linear_and_refuses_grids_beyond_the_data() {
 #[test]
 fn a_measured_curve_becomes_an_experiment_on_the_model_grid() {
     use nlvid_inverse::{Experiment, LeeRadokHertz, Model};
-use nlvid_model::{Domain};
+    use nlvid_model::Domain;
     let domain = Domain::table_5_3(0.01).expect("domain");
     let grid: Vec<f64> = (0..=20).map(|i| i as f64 * 0.1).collect();
     let delta: Vec<f64> = grid.iter().map(|t| (10e-6 * t).min(2e-6)).collect();

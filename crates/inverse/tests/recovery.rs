@@ -2,8 +2,11 @@
 //! (issue 6 "Done when", with the analytic model standing in for the
 //! surrogate until `nlvid build` exists).
 
-use nlvid_inverse::{Experiment, LeeRadokHertz, Misfit, Model, MultiStart, PronyShear, ramp_hold_grid, ramp_hold_indentation};
-use nlvid_model::{Domain};
+use nlvid_inverse::{
+    Experiment, LeeRadokHertz, Misfit, Model, MultiStart, PronyShear, ramp_hold_grid,
+    ramp_hold_indentation,
+};
+use nlvid_model::Domain;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

@@ -6,8 +6,12 @@
 //! Gram form does, its gradient must match central differences, and a
 //! multistart fit on it must reach the same optimum as on the direct misfit.
 
-use nlvid_inverse::{BasisModel, Coordinates, Experiment, KrigingSurrogate, LeeRadokHertz, Misfit, Model, MultiStart, Objective, Precomputed, ReducedExperiment, ReducedMisfit, SurrogateCurve, SurrogateMisfit, feasible_starts, gram, projection, ramp_hold_grid, ramp_hold_indentation};
-use nlvid_model::{Domain};
+use nlvid_inverse::{
+    BasisModel, Coordinates, Experiment, KrigingSurrogate, LeeRadokHertz, Misfit, Model,
+    MultiStart, Objective, Precomputed, ReducedExperiment, ReducedMisfit, SurrogateCurve,
+    SurrogateMisfit, feasible_starts, gram, projection, ramp_hold_grid, ramp_hold_indentation,
+};
+use nlvid_model::Domain;
 use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
@@ -48,8 +52,13 @@ fn surrogate() -> KrigingSurrogate {
     s.output_scale = Some(OutputScale::Linear { input: 0 });
     s.log_inputs = vec![true, false, false, true, true];
     let k = KrigingModel::fit(xm.as_ref(), ym.as_ref(), &s).expect("kriging");
-    let sur = KrigingSurrogate::new(k, domain, Model::times(&real).to_vec(), Coordinates::Physical)
-        .expect("adapter");
+    let sur = KrigingSurrogate::new(
+        k,
+        domain,
+        Model::times(&real).to_vec(),
+        Coordinates::Physical,
+    )
+    .expect("adapter");
     assert!(sur.is_reduced(), "the fixture must be PCA-reduced");
     sur
 }

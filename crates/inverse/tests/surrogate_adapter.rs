@@ -3,8 +3,11 @@
 //! gradient, and the gradient must match central differences of the
 //! predictor; the fast misfit must equal eq. 5.3 on the predicted curve.
 
-use nlvid_inverse::{AsModel, BasisExperiment, BasisMisfit, Coordinates, Experiment, KrigingSurrogate, LeeRadokHertz, Misfit, Model, Objective, gram, ramp_hold_grid, ramp_hold_indentation};
-use nlvid_model::{Domain};
+use nlvid_inverse::{
+    AsModel, BasisExperiment, BasisMisfit, Coordinates, Experiment, KrigingSurrogate,
+    LeeRadokHertz, Misfit, Model, Objective, gram, ramp_hold_grid, ramp_hold_indentation,
+};
+use nlvid_model::Domain;
 use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{Correlation, KrigingModel, KrigingSettings, Regression, ThetaSearch};
@@ -161,7 +164,7 @@ fn mismatched_parameter_count_or_grid_are_rejected() {
         "{err}"
     );
     let domain = Domain::table_5_3(0.01).expect("domain");
-    let err = KrigingSurrogate::new(k, domain, vec![0.0, 1.0], Coordinates::Physical)
-        .expect_err("grid");
+    let err =
+        KrigingSurrogate::new(k, domain, vec![0.0, 1.0], Coordinates::Physical).expect_err("grid");
     assert!(err.to_string().contains("time grid"), "{err}");
 }

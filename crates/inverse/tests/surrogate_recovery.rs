@@ -13,8 +13,12 @@
 
 use std::path::PathBuf;
 
-use nlvid_inverse::{BasisExperiment, BasisMisfit, Coordinates, ForwardFromModel, KrigingSurrogate, LeeRadokHertz, Model, MultiStart, PronyShear, gram, ramp_hold_grid, ramp_hold_indentation, range_normalised_rmse};
-use nlvid_model::{Domain};
+use nlvid_inverse::{
+    BasisExperiment, BasisMisfit, Coordinates, ForwardFromModel, KrigingSurrogate, LeeRadokHertz,
+    Model, MultiStart, PronyShear, gram, ramp_hold_grid, ramp_hold_indentation,
+    range_normalised_rmse,
+};
+use nlvid_model::Domain;
 use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
@@ -118,7 +122,7 @@ fn build_surrogate(
         .check_names(&mm.meta.parameter_names)
         .expect("the store's parameters are the domain's");
     let sur = KrigingSurrogate::new(k, domain.clone(), mm.meta.time.clone(), Coordinates::Unit)
-    .expect("adapter");
+        .expect("adapter");
     // Checking error (eq. 4.4) on 40 independent points.
     let check = sample(
         domain,

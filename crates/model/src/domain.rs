@@ -65,9 +65,7 @@ impl Parameter {
     pub fn from_unit(&self, u: f64) -> f64 {
         match self.scale {
             Scale::Linear => self.lower + u * (self.upper - self.lower),
-            Scale::Log => {
-                (self.lower.ln() + u * (self.upper.ln() - self.lower.ln())).exp()
-            }
+            Scale::Log => (self.lower.ln() + u * (self.upper.ln() - self.lower.ln())).exp(),
         }
     }
 

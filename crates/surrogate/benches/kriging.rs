@@ -14,8 +14,7 @@ use nlvid_model::{Domain, ForwardModel};
 use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
-    Correlation, KrigingModel, KrigingSettings, OptimiserSettings,
-    Regression, ThetaSearch,
+    Correlation, KrigingModel, KrigingSettings, OptimiserSettings, Regression, ThetaSearch,
 };
 
 fn data(n: usize, m: usize) -> (Mat<f64>, Mat<f64>) {

@@ -11,9 +11,7 @@ use nlvid_forward::HertzProny;
 use nlvid_model::{Domain, ForwardModel};
 use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
-use nlvid_surrogate::{
-    Correlation, KrigingModel, KrigingSettings, Regression, ThetaSearch,
-};
+use nlvid_surrogate::{Correlation, KrigingModel, KrigingSettings, Regression, ThetaSearch};
 use rayon::prelude::*;
 
 mod common;

@@ -271,10 +271,7 @@ fn sample_unit(domain: &Domain, s: &SampleSettings) -> Result<Vec<Vec<f64>>> {
     for _ in 0..20 {
         let mut pts = latin_hypercube_unit(big, d, &mut rng);
         ese_optimise(&mut pts, s.optimise_iterations.min(10), &mut rng);
-        let mut feas: Vec<Vec<f64>> = pts
-            .into_iter()
-            .filter(|u| feasible(domain, u))
-            .collect();
+        let mut feas: Vec<Vec<f64>> = pts.into_iter().filter(|u| feasible(domain, u)).collect();
         if feas.len() >= s.n {
             prune_to(&mut feas, s.n);
             return Ok(feas);

@@ -9,9 +9,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use nlvid_forward::HertzProny;
 use nlvid_model::{Domain, FailureKind, ForwardModel, Parameter, RunFailure, Scale, names};
 use nlvid_surrogate::doe::{SampleSettings, sample};
-use nlvid_surrogate::{
-    Admissibility, BuildOptions, RunStore, Shard, build, export, load, merge,
-};
+use nlvid_surrogate::{Admissibility, BuildOptions, RunStore, Shard, build, export, load, merge};
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("nlvid-surrogate-{}-{name}", std::process::id()));

@@ -5,9 +5,9 @@
 
 #![allow(clippy::unwrap_used)]
 
+use nlvid_model::Domain;
 use nlvid_study::Study;
 use nlvid_surrogate::Admissibility;
-use nlvid_model::Domain;
 use nlvid_surrogate::doe::{DesignSettings, training_and_checking};
 
 fn names() -> Vec<String> {
@@ -174,8 +174,9 @@ fn the_bundled_demo_design_reproduces_its_study_hash_and_domain() {
     let mut study = Study::load(demo.join("metamodel.toml")).unwrap();
     let model = nlvid_forward::from_study(&mut study).unwrap();
     let mut ds = study.section("design").unwrap();
-    let d = DesignSettings::from_section(&mut ds, &model.parameter_names(), &model.parameter_units())
-        .unwrap();
+    let d =
+        DesignSettings::from_section(&mut ds, &model.parameter_names(), &model.parameter_units())
+            .unwrap();
     ds.finish().unwrap();
     let (train, _) = d.designs().unwrap();
     let meta = nlvid_surrogate::StoreMeta::new(
