@@ -166,7 +166,7 @@ fn main() -> anyhow::Result<()> {
         );
         let xf = &fit.best.x;
         let at_truth = misfit.final_value(&x_true)?;
-        let real_misfit = match fe.run(&xf) {
+        let real_misfit = match fe.run(xf) {
             Ok(y) => Some(range_normalised_rmse(&y, &data, None)?),
             Err(e) => {
                 println!("case {case}: FE re-run failed: {e}");

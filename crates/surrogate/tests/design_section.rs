@@ -169,7 +169,6 @@ fn build_section_filters_in_si() {
 /// the domain stored in its `meta.json` is the one of its `[design]`.
 #[test]
 fn the_bundled_demo_design_reproduces_its_study_hash_and_domain() {
-    use nlvid_model::ForwardModel as _;
     let demo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo");
     let mut study = Study::load(demo.join("metamodel.toml")).unwrap();
     let model = nlvid_forward::from_study(&mut study).unwrap();
