@@ -49,11 +49,11 @@ fn dims_text(dims: &[Dimension]) -> String {
 fn split_header(h: &str) -> (String, Option<String>) {
     let h = h.trim();
     for (open, close) in [('[', ']'), ('(', ')')] {
-        if h.ends_with(close) {
-            if let Some(i) = h.rfind(open) {
-                let unit = h[i + 1..h.len() - 1].trim().to_string();
-                return (h[..i].trim().to_string(), Some(unit));
-            }
+        if h.ends_with(close)
+            && let Some(i) = h.rfind(open)
+        {
+            let unit = h[i + 1..h.len() - 1].trim().to_string();
+            return (h[..i].trim().to_string(), Some(unit));
         }
     }
     (h.to_string(), None)

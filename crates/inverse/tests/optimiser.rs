@@ -39,13 +39,13 @@ impl Model for Linear2 {
         &self.times
     }
     fn response(&self, x: &[f64]) -> Result<Vec<f64>> {
-        if let Some(limit) = self.fail_above {
-            if x[0] > limit {
-                return Err(InverseError::Model {
-                    x: x.to_vec(),
-                    message: "synthetic failure".into(),
-                });
-            }
+        if let Some(limit) = self.fail_above
+            && x[0] > limit
+        {
+            return Err(InverseError::Model {
+                x: x.to_vec(),
+                message: "synthetic failure".into(),
+            });
         }
         Ok(self
             .times

@@ -277,20 +277,19 @@ impl BuildArgs {
             .as_deref()
             .map(|p| super::sample::read_domain(p, &model.parameter_names()))
             .transpose()?;
-        if let Some(d) = &domain {
-            if let Some((i, _)) = design
+        if let Some(d) = &domain
+            && let Some((i, _)) = design
                 .rows
                 .iter()
                 .enumerate()
                 .find(|(_, x)| !d.contains(x, 1e-9))
-            {
-                bail!(
-                    "{}: design row {} lies outside the domain of {}",
-                    design_path.display(),
-                    i + 2,
-                    self.domain.as_deref().unwrap_or(Path::new("")).display()
-                );
-            }
+        {
+            bail!(
+                "{}: design row {} lies outside the domain of {}",
+                design_path.display(),
+                i + 2,
+                self.domain.as_deref().unwrap_or(Path::new("")).display()
+            );
         }
         run_set("design", &model, &design.rows, store, shard, self.quiet)?;
         if let Some(dir) = &self.export {
