@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use nlvid_forward::HertzProny;
-use nlvid_model::{Domain, FailureKind, ForwardModel, Parameter, RunFailure, Scale, names};
+use nlvid_model::{Domain, FailureKind, ForwardModel, Parameter, RunFailure, Scale};
 use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::{Admissibility, BuildOptions, RunStore, Shard, build, export, load, merge};
 
@@ -17,24 +17,11 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
+/// The cell-study domain (`Domain::cell_study`) with g1 + g2 ≤ 0.95.
 fn cell_domain() -> Domain {
-    let bounds = [
-        (100.0, 5000.0, Scale::Log),
-        (0.0, 0.9, Scale::Linear),
-        (0.0, 0.9, Scale::Linear),
-        (0.01, 1.0, Scale::Log),
-        (1.0, 100.0, Scale::Log),
-    ];
-    Domain::new(
-        names::PRONY2
-            .iter()
-            .zip(names::PRONY2_UNITS)
-            .zip(bounds)
-            .map(|((n, u), (lo, hi, s))| Parameter::new(n, u, lo, hi, s))
-            .collect(),
-    )
-    .and_then(|d| d.with_sum_constraint(&["g1", "g2"], 0.95))
-    .unwrap()
+    Domain::new(Domain::cell_study().params().to_vec())
+        .and_then(|d| d.with_sum_constraint(&["g1", "g2"], 0.95))
+        .unwrap()
 }
 
 fn model() -> HertzProny {
