@@ -5,10 +5,9 @@
 
 use nlvid_fem::FemError;
 use nlvid_fem::afm::{AfmSetup, Cantilever, Engagement, MeshSpec};
-use nlvid_model::{Relaxation, names};
+use nlvid_model::{FailureKind, ForwardModel, Relaxation, RunFailure, names};
 use nlvid_protocol::{AfmScript, Program};
 use nlvid_study::{Bounds, Dimension, Section};
-use nlvid_surrogate::{FailureKind, ForwardModel, RunFailure};
 
 use crate::error::{ForwardError, Result};
 
@@ -212,10 +211,10 @@ pub fn fem_failure(e: &FemError) -> RunFailure {
 
 impl ForwardModel for AfmFeModel {
     fn parameter_names(&self) -> Vec<String> {
-        nlvid_surrogate::PRONY2_NAMES.map(String::from).to_vec()
+        nlvid_model::names::PRONY2.map(String::from).to_vec()
     }
     fn parameter_units(&self) -> Vec<String> {
-        nlvid_surrogate::PRONY2_UNITS.map(String::from).to_vec()
+        nlvid_model::names::PRONY2_UNITS.map(String::from).to_vec()
     }
     fn time_grid(&self) -> &[f64] {
         &self.setup.output_times

@@ -1,14 +1,16 @@
 //! Forward models from study files: one place that turns a study's
 //! `[forward]` section (and, for the AFM and membrane models, its
-//! `[protocol]` section) into a [`nlvid_surrogate::ForwardModel`] — the
+//! `[protocol]` section) into a [`nlvid_model::ForwardModel`] — the
 //! parameters → force-curve map that meta-model builds, Kriging checks and
-//! fits evaluate.
+//! fits evaluate — and the one Lee–Radok kernel ([`LeeRadok`]) that the
+//! analytic model, the fits (`nlvid-inverse`), `nlvid inspect`
+//! (`nlvid-afm`) and the demo's curves (`nlvid-report`) evaluate.
 //!
 //! Models (`model = "…"`):
 //! * `hertz-prony` — analytic Lee–Radok ramp-hold indentation (equally
 //!   spaced or graded output grid, [`HertzGrid`]) with a
-//!   2-term Prony G(t) ([`HertzPronySpec`]); parameters `[G0, g1, g2, τ1, τ2]`;
-//!   microseconds per run.
+//!   2-term Prony G(t) ([`HertzPronySpec`], [`HertzProny`]); parameters
+//!   `[G0, g1, g2, τ1, τ2]`; microseconds per run.
 //! * `afm-fe` — the axisymmetric finite-element AFM cell model of thesis
 //!   §5.3 (`nlvid_fem::afm::run`) with the two-step script of
 //!   `nlvid-protocol` ([`AfmFeSpec`], [`AfmFeModel`]); parameters
@@ -48,22 +50,23 @@
 mod afm_fe;
 mod error;
 mod hertz;
+mod lee_radok;
 mod membrane;
 
 use std::time::Duration;
 
+use nlvid_model::{ForwardModel, RunFailure};
 use nlvid_protocol::{Loading as ProtocolLoading, ProtocolSettings};
 use nlvid_study::FromSection as _;
 use nlvid_study::{Bounds, Dimension, Section, Study};
-use nlvid_surrogate::{ForwardModel, RunFailure};
 
 pub use afm_fe::{AfmFeModel, AfmFeSpec, fem_failure};
 pub use error::{ForwardError, Result};
-pub use hertz::{HertzGrid, HertzPronyModel, HertzPronySpec};
+pub use hertz::{HertzGrid, HertzProny, HertzPronySpec};
+pub use lee_radok::LeeRadok;
 pub use membrane::{
     MembraneModel, MembraneSpec, PARAMETERS as MEMBRANE_PARAMETERS, membrane_failure,
 };
-pub use nlvid_surrogate::HertzProny;
 
 /// Which forward model, with all its settings.
 #[derive(Debug, Clone, PartialEq)]
@@ -183,7 +186,7 @@ impl ForwardSettings {
     /// Settings the model cannot use (see each spec's `build`).
     pub fn build(&self) -> Result<Box<dyn ForwardModel>> {
         let model: Box<dyn ForwardModel> = match &self.spec {
-            ForwardSpec::HertzProny(s) => Box::new(s.build()),
+            ForwardSpec::HertzProny(s) => Box::new(s.build()?),
             ForwardSpec::AfmFe(s) => Box::new(s.build()?),
             ForwardSpec::Membrane(s) => Box::new(s.build()?),
         };

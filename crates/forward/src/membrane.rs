@@ -13,9 +13,9 @@
 //! to newtons.
 
 use nlvid_membrane::{ControlKind, Geometry, Loading, MembraneError, PipkinRogersParams, simulate};
+use nlvid_model::{FailureKind, ForwardModel, RunFailure};
 use nlvid_protocol::{Program, ProgramBuilder, Quantity};
 use nlvid_study::{Bounds, Dimension, Section};
-use nlvid_surrogate::{FailureKind, ForwardModel, RunFailure};
 
 use crate::error::{ForwardError, Result};
 

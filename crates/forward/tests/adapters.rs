@@ -5,11 +5,11 @@
 
 use nlvid_fem::afm::{AfmSetup, Cantilever, Engagement, MeshSpec};
 use nlvid_fem::{FemError, NonConvergence};
-use nlvid_forward::{ForwardSettings, ForwardSpec, fem_failure, from_study};
+use nlvid_forward::{ForwardSettings, ForwardSpec, HertzProny, fem_failure, from_study};
 use nlvid_membrane::{ControlKind, Geometry, Loading, PipkinRogersParams, simulate};
+use nlvid_model::{FailureKind, ForwardModel};
 use nlvid_protocol::{Quantity, programs};
 use nlvid_study::Study;
-use nlvid_surrogate::{FailureKind, ForwardModel, HertzProny};
 
 fn study(text: &str) -> Study {
     Study::parse("s.toml", text).unwrap()
@@ -30,7 +30,7 @@ fn hertz_prony_from_study_equals_the_directly_built_model() {
     let mut s = study(HERTZ);
     let model = from_study(&mut s).unwrap();
     s.finish().unwrap();
-    let direct = HertzProny::new(2.5e-6, 2e-6, 0.5, 5.0, 40);
+    let direct = HertzProny::new(2.5e-6, 2e-6, 0.5, 5.0, 40).unwrap();
     let p = [1200.0, 0.3, 0.25, 0.08, 6.0];
     assert_eq!(model.run(&p).unwrap(), direct.run(&p).unwrap());
     assert_eq!(model.time_grid(), direct.time_grid());
@@ -313,40 +313,4 @@ fn bad_studies_name_file_line_and_key() {
         "control = \"force\"\ntarget = \"1 mN\"\nrate = \"1 mN/s\"",
     ));
     assert!(e.contains("protocol.control"), "{e}");
-}
-
-/// The small afm-fe example study built end to end through the surrogate
-/// build (4 FE runs, coarse mesh, short protocol). Heavy: run with
-/// `cargo test --release -p nlvid-forward -- --ignored`.
-#[test]
-#[ignore = "runs 4 finite-element simulations (seconds each)"]
-fn afm_fe_example_builds_end_to_end() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples/metamodel/afm-fe.toml");
-    let mut st = Study::load(&path).unwrap();
-    let model = from_study(&mut st).unwrap();
-    let design = vec![
-        vec![600.0, 0.55, 0.28, 0.45, 13.8],
-        vec![375.0, 0.63, 0.03, 0.024, 8.8],
-        vec![2170.0, 0.064, 0.16, 0.086, 19.1],
-        vec![268.0, 0.32, 0.45, 0.014, 2.35],
-    ];
-    let dir = std::env::temp_dir().join(format!("nlvid-forward-afm-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let s = nlvid_surrogate::build(
-        model.as_ref(),
-        &design,
-        &dir,
-        &nlvid_surrogate::BuildOptions::default(),
-    )
-    .unwrap();
-    assert_eq!((s.ran, s.failed), (4, 0));
-    let mm = nlvid_surrogate::load(&dir, &nlvid_surrogate::Admissibility::default()).unwrap();
-    for (y, (_, _, _, secs)) in mm.y.iter().zip(&mm.status) {
-        let peak = y.iter().copied().fold(0.0, f64::max);
-        // Above the 0.48 nN engagement force, relaxed at the end of the hold.
-        assert!(peak > 0.48e-9 && y[y.len() - 1] < peak, "peak {peak}");
-        eprintln!("afm-fe run: {secs:.2} s, peak {peak:.3e} N");
-    }
-    let _ = std::fs::remove_dir_all(&dir);
 }

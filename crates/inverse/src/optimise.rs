@@ -15,9 +15,9 @@
 use std::cell::{Cell, RefCell};
 use std::fmt;
 
+use nlvid_model::{BoundHit, BoundSide, Domain};
 use serde::Serialize;
 
-use crate::domain::{BoundHit, BoundSide, Domain};
 use crate::error::{InverseError, Result};
 use crate::misfit::{Misfit, Objective};
 use crate::model::Model;

@@ -5,10 +5,9 @@
 
 use std::fmt;
 
-use nlvid_model::Relaxation;
+use nlvid_model::{Domain, Relaxation};
 use serde::Serialize;
 
-use crate::domain::Domain;
 use crate::error::{InverseError, Result};
 
 /// G(t) of eq. 5.1 from `x` over `domain`, matched by name (`G0`, `g1`,
@@ -37,7 +36,7 @@ impl ParameterTable {
     /// Pairs values with the domain's names and units.
     ///
     /// # Errors
-    /// [`InverseError::ParameterCount`].
+    /// [`InverseError::Vocabulary`] (wrong length).
     pub fn new(domain: &Domain, x: &[f64]) -> Result<Self> {
         domain.check_len(x)?;
         Ok(Self {
@@ -54,7 +53,7 @@ impl ParameterTable {
 impl fmt::Display for ParameterTable {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         for (name, value, unit) in &self.rows {
-            if unit.is_empty() {
+            if unit.is_empty() || unit == "1" {
                 writeln!(f, "{name:>8} = {value:.6e}")?;
             } else {
                 writeln!(f, "{name:>8} = {value:.6e} {unit}")?;
@@ -70,9 +69,8 @@ mod tests {
 
     #[test]
     fn relaxation_follows_eq_5_1_by_name_and_young_is_three_times_it() {
-        // Table 5.3 order (G0, g1, tau1, g2, tau2), not the model crate's.
-        let d = Domain::prony2_table_5_3(0.01).expect("domain");
-        let x = [2940.0, 0.5, 0.1, 0.3, 10.0];
+        let d = Domain::table_5_3(0.01).expect("domain");
+        let x = [2940.0, 0.5, 0.3, 0.1, 10.0];
         let g = relaxation(&d, &x).expect("g");
         assert!((g.value(0.0) - 2940.0).abs() < 1e-9);
         assert!((g.prony().long_term_weight() - 0.2).abs() < 1e-15);
@@ -87,7 +85,7 @@ mod tests {
     /// (eq. 4.1's constant, G0 = 2(C1 + C2)) is not read as G0.
     #[test]
     fn a_c1_named_vector_is_refused_as_g0() {
-        use crate::domain::{Parameter, Scale};
+        use nlvid_model::{Parameter, Scale};
         let d = Domain::new(vec![
             Parameter::new("C1", "Pa", 80.0, 4000.0, Scale::Log),
             Parameter::new("g1", "", 0.0, 0.9, Scale::Linear),
@@ -100,8 +98,8 @@ mod tests {
 
     #[test]
     fn parameter_table_prints_names_and_units() {
-        let d = Domain::prony2_table_5_3(0.01).expect("domain");
-        let s = ParameterTable::new(&d, &[2940.0, 0.5, 0.1, 0.3, 10.0])
+        let d = Domain::table_5_3(0.01).expect("domain");
+        let s = ParameterTable::new(&d, &[2940.0, 0.5, 0.3, 0.1, 10.0])
             .expect("t")
             .to_string();
         assert!(s.contains("G0 = 2.940000e3 Pa"), "{s}");

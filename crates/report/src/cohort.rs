@@ -391,9 +391,10 @@ pub fn run_cohort(
     Ok(out)
 }
 
-/// Column name with its unit suffix, as docs/cli/compare.md reads it.
+/// Column name with its unit suffix, as docs/cli/compare.md reads it
+/// (none for a dimensionless parameter, unit `1`).
 fn column(name: &str, unit: &str) -> String {
-    if unit.is_empty() {
+    if unit.is_empty() || unit == "1" {
         name.to_string()
     } else {
         format!("{name}_{}", unit.replace('/', "_per_"))

@@ -27,7 +27,8 @@
 //! ramp_points = 40
 //! hold_points = 120
 //! first_hold_step = "1 ms"
-//! constraint_epsilon = 0.01    # g1 + g2 <= 1 - eps (Table 5.3)
+//! constraint_epsilon = 0.01    # g1 + g2 <= 1 - eps (Table 5.3; model = "lee-radok" only:
+//!                              # a meta-model brings the domain stored in its meta.json)
 //! suspicious_misfit = 0.05     # eq. 5.3 misfit above which a cell is `suspicious`
 //! ```
 
@@ -136,7 +137,9 @@ pub struct CohortSettings {
     pub hold_points: usize,
     /// First step of the hold grid, s.
     pub first_hold_step: f64,
-    /// ε of g1 + g2 ≤ 1 − ε.
+    /// ε of g1 + g2 ≤ 1 − ε of the Table 5.3 domain of the analytic
+    /// Lee–Radok model; a meta-model fit uses the domain stored in its
+    /// `meta.json` instead.
     pub constraint_epsilon: f64,
     /// Misfit (eq. 5.3) above which a cell is marked suspicious.
     pub suspicious_misfit: f64,

@@ -163,9 +163,11 @@ fn recovered_moduli_match_the_ground_truth_per_cell() {
             .find(|c| c.cell == t.cell)
             .expect("every true cell has a result");
         assert_eq!(c.status, CellStatus::Ok, "{}: {}", c.cell, c.reason);
-        let x: Vec<f64> = c.parameters.iter().map(|p| p.value).collect();
+        // Parameters by name; the truth in the order G0, g1, g2, tau1, tau2.
+        let p = |n: &str| c.parameter(n).expect("fitted parameter");
+        let x = [p("G0"), p("g1"), p("g2"), p("tau1"), p("tau2")];
         let shear = |x: &[f64], s: f64| {
-            x[0] * (1.0 - x[1] - x[3] + x[1] * (-s / x[2]).exp() + x[3] * (-s / x[4]).exp())
+            x[0] * (1.0 - x[1] - x[2] + x[1] * (-s / x[3]).exp() + x[2] * (-s / x[4]).exp())
         };
         // 1 % force noise, fitted on the meta-model (checking error: median
         // 0.3 %, max 7.6 %, metamodel/check.json): G(t) within 5 % at 1, 10
@@ -235,7 +237,7 @@ fn hertz_baseline_lies_between_the_true_instantaneous_and_ramp_end_moduli() {
         let h = c.hertz.as_ref().expect("Hertz baseline fitted");
         let x = t.x;
         let g = |s: f64| {
-            x[0] * (1.0 - x[1] - x[3] + x[1] * (-s / x[2]).exp() + x[3] * (-s / x[4]).exp())
+            x[0] * (1.0 - x[1] - x[2] + x[1] * (-s / x[3]).exp() + x[2] * (-s / x[4]).exp())
         };
         let (lo, hi) = (3.0 * g(1.0), 3.0 * g(0.0));
         assert!(

@@ -6,7 +6,9 @@
 //!   `[protocol]`), training and checking designs from `[design]`, store,
 //!   export and admissibility filters from `[build]`; the training set goes
 //!   to `<store>/train`, the checking set to `<store>/check`.
-//! * flags only (as before): `--design X.csv --model hertz-prony --store DIR`.
+//! * flags only (as before): `--design X.csv --model hertz-prony --store DIR`
+//!   (`--domain FILE`: the domain the design was sampled in, stored in the
+//!   export's `meta.json` for `nlvid fit`).
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -14,11 +16,10 @@ use std::process::ExitCode;
 use anyhow::{Context, bail};
 use clap::Args;
 use nlvid_forward::{ForwardSettings, HertzPronySpec};
+use nlvid_model::{Domain, ForwardModel};
 use nlvid_study::Study;
 use nlvid_surrogate::doe::DesignSettings;
-use nlvid_surrogate::{
-    Admissibility, BuildOptions, ForwardModel, Shard, build, export, load, merge,
-};
+use nlvid_surrogate::{Admissibility, BuildOptions, Shard, build, export, load, merge};
 
 use super::surrogate::read_table;
 
@@ -31,6 +32,11 @@ pub struct BuildArgs {
     /// Design CSV (from `nlvid sample`); flag-only use.
     #[arg(long, conflicts_with = "study")]
     pub design: Option<PathBuf>,
+    /// Domain file the design was sampled in (as for `nlvid sample
+    /// --domain`); flag-only use. The export's `meta.json` stores it, and
+    /// `nlvid fit` needs it there.
+    #[arg(long, conflicts_with = "study")]
+    pub domain: Option<PathBuf>,
     /// Forward model for flag-only use: `hertz-prony` (analytic LV Hertz
     /// ramp-hold, R = 5 µm, 1 µm/s for 1 s, then hold to 10 s; parameters
     /// G0, g1, g2, tau1, tau2). Study files choose any model in `[forward]`.
@@ -137,9 +143,21 @@ pub fn read_study(path: &Path) -> anyhow::Result<BuildStudy> {
     })
 }
 
-fn do_export(store: &Path, dir: &Path, filt: &Admissibility) -> anyhow::Result<()> {
+fn do_export(
+    store: &Path,
+    dir: &Path,
+    filt: &Admissibility,
+    domain: Option<&Domain>,
+) -> anyhow::Result<()> {
     let mm = load(store, filt)?;
-    export(&mm, dir)?;
+    export(&mm, dir, domain)?;
+    if domain.is_none() {
+        eprintln!(
+            "warning: {} has no parameter domain (give --domain FILE, or build from a study): \
+             `nlvid fit` and `nlvid cohort` cannot use it",
+            dir.join("meta.json").display()
+        );
+    }
     let c = &mm.counts;
     println!(
         "exported {} of {} runs to {} (failed {}, missing {}, below peak force {}, non-repulsive {})",
@@ -226,7 +244,12 @@ impl BuildArgs {
             }
             if let Some(dir) = &export_dir {
                 for (name, _) in &sets {
-                    do_export(&store.join(name), &dir.join(name), &st.filters)?;
+                    do_export(
+                        &store.join(name),
+                        &dir.join(name),
+                        &st.filters,
+                        Some(&st.design.domain),
+                    )?;
                 }
             }
             return Ok(ExitCode::SUCCESS);
@@ -235,7 +258,7 @@ impl BuildArgs {
             bail!("give a study file, or --design X.csv and --store DIR");
         };
         let model = match self.model.as_str() {
-            "hertz-prony" => HertzPronySpec::flag_defaults(self.points).build(),
+            "hertz-prony" => HertzPronySpec::flag_defaults(self.points).build()?,
             other => bail!(
                 "--model {other}: unknown forward model for flag-only use (available: hertz-prony; \
                  afm-fe and membrane are set up in a study file's [forward] section)"
@@ -249,6 +272,25 @@ impl BuildArgs {
                 design.header.len()
             );
         }
+        let domain = self
+            .domain
+            .as_deref()
+            .map(|p| super::sample::read_domain(p, &model.parameter_names()))
+            .transpose()?;
+        if let Some(d) = &domain
+            && let Some((i, _)) = design
+                .rows
+                .iter()
+                .enumerate()
+                .find(|(_, x)| !d.contains(x, 1e-9))
+        {
+            bail!(
+                "{}: design row {} lies outside the domain of {}",
+                design_path.display(),
+                i + 2,
+                self.domain.as_deref().unwrap_or(Path::new("")).display()
+            );
+        }
         run_set("design", &model, &design.rows, store, shard, self.quiet)?;
         if let Some(dir) = &self.export {
             let filt = Admissibility {
@@ -256,7 +298,7 @@ impl BuildArgs {
                 reject_non_repulsive: self.reject_non_repulsive,
                 contact_index: 0,
             };
-            do_export(store, dir, &filt)?;
+            do_export(store, dir, &filt, domain.as_ref())?;
         }
         Ok(ExitCode::SUCCESS)
     }
@@ -265,17 +307,19 @@ impl BuildArgs {
 impl MergeArgs {
     /// Run.
     pub fn run(self) -> anyhow::Result<ExitCode> {
-        let filt = match &self.study {
+        let (filt, domain) = match &self.study {
             Some(p) => {
-                read_study(p)
-                    .with_context(|| format!("--study {}", p.display()))?
-                    .filters
+                let st = read_study(p).with_context(|| format!("--study {}", p.display()))?;
+                (st.filters, Some(st.design.domain))
             }
-            None => Admissibility {
-                min_peak_force: self.min_peak_force,
-                reject_non_repulsive: self.reject_non_repulsive,
-                contact_index: 0,
-            },
+            None => (
+                Admissibility {
+                    min_peak_force: self.min_peak_force,
+                    reject_non_repulsive: self.reject_non_repulsive,
+                    contact_index: 0,
+                },
+                None,
+            ),
         };
         // A study build's shards hold `train/` (and `check/`) stores.
         let sets: Vec<Option<&str>> = if self.shards.iter().all(|d| d.join("meta.json").is_file()) {
@@ -310,7 +354,7 @@ impl MergeArgs {
                 out.display()
             );
             if let Some(dir) = &self.export {
-                do_export(&out, &sub(dir), &filt)?;
+                do_export(&out, &sub(dir), &filt, domain.as_ref())?;
             }
         }
         Ok(ExitCode::SUCCESS)

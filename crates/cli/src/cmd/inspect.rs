@@ -243,9 +243,15 @@ fn run_fit(
             let mut s = LeeRadokSettings::new(r);
             s.n_terms = terms;
             let f = fit_lee_radok(&rh.time, &rh.indentation, &rh.force, &s)?;
-            let terms_txt: Vec<String> = f
-                .prony
-                .terms
+            let g = &f.relaxation;
+            // Term moduli G_k = G0 g_k (Pa).
+            let moduli: Vec<(f64, f64)> = g
+                .prony()
+                .terms()
+                .iter()
+                .map(|t| (g.g0() * t.weight, t.tau))
+                .collect();
+            let terms_txt: Vec<String> = moduli
                 .iter()
                 .map(|(g, t)| format!("G = {g:.4e} Pa, tau = {t:.4e} s"))
                 .collect();
@@ -253,9 +259,9 @@ fn run_fit(
                 text: format!(
                     "Lee-Radok Prony (R = {r:e} m, {} terms): G_inf = {:.4e} Pa; {}; G(0) = {:.4e} Pa; range-normalised RMSE = {:.4} ({} points from contact at t = {:.4} s, {} Nelder-Mead iterations)",
                     s.n_terms,
-                    f.prony.g_inf,
+                    g.g_inf(),
                     terms_txt.join("; "),
-                    f.prony.g0(),
+                    g.g0(),
                     f.range_normalised_rmse,
                     rh.time.len(),
                     rh.contact_time,
@@ -263,9 +269,9 @@ fn run_fit(
                 ),
                 json: serde_json::json!({
                     "model": "lee-radok-prony", "tip_radius_m": r,
-                    "g_inf_Pa": f.prony.g_inf,
-                    "terms": f.prony.terms.iter().map(|(g, t)| serde_json::json!({"g_Pa": g, "tau_s": t})).collect::<Vec<_>>(),
-                    "g0_Pa": f.prony.g0(), "rmse_N": f.rmse,
+                    "g_inf_Pa": g.g_inf(),
+                    "terms": moduli.iter().map(|(g, t)| serde_json::json!({"g_Pa": g, "tau_s": t})).collect::<Vec<_>>(),
+                    "g0_Pa": g.g0(), "rmse_N": f.rmse,
                     "range_normalised_rmse": f.range_normalised_rmse,
                     "contact_time_s": rh.contact_time, "iterations": f.iterations,
                 }),

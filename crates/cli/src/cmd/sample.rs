@@ -1,11 +1,12 @@
 //! `nlvid sample`: Latin-hypercube training and checking designs.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 use clap::Args;
-use nlvid_surrogate::doe::{Domain, training_and_checking};
+use nlvid_model::Domain;
+use nlvid_surrogate::doe::training_and_checking;
 
 use super::surrogate::write_table;
 
@@ -14,7 +15,7 @@ use super::surrogate::write_table;
 pub struct SampleArgs {
     /// Study file with `[forward]` and `[design]` sections (docs/study-format.md).
     pub study: Option<PathBuf>,
-    /// Domain file (TOML: `[[axes]]` name, unit, lower, upper, log; `[[constraints]]` coeffs, bound); flag-only use.
+    /// Domain file (TOML: `[[parameters]]` name, unit, lower, upper, scale = "linear"/"log"; `[[constraints]]` coefficients, rhs, label); flag-only use.
     #[arg(long, conflicts_with = "study")]
     pub domain: Option<PathBuf>,
     /// Training points (flag-only use).
@@ -45,13 +46,7 @@ impl SampleArgs {
             let (Some(dpath), Some(n)) = (&self.domain, self.n) else {
                 bail!("give a study file, or --domain FILE and -n N");
             };
-            let text = std::fs::read_to_string(dpath)
-                .with_context(|| format!("cannot read {}", dpath.display()))?;
-            let domain: Domain =
-                toml::from_str(&text).with_context(|| format!("{}", dpath.display()))?;
-            domain
-                .validate()
-                .with_context(|| format!("{}", dpath.display()))?;
+            let domain = read_domain(dpath, &[])?;
             let (train, check) = training_and_checking(
                 &domain,
                 n,
@@ -65,7 +60,7 @@ impl SampleArgs {
         };
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("cannot create {}", self.out.display()))?;
-        let header: Vec<String> = domain.axes.iter().map(|a| a.name.clone()).collect();
+        let header = domain.names();
         write_table(Some(&self.out.join("train.csv")), &header, &train)?;
         if !check.is_empty() {
             write_table(Some(&self.out.join("check.csv")), &header, &check)?;
@@ -78,4 +73,21 @@ impl SampleArgs {
         );
         Ok(ExitCode::SUCCESS)
     }
+}
+
+/// Reads a domain file (the stored form of `nlvid_model::Domain`, checked
+/// when read); with `names`, they must be its parameters in order.
+///
+/// # Errors
+/// Unreadable or invalid file, or parameters other than `names`.
+pub fn read_domain(path: &Path, names: &[String]) -> anyhow::Result<Domain> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let domain: Domain = toml::from_str(&text).with_context(|| format!("{}", path.display()))?;
+    if !names.is_empty() {
+        domain
+            .check_names(names)
+            .with_context(|| format!("{}: the model's parameters", path.display()))?;
+    }
+    Ok(domain)
 }

@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 
 use nlvid_inverse::{
-    AfmColumns, Calibration, CompressionColumns, Coordinates, Domain, ProtocolTolerance, Segment,
+    AfmColumns, Calibration, CompressionColumns, Coordinates, ProtocolTolerance, Segment,
 };
 use nlvid_study::{Bounds, Dimension, Section, Study};
 
@@ -77,8 +77,6 @@ pub struct ExperimentSettings {
 pub struct FitSettings {
     /// The study file.
     pub study: PathBuf,
-    /// Parameter domain.
-    pub domain: Domain,
     /// Coordinates the surrogates were fitted on.
     pub inputs: Coordinates,
     /// Columns and calibration of the data files.
@@ -110,7 +108,7 @@ pub fn read(path: &Path, starts: Option<usize>, seed: Option<u64>) -> anyhow::Re
         ],
         Coordinates::Physical,
     )?;
-    let domain = read_domain(&mut s)?;
+    reject_domain_keys(&mut s)?;
     let columns = read_columns(&mut s)?;
     // Read the keys even when the command line overrides them (so they are
     // validated and not reported as unknown).
@@ -144,7 +142,6 @@ pub fn read(path: &Path, starts: Option<usize>, seed: Option<u64>) -> anyhow::Re
     s.finish()?;
     Ok(FitSettings {
         study: path.to_path_buf(),
-        domain,
         inputs,
         columns,
         starts,
@@ -155,18 +152,23 @@ pub fn read(path: &Path, starts: Option<usize>, seed: Option<u64>) -> anyhow::Re
     })
 }
 
-fn read_domain(s: &mut Section) -> anyhow::Result<Domain> {
-    let name = s.req_str("domain")?;
-    let eps = s.f64_or("epsilon", Bounds::closed_open(0.0, 0.98), 0.01)?;
-    match name.as_str() {
-        "table-5.3" => Ok(Domain::prony2_table_5_3(eps)?),
-        other => Err(s
-            .invalid(
-                "domain",
-                format!("unknown domain `{other}` (available: table-5.3)"),
-            )
-            .into()),
+/// The parameter domain is the one each meta-model was designed on, read
+/// from its `meta.json`; `domain`/`epsilon` in `[fit]` are refused with
+/// what to do instead.
+fn reject_domain_keys(s: &mut Section) -> anyhow::Result<()> {
+    for key in ["domain", "epsilon"] {
+        if s.has(key) {
+            return Err(s
+                .invalid(
+                    key,
+                    "the parameter domain (bounds, g1 + g2 <= 1 - epsilon) is now read from the \
+                     meta-model's meta.json, written by `nlvid build --export` from the build \
+                     study's [design] section: remove `domain` and `epsilon` from [fit]",
+                )
+                .into());
+        }
     }
+    Ok(())
 }
 
 fn read_columns(s: &mut Section) -> anyhow::Result<DataColumns> {

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context as _, bail};
 use nlvid_inverse::Model as _;
 use nlvid_inverse::{
-    Calibration, Coordinates, Domain, KrigingSurrogate, MeasuredCurve, load_kriging_surrogate,
+    Calibration, Coordinates, KrigingSurrogate, MeasuredCurve, load_kriging_surrogate,
     ramp_hold_indentation, read_afm_csv, read_compression_csv, segment_weights,
 };
 
@@ -51,7 +51,7 @@ pub enum RealModel {
         poisson: f64,
     },
     /// A study's forward model.
-    Forward(Box<dyn nlvid_surrogate::ForwardModel>),
+    Forward(Box<dyn nlvid_model::ForwardModel>),
 }
 
 /// Sets up the real model named by `spec` (a `[forward]` section is read
@@ -94,9 +94,12 @@ pub fn load(settings: &FitSettings, files: &[PathBuf]) -> anyhow::Result<Vec<Loa
         }
         settings.experiments.iter().zip(files).collect()
     };
-    let mut out = Vec::with_capacity(pairs.len());
+    let mut out: Vec<LoadedExperiment> = Vec::with_capacity(pairs.len());
     for (exp, file) in pairs {
-        let surrogate = load_surrogate(exp, &settings.domain, settings.inputs)?;
+        let surrogate = load_surrogate(exp, settings.inputs)?;
+        if let Some(first) = out.first() {
+            same_domain(&first.surrogate, &surrogate)?;
+        }
         let times = surrogate.model.times().to_vec();
         let curve = read_curve(file, &settings.columns)?;
         check_protocol(&curve, exp, &times, &settings.study)?;
@@ -121,12 +124,25 @@ pub fn load(settings: &FitSettings, files: &[PathBuf]) -> anyhow::Result<Vec<Loa
     Ok(out)
 }
 
-fn load_surrogate(
-    exp: &ExperimentSettings,
-    domain: &Domain,
-    inputs: Coordinates,
-) -> anyhow::Result<Surrogate> {
-    let model = load_kriging_surrogate(&exp.surrogate, &exp.meta, domain.clone(), inputs)
+/// Curves fitted with one parameter set are fitted in one domain: every
+/// meta-model must carry the same one.
+fn same_domain(first: &Surrogate, other: &Surrogate) -> anyhow::Result<()> {
+    let (a, b) = (first.model.domain(), other.model.domain());
+    if a != b {
+        bail!(
+            "{} and {} were built on different parameter domains ({:?} vs {:?}): \
+             curves fitted together need meta-models of one [design] domain",
+            first.path.display(),
+            other.path.display(),
+            a,
+            b
+        );
+    }
+    Ok(())
+}
+
+fn load_surrogate(exp: &ExperimentSettings, inputs: Coordinates) -> anyhow::Result<Surrogate> {
+    let model = load_kriging_surrogate(&exp.surrogate, &exp.meta, inputs)
         .with_context(|| format!("surrogate {}", exp.surrogate.display()))?;
     let checking = match &exp.checking {
         Some(p) => Some((read_checking_error(p)?, p.clone())),

@@ -93,9 +93,7 @@ impl Run for Args {
         let x = fit.best.x.clone();
         let mut reruns = Vec::with_capacity(c.experiments.len());
         for e in &c.experiments {
-            reruns.push(
-                recheck::recheck(e, &c.settings.domain, &x).map_err(|err| format!("{err:#}")),
-            );
+            reruns.push(recheck::recheck(e, &fit.domain, &x).map_err(|err| format!("{err:#}")));
         }
         let outcome = report::Outcome::new(&c.settings, &c.experiments, fit, reruns, seconds)?;
         let outcome = match &c.plot {
