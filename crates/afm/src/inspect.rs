@@ -124,9 +124,15 @@ pub fn quick_fit(
             let mut s = LeeRadokSettings::new(r);
             s.n_terms = terms;
             let f = fit_lee_radok(&rh.time, &rh.indentation, &rh.force, &s)?;
-            let terms_txt: Vec<String> = f
-                .prony
-                .terms
+            let g = &f.relaxation;
+            // Term moduli G_k = G0 g_k (Pa).
+            let moduli: Vec<(f64, f64)> = g
+                .prony()
+                .terms()
+                .iter()
+                .map(|t| (g.g0() * t.weight, t.tau))
+                .collect();
+            let terms_txt: Vec<String> = moduli
                 .iter()
                 .map(|(g, t)| format!("G = {g:.4e} Pa, tau = {t:.4e} s"))
                 .collect();
@@ -134,20 +140,20 @@ pub fn quick_fit(
                 model: "lee-radok-prony",
                 values: vec![
                     ("tip_radius_m".into(), r),
-                    ("g_inf_Pa".into(), f.prony.g_inf),
-                    ("g0_Pa".into(), f.prony.g0()),
+                    ("g_inf_Pa".into(), g.g_inf()),
+                    ("g0_Pa".into(), g.g0()),
                     ("rmse_N".into(), f.rmse),
                     ("range_normalised_rmse".into(), f.range_normalised_rmse),
                     ("contact_time_s".into(), rh.contact_time),
                     ("iterations".into(), f.iterations as f64),
                 ],
-                terms: f.prony.terms.clone(),
+                terms: moduli,
                 text: format!(
                     "Lee-Radok Prony (R = {r:e} m, {} terms): G_inf = {:.4e} Pa; {}; G(0) = {:.4e} Pa; range-normalised RMSE = {:.4} ({} points from contact at t = {:.4} s, {} Nelder-Mead iterations)",
                     s.n_terms,
-                    f.prony.g_inf,
+                    g.g_inf(),
                     terms_txt.join("; "),
-                    f.prony.g0(),
+                    g.g0(),
                     f.range_normalised_rmse,
                     rh.time.len(),
                     rh.contact_time,

@@ -6,7 +6,8 @@
 //! its time axis and channels in SI units — and the small-strain analysis of such curves:
 //! baseline correction, tip–sample separation, contact point, indentation δ = Z − d
 //! (§5.2.2), the Hertz fit of a paraboloidal probe (eq. 1.1) and a linear-viscoelastic
-//! Prony fit through the Lee–Radok hereditary integral. App. B.2 cell geometry helpers
+//! Prony fit through the Lee–Radok hereditary integral (the kernel of `nlvid-forward`,
+//! the relaxation modulus of `nlvid-model`). App. B.2 cell geometry helpers
 //! (cell height, eq. B.1; base diameter √(d1·d2)) live in [`geometry`].
 //!
 //! Cost: reading a 10 000-point JPK file takes a few milliseconds (ZIP inflate + one pass
@@ -52,10 +53,7 @@ pub use inspect::{
 pub use jpk::{
     ReadOptions, read_force_curve, read_force_curve_with, read_force_map, read_jpk_bytes,
 };
-pub use lee_radok::{
-    LeeRadokFit, LeeRadokSettings, Prony, RampHold, fit_lee_radok, lee_radok_force,
-    prepare_ramp_hold,
-};
+pub use lee_radok::{LeeRadokFit, LeeRadokSettings, RampHold, fit_lee_radok, prepare_ramp_hold};
 pub use prepare::{
     Baseline, ContactMethod, ContactPoint, contact_point, contact_point_from_baseline, indentation,
     tip_sample_separation,

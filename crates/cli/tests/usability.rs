@@ -238,10 +238,10 @@ speed = "5 mm/s"
 hold = "0.5 s"
 
 [parameters]
-C1 = "3 kPa"
+G10 = "3 kPa"
 gamma0 = 0.1
-g1 = 0.5
-g2 = 0.5
+g1_long_term = 0.5
+g2_long_term = 0.5
 tau1 = "0.1 s"
 tau2 = "2 s"
 "#,
@@ -256,7 +256,7 @@ tau2 = "2 s"
     let out_dir = dir.join("capsule.membrane");
     assert!(out_dir.join("history.csv").is_file());
     assert_eq!(std::fs::read_dir(&cwd).unwrap().count(), 0);
-    assert_eq!(v["parameters"]["C1_Pa"], 3000.0);
+    assert_eq!(v["parameters"]["G10_Pa"], 3000.0);
     let fin = &v["final"];
     for key in [
         "time_s",

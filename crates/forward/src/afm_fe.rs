@@ -10,10 +10,10 @@
 //! which give the verified setup-1 forces (docs/theory/forward.md).
 
 use nlvid_fem::FemError;
-use nlvid_fem::afm::{AfmParams, AfmSetup, Cantilever, Engagement, MeshSpec};
+use nlvid_fem::afm::{AfmSetup, Cantilever, Engagement, MeshSpec};
+use nlvid_model::{FailureKind, ForwardModel, Relaxation, RunFailure, names};
 use nlvid_protocol::{Loading as ProtocolLoading, Program, Quantity};
 use nlvid_study::{Bounds, Dimension, Section};
-use nlvid_surrogate::{FailureKind, ForwardModel, RunFailure};
 
 use crate::error::{ForwardError, Result};
 
@@ -278,10 +278,10 @@ pub fn fem_failure(e: &FemError) -> RunFailure {
 
 impl ForwardModel for AfmFeModel {
     fn parameter_names(&self) -> Vec<String> {
-        nlvid_surrogate::PRONY2_NAMES.map(String::from).to_vec()
+        nlvid_model::names::PRONY2.map(String::from).to_vec()
     }
     fn parameter_units(&self) -> Vec<String> {
-        nlvid_surrogate::PRONY2_UNITS.map(String::from).to_vec()
+        nlvid_model::names::PRONY2_UNITS.map(String::from).to_vec()
     }
     fn time_grid(&self) -> &[f64] {
         &self.setup.output_times
@@ -290,23 +290,12 @@ impl ForwardModel for AfmFeModel {
         self.identity.clone()
     }
     fn run(&self, p: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
-        let &[g0, g1, g2, tau1, tau2] = p else {
-            return Err(RunFailure {
-                kind: FailureKind::InvalidParameters,
-                time: None,
-                message: format!(
-                    "afm-fe expects 5 parameters [G0, g1, g2, tau1, tau2], got {}",
-                    p.len()
-                ),
-            });
-        };
-        let params = AfmParams {
-            g0,
-            g1,
-            tau1,
-            g2,
-            tau2,
-        };
+        // Parameters in `names::PRONY2` order (G0 the shear modulus).
+        let params = Relaxation::from_named(&names::PRONY2, p).map_err(|e| RunFailure {
+            kind: FailureKind::InvalidParameters,
+            time: None,
+            message: format!("afm-fe: {e}"),
+        })?;
         nlvid_fem::afm::run(&params, &self.setup)
             .map(|r| r.force)
             .map_err(|e| fem_failure(&e))

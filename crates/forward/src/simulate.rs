@@ -19,7 +19,7 @@
 //! and of the former `nlvid membrane` schema (`[membrane]`) are errors that
 //! name the keys to use.
 
-use nlvid_fem::afm::{AfmParams, AfmRun};
+use nlvid_fem::afm::AfmRun;
 use nlvid_membrane::MembraneRun;
 use nlvid_model::Curve;
 use nlvid_study::{Bounds, Dimension, Study};
@@ -185,16 +185,10 @@ impl SimulateStudy {
         };
         match &self.forward.spec {
             ForwardSpec::AfmFe(spec) => {
-                let &[g0, g1, g2, tau1, tau2] = self.values.as_slice() else {
-                    return Err(failed("expects [G0, g1, g2, tau1, tau2]".into()));
-                };
-                let params = AfmParams {
-                    g0,
-                    g1,
-                    tau1,
-                    g2,
-                    tau2,
-                };
+                // Parameters in `names::PRONY2` order (G0 the shear modulus).
+                let params =
+                    nlvid_model::Relaxation::from_named(&nlvid_model::names::PRONY2, &self.values)
+                        .map_err(|e| failed(e.to_string()))?;
                 nlvid_fem::afm::run(&params, &spec.setup()?)
                     .map(|r| Simulation::AfmFe(Box::new(r)))
                     .map_err(|e| failed(fem_failure(&e).to_string()))

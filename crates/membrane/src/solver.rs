@@ -62,7 +62,7 @@ impl Geometry {
 pub enum Control {
     /// Plate displacement D/r0 = r_s − H1/r0 (eq. 2.43); D ≤ 0 means no contact.
     Displacement(f64),
-    /// Contact force F/(C1 h0 r0) (eq. 2.44); F ≤ 0 means no contact.
+    /// Contact force F/(G10 h0 r0) (eq. 2.44); F ≤ 0 means no contact.
     Force(f64),
     /// Contact angle ψc (rad, reference configuration): the well-conditioned
     /// parameter for elastic sweeps through first contact.
@@ -84,7 +84,7 @@ impl std::fmt::Display for Control {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Control::Displacement(d) => write!(f, "D/r0 = {d:.6}"),
-            Control::Force(v) => write!(f, "F/(C1 h0 r0) = {v:.6}"),
+            Control::Force(v) => write!(f, "F/(G10 h0 r0) = {v:.6}"),
             Control::ContactAngle(v) => write!(f, "ψc = {v:.6} rad"),
         }
     }
@@ -100,9 +100,9 @@ pub struct Solution {
     pub displacement: f64,
     /// Half-height H1/r0.
     pub h1: f64,
-    /// Contact force F/(C1 h0 r0) = π a² p (eq. 2.44).
+    /// Contact force F/(G10 h0 r0) = π a² p (eq. 2.44).
     pub force: f64,
-    /// Pressure p r0/(C1 h0).
+    /// Pressure p r0/(G10 h0).
     pub pressure: f64,
     /// Contact angle ψc (rad, reference configuration).
     pub psi_c: f64,
@@ -112,7 +112,7 @@ pub struct Solution {
     pub contact_radius: f64,
     /// Equatorial radius ρ(π/2)/r0.
     pub equator_radius: f64,
-    /// Meridional tension at the equator T1/(C1 h0).
+    /// Meridional tension at the equator T1/(G10 h0).
     pub t1_equator: f64,
     /// Enclosed volume V/r0³.
     pub volume: f64,
@@ -229,7 +229,7 @@ fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
 
 impl<M: MembraneMaterial> MembraneSolver<M> {
     /// A solver for `material` whose stresses are divided by `stress_scale`
-    /// (C1 of eq. 2.47; 1 for a dimensionless material). Solves the free
+    /// (G10 of eq. 2.47; 1 for a dimensionless material). Solves the free
     /// inflation to r_s at once (the membrane is inflated instantaneously at
     /// t = 0; nothing is committed until the first [`Self::advance`]).
     ///
@@ -243,7 +243,7 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
             return Err(MembraneError::Input {
                 name: "stress_scale",
                 value: stress_scale,
-                reason: "C1 must be positive".into(),
+                reason: "the stress scale G10 must be positive".into(),
             });
         }
         let s0 = material.initial_state();

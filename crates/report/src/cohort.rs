@@ -239,9 +239,10 @@ pub fn run_cohort(
     Ok(out)
 }
 
-/// Column name with its unit suffix, as docs/cli/compare.md reads it.
+/// Column name with its unit suffix, as docs/cli/compare.md reads it
+/// (none for a dimensionless parameter, unit `1`).
 fn column(name: &str, unit: &str) -> String {
-    if unit.is_empty() {
+    if unit.is_empty() || unit == "1" {
         name.to_string()
     } else {
         format!("{name}_{}", unit.replace('/', "_per_"))
@@ -347,7 +348,8 @@ pub fn results_csv(cells: &[CellResult]) -> Result<String> {
 /// # Errors
 /// A fitted cell without `G0` or with inadmissible Prony parameters.
 pub fn results_table(cells: &[CellResult]) -> Result<nlvid_stats::ResultsTable> {
-    use nlvid_stats::{CellRow, Excluded, Prony, PronyTerm, ResultsTable};
+    use nlvid_model::{Prony, Relaxation, names};
+    use nlvid_stats::{CellRow, Excluded, ResultsTable};
     let mut sorted: Vec<&CellResult> = cells.iter().collect();
     sorted.sort_by(|a, b| (&a.group, &a.file).cmp(&(&b.group, &b.file)));
     let terms = parameter_names(cells).map_or(0, |names| {
@@ -385,16 +387,16 @@ pub fn results_table(cells: &[CellResult]) -> Result<nlvid_stats::ResultsTable> 
         let mut prony_terms = Vec::with_capacity(terms);
         for k in 1..=terms {
             let (g, tau) = (format!("g{k}"), format!("tau{k}"));
-            prony_terms.push(PronyTerm {
-                g: c.parameter(&g).ok_or_else(|| missing(&g))?,
-                tau: c.parameter(&tau).ok_or_else(|| missing(&tau))?,
-            });
+            prony_terms.push((
+                c.parameter(&g).ok_or_else(|| missing(&g))?,
+                c.parameter(&tau).ok_or_else(|| missing(&tau))?,
+            ));
         }
         table.cells.push(CellRow {
             cell: c.cell.clone(),
             group: c.group.clone(),
             line,
-            prony: Prony::new(g0, prony_terms)?,
+            relaxation: Relaxation::new(names::G0, g0, Prony::new("G", &prony_terms)?)?,
         });
     }
     Ok(table)

@@ -26,6 +26,9 @@ pub enum ReportError {
     /// The study file.
     #[error(transparent)]
     Study(#[from] nlvid_study::StudyError),
+    /// A value outside the shared vocabulary (parameter domain, Prony series).
+    #[error(transparent)]
+    Model(#[from] nlvid_model::ModelError),
     /// The inverse analysis (model, misfit, optimiser).
     #[error(transparent)]
     Inverse(#[from] nlvid_inverse::InverseError),

@@ -12,8 +12,8 @@
 //! surrogate = "metamodel/model.json"  # model file of `nlvid surrogate fit`
 //! meta = "metamodel/meta.json"        # sidecar of `nlvid build --export`
 //! check = "metamodel/model.check.json" # default: <surrogate>.check.json if present
-//! domain = "table-5.3"         # default
-//! constraint_epsilon = 0.01    # g1 + g2 <= 1 - eps (Table 5.3)
+//! constraint_epsilon = 0.01    # g1 + g2 <= 1 - eps (Table 5.3; model = "lee-radok" only:
+//!                              # a meta-model brings the domain stored in its meta.json)
 //! inputs = "physical"          # or "unit": coordinates the surrogate was fitted on
 //! data = "afm"                 # or "compression"
 //! starts = 8
@@ -38,7 +38,7 @@
 use std::path::{Path, PathBuf};
 
 use nlvid_inverse::{
-    AfmColumns, Calibration, CompressionColumns, Coordinates, Domain, ProtocolTolerance, Segment,
+    AfmColumns, Calibration, CompressionColumns, Coordinates, ProtocolTolerance, Segment,
 };
 use nlvid_study::{Bounds, Dimension, FromSection, Section, Study, StudyError};
 use serde::{Deserialize, Serialize};
@@ -152,9 +152,9 @@ pub struct FitSettings {
     pub study: PathBuf,
     /// Surrogate or analytic Lee–Radok.
     pub model: ForwardModel,
-    /// Parameter domain.
-    pub domain: Domain,
-    /// ε of g1 + g2 ≤ 1 − ε.
+    /// ε of g1 + g2 ≤ 1 − ε of the Table 5.3 domain of the analytic
+    /// Lee–Radok model; a meta-model brings the domain stored in its
+    /// `meta.json` instead.
     pub constraint_epsilon: f64,
     /// Coordinates the surrogates were fitted on.
     pub inputs: Coordinates,
@@ -251,17 +251,6 @@ impl FitSettings {
         )?;
         let constraint_epsilon =
             s.f64_or("constraint_epsilon", Bounds::closed_open(0.0, 0.98), 0.01)?;
-        let domain = match s.opt_str("domain")?.as_deref() {
-            None | Some("table-5.3") => Domain::prony2_table_5_3(constraint_epsilon)?,
-            Some(other) => {
-                return Err(s
-                    .invalid(
-                        "domain",
-                        format!("unknown domain `{other}` (available: table-5.3)"),
-                    )
-                    .into());
-            }
-        };
         let columns = read_columns(s)?;
         let window = match (s.has("ramp"), s.has("hold_end")) {
             (false, false) => None,
@@ -277,7 +266,6 @@ impl FitSettings {
         let settings = Self {
             study: path.to_path_buf(),
             model,
-            domain,
             constraint_epsilon,
             inputs,
             columns,
@@ -565,7 +553,9 @@ pub struct CohortSettings {
     pub hold_points: usize,
     /// First step of the hold grid, s.
     pub first_hold_step: f64,
-    /// ε of g1 + g2 ≤ 1 − ε.
+    /// ε of g1 + g2 ≤ 1 − ε of the Table 5.3 domain of the analytic
+    /// Lee–Radok model; a meta-model fit uses the domain stored in its
+    /// `meta.json` instead.
     pub constraint_epsilon: f64,
     /// Misfit (eq. 5.3) above which a cell is marked suspicious.
     pub suspicious_misfit: f64,

@@ -10,10 +10,10 @@ use crate::groups::{
     GroupCurves, MeanSd, TimeComparison, compare_over_time, group_curves, mean_sd,
     relaxation_amounts,
 };
-use crate::prony::Prony;
 use crate::ranksum::{Method, RankSum, rank_sum};
 use crate::results::ResultsTable;
 use crate::{Result, StatsError};
+use nlvid_model::Relaxation;
 
 /// One group summarised on the grid.
 #[derive(Debug, Clone, PartialEq)]
@@ -143,7 +143,8 @@ pub fn compare_groups(
                 )));
             }
             let (ca, cb) = (table.group(a), table.group(b));
-            let g = |cells: &[Prony], t: f64| cells.iter().map(|p| p.shear(t)).collect::<Vec<_>>();
+            let g =
+                |cells: &[Relaxation], t: f64| cells.iter().map(|p| p.value(t)).collect::<Vec<_>>();
             let contrasts = vec![
                 contrast("G(0)".into(), "Pa", (&g(&ca, 0.0), &g(&cb, 0.0)), method)?,
                 contrast(
@@ -180,8 +181,8 @@ pub fn compare_groups(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::prony::PronyTerm;
     use crate::results::CellRow;
+    use nlvid_model::Prony;
 
     fn table(rows: &[(&str, f64)]) -> ResultsTable {
         let cells = rows
@@ -191,7 +192,12 @@ mod tests {
                 cell: format!("c{i}"),
                 group: group.to_string(),
                 line: i as u64 + 2,
-                prony: Prony::new(*g0, vec![PronyTerm { g: 0.5, tau: 1.0 }]).expect("prony"),
+                relaxation: Relaxation::new(
+                    "G0",
+                    *g0,
+                    Prony::new("G", &[(0.5, 1.0)]).expect("prony"),
+                )
+                .expect("relaxation"),
             })
             .collect();
         ResultsTable {

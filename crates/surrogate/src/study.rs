@@ -6,12 +6,13 @@
 
 use std::path::{Path, PathBuf};
 
+use nlvid_model::Domain;
 use nlvid_study::Study;
 
 use crate::build::{Admissibility, BuildOptions, build, export, load};
 use crate::doe::DesignSettings;
 use crate::error::{Result, SurrogateError};
-use crate::forward::ForwardModel;
+use nlvid_model::ForwardModel;
 
 /// Sections of the other pipeline stages a build study may hold.
 const OTHER_STAGES: [&str; 6] = ["parameters", "fit", "probe", "material", "loading", "cell"];
@@ -144,17 +145,32 @@ pub fn build_report(
     Ok(text)
 }
 
-/// Exports the admissible runs of `store` to `dir` ([`export`]) and says
-/// how many each filter removed.
+/// Exports the admissible runs of `store` to `dir` ([`export`]; `domain`
+/// is stored in its `meta.json` for the fits) and says how many each filter
+/// removed — and, without a domain, that fits cannot use the export.
 ///
 /// # Errors
 /// As [`load`] and [`export`].
-pub fn export_report(store: &Path, dir: &Path, filters: &Admissibility) -> Result<String> {
+pub fn export_report(
+    store: &Path,
+    dir: &Path,
+    filters: &Admissibility,
+    domain: Option<&Domain>,
+) -> Result<String> {
     let mm = load(store, filters)?;
-    export(&mm, dir)?;
+    export(&mm, dir, domain)?;
     let c = &mm.counts;
+    let warning = if domain.is_none() {
+        format!(
+            "warning: {} has no parameter domain (give --domain FILE, or build from a study): \
+             `nlvid fit` and `nlvid cohort` cannot use it\n",
+            dir.join("meta.json").display()
+        )
+    } else {
+        String::new()
+    };
     Ok(format!(
-        "exported {} of {} runs to {} (failed {}, missing {}, below peak force {}, non-repulsive {})\n",
+        "{warning}exported {} of {} runs to {} (failed {}, missing {}, below peak force {}, non-repulsive {})\n",
         c.kept,
         c.design,
         dir.display(),
@@ -163,4 +179,24 @@ pub fn export_report(store: &Path, dir: &Path, filters: &Admissibility) -> Resul
         c.below_peak,
         c.non_repulsive
     ))
+}
+
+/// Reads a domain file (the stored form of [`Domain`], checked when read);
+/// with `names`, they must be its parameters, in order.
+///
+/// # Errors
+/// Unreadable or invalid file, or parameters other than `names`.
+pub fn read_domain(path: &Path, names: &[String]) -> Result<Domain> {
+    let text = std::fs::read_to_string(path).map_err(crate::error::io_err(path))?;
+    let bad = |m: String| SurrogateError::Parse {
+        path: path.to_path_buf(),
+        message: m,
+    };
+    let domain: Domain = toml::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    if !names.is_empty() {
+        domain
+            .check_names(names)
+            .map_err(|e| bad(format!("the model's parameters: {e}")))?;
+    }
+    Ok(domain)
 }

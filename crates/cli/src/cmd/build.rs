@@ -6,7 +6,9 @@
 //!   `[protocol]`), training and checking designs from `[design]`, store,
 //!   export and admissibility filters from `[build]`; the training set goes
 //!   to `<store>/train`, the checking set to `<store>/check`.
-//! * flags only (as before): `--design X.csv --model hertz-prony --store DIR`.
+//! * flags only (as before): `--design X.csv --model hertz-prony --store DIR`
+//!   (`--domain FILE`: the domain the design was sampled in, stored in the
+//!   export's `meta.json` for `nlvid fit`).
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -14,10 +16,11 @@ use std::process::ExitCode;
 use anyhow::{Context, bail};
 use clap::Args;
 use nlvid_forward::{ForwardSettings, HertzPronySpec};
+use nlvid_model::{Domain, ForwardModel};
 use nlvid_study::Study;
 use nlvid_surrogate::{
-    Admissibility, BuildOptions, BuildSettings, ForwardModel, Shard, build_report, export_report,
-    merge, read_table, set_dir, shard_sets,
+    Admissibility, BuildOptions, BuildSettings, Shard, build_report, export_report, merge,
+    read_domain, read_table, set_dir, shard_sets,
 };
 
 use crate::output::print_text;
@@ -32,6 +35,11 @@ pub struct BuildArgs {
     /// Design CSV (from `nlvid sample`); flag-only use.
     #[arg(long, conflicts_with = "study")]
     pub design: Option<PathBuf>,
+    /// Domain file the design was sampled in (as for `nlvid sample
+    /// --domain`); flag-only use. The export's `meta.json` stores it, and
+    /// `nlvid fit` needs it there.
+    #[arg(long, conflicts_with = "study")]
+    pub domain: Option<PathBuf>,
     /// Forward model for flag-only use: `hertz-prony` (analytic LV Hertz
     /// ramp-hold, R = 5 µm, 1 µm/s for 1 s, then hold to 10 s; parameters
     /// G0, g1, g2, tau1, tau2). Study files choose any model in `[forward]`.
@@ -115,8 +123,13 @@ fn filters(min_peak_force: Option<f64>, reject_non_repulsive: bool) -> Admissibi
     }
 }
 
-fn do_export(store: &Path, dir: &Path, filters: &Admissibility) -> anyhow::Result<()> {
-    print_text(&export_report(store, dir, filters)?)
+fn do_export(
+    store: &Path,
+    dir: &Path,
+    filters: &Admissibility,
+    domain: Option<&Domain>,
+) -> anyhow::Result<()> {
+    print_text(&export_report(store, dir, filters, domain)?)
 }
 
 fn run_set(
@@ -165,7 +178,13 @@ impl BuildArgs {
             }
             if let Some(dir) = &export_dir {
                 for (name, _) in &sets {
-                    do_export(&store.join(name), &dir.join(name), &st.settings.filters)?;
+                    let domain = Some(&st.settings.design.domain);
+                    do_export(
+                        &store.join(name),
+                        &dir.join(name),
+                        &st.settings.filters,
+                        domain,
+                    )?;
                 }
             }
             return Ok(ExitCode::SUCCESS);
@@ -174,7 +193,7 @@ impl BuildArgs {
             bail!("give a study file, or --design X.csv and --store DIR");
         };
         let model = match self.model.as_str() {
-            "hertz-prony" => HertzPronySpec::flag_defaults(self.points).build(),
+            "hertz-prony" => HertzPronySpec::flag_defaults(self.points).build()?,
             other => bail!(
                 "--model {other}: unknown forward model for flag-only use (available: hertz-prony; \
                  afm-fe and membrane are set up in a study file's [forward] section)"
@@ -188,13 +207,25 @@ impl BuildArgs {
                 design.header.len()
             );
         }
+        let names = model.parameter_names();
+        let domain = self
+            .domain
+            .as_deref()
+            .map(|p| read_domain(p, &names))
+            .transpose()?;
+        if let Some(d) = &domain
+            && let Some(i) = design.rows.iter().position(|x| !d.contains(x, 1e-9))
+        {
+            bail!(
+                "{}: design row {} lies outside the domain of --domain",
+                design_path.display(),
+                i + 2
+            );
+        }
         run_set("design", &model, &design.rows, store, shard, self.quiet)?;
         if let Some(dir) = &self.export {
-            do_export(
-                store,
-                dir,
-                &filters(self.min_peak_force, self.reject_non_repulsive),
-            )?;
+            let filters = filters(self.min_peak_force, self.reject_non_repulsive);
+            do_export(store, dir, &filters, domain.as_ref())?;
         }
         Ok(ExitCode::SUCCESS)
     }
@@ -203,14 +234,15 @@ impl BuildArgs {
 impl MergeArgs {
     /// Run.
     pub fn run(self) -> anyhow::Result<ExitCode> {
-        let filt = match &self.study {
+        let (filt, domain) = match &self.study {
             Some(p) => {
-                read_study(p)
-                    .with_context(|| format!("--study {}", p.display()))?
-                    .settings
-                    .filters
+                let st = read_study(p).with_context(|| format!("--study {}", p.display()))?;
+                (st.settings.filters, Some(st.settings.design.domain))
             }
-            None => filters(self.min_peak_force, self.reject_non_repulsive),
+            None => (
+                filters(self.min_peak_force, self.reject_non_repulsive),
+                None,
+            ),
         };
         for set in shard_sets(&self.shards)? {
             let dirs: Vec<PathBuf> = self.shards.iter().map(|d| set_dir(d, set)).collect();
@@ -222,7 +254,7 @@ impl MergeArgs {
                 out.display()
             )?;
             if let Some(dir) = &self.export {
-                do_export(&out, &set_dir(dir, set), &filt)?;
+                do_export(&out, &set_dir(dir, set), &filt, domain.as_ref())?;
             }
         }
         Ok(ExitCode::SUCCESS)

@@ -5,7 +5,8 @@ use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 use clap::Args;
-use nlvid_surrogate::doe::{Domain, training_and_checking};
+use nlvid_surrogate::doe::training_and_checking;
+use nlvid_surrogate::read_domain;
 
 use crate::say;
 use nlvid_surrogate::write_table;
@@ -15,7 +16,7 @@ use nlvid_surrogate::write_table;
 pub struct SampleArgs {
     /// Study file with `[forward]` and `[design]` sections (docs/study-format.md).
     pub study: Option<PathBuf>,
-    /// Domain file (TOML: `[[axes]]` name, unit, lower, upper, log; `[[constraints]]` coeffs, bound); flag-only use.
+    /// Domain file (TOML: `[[parameters]]` name, unit, lower, upper, scale = "linear"/"log"; `[[constraints]]` coefficients, rhs, label); flag-only use.
     #[arg(long, conflicts_with = "study")]
     pub domain: Option<PathBuf>,
     /// Training points (flag-only use).
@@ -46,13 +47,7 @@ impl SampleArgs {
             let (Some(dpath), Some(n)) = (&self.domain, self.n) else {
                 bail!("give a study file, or --domain FILE and -n N");
             };
-            let text = std::fs::read_to_string(dpath)
-                .with_context(|| format!("cannot read {}", dpath.display()))?;
-            let domain: Domain =
-                toml::from_str(&text).with_context(|| format!("{}", dpath.display()))?;
-            domain
-                .validate()
-                .with_context(|| format!("{}", dpath.display()))?;
+            let domain = read_domain(dpath, &[])?;
             let (train, check) = training_and_checking(
                 &domain,
                 n,
@@ -66,7 +61,7 @@ impl SampleArgs {
         };
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("cannot create {}", self.out.display()))?;
-        let header: Vec<String> = domain.axes.iter().map(|a| a.name.clone()).collect();
+        let header = domain.names();
         for (name, rows) in [("train.csv", &train), ("check.csv", &check)] {
             if !rows.is_empty() {
                 let mut buf = Vec::new();

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use nlvid_inverse::Model as _;
 use nlvid_inverse::{
-    Calibration, Coordinates, Domain, KrigingSurrogate, MeasuredCurve, load_kriging_surrogate,
+    Calibration, Coordinates, KrigingSurrogate, MeasuredCurve, load_kriging_surrogate,
     ramp_hold_indentation, read_afm_csv, read_compression_csv, segment_weights,
 };
 
@@ -51,7 +51,7 @@ pub enum RealModel {
         poisson: f64,
     },
     /// A study's forward model.
-    Forward(Box<dyn nlvid_surrogate::ForwardModel>),
+    Forward(Box<dyn nlvid_model::ForwardModel>),
 }
 
 /// Sets up the real model named by `spec` (a `[forward]` section is read
@@ -98,9 +98,12 @@ pub fn load(settings: &FitSettings, files: &[PathBuf]) -> Result<Vec<LoadedExper
         }
         settings.experiments.iter().zip(files).collect()
     };
-    let mut out = Vec::with_capacity(pairs.len());
+    let mut out: Vec<LoadedExperiment> = Vec::with_capacity(pairs.len());
     for (exp, file) in pairs {
-        let surrogate = load_surrogate(settings, exp, &settings.domain, settings.inputs)?;
+        let surrogate = load_surrogate(settings, exp, settings.inputs)?;
+        if let Some(first) = out.first() {
+            same_domain(&first.surrogate, &surrogate)?;
+        }
         let times = surrogate.model.times().to_vec();
         let curve = read_curve(file, &settings.columns)?;
         check_protocol(&curve, exp, &times, &settings.study)?;
@@ -125,10 +128,26 @@ pub fn load(settings: &FitSettings, files: &[PathBuf]) -> Result<Vec<LoadedExper
     Ok(out)
 }
 
+/// Curves fitted with one parameter set are fitted in one domain: every
+/// meta-model must carry the same one.
+fn same_domain(first: &Surrogate, other: &Surrogate) -> Result<()> {
+    let (a, b) = (first.model.domain(), other.model.domain());
+    if a != b {
+        return Err(ReportError::InvalidSetting(format!(
+            "{} and {} were built on different parameter domains ({:?} vs {:?}): \
+             curves fitted together need meta-models of one [design] domain",
+            first.path.display(),
+            other.path.display(),
+            a,
+            b
+        )));
+    }
+    Ok(())
+}
+
 fn load_surrogate(
     settings: &FitSettings,
     exp: &ExperimentSettings,
-    domain: &Domain,
     inputs: Coordinates,
 ) -> Result<Surrogate> {
     let (Some(path), Some(meta)) = (&exp.surrogate, &exp.meta) else {
@@ -138,7 +157,7 @@ fn load_surrogate(
             settings.study.display()
         )));
     };
-    let model = load_kriging_surrogate(path, meta, domain.clone(), inputs)
+    let model = load_kriging_surrogate(path, meta, inputs)
         .map_err(|e| ReportError::InvalidSetting(format!("surrogate {}: {e}", path.display())))?;
     let checking = match exp.check_file() {
         Some(p) => Some((read_checking_error(&p)?, p)),

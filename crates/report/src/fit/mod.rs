@@ -65,7 +65,7 @@ pub fn fit(settings: &FitSettings, experiments: &[LoadedExperiment]) -> Result<O
     let seconds = t0.elapsed().as_secs_f64();
     let reruns = experiments
         .iter()
-        .map(|e| recheck::recheck(e, &settings.domain, &fit.best.x).map_err(|err| err.to_string()))
+        .map(|e| recheck::recheck(e, &fit.domain, &fit.best.x).map_err(|err| err.to_string()))
         .collect();
     Outcome::new(settings, experiments, fit, reruns, seconds)
 }

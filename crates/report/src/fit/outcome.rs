@@ -8,9 +8,10 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use nlvid_inverse::{
-    Experiment, FigureCurve, FitFigure, FitResult, Identifiability, Misfit, Model, ModulusPoint,
-    Rerun, SensitivityScaling, Z95, identifiability, range_normalised_rmse,
+    Experiment, FigureCurve, FitFigure, FitResult, Identifiability, Misfit, Model, Rerun,
+    SensitivityScaling, Z95, identifiability, range_normalised_rmse,
 };
+use nlvid_model::ModulusPoint;
 use serde_json::json;
 
 use super::data::LoadedExperiment;

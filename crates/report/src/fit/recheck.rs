@@ -1,10 +1,10 @@
 //! The real forward model at the optimum (§4.4.1 step 5, §5.4.1): any
-//! `ForwardModel` is run once and scored with eq. 5.3
+//! `nlvid_model::ForwardModel` is run once and scored with eq. 5.3
 //! ([`nlvid_inverse::rerun`]); this module only sets up the model an
 //! experiment names.
 
-use nlvid_inverse::{Domain, ForwardFromModel, LeeRadokHertz, Model as _, Rerun, rerun};
-use nlvid_surrogate::ForwardModel;
+use nlvid_inverse::{ForwardFromModel, LeeRadokHertz, Model as _, Rerun, rerun};
+use nlvid_model::{Domain, ForwardModel};
 
 use super::data::{LoadedExperiment, RealModel};
 use crate::error::{ReportError, Result};
