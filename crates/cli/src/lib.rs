@@ -28,8 +28,9 @@ use std::process::ExitCode;
 use clap::Parser;
 
 pub mod args;
-pub mod cmd;
+#[macro_use]
 pub mod output;
+pub mod cmd;
 pub mod progress;
 
 /// Parses the command line, sets up logging and runs the subcommand.

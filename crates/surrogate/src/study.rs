@@ -182,11 +182,13 @@ pub fn export_report(
 }
 
 /// Reads a domain file (the stored form of [`Domain`], checked when read);
-/// with `names`, they must be its parameters, in order.
+/// with `names`, they must be its parameters, in order; every row of
+/// `design` must lie inside it.
 ///
 /// # Errors
-/// Unreadable or invalid file, or parameters other than `names`.
-pub fn read_domain(path: &Path, names: &[String]) -> Result<Domain> {
+/// Unreadable or invalid file, parameters other than `names`, a design row
+/// outside the domain (naming its CSV line).
+pub fn read_domain(path: &Path, names: &[String], design: &[Vec<f64>]) -> Result<Domain> {
     let text = std::fs::read_to_string(path).map_err(crate::error::io_err(path))?;
     let bad = |m: String| SurrogateError::Parse {
         path: path.to_path_buf(),
@@ -197,6 +199,12 @@ pub fn read_domain(path: &Path, names: &[String]) -> Result<Domain> {
         domain
             .check_names(names)
             .map_err(|e| bad(format!("the model's parameters: {e}")))?;
+    }
+    if let Some(i) = design.iter().position(|x| !domain.contains(x, 1e-9)) {
+        return Err(bad(format!(
+            "design row {} (CSV line) lies outside the domain",
+            i + 2
+        )));
     }
     Ok(domain)
 }

@@ -24,7 +24,6 @@ use nlvid_surrogate::{
 };
 
 use crate::output::print_text;
-use crate::say;
 
 /// Arguments of `build`.
 #[derive(Debug, Args)]
@@ -208,20 +207,10 @@ impl BuildArgs {
             );
         }
         let names = model.parameter_names();
-        let domain = self
-            .domain
-            .as_deref()
-            .map(|p| read_domain(p, &names))
-            .transpose()?;
-        if let Some(d) = &domain
-            && let Some(i) = design.rows.iter().position(|x| !d.contains(x, 1e-9))
-        {
-            bail!(
-                "{}: design row {} lies outside the domain of --domain",
-                design_path.display(),
-                i + 2
-            );
-        }
+        let domain = (self.domain.as_deref())
+            .map(|p| read_domain(p, &names, &design.rows))
+            .transpose()
+            .with_context(|| format!("--domain for --design {}", design_path.display()))?;
         run_set("design", &model, &design.rows, store, shard, self.quiet)?;
         if let Some(dir) = &self.export {
             let filters = filters(self.min_peak_force, self.reject_non_repulsive);

@@ -11,7 +11,6 @@ use std::time::Instant;
 use nlvid_report::demo::{DemoSpec, run_demo, write_demo_data};
 
 use super::{Context, Run};
-use crate::say;
 
 /// Raw arguments of `nlvid demo`.
 #[derive(Debug, clap::Args)]

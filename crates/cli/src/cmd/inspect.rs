@@ -35,9 +35,6 @@ pub struct Args {
     /// With --json: include every sample (time and channel values of each segment).
     #[arg(long)]
     pub samples: bool,
-    /// Set from the global `--json` flag.
-    #[arg(skip)]
-    pub json: bool,
     /// Spring constant replacing the file's, e.g. "0.12 N/m" (needed if the file has none).
     #[arg(long, value_name = "K", value_parser = |s: &str| si(s, Dimension::STIFFNESS))]
     pub spring_constant: Option<f64>,
@@ -87,7 +84,7 @@ impl Args {
     ///
     /// # Errors
     /// Unreadable file, a missing calibration, a fit that fails, unwritable outputs.
-    pub fn run(self) -> anyhow::Result<ExitCode> {
+    pub fn run(self, json: bool) -> anyhow::Result<ExitCode> {
         let options = ReadOptions {
             spring_constant: self.spring_constant,
             sensitivity: self.sensitivity,
@@ -127,7 +124,7 @@ impl Args {
         if let Some(path) = &self.plot {
             nlvid_afm::write_plot(path, &curve, fit.as_ref())?;
         }
-        if self.json {
+        if json {
             let mut v = nlvid_afm::summary_json(&curve, n_curves, self.samples);
             if let Some(f) = &fit {
                 v["fit"] = f.to_json();

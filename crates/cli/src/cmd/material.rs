@@ -14,7 +14,6 @@ use serde_json::json;
 
 use super::{Context, Run};
 use crate::output::{curve_json, next_to, parameters_json, print_json, provenance, write_atomic};
-use crate::say;
 
 /// Raw arguments of `nlvid material`.
 #[derive(Debug, clap::Args)]

@@ -16,7 +16,6 @@ use serde_json::json;
 
 use crate::args::quantity;
 use crate::output::{next_to, print_json, print_text, provenance, write_atomic};
-use crate::say;
 
 /// Arguments of `nlvid membrane`.
 #[derive(Debug, Args)]
@@ -36,9 +35,6 @@ pub struct MembraneArgs {
     /// (default: the last solve time).
     #[arg(long, value_delimiter = ',', value_parser = |s: &str| quantity(s.trim(), Dimension::TIME))]
     pub profile_times: Option<Vec<f64>>,
-    /// Set from the global `--json` flag.
-    #[arg(skip)]
-    pub json: bool,
 }
 
 /// Published data sets.
@@ -52,7 +48,7 @@ fn create(dir: &Path) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))
 }
 
-fn run_study(args: &MembraneArgs, path: &Path) -> anyhow::Result<ExitCode> {
+fn run_study(args: &MembraneArgs, path: &Path, json: bool) -> anyhow::Result<ExitCode> {
     let study = Study::load(path)?;
     let (name, prov) = (study.name().to_string(), provenance(&study));
     let sim = SimulateStudy::from_study(study)?;
@@ -80,11 +76,11 @@ fn run_study(args: &MembraneArgs, path: &Path) -> anyhow::Result<ExitCode> {
     }
     let wrote = format!("{} files in {}", files.len(), out.display());
     let files = json!({ "files": files, "out": out });
-    super::simulate::report(args.json, &name, &prov, &sim, &run, files, &wrote)?;
+    super::simulate::report(json, &name, &prov, &sim, &run, files, &wrote)?;
     Ok(ExitCode::SUCCESS)
 }
 
-fn run_reproduce(args: &MembraneArgs) -> anyhow::Result<ExitCode> {
+fn run_reproduce(args: &MembraneArgs, json: bool) -> anyhow::Result<ExitCode> {
     let out = args
         .out
         .clone()
@@ -107,7 +103,7 @@ fn run_reproduce(args: &MembraneArgs) -> anyhow::Result<ExitCode> {
     for n in &notes {
         eprintln!("note: {n}");
     }
-    if args.json {
+    if json {
         // Dimensionless quantities of eq. 2.47, named as the CSV columns.
         let table: Vec<_> = rows
             .iter()
@@ -133,10 +129,10 @@ fn run_reproduce(args: &MembraneArgs) -> anyhow::Result<ExitCode> {
 ///
 /// # Errors
 /// A bad study, a failed run, unwritable outputs.
-pub fn run(args: MembraneArgs) -> anyhow::Result<ExitCode> {
+pub fn run(args: MembraneArgs, json: bool) -> anyhow::Result<ExitCode> {
     match (&args.reproduce, &args.study) {
-        (Some(Reproduce::Thesis), _) => run_reproduce(&args),
-        (None, Some(p)) => run_study(&args, &p.clone()),
+        (Some(Reproduce::Thesis), _) => run_reproduce(&args, json),
+        (None, Some(p)) => run_study(&args, &p.clone(), json),
         (None, None) => bail!("give a study file or --reproduce thesis"),
     }
 }

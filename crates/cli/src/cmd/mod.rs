@@ -9,7 +9,6 @@
 //!    arm in [`Command::run`].
 //! 3. `docs/cli/foo.md`.
 
-use crate::say;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -133,15 +132,9 @@ impl Command {
             }
             Command::Check(a) => a.run(ctx),
             Command::Material(a) => a.run(ctx),
-            Command::Membrane(mut args) => {
-                args.json = ctx.json;
-                membrane::run(args)
-            }
+            Command::Membrane(args) => membrane::run(args, ctx.json),
             Command::Simulate(a) => a.run(ctx),
-            Command::Inspect(mut args) => {
-                args.json = ctx.json;
-                args.run()
-            }
+            Command::Inspect(args) => args.run(ctx.json),
             Command::Sample(a) => a.run(),
             Command::Build(a) => a.run(),
             Command::Merge(a) => a.run(),

@@ -8,7 +8,6 @@ use nlvid_report::report::{ReportOptions, write_report};
 use serde_json::json;
 
 use super::{Context, Run};
-use crate::say;
 
 /// Raw arguments of `nlvid report`.
 #[derive(Debug, clap::Args)]

@@ -6,10 +6,7 @@ use std::process::ExitCode;
 use anyhow::{Context, bail};
 use clap::Args;
 use nlvid_surrogate::doe::training_and_checking;
-use nlvid_surrogate::read_domain;
-
-use crate::say;
-use nlvid_surrogate::write_table;
+use nlvid_surrogate::{read_domain, write_table};
 
 /// Arguments of `sample`.
 #[derive(Debug, Args)]
@@ -47,7 +44,7 @@ impl SampleArgs {
             let (Some(dpath), Some(n)) = (&self.domain, self.n) else {
                 bail!("give a study file, or --domain FILE and -n N");
             };
-            let domain = read_domain(dpath, &[])?;
+            let domain = read_domain(dpath, &[], &[])?;
             let (train, check) = training_and_checking(
                 &domain,
                 n,

@@ -11,7 +11,6 @@ use nlvid_surrogate::{
 };
 
 use crate::output::{print_json, print_text, write_atomic};
-use crate::say;
 
 /// Kriging surrogates (DACE-equivalent).
 #[derive(Debug, Subcommand)]
