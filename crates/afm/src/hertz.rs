@@ -277,6 +277,12 @@ pub fn prepare_approach(curve: &ForceCurve, method: ContactMethod) -> Result<App
             |b, (i, v)| if *v > b.1 { (i, *v) } else { b },
         )
         .0;
+    if imax < 8 {
+        return Err(AfmError::NoContact(format!(
+            "the extend force is largest at sample {imax} of {}: the probe never pushes on the sample",
+            f.len()
+        )));
+    }
     let s = s[..=imax].to_vec();
     let f = &f[..=imax];
     let contact = contact_point(&s, f, method)?;

@@ -30,6 +30,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod batch;
 mod curve;
 mod error;
 pub mod geometry;
@@ -39,6 +40,7 @@ mod lee_radok;
 pub mod plot;
 mod prepare;
 
+pub use batch::{Batch, BatchRow, CurveFailure, for_each_curve};
 pub use curve::{Calibration, CalibrationSource, Channel, ForceCurve, Segment, SegmentKind};
 pub use error::{AfmError, Result};
 pub use hertz::{
@@ -46,6 +48,7 @@ pub use hertz::{
 };
 pub use jpk::{
     ReadOptions, read_force_curve, read_force_curve_with, read_force_map, read_jpk_bytes,
+    read_jpk_each,
 };
 pub use lee_radok::{
     LeeRadokFit, LeeRadokSettings, Prony, RampHold, fit_lee_radok, lee_radok_force,
