@@ -35,6 +35,7 @@ mod curve;
 mod error;
 pub mod geometry;
 mod hertz;
+mod indenter;
 mod jpk;
 mod lee_radok;
 pub mod plot;
@@ -44,8 +45,10 @@ pub use batch::{Batch, BatchRow, CurveFailure, for_each_curve};
 pub use curve::{Calibration, CalibrationSource, Channel, ForceCurve, Segment, SegmentKind};
 pub use error::{AfmError, Result};
 pub use hertz::{
-    Approach, HertzFit, HertzSettings, fit_hertz, hertz_baseline, hertz_force, prepare_approach,
+    Approach, ApproachFit, FitRange, FitWarning, HertzFit, HertzSettings, fit_approach, fit_curve,
+    fit_hertz, fit_warnings, hertz_baseline, modulus_vs_depth, prepare_approach,
 };
+pub use indenter::{Indenter, Validity, hertz_force};
 pub use jpk::{
     ReadOptions, read_force_curve, read_force_curve_with, read_force_map, read_jpk_bytes,
     read_jpk_each,
@@ -55,6 +58,6 @@ pub use lee_radok::{
     prepare_ramp_hold,
 };
 pub use prepare::{
-    Baseline, ContactMethod, ContactPoint, contact_point, contact_point_from_baseline, indentation,
-    tip_sample_separation,
+    Baseline, ContactMethod, ContactPoint, approach_baseline, contact_point,
+    contact_point_from_baseline, indentation, tip_sample_separation,
 };

@@ -115,3 +115,10 @@ pub fn fig5d() -> Vec<(String, Vec<u8>)> {
     e.sort();
     e
 }
+
+/// A standard normal deviate (Box–Muller) from `rng`.
+pub fn gauss(rng: &mut impl rand::RngExt) -> f64 {
+    let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
+    let u2: f64 = rng.random::<f64>();
+    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+}
