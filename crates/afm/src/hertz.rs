@@ -91,7 +91,7 @@ pub struct HertzFit {
     /// Indentation at the last fitted sample, m.
     pub max_indentation: f64,
     /// Interval of separations the contact point was searched in (the fitted samples'
-    /// range), m.
+    /// range, extended by a tenth of it beyond the first sample), m.
     pub search: (f64, f64),
     /// Fitted samples on the non-contact side (δ ≤ 0) of the fitted contact point.
     pub n_before_contact: usize,
@@ -191,11 +191,15 @@ pub fn fit_hertz(separation: &[f64], force: &[f64], settings: &HertzSettings) ->
         ));
     }
     let lo = separation.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = separation.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let span = hi - lo;
-    if span <= 0.0 {
+    let s_max = separation.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if s_max <= lo {
         return Err(AfmError::InvalidInput("separation does not vary".into()));
     }
+    // The contact may lie before the first fitted sample (a curve that starts in
+    // contact): search a tenth of the range beyond it, so that the least-squares optimum
+    // is found rather than clipped, and flagged by `contact_at_edge`.
+    let hi = s_max + 0.1 * (s_max - lo);
+    let span = hi - lo;
     let p = Profile {
         s: separation,
         f: force,
