@@ -2,8 +2,8 @@
 //! every curve that could not be read or analysed listed with its file, index and reason
 //! instead of stopping the batch.
 //!
-//! Files are read and analysed in parallel (rayon, one task per file); curves are not
-//! kept in memory once analysed, so a batch holds only the per-curve results.
+//! Files, and the curves of a map, are read and analysed in parallel (rayon); a curve is
+//! dropped once analysed, so a batch holds only the per-curve results.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -12,14 +12,16 @@ use rayon::prelude::*;
 
 use crate::curve::ForceCurve;
 use crate::error::{AfmError, Result};
-use crate::jpk::{ReadOptions, read_jpk_each};
+use crate::ibw::read_ibw_bytes;
+use crate::jpk::{JpkArchive, ReadOptions};
 
 /// File name endings of the instrument files a folder is searched for (lower case).
-pub const AFM_EXTENSIONS: [&str; 4] = [
+pub const AFM_EXTENSIONS: [&str; 5] = [
     ".jpk-force",
     ".jpk-force-map",
     ".jpk-qi-data",
     ".jpk-qi-series",
+    ".ibw",
 ];
 
 /// A curve (or a whole file) that could not be read or analysed.
@@ -75,6 +77,13 @@ pub fn is_afm_file(path: &Path) -> bool {
     AFM_EXTENSIONS.iter().any(|e| name.ends_with(e))
 }
 
+/// True for Asylum Research Igor binary waves (name ends in `.ibw`); every other file
+/// is read as JPK.
+fn is_ibw(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case("ibw"))
+}
+
 /// Expand `inputs`: files are kept as given (whatever their name); folders are searched
 /// recursively for AFM files (sorted by path). Returns (files, ignored, failures).
 fn expand<P: AsRef<Path>>(inputs: &[P]) -> (Vec<PathBuf>, Vec<PathBuf>, Vec<CurveFailure>) {
@@ -128,21 +137,6 @@ fn expand<P: AsRef<Path>>(inputs: &[P]) -> (Vec<PathBuf>, Vec<PathBuf>, Vec<Curv
     (files, ignored, failures)
 }
 
-/// Read one instrument file curve by curve (see [`read_jpk_each`]).
-///
-/// # Errors
-/// [`AfmError::Io`] if the file cannot be read; file-level reader errors.
-pub fn read_file_each(
-    path: &Path,
-    options: &ReadOptions,
-) -> Result<Vec<(Option<usize>, Result<ForceCurve>)>> {
-    let bytes = std::fs::read(path).map_err(|source| AfmError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    read_jpk_each(&bytes, &path.display().to_string(), options)
-}
-
 /// Read every curve of `inputs` (files, maps, folders) and apply `analyse` to each, in
 /// parallel over files. A file or curve that cannot be read, and a curve `analyse`
 /// rejects, becomes a [`CurveFailure`]; the batch always runs to the end.
@@ -160,29 +154,48 @@ where
     let per_file: Vec<(Vec<BatchRow<T>>, Vec<CurveFailure>)> = files
         .par_iter()
         .map(|file| {
+            let fail = |curve, error| CurveFailure {
+                file: file.clone(),
+                curve,
+                error,
+            };
+            let bytes = match std::fs::read(file) {
+                Ok(b) => b,
+                Err(source) => {
+                    let error = AfmError::Io {
+                        path: file.clone(),
+                        source,
+                    };
+                    return (Vec::new(), vec![fail(None, error)]);
+                }
+            };
+            let name = file.display().to_string();
+            let results: Vec<(Option<usize>, Result<T>)> = if is_ibw(file) {
+                match read_ibw_bytes(&bytes, &name, options) {
+                    Ok(c) => vec![(None, analyse(&c))],
+                    Err(error) => return (Vec::new(), vec![fail(None, error)]),
+                }
+            } else {
+                let archive = match JpkArchive::open(&bytes, &name, options) {
+                    Ok(a) => a,
+                    Err(error) => return (Vec::new(), vec![fail(None, error)]),
+                };
+                // Curves of a map in parallel too; each is dropped once analysed.
+                (0..archive.len())
+                    .into_par_iter()
+                    .map(|i| (archive.index(i), archive.read(i).and_then(|c| analyse(&c))))
+                    .collect()
+            };
             let mut rows = Vec::new();
             let mut fails = Vec::new();
-            match read_file_each(file, options) {
-                Err(error) => fails.push(CurveFailure {
-                    file: file.clone(),
-                    curve: None,
-                    error,
-                }),
-                Ok(curves) => {
-                    for (curve, read) in curves {
-                        match read.and_then(|c| analyse(&c)) {
-                            Ok(value) => rows.push(BatchRow {
-                                file: file.clone(),
-                                curve,
-                                value,
-                            }),
-                            Err(error) => fails.push(CurveFailure {
-                                file: file.clone(),
-                                curve,
-                                error,
-                            }),
-                        }
-                    }
+            for (curve, r) in results {
+                match r {
+                    Ok(value) => rows.push(BatchRow {
+                        file: file.clone(),
+                        curve,
+                        value,
+                    }),
+                    Err(error) => fails.push(fail(curve, error)),
                 }
             }
             (rows, fails)

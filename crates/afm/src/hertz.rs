@@ -108,59 +108,127 @@ impl HertzFit {
     }
 }
 
-struct Profile<'a> {
-    s: &'a [f64],
-    f: &'a [f64],
+/// The residual profiled over the contact point. Samples are kept sorted by separation
+/// so that a trial contact s_c touches only the samples in contact (s < s_c, a prefix);
+/// the baseline samples (s ≥ s_c, a suffix) enter through their count, mean and sum of
+/// squared deviations, accumulated from the far end (no cancellation).
+struct Profile {
+    /// Separations, ascending.
+    s: Vec<f64>,
+    /// Forces in the same order.
+    f: Vec<f64>,
+    /// Σ f over the suffix starting at k (length n + 1).
+    suffix_sum: Vec<f64>,
+    /// Mean and Σ (f − mean)² of the suffix starting at k (Welford, from the end).
+    suffix_m2: Vec<(f64, f64)>,
     indenter: Indenter,
     lo: f64,
     span: f64,
     fit_offset: bool,
-    /// shape(s_c − s_i) of the current trial.
+    /// shape(s_c − s_i) of the current trial, contact samples only.
     scratch: RefCell<Vec<f64>>,
 }
 
-impl Profile<'_> {
+impl Profile {
+    fn new(
+        separation: &[f64],
+        force: &[f64],
+        settings: &HertzSettings,
+        lo: f64,
+        span: f64,
+    ) -> Self {
+        let mut order: Vec<usize> = (0..separation.len()).collect();
+        order.sort_by(|&i, &j| separation[i].total_cmp(&separation[j]));
+        let s: Vec<f64> = order.iter().map(|&i| separation[i]).collect();
+        let f: Vec<f64> = order.iter().map(|&i| force[i]).collect();
+        let n = f.len();
+        let mut suffix_sum = vec![0.0; n + 1];
+        let mut suffix_m2 = vec![(0.0, 0.0); n + 1];
+        for k in (0..n).rev() {
+            suffix_sum[k] = suffix_sum[k + 1] + f[k];
+            let (mean, m2) = suffix_m2[k + 1];
+            let count = (n - k) as f64;
+            let delta = f[k] - mean;
+            let mean_new = mean + delta / count;
+            suffix_m2[k] = (mean_new, m2 + delta * (f[k] - mean_new));
+        }
+        Profile {
+            s,
+            f,
+            suffix_sum,
+            suffix_m2,
+            indenter: settings.indenter,
+            lo,
+            span,
+            fit_offset: settings.fit_offset,
+            scratch: RefCell::new(Vec::with_capacity(n)),
+        }
+    }
+
     /// Best (E*, b, sse) for contact point `sc`, with E* ≥ 0.
     fn solve(&self, sc: f64) -> (f64, f64, f64) {
-        let n = self.s.len() as f64;
+        // One dispatch per trial, then a loop the compiler can specialise.
+        match self.indenter {
+            Indenter::Paraboloid { radius } => {
+                let c = 4.0 / 3.0 * radius.sqrt();
+                self.solve_with(sc, |d| c * d * d.sqrt())
+            }
+            Indenter::Cone { .. } | Indenter::Pyramid { .. } => {
+                let c = self.indenter.shape(1.0);
+                self.solve_with(sc, |d| c * d * d)
+            }
+            Indenter::FlatPunch { radius } => self.solve_with(sc, |d| 2.0 * radius * d),
+            Indenter::Sphere { .. } => {
+                let ind = self.indenter;
+                self.solve_with(sc, |d| ind.shape(d))
+            }
+        }
+    }
+
+    fn solve_with(&self, sc: f64, shape: impl Fn(f64) -> f64) -> (f64, f64, f64) {
+        let n = self.s.len();
+        let nf = n as f64;
+        let k = self.s.partition_point(|&x| x < sc);
         let mut r = self.scratch.borrow_mut();
         r.clear();
-        let (mut sr, mut srr, mut sy, mut sry) = (0.0, 0.0, 0.0, 0.0);
-        for (s, y) in self.s.iter().zip(self.f) {
-            let g = self.indenter.shape(sc - s);
+        let (mut sr, mut srr, mut sry) = (0.0, 0.0, 0.0);
+        for (s, y) in self.s[..k].iter().zip(&self.f[..k]) {
+            let g = shape(sc - s);
             r.push(g);
             sr += g;
             srr += g * g;
-            sy += y;
             sry += g * y;
         }
+        let sy = self.suffix_sum[0];
         let (a, b) = if self.fit_offset {
-            let det = n * srr - sr * sr;
+            let det = nf * srr - sr * sr;
             if det > 0.0 {
-                let a = (n * sry - sr * sy) / det;
+                let a = (nf * sry - sr * sy) / det;
                 if a > 0.0 {
-                    (a, (sy - a * sr) / n)
+                    (a, (sy - a * sr) / nf)
                 } else {
-                    (0.0, sy / n)
+                    (0.0, sy / nf)
                 }
             } else {
-                (0.0, sy / n)
+                (0.0, sy / nf)
             }
         } else if srr > 0.0 {
             ((sry / srr).max(0.0), 0.0)
         } else {
             (0.0, 0.0)
         };
-        let sse = r
+        let contact: f64 = r
             .iter()
-            .zip(self.f)
+            .zip(&self.f[..k])
             .map(|(g, y)| (y - b - a * g).powi(2))
             .sum();
-        (a, b, sse)
+        let (mean, m2) = self.suffix_m2[k];
+        let baseline = m2 + (n - k) as f64 * (mean - b).powi(2);
+        (a, b, contact + baseline)
     }
 }
 
-impl CostFunction for Profile<'_> {
+impl CostFunction for Profile {
     type Param = f64;
     type Output = f64;
     fn cost(&self, x: &f64) -> std::result::Result<f64, argmin::core::Error> {
@@ -200,15 +268,7 @@ pub fn fit_hertz(separation: &[f64], force: &[f64], settings: &HertzSettings) ->
     // is found rather than clipped, and flagged by `contact_at_edge`.
     let hi = s_max + 0.1 * (s_max - lo);
     let span = hi - lo;
-    let p = Profile {
-        s: separation,
-        f: force,
-        indenter: settings.indenter,
-        lo,
-        span,
-        fit_offset: settings.fit_offset,
-        scratch: RefCell::new(Vec::with_capacity(n)),
-    };
+    let p = Profile::new(separation, force, settings, lo, span);
     // Grid scan on x = (s_c − lo)/span ∈ [0, 1].
     let g = settings.grid;
     let mut best = (0usize, f64::INFINITY);

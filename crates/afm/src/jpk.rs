@@ -111,132 +111,196 @@ pub fn read_jpk_bytes(
 /// the others.
 ///
 /// # Errors
-/// [`AfmError::NotZip`], [`AfmError::NotJpk`], or a reader error in the top-level or
-/// shared header; [`AfmError::InvalidInput`] for a nonsensical calibration override.
+/// As [`JpkArchive::open`].
 pub fn read_jpk_each(
     bytes: &[u8],
     source: &str,
     options: &ReadOptions,
 ) -> Result<Vec<(Option<usize>, Result<ForceCurve>)>> {
-    check_override(options)?;
-    let mut zip = ZipArchive::new(Cursor::new(bytes)).map_err(|e| AfmError::NotZip {
-        detail: e.to_string(),
-    })?;
-    let names: HashSet<String> = zip.file_names().map(str::to_owned).collect();
-    if !names.contains("header.properties") {
-        return Err(AfmError::NotJpk {
-            detail: "ZIP archive without header.properties".into(),
-        });
-    }
-    let header = read_props(&mut zip, "header.properties")?;
-    // A curve extracted from a map keeps the map's curve header (`type=force-scan-series`)
-    // in place of the file header.
-    let extracted = header
-        .get("type")
-        .is_some_and(|t| t.trim() == "force-scan-series");
-    if !header.contains_key("jpk-data-file")
-        && !header.contains_key("file-format-version")
-        && !extracted
-    {
-        return Err(AfmError::NotJpk {
-            detail: "header.properties has neither 'jpk-data-file' nor 'file-format-version' nor 'type=force-scan-series'"
-                .into(),
-        });
-    }
-    let shared_props = if names.contains(SHARED) {
-        Some(read_props(&mut zip, SHARED)?)
-    } else {
-        None
-    };
-    let format_version = header
-        .get("file-format-version")
-        .or_else(|| shared_props.as_ref()?.get("file-format-version"))
-        .cloned()
-        .unwrap_or_else(|| {
-            if shared_props.is_some() {
-                "2.0"
-            } else {
-                "unknown"
-            }
-            .into()
-        });
-    let shared = shared_props.as_ref().map(Shared::new);
-    // Shortest non-empty `...description.instrument` key (HashMap order is not stable).
-    let instrument = header
-        .iter()
-        .filter(|(k, v)| k.ends_with("description.instrument") && !v.trim().is_empty())
-        .min_by_key(|(k, _)| (k.len(), k.as_str()))
-        .map(|(_, v)| v.clone());
+    let archive = JpkArchive::open(bytes, source, options)?;
+    Ok((0..archive.len())
+        .map(|i| (archive.index(i), archive.read(i)))
+        .collect())
+}
 
-    // One pass over the entry names: segment ids per curve (None = single curve,
-    // Some(n) = curve n of a map under index/<n>/).
-    let mut layout: BTreeMap<Option<usize>, BTreeSet<usize>> = BTreeMap::new();
-    for n in &names {
-        let (curve, rest) = match n.strip_prefix("index/") {
-            Some(r) => match r.split_once('/') {
-                Some((i, rest)) => match i.parse::<usize>() {
-                    Ok(i) => (Some(i), rest),
-                    Err(_) => continue,
-                },
-                None => continue,
-            },
-            None => (None, n.as_str()),
-        };
-        if let Some(seg) = rest
-            .strip_prefix("segments/")
-            .and_then(|r| r.strip_suffix("/segment-header.properties"))
-            .and_then(|id| id.parse::<usize>().ok())
-        {
-            layout.entry(curve).or_default().insert(seg);
+/// A JPK archive held in memory, opened: headers read and curves located, no channel
+/// decoded yet. [`JpkArchive::read`] decodes one curve; it takes `&self`, so the curves
+/// of a map can be decoded in parallel.
+pub struct JpkArchive<'a> {
+    zip: Zip<'a>,
+    source: String,
+    names: HashSet<String>,
+    header: Props,
+    shared: Option<Shared>,
+    format_version: String,
+    instrument: Option<String>,
+    /// (curve index in the map or None, segment ids), in index order.
+    curves: Vec<(Option<usize>, BTreeSet<usize>)>,
+    options: ReadOptions,
+}
+
+impl<'a> JpkArchive<'a> {
+    /// Open the archive `bytes`, named `source` in errors and in [`ForceCurve::source`].
+    ///
+    /// # Errors
+    /// [`AfmError::NotZip`], [`AfmError::NotJpk`], or a reader error in the top-level or
+    /// shared header; [`AfmError::InvalidInput`] for a nonsensical calibration override.
+    pub fn open(bytes: &'a [u8], source: &str, options: &ReadOptions) -> Result<Self> {
+        check_override(options)?;
+        let mut zip = ZipArchive::new(Cursor::new(bytes)).map_err(|e| AfmError::NotZip {
+            detail: e.to_string(),
+        })?;
+        let names: HashSet<String> = zip.file_names().map(str::to_owned).collect();
+        if !names.contains("header.properties") {
+            return Err(AfmError::NotJpk {
+                detail: "ZIP archive without header.properties".into(),
+            });
         }
-    }
-    if layout.contains_key(&None) && layout.len() > 1 {
-        return Err(AfmError::NotJpk {
-            detail: "archive mixes a single-curve segments/ tree with force-map index/<n>/ curves"
-                .into(),
-        });
-    }
-    if layout.is_empty() {
-        return Err(AfmError::NotJpk {
-            detail: "no segments/<n>/segment-header.properties in the archive".into(),
-        });
+        let header = read_props(&mut zip, "header.properties")?;
+        // A curve extracted from a map keeps the map's curve header
+        // (`type=force-scan-series`) in place of the file header.
+        let extracted = header
+            .get("type")
+            .is_some_and(|t| t.trim() == "force-scan-series");
+        if !header.contains_key("jpk-data-file")
+            && !header.contains_key("file-format-version")
+            && !extracted
+        {
+            return Err(AfmError::NotJpk {
+                detail: "header.properties has neither 'jpk-data-file' nor 'file-format-version' nor 'type=force-scan-series'"
+                    .into(),
+            });
+        }
+        let shared_props = if names.contains(SHARED) {
+            Some(read_props(&mut zip, SHARED)?)
+        } else {
+            None
+        };
+        let format_version = header
+            .get("file-format-version")
+            .or_else(|| shared_props.as_ref()?.get("file-format-version"))
+            .cloned()
+            .unwrap_or_else(|| {
+                if shared_props.is_some() {
+                    "2.0"
+                } else {
+                    "unknown"
+                }
+                .into()
+            });
+        let shared = shared_props.as_ref().map(Shared::new);
+        // Shortest non-empty `...description.instrument` key (HashMap order is not stable).
+        let instrument = header
+            .iter()
+            .filter(|(k, v)| k.ends_with("description.instrument") && !v.trim().is_empty())
+            .min_by_key(|(k, _)| (k.len(), k.as_str()))
+            .map(|(_, v)| v.clone());
+
+        // One pass over the entry names: segment ids per curve (None = single curve,
+        // Some(n) = curve n of a map under index/<n>/).
+        let mut layout: BTreeMap<Option<usize>, BTreeSet<usize>> = BTreeMap::new();
+        for n in &names {
+            let (curve, rest) = match n.strip_prefix("index/") {
+                Some(r) => match r.split_once('/') {
+                    Some((i, rest)) => match i.parse::<usize>() {
+                        Ok(i) => (Some(i), rest),
+                        Err(_) => continue,
+                    },
+                    None => continue,
+                },
+                None => (None, n.as_str()),
+            };
+            if let Some(seg) = rest
+                .strip_prefix("segments/")
+                .and_then(|r| r.strip_suffix("/segment-header.properties"))
+                .and_then(|id| id.parse::<usize>().ok())
+            {
+                layout.entry(curve).or_default().insert(seg);
+            }
+        }
+        if layout.contains_key(&None) && layout.len() > 1 {
+            return Err(AfmError::NotJpk {
+                detail:
+                    "archive mixes a single-curve segments/ tree with force-map index/<n>/ curves"
+                        .into(),
+            });
+        }
+        if layout.is_empty() {
+            return Err(AfmError::NotJpk {
+                detail: "no segments/<n>/segment-header.properties in the archive".into(),
+            });
+        }
+        Ok(JpkArchive {
+            zip,
+            source: source.to_string(),
+            names,
+            header,
+            shared,
+            format_version,
+            instrument,
+            curves: layout.into_iter().collect(),
+            options: *options,
+        })
     }
 
-    let ctx = Ctx {
-        shared: shared.as_ref(),
-        options,
-    };
-    let mut curves = Vec::with_capacity(layout.len());
-    for (index, seg_ids) in layout {
-        let (prefix, name) = match index {
-            None => (String::new(), source.to_string()),
-            Some(i) => (format!("index/{i}/"), format!("{source}#{i}")),
-        };
-        let curve = (|| {
-            let curve_header = if prefix.is_empty() {
-                None
-            } else {
-                let entry = format!("{prefix}header.properties");
-                if names.contains(&entry) {
-                    Some(read_props(&mut zip, &entry)?)
-                } else {
-                    None
-                }
-            };
-            let position = curve_header
-                .as_ref()
-                .and_then(position_of)
-                .or_else(|| position_of(&header));
-            let mut curve = read_curve(&mut zip, &names, &prefix, &seg_ids, &ctx)?;
-            curve.source = name;
-            curve.format_version = format_version.clone();
-            curve.instrument = instrument.clone();
-            curve.position = position;
-            Ok(curve)
-        })();
-        curves.push((index, curve));
+    /// Number of curves (1 for a single-curve file).
+    pub fn len(&self) -> usize {
+        self.curves.len()
     }
-    Ok(curves)
+
+    /// True if the archive holds no curve (never after a successful [`JpkArchive::open`]).
+    pub fn is_empty(&self) -> bool {
+        self.curves.is_empty()
+    }
+
+    /// Index in the map of the `i`-th curve (`None` for a single-curve file).
+    pub fn index(&self, i: usize) -> Option<usize> {
+        self.curves.get(i).and_then(|c| c.0)
+    }
+
+    /// Decode the `i`-th curve (0-based position, not the map index).
+    ///
+    /// # Errors
+    /// Reader errors of that curve ([`AfmError`]); [`AfmError::InvalidInput`] if `i` is
+    /// out of range.
+    pub fn read(&self, i: usize) -> Result<ForceCurve> {
+        let (index, seg_ids) = self.curves.get(i).ok_or_else(|| {
+            AfmError::InvalidInput(format!(
+                "{}: curve {i} requested, the file holds {}",
+                self.source,
+                self.curves.len()
+            ))
+        })?;
+        let (prefix, name) = match index {
+            None => (String::new(), self.source.clone()),
+            Some(i) => (format!("index/{i}/"), format!("{}#{i}", self.source)),
+        };
+        let mut zip = self.zip.clone();
+        let curve_header = if prefix.is_empty() {
+            None
+        } else {
+            let entry = format!("{prefix}header.properties");
+            if self.names.contains(&entry) {
+                Some(read_props(&mut zip, &entry)?)
+            } else {
+                None
+            }
+        };
+        let position = curve_header
+            .as_ref()
+            .and_then(position_of)
+            .or_else(|| position_of(&self.header));
+        let ctx = Ctx {
+            shared: self.shared.as_ref(),
+            options: &self.options,
+        };
+        let mut curve = read_curve(&mut zip, &self.names, &prefix, seg_ids, &ctx)?;
+        curve.source = name;
+        curve.format_version = self.format_version.clone();
+        curve.instrument = self.instrument.clone();
+        curve.position = position;
+        Ok(curve)
+    }
 }
 
 pub(crate) fn check_override(options: &ReadOptions) -> Result<()> {

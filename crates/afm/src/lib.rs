@@ -35,6 +35,7 @@ mod curve;
 mod error;
 pub mod geometry;
 mod hertz;
+mod ibw;
 mod indenter;
 mod jpk;
 mod lee_radok;
@@ -48,10 +49,11 @@ pub use hertz::{
     Approach, ApproachFit, FitRange, FitWarning, HertzFit, HertzSettings, fit_approach, fit_curve,
     fit_hertz, fit_warnings, hertz_baseline, modulus_vs_depth, prepare_approach,
 };
+pub use ibw::read_ibw_bytes;
 pub use indenter::{Indenter, Validity, hertz_force};
 pub use jpk::{
-    ReadOptions, read_force_curve, read_force_curve_with, read_force_map, read_jpk_bytes,
-    read_jpk_each,
+    JpkArchive, ReadOptions, read_force_curve, read_force_curve_with, read_force_map,
+    read_jpk_bytes, read_jpk_each,
 };
 pub use lee_radok::{
     LeeRadokFit, LeeRadokSettings, Prony, RampHold, fit_lee_radok, lee_radok_force,
