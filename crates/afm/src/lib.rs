@@ -31,6 +31,7 @@
 #![warn(missing_docs)]
 
 pub mod batch;
+mod creep;
 mod curve;
 mod error;
 pub mod geometry;
@@ -43,6 +44,10 @@ pub mod plot;
 mod prepare;
 
 pub use batch::{Batch, BatchRow, CurveFailure, for_each_curve};
+pub use creep::{
+    Compliance, Creep, CreepFit, CreepSettings, creep_indentation, creep_objective, fit_creep,
+    prepare_creep,
+};
 pub use curve::{Calibration, CalibrationSource, Channel, ForceCurve, Segment, SegmentKind};
 pub use error::{AfmError, Result};
 pub use hertz::{
