@@ -191,14 +191,27 @@ impl Profile {
         let k = self.s.partition_point(|&x| x < sc);
         let mut r = self.scratch.borrow_mut();
         r.clear();
-        let (mut sr, mut srr, mut sry) = (0.0, 0.0, 0.0);
-        for (s, y) in self.s[..k].iter().zip(&self.f[..k]) {
-            let g = shape(sc - s);
-            r.push(g);
-            sr += g;
-            srr += g * g;
-            sry += g * y;
+        r.extend(self.s[..k].iter().map(|s| shape(sc - s)));
+        let y = &self.f[..k];
+        // Four partial sums per moment: independent dependency chains (the sums are
+        // the hot loop of a batch).
+        let (mut sr, mut srr, mut sry) = ([0.0; 4], [0.0; 4], [0.0; 4]);
+        let mut gc = r.chunks_exact(4);
+        let mut yc = y.chunks_exact(4);
+        for (g, y) in gc.by_ref().zip(yc.by_ref()) {
+            for l in 0..4 {
+                sr[l] += g[l];
+                srr[l] += g[l] * g[l];
+                sry[l] += g[l] * y[l];
+            }
         }
+        for (g, y) in gc.remainder().iter().zip(yc.remainder()) {
+            sr[0] += g;
+            srr[0] += g * g;
+            sry[0] += g * y;
+        }
+        let total = |v: [f64; 4]| (v[0] + v[1]) + (v[2] + v[3]);
+        let (sr, srr, sry) = (total(sr), total(srr), total(sry));
         let sy = self.suffix_sum[0];
         let (a, b) = if self.fit_offset {
             let det = nf * srr - sr * sr;
@@ -217,14 +230,22 @@ impl Profile {
         } else {
             (0.0, 0.0)
         };
-        let contact: f64 = r
-            .iter()
-            .zip(&self.f[..k])
-            .map(|(g, y)| (y - b - a * g).powi(2))
-            .sum();
+        let mut sse = [0.0; 4];
+        let mut gc = r.chunks_exact(4);
+        let mut yc = y.chunks_exact(4);
+        for (g, y) in gc.by_ref().zip(yc.by_ref()) {
+            for l in 0..4 {
+                let e = y[l] - b - a * g[l];
+                sse[l] += e * e;
+            }
+        }
+        for (g, y) in gc.remainder().iter().zip(yc.remainder()) {
+            let e = y - b - a * g;
+            sse[0] += e * e;
+        }
         let (mean, m2) = self.suffix_m2[k];
         let baseline = m2 + (n - k) as f64 * (mean - b).powi(2);
-        (a, b, contact + baseline)
+        (a, b, total(sse) + baseline)
     }
 }
 
