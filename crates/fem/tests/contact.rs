@@ -180,9 +180,7 @@ fn frictionless_plate_compression_matches_homogeneous_neo_hookean() {
         Support::fixed("axis", Component::R),
         Support::fixed("base", Component::Z),
     ];
-    let plane = RigidPlane {
-        surface: "top".into(),
-    };
+    let plane = RigidPlane::above("top");
     let mut model = Model::new(
         mesh,
         NeoHookean {
