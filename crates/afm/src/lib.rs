@@ -18,7 +18,7 @@
 //! Cost: reading a 10 000-point JPK file takes a few milliseconds (ZIP inflate + one pass
 //! per channel); an elastic fit is O(samples in contact) per contact-point trial, ~450
 //! trials; the Lee–Radok and creep fits are O(n) per objective evaluation (recursive
-//! exponential convolution). A batch of 1000 public curves costs ~4.5 s of CPU.
+//! exponential convolution). A batch of 1000 public curves costs ~2.4 s of CPU.
 //!
 //! ```
 //! use nlvid_afm::{ContactMethod, HertzSettings, SegmentKind, fit_hertz, prepare_approach, read_force_curve};
