@@ -244,18 +244,31 @@ if [ "$bench" = 1 ]; then
         t_array=$(secs "$t0" "$(now)")
         [ -f "$b/job/state/merge.ok" ] || { show_logs "$b/job"; die "benchmark merge failed"; }
         same_export "$b/job/export" "$b/local-export" > /dev/null
-        # Per task: wall time of the task script minus its nlvid build.
-        over=$(awk '/task-[0-9]*: start/ {for (i = 1; i <= NF; i++) if ($i == "epoch") s[FILENAME] = $(i + 1)}
-                    /: done, nlvid build took/ {for (i = 1; i <= NF; i++) {if ($i == "took") b[FILENAME] = $(i + 1); if ($i == "epoch") e[FILENAME] = $(i + 1)}}
-                    END {for (f in s) {n++; o += e[f] - s[f] - b[f]; w += e[f] - s[f]} printf "%.3f %.2f %d", o / n, w, n}' "$b"/job/logs/task-*.out)
-        merge_s=$(grep -h 'epoch' "$b"/job/logs/merge-*.out | awk '{print $NF}')
+        # From the task logs (epochs at script start and end, nlvid's own
+        # wall time): script overhead = task wall - its nlvid build.
+        read -r per_task task_sum n < <(awk '
+            /task-[0-9]*: start/ {for (i = 1; i <= NF; i++) if ($i == "epoch") s[FILENAME] = $(i + 1)}
+            /: done, nlvid build took/ {for (i = 1; i <= NF; i++) {if ($i == "took") b[FILENAME] = $(i + 1); if ($i == "epoch") e[FILENAME] = $(i + 1)}}
+            END {for (f in s) {n++; o += e[f] - s[f] - b[f]; w += e[f] - s[f]} printf "%.3f %.3f %d\n", o / n, w, n}' \
+            "$b"/job/logs/task-*.out)
+        merge_s=$(grep -h ', epoch' "$b"/job/logs/merge-*.out | awk '{print $NF}')
         last_end=$(grep -h ': done, nlvid build took' "$b"/job/logs/task-*.out | awk '{print $NF}' | sort -n | tail -n 1)
         first_start=$(grep -h ': start on' "$b"/job/logs/task-*.out | awk '{print $NF}' | sort -n | head -n 1)
-        read -r per_task task_sum n <<< "$over"
-        echo "run $r: nlvid build ${t_local} s; array + merge ${t_array} s (ratio $(awk "BEGIN {printf \"%.3f\", $t_array / $t_local}"));" \
-            "first task start -> last task end $(secs "$first_start" "$last_end") s;" \
-            "overhead per task (task script - its nlvid build) ${per_task} s over $n tasks;" \
-            "last task end -> merge done $(secs "$last_end" "$merge_s") s; byte-identical"
+        span=$(secs "$first_start" "$last_end")
+        # CPU-seconds the 2 CPUs sat idle between first start and last end,
+        # per task (dispatch gaps and the imbalance of the last tasks).
+        idle=$(awk "BEGIN {printf \"%.3f\", (2 * $span - $task_sum) / $n}")
+        # nlvid's fixed cost per task: a shard build with nothing left to run
+        # (start, read the study, make the design, open the store).
+        t1=$(now)
+        "$nlvid" build "$bstudy" --shard "1/$tasks" --store "$b/job/stores/task-0" --quiet > /dev/null
+        fixed=$(secs "$t1" "$(now)")
+        echo "run $r: nlvid build ${t_local} s; array + merge ${t_array} s" \
+            "(ratio $(awk "BEGIN {r = $t_array / $t_local; printf \"%.3f, %s 15 %%\", r, r <= 1.15 ? \"within\" : \"NOT within\"}")); byte-identical"
+        echo "    submit -> first task start $(secs "$t0" "$first_start") s; first start -> last task end ${span} s;" \
+            "last task end -> merge done $(secs "$last_end" "$merge_s") s"
+        echo "    per task ($n tasks): script overhead ${per_task} s, idle CPU ${idle} s," \
+            "nlvid fixed cost (no runs left) ${fixed} s; load $(cut -d' ' -f1-3 /proc/loadavg)"
     done
     echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)"
 fi
