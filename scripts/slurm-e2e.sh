@@ -12,7 +12,9 @@
 #   3. an array whose tasks fail: the merge job is cancelled,
 #      `nlvid slurm --status` says what to do; doing it completes the build;
 #   4. with --bench: wall time of the array build against `nlvid build` on
-#      the same runs, and the overhead per task.
+#      the same runs, and the overhead per task: (a) hertz-prony with runs
+#      that sleep 400 ms (insensitive to other users' load), (b) the CPU-bound
+#      membrane study.
 #
 # Usage (as root: it installs packages and starts slurmd):
 #   cargo build --release -p nlvid
@@ -229,10 +231,11 @@ wait_gone "$aid,$mid" 120
 same_export "$p3/job/export" "$p1/local-export"
 
 # --- 4. benchmark ----------------------------------------------------------------
-if [ "$bench" = 1 ]; then
-    bstudy=${BENCH_STUDY:-$repo/examples/metamodel/membrane.toml}
-    tasks=${BENCH_TASKS:-4}
-    say "4. benchmark: $(basename "$bstudy"), array of $tasks tasks (1 CPU each) vs nlvid build (2 threads)"
+# bench_study LABEL STUDY TASKS: array of TASKS tasks (1 CPU each) + merge
+# against `nlvid build` (2 threads) on the same runs, BENCH_REPEAT times.
+bench_study() {
+    local label=$1 bstudy=$2 tasks=$3 r b t0 t1 t_local t_array fair
+    say "4$label. benchmark: $(basename "$bstudy"), array of $tasks tasks (1 CPU each) vs nlvid build (2 threads)"
     echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)"
     # Linux autogroup gives every session one equal CPU share on a busy
     # machine, and Slurm starts each task in a session of its own: 2 running
@@ -245,7 +248,7 @@ if [ "$bench" = 1 ]; then
         echo "autogroup on: array tasks at autogroup nice 3, nlvid build in its own session at 0"
     fi
     for r in $(seq "${BENCH_REPEAT:-3}"); do
-        b=$work/bench-$r
+        b=$work/bench$label-$r
         mkdir -p "$b"
         t0=$(now)
         setsid -w "$nlvid" build "$bstudy" --store "$b/local-store" --export "$b/local-export" \
@@ -294,6 +297,17 @@ if [ "$bench" = 1 ]; then
             "nlvid fixed cost (no runs left) ${fixed} s; load $(cut -d' ' -f1-3 /proc/loadavg)"
     done
     echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)"
+}
+if [ "$bench" = 1 ]; then
+    # a. Runs that sleep (test_delay 400 ms, hertz-prony): CPU contention
+    #    from other users hardly matters, so the difference is what Slurm
+    #    and the task scripts add.
+    sed 's/^model = "hertz-prony"$/&\ntest_delay = "400 ms"/' \
+        "$repo/examples/metamodel/hertz-prony.toml" > "$work/sleepy.toml"
+    bench_study a "$work/sleepy.toml" 4
+    # b. A CPU-bound study (the ch. II membrane solver).
+    bench_study b "${BENCH_STUDY:-$repo/examples/metamodel/membrane.toml}" "${BENCH_TASKS:-4}"
 fi
+
 
 say "all passed"
