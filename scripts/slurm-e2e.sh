@@ -21,7 +21,7 @@
 #   scripts/slurm-e2e.sh [--bench]
 # Environment: NLVID (default target/release/nlvid), E2E_DIR (default
 # target/slurm-e2e), BENCH_STUDY (default examples/metamodel/membrane.toml),
-# BENCH_TASKS (4), BENCH_REPEAT (3), SLURM_PORTS (16817-16818).
+# BENCH_TASKS (2), BENCH_REPEAT (3), SLURM_PORTS (16817-16818).
 set -euo pipefail
 
 repo=$(cd "$(dirname "$0")/.." && pwd)
@@ -304,9 +304,9 @@ if [ "$bench" = 1 ]; then
     #    and the task scripts add.
     sed 's/^model = "hertz-prony"$/&\ntest_delay = "400 ms"/' \
         "$repo/examples/metamodel/hertz-prony.toml" > "$work/sleepy.toml"
-    bench_study a "$work/sleepy.toml" 4
+    bench_study a "$work/sleepy.toml" "${BENCH_TASKS:-2}"
     # b. A CPU-bound study (the ch. II membrane solver).
-    bench_study b "${BENCH_STUDY:-$repo/examples/metamodel/membrane.toml}" "${BENCH_TASKS:-4}"
+    bench_study b "${BENCH_STUDY:-$repo/examples/metamodel/membrane.toml}" "${BENCH_TASKS:-2}"
 fi
 
 
