@@ -13,7 +13,7 @@
 #      `nlvid slurm --status` says what to do; doing it completes the build;
 #   4. with --bench: wall time of the array build against `nlvid build` on
 #      the same runs, and the overhead per task: (a) hertz-prony with runs
-#      that sleep 400 ms (insensitive to other users' load), (b) the CPU-bound
+#      that sleep (test_delay) (insensitive to other users' load), (b) the CPU-bound
 #      membrane study.
 #
 # Usage (as root: it installs packages and starts slurmd):
@@ -21,7 +21,8 @@
 #   scripts/slurm-e2e.sh [--bench]
 # Environment: NLVID (default target/release/nlvid), E2E_DIR (default
 # target/slurm-e2e), BENCH_STUDY (default examples/metamodel/membrane.toml),
-# BENCH_TASKS (2), BENCH_REPEAT (3), SLURM_PORTS (16817-16818).
+# BENCH_TASKS (2), BENCH_REPEAT (3), BENCH_DELAY (400 ms: the sleep of benchmark a),
+# BENCH_CPU (1; 0 skips benchmark b), SLURM_PORTS (16817-16818).
 set -euo pipefail
 
 repo=$(cd "$(dirname "$0")/.." && pwd)
@@ -302,11 +303,13 @@ if [ "$bench" = 1 ]; then
     # a. Runs that sleep (test_delay 400 ms, hertz-prony): CPU contention
     #    from other users hardly matters, so the difference is what Slurm
     #    and the task scripts add.
-    sed 's/^model = "hertz-prony"$/&\ntest_delay = "400 ms"/' \
+    sed "s/^model = \"hertz-prony\"\$/&\ntest_delay = \"${BENCH_DELAY:-400 ms}\"/" \
         "$repo/examples/metamodel/hertz-prony.toml" > "$work/sleepy.toml"
     bench_study a "$work/sleepy.toml" "${BENCH_TASKS:-2}"
     # b. A CPU-bound study (the ch. II membrane solver).
-    bench_study b "${BENCH_STUDY:-$repo/examples/metamodel/membrane.toml}" "${BENCH_TASKS:-2}"
+    if [ "${BENCH_CPU:-1}" = 1 ]; then
+        bench_study b "${BENCH_STUDY:-$repo/examples/metamodel/membrane.toml}" "${BENCH_TASKS:-2}"
+    fi
 fi
 
 
