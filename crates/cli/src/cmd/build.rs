@@ -226,7 +226,12 @@ impl BuildArgs {
                     path.display()
                 );
             };
-            let export_dir = self.export.clone().or(st.export.clone());
+            // The tasks of an array would all write `[build] export` at
+            // once: a shard exports only when asked with --export.
+            let export_dir = match shard {
+                Some(_) => self.export.clone(),
+                None => self.export.clone().or(st.export.clone()),
+            };
             let (train, check) = st.design.designs()?;
             let mut sets = vec![("train", train)];
             if !check.is_empty() {
