@@ -14,8 +14,8 @@ use std::path::{Path, PathBuf};
 
 use nlvid_model::Relaxation;
 use nlvid_stats::{
-    Method, ResultsTable, compare_over_time, effect, group_curves, mean_sd, rank_sum,
-    read_results, relaxation_amounts,
+    Method, ResultsTable, compare_over_time, effect, group_curves, mean_sd, rank_sum, read_results,
+    relaxation_amounts,
 };
 
 use crate::cell::{CellResult, CellStatus};

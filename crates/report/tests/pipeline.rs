@@ -6,12 +6,12 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+use nlvid_model::Relaxation;
 use nlvid_report::cell::CellStatus;
 use nlvid_report::cohort::{self, RunOptions};
 use nlvid_report::demo::{DemoSpec, write_demo_data};
 use nlvid_report::report::{ReportOptions, write_report};
 use nlvid_report::settings::CohortSettings;
-use nlvid_model::Relaxation;
 use nlvid_stats::{Method, rank_sum, read_results, relaxation_amounts};
 
 fn repo_demo() -> PathBuf {
