@@ -25,8 +25,7 @@ use std::path::Path;
 use anyhow::{Context, bail};
 use nlvid_inverse::{
     BasisExperiment, BasisMisfit, Coordinates, KrigingSurrogate, Model, MultiStart, Objective,
-    Precomputed, SurrogateCurve, SurrogateMisfit, gram, range_normalised_rmse,
-    read_meta,
+    Precomputed, SurrogateCurve, SurrogateMisfit, gram, range_normalised_rmse, read_meta,
 };
 use nlvid_surrogate::KrigingModel;
 use rand::{RngExt, SeedableRng};

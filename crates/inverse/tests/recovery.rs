@@ -3,8 +3,7 @@
 //! surrogate until `nlvid build` exists).
 
 use nlvid_inverse::{
-    Experiment, LeeRadokHertz, Misfit, Model, MultiStart, ramp_hold_grid,
-    ramp_hold_indentation,
+    Experiment, LeeRadokHertz, Misfit, Model, MultiStart, ramp_hold_grid, ramp_hold_indentation,
 };
 use nlvid_model::Domain;
 use rand::{RngExt, SeedableRng};

@@ -15,8 +15,7 @@ use std::path::PathBuf;
 
 use nlvid_inverse::{
     BasisExperiment, BasisMisfit, Coordinates, ForwardFromModel, KrigingSurrogate, LeeRadokHertz,
-    Model, MultiStart, gram, ramp_hold_grid, ramp_hold_indentation,
-    range_normalised_rmse,
+    Model, MultiStart, gram, ramp_hold_grid, ramp_hold_indentation, range_normalised_rmse,
 };
 use nlvid_model::Domain;
 use nlvid_surrogate::doe::{SampleSettings, sample};

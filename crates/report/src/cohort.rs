@@ -349,10 +349,10 @@ pub fn run_cohort(
                 }
                 return Ok(Some((r, false)));
             }
-            if let Some(max) = opts.max_new_fits {
-                if started.fetch_add(1, Ordering::SeqCst) >= max {
-                    return Ok(None);
-                }
+            if let Some(max) = opts.max_new_fits
+                && started.fetch_add(1, Ordering::SeqCst) >= max
+            {
+                return Ok(None);
             }
             let r = fit_cell(settings, &model, c);
             let bytes = serde_json::to_vec(&r).map_err(|e| ReportError::io(&path, e))?;
