@@ -45,10 +45,12 @@ pub mod geometry;
 mod hertz;
 mod ibw;
 mod indenter;
+mod inspect;
 mod jpk;
 mod lee_radok;
 pub mod plot;
 mod prepare;
+mod ramp_hold;
 
 pub use batch::{Batch, BatchRow, CurveFailure, for_each_curve};
 pub use creep::{
@@ -63,6 +65,9 @@ pub use hertz::{
 };
 pub use ibw::read_ibw_bytes;
 pub use indenter::{Indenter, Validity, hertz_force};
+pub use inspect::{
+    QuickFit, QuickFitKind, quick_fit, range, summary_json, summary_text, write_plot,
+};
 pub use jpk::{
     JpkArchive, ReadOptions, read_force_curve, read_force_curve_with, read_force_map,
     read_jpk_bytes, read_jpk_each,
@@ -72,3 +77,4 @@ pub use prepare::{
     Baseline, ContactMethod, ContactPoint, approach_baseline, contact_point,
     contact_point_from_baseline, indentation, tip_sample_separation,
 };
+pub use ramp_hold::read_ramp_hold;

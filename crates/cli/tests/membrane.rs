@@ -1,92 +1,94 @@
-//! `nlvid membrane <study>`: ch. II's modulus is `G10` (G1(0)) in the study
-//! keys and the CSV headers, the long-term fractions are `g1_long_term`,
-//! `g2_long_term`; the old keys fail naming the new one
-//! (docs/theory/model.md).
+//! `nlvid membrane <study>`: the `membrane` model of `[forward]`,
+//! `[protocol]`, `[parameters]` (the schema `nlvid build` reads). Ch. II's
+//! modulus is `G10` (G1(0)), the long-term fractions are `g1_long_term`,
+//! `g2_long_term` (docs/theory/model.md); the former `[membrane]` section
+//! and the old names fail naming the new ones.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers
 
 mod common;
 use common::{nlvid, scratch, text};
 
-const RAMP: &str = "[membrane]\ncontrol = \"displacement\"\nprogram = \"ramp\"\nvalue = 0.2\n\
-                    rate = 0.2\nt_end = 1.0\nsteps = 4\n";
+const STUDY: &str = r#"
+[forward]
+model = "membrane"
+radius = "10 um"
+wall_thickness = "0.1 um"
+nodes = 48
+points = 5
 
-fn run(dir: &std::path::Path, body: &str) -> std::process::Output {
-    let study = dir.join("m.toml");
-    std::fs::write(&study, format!("{RAMP}{body}")).unwrap();
-    nlvid(&[
-        "membrane",
-        study.to_str().unwrap(),
-        "--out",
-        dir.join("out").to_str().unwrap(),
-    ])
+[protocol]
+kind = "ramp-hold"
+displacement = "2 um"
+speed = "4 um/s"
+hold = "0.5 s"
+"#;
+
+fn params(g10: &str) -> String {
+    format!(
+        "[parameters]\nG10 = \"{g10}\"\ngamma0 = 0.1\ng1_long_term = 0.5\ng2_long_term = 0.5\n\
+         tau1 = \"1 s\"\ntau2 = \"1 s\"\n"
+    )
 }
 
-#[test]
-fn scaled_history_uses_g10_and_its_si_force_is_the_dimensionless_force_times_g10_h0_r0() {
-    let dir = scratch("membrane-g10");
-    let out = run(
-        &dir,
-        "[membrane.material]\ngamma0 = 0.1\ng1_long_term = 0.5\ng2_long_term = 0.5\n\
-         [membrane.scale]\nr0 = \"10 um\"\nh0 = \"0.1 um\"\nG10 = \"2 kPa\"\ntau1 = \"1 s\"\n",
-    );
-    assert!(out.status.success(), "{}", text(&out.stderr));
-    assert!(
-        text(&out.stdout).contains("F/(G10 h0 r0)"),
-        "{}",
-        text(&out.stdout)
-    );
-    let csv = std::fs::read_to_string(dir.join("out/history.csv")).unwrap();
+fn run(dir: &std::path::Path, name: &str, body: &str) -> std::process::Output {
+    let study = dir.join(format!("{name}.toml"));
+    std::fs::write(&study, format!("{STUDY}{body}")).unwrap();
+    nlvid(&["membrane", study.to_str().unwrap()])
+}
+
+/// Column `name` of `<dir>/<stem>.membrane/history.csv`.
+fn column(dir: &std::path::Path, stem: &str, name: &str) -> Vec<f64> {
+    let csv = std::fs::read_to_string(dir.join(format!("{stem}.membrane/history.csv"))).unwrap();
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
-    let col = |name: &str| {
-        header
-            .iter()
-            .position(|h| *h == name)
-            .unwrap_or_else(|| panic!("no column {name} in {header:?}"))
-    };
-    let (fbar, f_si) = (col("F_over_G10h0r0"), col("F_N"));
-    assert!(!csv.contains("C1"), "{}", csv.lines().next().unwrap());
-    let mut rows = 0;
-    for line in csv.lines().skip(1) {
-        let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
-        // F = F̄ · G10 h0 r0 with G10 = 2 kPa, h0 = 0.1 µm, r0 = 10 µm.
-        let by_hand = v[fbar] * 2000.0 * 0.1e-6 * 10e-6;
-        assert!(
-            (v[f_si] - by_hand).abs() <= 1e-12 * by_hand.abs().max(1e-30),
-            "{line}"
-        );
-        rows += 1;
+    assert!(!csv.contains("C1"), "{header:?}");
+    let j = header.iter().position(|h| *h == name).unwrap();
+    csv.lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(j).unwrap().parse().unwrap())
+        .collect()
+}
+
+/// The solver works in eq. 2.47's units, so F = F̄ · G10 h0 r0 with F̄
+/// independent of G10: doubling G10 doubles the force at every time and
+/// leaves the displacement as it is.
+#[test]
+fn the_si_force_scales_with_g10_and_the_displacement_does_not() {
+    let dir = scratch("membrane-g10");
+    for (stem, g10) in [("a", "2 kPa"), ("b", "4 kPa")] {
+        let out = run(&dir, stem, &params(g10));
+        assert!(out.status.success(), "{}", text(&out.stderr));
     }
-    assert!(rows >= 5, "{rows} rows");
+    let (fa, fb) = (column(&dir, "a", "force_N"), column(&dir, "b", "force_N"));
+    assert!(fa.len() >= 5, "{fa:?}");
+    assert!(fa.iter().any(|f| *f > 0.0));
+    for (a, b) in fa.iter().zip(&fb) {
+        assert!((b - 2.0 * a).abs() <= 1e-12 * a.abs().max(1e-30), "{a} {b}");
+    }
+    assert_eq!(
+        column(&dir, "a", "displacement_m"),
+        column(&dir, "b", "displacement_m")
+    );
 }
 
 #[test]
-fn old_membrane_keys_fail_naming_the_new_key() {
+fn old_membrane_keys_fail_naming_the_new_ones() {
     let dir = scratch("membrane-old-keys");
     let out = run(
         &dir,
-        "[membrane.material]\n[membrane.scale]\nr0 = \"10 um\"\nh0 = \"0.1 um\"\nc1 = \"2 kPa\"\n\
-         tau1 = \"1 s\"\n",
+        "old",
+        "[membrane]\ncontrol = \"displacement\"\nprogram = \"ramp\"\n",
     );
     assert_eq!(out.status.code(), Some(1));
     let e = text(&out.stderr);
     assert!(
-        e.contains("m.toml:12") && e.contains("membrane.scale.c1") && e.contains("`G10`"),
+        e.contains("old.toml") && e.contains("[forward]") && e.contains("[parameters]"),
         "{e}"
     );
-
-    let out = run(&dir, "[membrane.material]\ng1 = 0.5\n");
-    assert_eq!(out.status.code(), Some(1));
-    let e = text(&out.stderr);
-    assert!(
-        e.contains("membrane.material.g1") && e.contains("`g1_long_term`"),
-        "{e}"
-    );
-
-    let out = run(&dir, "[membrane.material]\nC1 = 1.0\n");
-    assert_eq!(out.status.code(), Some(1));
-    let e = text(&out.stderr);
-    assert!(
-        e.contains("membrane.material.C1") && e.contains("G10"),
-        "{e}"
-    );
+    for (old, new) in [("C1", "G10"), ("g1", "g1_long_term")] {
+        let body = params("2 kPa").replace(&format!("\n{new} ="), &format!("\n{old} ="));
+        let out = run(&dir, "old", &body);
+        assert_eq!(out.status.code(), Some(1));
+        let e = text(&out.stderr);
+        assert!(e.contains(&format!("`parameters.{new}`")), "{old}: {e}");
+    }
 }

@@ -52,6 +52,7 @@ mod error;
 mod hertz;
 mod lee_radok;
 mod membrane;
+pub mod simulate;
 
 use std::time::Duration;
 
@@ -67,6 +68,7 @@ pub use lee_radok::LeeRadok;
 pub use membrane::{
     MembraneModel, MembraneSpec, PARAMETERS as MEMBRANE_PARAMETERS, membrane_failure,
 };
+pub use simulate::{SimulateStudy, Simulation};
 
 /// Which forward model, with all its settings.
 #[derive(Debug, Clone, PartialEq)]
@@ -143,17 +145,9 @@ impl ForwardSettings {
             Kind::AfmFe => {
                 let mut ps = study.section("protocol")?;
                 let settings = ProtocolSettings::from_section(&mut ps)?;
-                let ProtocolLoading::Afm(script) = &settings.loading else {
-                    return Err(ps
-                        .invalid(
-                            "kind",
-                            "model `afm-fe` needs kind = \"afm\" (the two-step AFM script)",
-                        )
-                        .into());
-                };
                 let m = points(&mut f, Some((&ps, &settings)))?;
                 ps.finish()?;
-                ForwardSpec::AfmFe(AfmFeSpec::from_section(&mut f, script.clone(), m)?)
+                ForwardSpec::AfmFe(AfmFeSpec::from_section(&mut f, settings.loading, m)?)
             }
             Kind::Membrane => {
                 let mut ps = study.section("protocol")?;

@@ -210,6 +210,35 @@ pub fn membrane_failure(e: &MembraneError) -> RunFailure {
     }
 }
 
+impl MembraneModel {
+    /// One full run at `p` (SI, the order of `parameter_names`): the
+    /// dimensionless history and the profiles kept at the solve times
+    /// nearest to `profile_times` (s). Scale the history with
+    /// [`MembraneModel::scales`].
+    ///
+    /// # Errors
+    /// Bad parameters; the solver's errors (wrinkling, non-convergence).
+    pub fn run_full(
+        &self,
+        p: &[f64],
+        profile_times: &[f64],
+    ) -> std::result::Result<nlvid_membrane::MembraneRun, RunFailure> {
+        let params = self.params(p)?;
+        let loading = self.loading.clone().with_profiles(profile_times);
+        simulate(&params, &self.geometry, &loading).map_err(|e| membrane_failure(&e))
+    }
+
+    /// The scales of eq. 2.47 at `p`: length r0 (m), wall thickness h0 (m)
+    /// and stress G1(0) (Pa): force F = F̄·G1(0)·h0·r0, pressure
+    /// p = p̄·G1(0)·h0/r0, tension T = T̄·G1(0)·h0.
+    ///
+    /// # Errors
+    /// A parameter vector of the wrong length.
+    pub fn scales(&self, p: &[f64]) -> std::result::Result<(f64, f64, f64), RunFailure> {
+        Ok((self.r0, self.h0, self.params(p)?.g10))
+    }
+}
+
 impl ForwardModel for MembraneModel {
     fn parameter_names(&self) -> Vec<String> {
         PARAMETERS.map(String::from).to_vec()

@@ -62,6 +62,7 @@
 #![warn(missing_docs)]
 
 mod cube_root;
+mod curve;
 mod error;
 mod history;
 pub mod homogeneous;
@@ -76,6 +77,7 @@ pub mod reference;
 mod spec;
 
 pub use cube_root::cube_root;
+pub use curve::samples_curve;
 pub use error::{MaterialError, Result};
 pub use history::HistoryRule;
 pub use hyperelastic::MooneyRivlin;

@@ -51,7 +51,9 @@ pub mod plot;
 mod shooting;
 mod simulate;
 mod solver;
+mod tables;
 pub mod thesis;
+pub use tables::{table2_1_csv, table2_1_text};
 
 pub use error::{MembraneError, Result};
 pub use models::{

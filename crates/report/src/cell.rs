@@ -19,8 +19,8 @@ use nlvid_inverse::{
 use nlvid_model::{BoundSide, Domain};
 use serde::{Deserialize, Serialize};
 
-use crate::cohort::{CellInput, Geometry};
 use crate::error::Result;
+use crate::input::{CellInput, Geometry};
 use crate::settings::{CohortSettings, ForwardModel};
 
 /// Outcome class of a cell.
@@ -255,7 +255,7 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
     if t_last - t_first < needed * (1.0 - 1e-9) {
         return fail(format!(
             "the curve covers {:.4} s but the fitted window needs {needed} s \
-             (protocol.hold_end / the model's time grid)",
+             (fit.hold_end / the model's time grid)",
             t_last - t_first,
         ));
     }
@@ -440,8 +440,8 @@ mod tests {
         let study = dir.join("study.toml");
         std::fs::write(
             &study,
-            "[probe]\nradius = \"2.5 um\"\npoisson = 0.5\n[afm]\nspring_constant = \"0.1 N/m\"\n\
-             [protocol]\nramp = \"1 s\"\nhold_end = \"3 s\"\n",
+            "[probe]\nradius = \"2.5 um\"\npoisson = 0.5\n[fit]\nramp = \"1 s\"\n\
+             hold_end = \"3 s\"\n[fit.calibration]\nspring_constant = \"0.1 N/m\"\n",
         )
         .unwrap();
         CohortSettings::load(&study).unwrap()

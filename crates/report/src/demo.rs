@@ -314,6 +314,98 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
     })
 }
 
+/// The bundled example: `given`, else `examples/demo` in the current
+/// directory, else `built` (the source tree the binary was built from).
+///
+/// # Errors
+/// None of them holds a `study.toml`.
+pub fn demo_dir(given: Option<PathBuf>, built: &Path) -> Result<PathBuf> {
+    if let Some(d) = given {
+        return Ok(d);
+    }
+    let here = PathBuf::from("examples/demo");
+    if here.join("study.toml").is_file() {
+        return Ok(here);
+    }
+    if built.join("study.toml").is_file() {
+        // Print `/…/examples/demo`, not `/…/crates/cli/../../examples/demo`.
+        return Ok(std::fs::canonicalize(built).unwrap_or_else(|_| built.to_path_buf()));
+    }
+    Err(ReportError::InvalidSetting(format!(
+        "no bundled example: neither ./examples/demo nor {} has a study.toml; give --demo DIR",
+        built.display()
+    )))
+}
+
+/// Runs the bundled example in `demo` end to end into `out`: `nlvid cohort`
+/// (into `out/cohort`, `on_cell` after each cell), `nlvid compare` on the
+/// cells in memory, `nlvid report`; each step and its outcome are handed to
+/// `say` as text. Returns the report's files.
+///
+/// # Errors
+/// A bad bundled study, unwritable outputs, or `say` failing.
+pub fn run_demo(
+    demo: &Path,
+    out: &Path,
+    on_cell: Option<&(dyn Fn(&crate::cell::CellResult) + Sync)>,
+    say: &mut dyn FnMut(&str) -> std::io::Result<()>,
+) -> Result<crate::report::ReportFiles> {
+    let io = ReportError::Output;
+    let (study, data) = (demo.join("study.toml"), demo.join("data"));
+    let settings = CohortSettings::load(&study)?;
+    let cells = crate::cohort::discover(&data)?;
+    let mut text = format!(
+        "1. bundled study {}: {} cells made by the forward model from known parameters \
+         (truth: {})\n",
+        study.display(),
+        cells.len(),
+        demo.join("ground_truth.csv").display()
+    );
+    if let Some(f) = &settings.surrogate {
+        let _ = writeln!(
+            text,
+            "   fitted on the pre-built meta-model {} of `{}`",
+            f.model.display(),
+            f.forward
+        );
+    }
+    let cohort_dir = out.join("cohort");
+    let _ = writeln!(
+        text,
+        "2. nlvid cohort {} {} --out {}",
+        study.display(),
+        data.display(),
+        cohort_dir.display()
+    );
+    say(&text).map_err(io)?;
+    let opts = crate::cohort::RunOptions {
+        max_new_fits: None,
+        on_cell,
+    };
+    let run = crate::cohort::run_cohort(&settings, &study, &data, &cells, &cohort_dir, &opts)?;
+    // The results table and the report use the cells in memory.
+    let table = crate::cohort::results_table(&run.cells)?;
+    let results = cohort_dir.join("results.csv");
+    say(&format!(
+        "{}3. nlvid compare {}\n",
+        run.text(),
+        results.display()
+    ))
+    .map_err(io)?;
+    let times: Vec<f64> = (0..53)
+        .map(|i| settings.hold_end * i as f64 / 52.0)
+        .collect();
+    let cmp = crate::compare::compare(&results, table, None, &times, "matlab", &cohort_dir)?;
+    say(&format!(
+        "{}4. nlvid report {}\n",
+        cmp.text(),
+        cohort_dir.display()
+    ))
+    .map_err(io)?;
+    let opts = crate::report::ReportOptions::default();
+    crate::report::write_report_of(&cohort_dir, &run.record, &run.cells, &opts)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -58,6 +58,9 @@ pub enum StatsError {
         /// What is wrong.
         message: String,
     },
+    /// A group comparison cannot be made as asked (grid, groups).
+    #[error("group comparison: {0}")]
+    Comparison(String),
     /// Writing an output failed.
     #[error("cannot write output: {0}")]
     Write(String),

@@ -30,6 +30,7 @@
 
 #![warn(missing_docs)]
 
+mod comparison;
 mod effect;
 mod error;
 mod groups;
@@ -38,6 +39,7 @@ mod rank;
 mod ranksum;
 mod results;
 
+pub use comparison::{Comparison, Contrast, GroupSummary, PairComparison, compare_groups};
 pub use effect::{Effect, cliffs_delta, effect, hodges_lehmann, rank_biserial};
 pub use error::{Result, StatsError};
 pub use groups::{

@@ -48,9 +48,13 @@ mod error;
 mod kriging;
 mod likelihood;
 pub mod optimise;
+mod options;
 mod regression;
 pub mod slurm;
 mod store;
+mod study;
+mod table;
+mod trend;
 
 pub use boxmin::{SearchResult, boxmin};
 pub use build::{
@@ -65,5 +69,9 @@ pub use kriging::{
     likelihood_psi,
 };
 pub use optimise::OptimiserSettings;
+pub use options::FitOptions;
 pub use regression::Regression;
 pub use store::{RunOutcome, RunRecord, RunStore, StoreMeta, merge};
+pub use study::{BuildSettings, build_report, export_report, read_domain, set_dir, shard_sets};
+pub use table::{NamedModel, Predictions, Table, read_table, write_table};
+pub use trend::{Trend, TrendTerm};

@@ -18,10 +18,12 @@ use clap::Args;
 use nlvid_forward::{ForwardSettings, HertzPronySpec};
 use nlvid_model::{Domain, ForwardModel};
 use nlvid_study::Study;
-use nlvid_surrogate::doe::DesignSettings;
-use nlvid_surrogate::{Admissibility, BuildOptions, Shard, build, export, load, merge};
+use nlvid_surrogate::{
+    Admissibility, BuildOptions, BuildSettings, Shard, build_report, export_report, merge,
+    read_domain, read_table, set_dir, shard_sets,
+};
 
-use super::surrogate::read_table;
+use crate::output::print_text;
 
 /// Arguments of `build`.
 #[derive(Debug, Args)]
@@ -89,97 +91,44 @@ pub struct MergeArgs {
     pub reject_non_repulsive: bool,
 }
 
-/// A study file read for a meta-model build.
+/// A study read for a meta-model build: the forward model of `[forward]`
+/// and the `[design]` and `[build]` sections (library calls only).
 pub struct BuildStudy {
     /// The forward model.
     pub model: Box<dyn ForwardModel>,
-    /// `[design]`.
-    pub design: DesignSettings,
-    /// `[build] store`.
-    pub store: Option<PathBuf>,
-    /// `[build] export`.
-    pub export: Option<PathBuf>,
-    /// `[build]` filters.
-    pub filters: Admissibility,
+    /// `[design]` and `[build]`.
+    pub settings: BuildSettings,
 }
 
-/// Reads `[forward]` (+ `[protocol]`), `[design]` and `[build]`; unknown
-/// sections or keys are errors naming file and line.
+/// Reads `[forward]` (+ `[protocol]`), `[design]` and `[build]`; sections
+/// of other stages are left alone, unknown ones are errors.
 ///
 /// # Errors
-/// Any study error.
+/// Any study error (file, line, key).
 pub fn read_study(path: &Path) -> anyhow::Result<BuildStudy> {
     let mut study = Study::load(path)?;
-    let _ = study.root().opt_str("title")?;
     let model = ForwardSettings::from_study(&mut study)?.build()?;
-    let mut ds = study.section("design")?;
-    let design =
-        DesignSettings::from_section(&mut ds, &model.parameter_names(), &model.parameter_units())?;
-    ds.finish()?;
-    let (store, export, filters) = match study.opt_section("build")? {
-        Some(mut b) => {
-            let store = b.opt_path("store")?;
-            let export = b.opt_path("export")?;
-            let filters = Admissibility::from_section(&mut b, model.contact_index())?;
-            b.finish()?;
-            (store, export, filters)
-        }
-        None => (
-            None,
-            None,
-            Admissibility {
-                contact_index: model.contact_index(),
-                ..Default::default()
-            },
-        ),
-    };
-    study.finish()?;
-    Ok(BuildStudy {
-        model,
-        design,
-        store,
-        export,
-        filters,
-    })
+    let (names, units) = (model.parameter_names(), model.parameter_units());
+    let settings = BuildSettings::from_study(study, &names, &units, model.contact_index())?;
+    Ok(BuildStudy { model, settings })
+}
+
+/// The admissibility filters of the flags.
+fn filters(min_peak_force: Option<f64>, reject_non_repulsive: bool) -> Admissibility {
+    Admissibility {
+        min_peak_force,
+        reject_non_repulsive,
+        contact_index: 0,
+    }
 }
 
 fn do_export(
     store: &Path,
     dir: &Path,
-    filt: &Admissibility,
+    filters: &Admissibility,
     domain: Option<&Domain>,
 ) -> anyhow::Result<()> {
-    let mm = load(store, filt)?;
-    export(&mm, dir, domain)?;
-    if domain.is_none() {
-        eprintln!(
-            "warning: {} has no parameter domain (give --domain FILE, or build from a study): \
-             `nlvid fit` and `nlvid cohort` cannot use it",
-            dir.join("meta.json").display()
-        );
-    }
-    let c = &mm.counts;
-    println!(
-        "exported {} of {} runs to {} (failed {}, missing {}, below peak force {}, non-repulsive {})",
-        c.kept,
-        c.design,
-        dir.display(),
-        c.failed,
-        c.missing,
-        c.below_peak,
-        c.non_repulsive
-    );
-    Ok(())
-}
-
-fn report_failures(store: &Path) -> anyhow::Result<()> {
-    let mm = load(store, &Admissibility::default())?;
-    for (i, status, reason, secs) in &mm.status {
-        if status == "failed" {
-            eprintln!("run {i} failed after {secs:.3} s: {reason}");
-        }
-    }
-    Ok(())
+    print_text(&export_report(store, dir, filters, domain)?)
 }
 
 fn run_set(
@@ -190,28 +139,12 @@ fn run_set(
     shard: Option<Shard>,
     quiet: bool,
 ) -> anyhow::Result<()> {
-    let hide = std::env::var_os("NLVID_NO_PROGRESS").is_some() || std::env::var_os("CI").is_some();
     let opts = BuildOptions {
         shard,
-        progress: !quiet && !hide,
+        progress: !quiet && crate::progress::progress_enabled(),
         cancel: None,
     };
-    let t0 = std::time::Instant::now();
-    let s = build(model, design, store, &opts)?;
-    let secs = t0.elapsed().as_secs_f64();
-    let per_run = if s.ran > 0 {
-        format!(", {:.3} s per run", secs / s.ran as f64)
-    } else {
-        String::new()
-    };
-    println!(
-        "{name}: {} runs in shard: {} already done, {} run now ({} failed) in {secs:.2} s{per_run}",
-        s.in_shard, s.skipped, s.ran, s.failed
-    );
-    if s.failed > 0 {
-        report_failures(store)?;
-    }
-    Ok(())
+    print_text(&build_report(name, model, design, store, &opts)?)
 }
 
 impl BuildArgs {
@@ -220,7 +153,7 @@ impl BuildArgs {
         let shard = self.shard.as_deref().map(Shard::parse).transpose()?;
         if let Some(path) = &self.study {
             let st = read_study(path)?;
-            let Some(store) = self.store.clone().or(st.store.clone()) else {
+            let Some(store) = self.store.clone().or(st.settings.store.clone()) else {
                 bail!(
                     "{}: no store directory: give --store DIR or `store = \"DIR\"` in [build]",
                     path.display()
@@ -230,9 +163,9 @@ impl BuildArgs {
             // once: a shard exports only when asked with --export.
             let export_dir = match shard {
                 Some(_) => self.export.clone(),
-                None => self.export.clone().or(st.export.clone()),
+                None => self.export.clone().or(st.settings.export.clone()),
             };
-            let (train, check) = st.design.designs()?;
+            let (train, check) = st.settings.design.designs()?;
             let mut sets = vec![("train", train)];
             if !check.is_empty() {
                 sets.push(("check", check));
@@ -249,11 +182,12 @@ impl BuildArgs {
             }
             if let Some(dir) = &export_dir {
                 for (name, _) in &sets {
+                    let domain = Some(&st.settings.design.domain);
                     do_export(
                         &store.join(name),
                         &dir.join(name),
-                        &st.filters,
-                        Some(&st.design.domain),
+                        &st.settings.filters,
+                        domain,
                     )?;
                 }
             }
@@ -277,33 +211,15 @@ impl BuildArgs {
                 design.header.len()
             );
         }
-        let domain = self
-            .domain
-            .as_deref()
-            .map(|p| super::sample::read_domain(p, &model.parameter_names()))
-            .transpose()?;
-        if let Some(d) = &domain
-            && let Some((i, _)) = design
-                .rows
-                .iter()
-                .enumerate()
-                .find(|(_, x)| !d.contains(x, 1e-9))
-        {
-            bail!(
-                "{}: design row {} lies outside the domain of {}",
-                design_path.display(),
-                i + 2,
-                self.domain.as_deref().unwrap_or(Path::new("")).display()
-            );
-        }
+        let names = model.parameter_names();
+        let domain = (self.domain.as_deref())
+            .map(|p| read_domain(p, &names, &design.rows))
+            .transpose()
+            .with_context(|| format!("--domain for --design {}", design_path.display()))?;
         run_set("design", &model, &design.rows, store, shard, self.quiet)?;
         if let Some(dir) = &self.export {
-            let filt = Admissibility {
-                min_peak_force: self.min_peak_force,
-                reject_non_repulsive: self.reject_non_repulsive,
-                contact_index: 0,
-            };
-            do_export(store, dir, &filt, domain.as_ref())?;
+            let filters = filters(self.min_peak_force, self.reject_non_repulsive);
+            do_export(store, dir, &filters, domain.as_ref())?;
         }
         Ok(ExitCode::SUCCESS)
     }
@@ -315,51 +231,24 @@ impl MergeArgs {
         let (filt, domain) = match &self.study {
             Some(p) => {
                 let st = read_study(p).with_context(|| format!("--study {}", p.display()))?;
-                (st.filters, Some(st.design.domain))
+                (st.settings.filters, Some(st.settings.design.domain))
             }
             None => (
-                Admissibility {
-                    min_peak_force: self.min_peak_force,
-                    reject_non_repulsive: self.reject_non_repulsive,
-                    contact_index: 0,
-                },
+                filters(self.min_peak_force, self.reject_non_repulsive),
                 None,
             ),
         };
-        // A study build's shards hold `train/` (and `check/`) stores.
-        let sets: Vec<Option<&str>> = if self.shards.iter().all(|d| d.join("meta.json").is_file()) {
-            vec![None]
-        } else if self
-            .shards
-            .iter()
-            .all(|d| d.join("train/meta.json").is_file())
-        {
-            let mut v = vec![Some("train")];
-            if self
-                .shards
-                .iter()
-                .all(|d| d.join("check/meta.json").is_file())
-            {
-                v.push(Some("check"));
-            }
-            v
-        } else {
-            bail!(
-                "each shard directory must be a store (meta.json) or hold train/ (and check/) stores"
-            );
-        };
-        for set in sets {
-            let sub = |d: &Path| set.map_or_else(|| d.to_path_buf(), |s| d.join(s));
-            let dirs: Vec<PathBuf> = self.shards.iter().map(|d| sub(d)).collect();
-            let out = sub(&self.out);
+        for set in shard_sets(&self.shards)? {
+            let dirs: Vec<PathBuf> = self.shards.iter().map(|d| set_dir(d, set)).collect();
+            let out = set_dir(&self.out, set);
             let n = merge(&dirs, &out)?;
-            println!(
+            say!(
                 "merged {} shards into {} ({n} runs copied)",
                 dirs.len(),
                 out.display()
-            );
+            )?;
             if let Some(dir) = &self.export {
-                do_export(&out, &sub(dir), &filt, domain.as_ref())?;
+                do_export(&out, &set_dir(dir, set), &filt, domain.as_ref())?;
             }
         }
         Ok(ExitCode::SUCCESS)

@@ -129,21 +129,15 @@ impl Command {
                         "version": env!("CARGO_PKG_VERSION"),
                     }))?;
                 } else {
-                    println!("nlvid {}", env!("CARGO_PKG_VERSION"));
+                    say!("nlvid {}", env!("CARGO_PKG_VERSION"))?;
                 }
                 Ok(ExitCode::SUCCESS)
             }
             Command::Check(a) => a.run(ctx),
             Command::Material(a) => a.run(ctx),
-            Command::Membrane(mut args) => {
-                args.json = ctx.json;
-                membrane::run(args)
-            }
+            Command::Membrane(args) => membrane::run(args, ctx.json),
             Command::Simulate(a) => a.run(ctx),
-            Command::Inspect(mut args) => {
-                args.json = ctx.json;
-                args.run()
-            }
+            Command::Inspect(args) => args.run(ctx.json),
             Command::Sample(a) => a.run(),
             Command::Build(a) => a.run(),
             Command::Merge(a) => a.run(),

@@ -57,11 +57,11 @@ impl Run for Args {
                 "svgs": files.svgs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
             }))?;
         } else {
-            println!(
+            say!(
                 "report: {} ({} figures)",
                 files.html.display(),
                 files.figure_ids.len()
-            );
+            )?;
         }
         Ok(ExitCode::SUCCESS)
     }

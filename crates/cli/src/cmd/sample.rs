@@ -1,14 +1,12 @@
 //! `nlvid sample`: Latin-hypercube training and checking designs.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 use clap::Args;
-use nlvid_model::Domain;
 use nlvid_surrogate::doe::training_and_checking;
-
-use super::surrogate::write_table;
+use nlvid_surrogate::{read_domain, write_table};
 
 /// Arguments of `sample`.
 #[derive(Debug, Args)]
@@ -40,13 +38,13 @@ impl SampleArgs {
     pub fn run(self) -> anyhow::Result<ExitCode> {
         let (domain, train, check) = if let Some(path) = &self.study {
             let st = super::build::read_study(path)?;
-            let (train, check) = st.design.designs()?;
-            (st.design.domain, train, check)
+            let (train, check) = st.settings.design.designs()?;
+            (st.settings.design.domain, train, check)
         } else {
             let (Some(dpath), Some(n)) = (&self.domain, self.n) else {
                 bail!("give a study file, or --domain FILE and -n N");
             };
-            let domain = read_domain(dpath, &[])?;
+            let domain = read_domain(dpath, &[], &[])?;
             let (train, check) = training_and_checking(
                 &domain,
                 n,
@@ -61,33 +59,19 @@ impl SampleArgs {
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("cannot create {}", self.out.display()))?;
         let header = domain.names();
-        write_table(Some(&self.out.join("train.csv")), &header, &train)?;
-        if !check.is_empty() {
-            write_table(Some(&self.out.join("check.csv")), &header, &check)?;
+        for (name, rows) in [("train.csv", &train), ("check.csv", &check)] {
+            if !rows.is_empty() {
+                let mut buf = Vec::new();
+                write_table(&mut buf, &header, rows)?;
+                crate::output::write_atomic(&self.out.join(name), &buf)?;
+            }
         }
-        println!(
+        say!(
             "wrote {} training and {} checking points to {}",
             train.len(),
             check.len(),
             self.out.display()
-        );
+        )?;
         Ok(ExitCode::SUCCESS)
     }
-}
-
-/// Reads a domain file (the stored form of `nlvid_model::Domain`, checked
-/// when read); with `names`, they must be its parameters in order.
-///
-/// # Errors
-/// Unreadable or invalid file, or parameters other than `names`.
-pub fn read_domain(path: &Path, names: &[String]) -> anyhow::Result<Domain> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let domain: Domain = toml::from_str(&text).with_context(|| format!("{}", path.display()))?;
-    if !names.is_empty() {
-        domain
-            .check_names(names)
-            .with_context(|| format!("{}: the model's parameters", path.display()))?;
-    }
-    Ok(domain)
 }
