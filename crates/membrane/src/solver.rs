@@ -490,10 +490,12 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
 
     fn guess_for(&self, control: Control) -> [f64; 3] {
         let mut x = self.x;
-        if let Some(p) = self.predicted {
-            if p[1] > 0.0 && x[1] > 0.0 && control.touches() {
-                x = p;
-            }
+        if let Some(p) = self.predicted
+            && p[1] > 0.0
+            && x[1] > 0.0
+            && control.touches()
+        {
+            x = p;
         }
         if let Control::ContactAngle(v) = control {
             x[1] = v;
@@ -553,10 +555,10 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                 iterations,
                 last_shot,
             } => {
-                if let Some((psi, which, value)) = last_shot.as_ref().and_then(tension) {
-                    if norm(&residual) > 1e-4 {
-                        return wrinkle(psi, which, value);
-                    }
+                if let Some((psi, which, value)) = last_shot.as_ref().and_then(tension)
+                    && norm(&residual) > 1e-4
+                {
+                    return wrinkle(psi, which, value);
                 }
                 let k = (0..3)
                     .max_by(|&a, &b| residual[a].abs().total_cmp(&residual[b].abs()))
@@ -595,20 +597,21 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         control: Control,
     ) -> Result<([f64; 3], usize, Control)> {
         self.detached = None;
-        if let Control::Displacement(d) = control {
-            if d > 0.0 && self.x[1] <= 0.0 {
-                // Not in contact: does the free membrane (relaxing at this dt) reach the plate?
-                if let Some(x) = self.detached_solution(dt, d) {
-                    return Ok((x, 0, Control::Displacement(0.0)));
-                }
+        if let Control::Displacement(d) = control
+            && d > 0.0
+            && self.x[1] <= 0.0
+        {
+            // Not in contact: does the free membrane (relaxing at this dt) reach the plate?
+            if let Some(x) = self.detached_solution(dt, d) {
+                return Ok((x, 0, Control::Displacement(0.0)));
             }
         }
         match self.solve_in_contact(time, dt, control) {
             Ok(v) => {
-                if let Control::Displacement(d) = control {
-                    if d <= 0.0 {
-                        self.detached = Some(d);
-                    }
+                if let Control::Displacement(d) = control
+                    && d <= 0.0
+                {
+                    self.detached = Some(d);
                 }
                 Ok(v)
             }
@@ -867,10 +870,10 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                     let mut sh =
                         Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale)
                             .compression(self.allow_compression_in_contact);
-                    if let Ok(end) = sh.shoot(cur[0], cur[1], cur[2], None) {
-                        if stop(&cur, &end) {
-                            return Ok((prev, cur));
-                        }
+                    if let Ok(end) = sh.shoot(cur[0], cur[1], cur[2], None)
+                        && stop(&cur, &end)
+                    {
+                        return Ok((prev, cur));
                     }
                 }
                 Err(e) => {

@@ -85,13 +85,13 @@ impl ResultsTable {
 fn split_header(raw: &str) -> (String, String) {
     let raw = raw.trim();
     for (o, c) in [('[', ']'), ('(', ')')] {
-        if let Some(inner) = raw.strip_suffix(c) {
-            if let Some(open) = inner.rfind(o) {
-                return (
-                    inner[..open].trim().to_string(),
-                    inner[open + 1..].trim().to_string(),
-                );
-            }
+        if let Some(inner) = raw.strip_suffix(c)
+            && let Some(open) = inner.rfind(o)
+        {
+            return (
+                inner[..open].trim().to_string(),
+                inner[open + 1..].trim().to_string(),
+            );
         }
     }
     match raw.rsplit_once('_') {

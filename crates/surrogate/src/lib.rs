@@ -18,6 +18,8 @@
 //!   [`RunStore`] (atomic file per run, resumable, shardable, [`merge`]),
 //!   [`load`] applies the admissibility filters, [`export`] writes
 //!   `.npy`/CSV for numpy/pandas and a `meta.json` that stores the domain.
+//! * [`slurm`]: a build as a Slurm job array (one shard per task) plus a
+//!   merge job that waits for it; resumable, requeued when killed.
 //! * [`check`]: range-normalised RMSE (thesis eq. 4.4) on a checking set.
 //!
 //! ```
@@ -48,6 +50,7 @@ mod likelihood;
 pub mod optimise;
 mod options;
 mod regression;
+pub mod slurm;
 mod store;
 mod study;
 mod table;

@@ -159,7 +159,12 @@ impl BuildArgs {
                     path.display()
                 );
             };
-            let export_dir = self.export.clone().or(st.settings.export.clone());
+            // The tasks of an array would all write `[build] export` at
+            // once: a shard exports only when asked with --export.
+            let export_dir = match shard {
+                Some(_) => self.export.clone(),
+                None => self.export.clone().or(st.settings.export.clone()),
+            };
             let (train, check) = st.settings.design.designs()?;
             let mut sets = vec![("train", train)];
             if !check.is_empty() {
