@@ -122,7 +122,7 @@ impl Run for Args {
                             "runs": t.runs, "expected": t.expected})).collect::<Vec<_>>(),
                         "merged": st.merged, "next": st.next_step()}))?;
                 } else {
-                    println!("{st}");
+                    say!("{st}")?;
                 }
                 return Ok(if st.merged {
                     ExitCode::SUCCESS
@@ -146,13 +146,13 @@ impl Run for Args {
                 "array_job": ids.as_ref().map(|i| &i.array_job),
                 "merge_job": ids.as_ref().map(|i| &i.merge_job)}))?;
         } else {
-            println!(
+            say!(
                 "wrote {} and {}",
                 files.array.display(),
                 files.merge.display()
-            );
+            )?;
             match ids {
-                Some(i) => println!(
+                Some(i) => say!(
                     "submitted array job {} (tasks {}) and merge job {} (afterok)\nfollow: squeue -j {},{}; nlvid slurm --status {}",
                     i.array_job,
                     i.array,
@@ -160,8 +160,8 @@ impl Run for Args {
                     i.array_job,
                     i.merge_job,
                     files.dir.display()
-                ),
-                None => println!("submit with: {}", files.submit.display()),
+                )?,
+                None => say!("submit with: {}", files.submit.display())?,
             }
         }
         Ok(ExitCode::SUCCESS)
