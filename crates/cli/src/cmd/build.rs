@@ -15,12 +15,11 @@ use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 use clap::Args;
-use nlvid_forward::{ForwardSettings, HertzPronySpec};
-use nlvid_model::{Domain, ForwardModel};
-use nlvid_study::Study;
+use nlvid_forward::HertzPronySpec;
+use nlvid_model::ForwardModel;
 use nlvid_surrogate::{
-    Admissibility, BuildOptions, BuildSettings, Shard, build_report, export_report, merge,
-    read_domain, read_table, set_dir, shard_sets,
+    Admissibility, BuildOptions, BuildStudy, Shard, build_report, export_report, merge_report,
+    read_domain, read_table,
 };
 
 use crate::output::print_text;
@@ -91,26 +90,12 @@ pub struct MergeArgs {
     pub reject_non_repulsive: bool,
 }
 
-/// A study read for a meta-model build: the forward model of `[forward]`
-/// and the `[design]` and `[build]` sections (library calls only).
-pub struct BuildStudy {
-    /// The forward model.
-    pub model: Box<dyn ForwardModel>,
-    /// `[design]` and `[build]`.
-    pub settings: BuildSettings,
-}
-
-/// Reads `[forward]` (+ `[protocol]`), `[design]` and `[build]`; sections
-/// of other stages are left alone, unknown ones are errors.
+/// Reads a build study ([`BuildStudy::load`]).
 ///
 /// # Errors
 /// Any study error (file, line, key).
 pub fn read_study(path: &Path) -> anyhow::Result<BuildStudy> {
-    let mut study = Study::load(path)?;
-    let model = ForwardSettings::from_study(&mut study)?.build()?;
-    let (names, units) = (model.parameter_names(), model.parameter_units());
-    let settings = BuildSettings::from_study(study, &names, &units, model.contact_index())?;
-    Ok(BuildStudy { model, settings })
+    Ok(BuildStudy::load(path)?)
 }
 
 /// The admissibility filters of the flags.
@@ -122,29 +107,12 @@ fn filters(min_peak_force: Option<f64>, reject_non_repulsive: bool) -> Admissibi
     }
 }
 
-fn do_export(
-    store: &Path,
-    dir: &Path,
-    filters: &Admissibility,
-    domain: Option<&Domain>,
-) -> anyhow::Result<()> {
-    print_text(&export_report(store, dir, filters, domain)?)
-}
-
-fn run_set(
-    name: &str,
-    model: &dyn ForwardModel,
-    design: &[Vec<f64>],
-    store: &Path,
-    shard: Option<Shard>,
-    quiet: bool,
-) -> anyhow::Result<()> {
-    let opts = BuildOptions {
+fn options(shard: Option<Shard>, quiet: bool) -> BuildOptions<'static> {
+    BuildOptions {
         shard,
         progress: !quiet && crate::progress::progress_enabled(),
         cancel: None,
-    };
-    print_text(&build_report(name, model, design, store, &opts)?)
+    }
 }
 
 impl BuildArgs {
@@ -165,32 +133,10 @@ impl BuildArgs {
                 Some(_) => self.export.clone(),
                 None => self.export.clone().or(st.settings.export.clone()),
             };
-            let (train, check) = st.settings.design.designs()?;
-            let mut sets = vec![("train", train)];
-            if !check.is_empty() {
-                sets.push(("check", check));
-            }
-            for (name, design) in &sets {
-                run_set(
-                    name,
-                    st.model.as_ref(),
-                    design,
-                    &store.join(name),
-                    shard,
-                    self.quiet,
-                )?;
-            }
-            if let Some(dir) = &export_dir {
-                for (name, _) in &sets {
-                    let domain = Some(&st.settings.design.domain);
-                    do_export(
-                        &store.join(name),
-                        &dir.join(name),
-                        &st.settings.filters,
-                        domain,
-                    )?;
-                }
-            }
+            let opts = options(shard, self.quiet);
+            st.build_all(&store, export_dir.as_deref(), &opts, &mut |t| {
+                std::io::Write::write_all(&mut std::io::stdout(), t.as_bytes())
+            })?;
             return Ok(ExitCode::SUCCESS);
         }
         let (Some(design_path), Some(store)) = (&self.design, &self.store) else {
@@ -216,10 +162,11 @@ impl BuildArgs {
             .map(|p| read_domain(p, &names, &design.rows))
             .transpose()
             .with_context(|| format!("--domain for --design {}", design_path.display()))?;
-        run_set("design", &model, &design.rows, store, shard, self.quiet)?;
+        let opts = options(shard, self.quiet);
+        print_text(&build_report("design", &model, &design.rows, store, &opts)?)?;
         if let Some(dir) = &self.export {
             let filters = filters(self.min_peak_force, self.reject_non_repulsive);
-            do_export(store, dir, &filters, domain.as_ref())?;
+            print_text(&export_report(store, dir, &filters, domain.as_ref())?)?;
         }
         Ok(ExitCode::SUCCESS)
     }
@@ -238,19 +185,14 @@ impl MergeArgs {
                 None,
             ),
         };
-        for set in shard_sets(&self.shards)? {
-            let dirs: Vec<PathBuf> = self.shards.iter().map(|d| set_dir(d, set)).collect();
-            let out = set_dir(&self.out, set);
-            let n = merge(&dirs, &out)?;
-            say!(
-                "merged {} shards into {} ({n} runs copied)",
-                dirs.len(),
-                out.display()
-            )?;
-            if let Some(dir) = &self.export {
-                do_export(&out, &set_dir(dir, set), &filt, domain.as_ref())?;
-            }
-        }
+        let export = self.export.as_deref();
+        print_text(&merge_report(
+            &self.shards,
+            &self.out,
+            export,
+            &filt,
+            domain.as_ref(),
+        )?)?;
         Ok(ExitCode::SUCCESS)
     }
 }
