@@ -10,7 +10,7 @@
 //!   (`--domain FILE`: the domain the design was sampled in, stored in the
 //!   export's `meta.json` for `nlvid fit`).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Context, bail};
@@ -53,12 +53,9 @@ pub struct BuildArgs {
     /// done. Overrides `[build] export`.
     #[arg(long)]
     pub export: Option<PathBuf>,
-    /// Admissibility: remove runs whose peak force is below this [N] (flag-only use).
-    #[arg(long, conflicts_with = "study")]
-    pub min_peak_force: Option<f64>,
-    /// Admissibility: remove runs with any non-positive force after contact (flag-only use).
-    #[arg(long, conflicts_with = "study")]
-    pub reject_non_repulsive: bool,
+    /// Admissibility filters (flag-only use).
+    #[command(flatten)]
+    pub filters: Filters,
     /// hertz-prony (flag-only use): time points.
     #[arg(long, default_value_t = 200, conflicts_with = "study")]
     pub points: usize,
@@ -80,30 +77,31 @@ pub struct MergeArgs {
     #[arg(long)]
     pub export: Option<PathBuf>,
     /// Take the admissibility filters from this study's `[build]` section.
-    #[arg(long, conflicts_with_all = ["min_peak_force", "reject_non_repulsive"])]
+    #[arg(long)]
     pub study: Option<PathBuf>,
-    /// Admissibility: peak-force threshold [N].
-    #[arg(long)]
+    /// Admissibility filters (without --study).
+    #[command(flatten)]
+    pub filters: Filters,
+}
+
+/// Admissibility filters given as flags (thesis §5.4.1, App. A.2).
+#[derive(Debug, Args)]
+pub struct Filters {
+    /// Admissibility: remove runs whose peak force is below this [N].
+    #[arg(long, conflicts_with = "study")]
     pub min_peak_force: Option<f64>,
-    /// Admissibility: remove non-repulsive runs.
-    #[arg(long)]
+    /// Admissibility: remove runs with any non-positive force after contact.
+    #[arg(long, conflicts_with = "study")]
     pub reject_non_repulsive: bool,
 }
 
-/// Reads a build study ([`BuildStudy::load`]).
-///
-/// # Errors
-/// Any study error (file, line, key).
-pub fn read_study(path: &Path) -> anyhow::Result<BuildStudy> {
-    Ok(BuildStudy::load(path)?)
-}
-
-/// The admissibility filters of the flags.
-fn filters(min_peak_force: Option<f64>, reject_non_repulsive: bool) -> Admissibility {
-    Admissibility {
-        min_peak_force,
-        reject_non_repulsive,
-        contact_index: 0,
+impl Filters {
+    fn admissibility(&self) -> Admissibility {
+        Admissibility {
+            min_peak_force: self.min_peak_force,
+            reject_non_repulsive: self.reject_non_repulsive,
+            contact_index: 0,
+        }
     }
 }
 
@@ -120,7 +118,7 @@ impl BuildArgs {
     pub fn run(self) -> anyhow::Result<ExitCode> {
         let shard = self.shard.as_deref().map(Shard::parse).transpose()?;
         if let Some(path) = &self.study {
-            let st = read_study(path)?;
+            let st = BuildStudy::load(path)?;
             let Some(store) = self.store.clone().or(st.settings.store.clone()) else {
                 bail!(
                     "{}: no store directory: give --store DIR or `store = \"DIR\"` in [build]",
@@ -165,7 +163,7 @@ impl BuildArgs {
         let opts = options(shard, self.quiet);
         print_text(&build_report("design", &model, &design.rows, store, &opts)?)?;
         if let Some(dir) = &self.export {
-            let filters = filters(self.min_peak_force, self.reject_non_repulsive);
+            let filters = self.filters.admissibility();
             print_text(&export_report(store, dir, &filters, domain.as_ref())?)?;
         }
         Ok(ExitCode::SUCCESS)
@@ -177,13 +175,10 @@ impl MergeArgs {
     pub fn run(self) -> anyhow::Result<ExitCode> {
         let (filt, domain) = match &self.study {
             Some(p) => {
-                let st = read_study(p).with_context(|| format!("--study {}", p.display()))?;
+                let st = BuildStudy::load(p).with_context(|| format!("--study {}", p.display()))?;
                 (st.settings.filters, Some(st.settings.design.domain))
             }
-            None => (
-                filters(self.min_peak_force, self.reject_non_repulsive),
-                None,
-            ),
+            None => (self.filters.admissibility(), None),
         };
         let export = self.export.as_deref();
         print_text(&merge_report(

@@ -123,13 +123,12 @@ impl Command {
     pub fn run(self, ctx: &Context) -> anyhow::Result<ExitCode> {
         match self {
             Command::Version => {
-                if ctx.json {
-                    crate::output::print_json(&serde_json::json!({
-                        "name": "nlvid",
-                        "version": env!("CARGO_PKG_VERSION"),
-                    }))?;
-                } else {
-                    say!("nlvid {}", env!("CARGO_PKG_VERSION"))?;
+                let v = env!("CARGO_PKG_VERSION");
+                match ctx.json {
+                    true => crate::output::print_json(
+                        &serde_json::json!({"name": "nlvid", "version": v}),
+                    )?,
+                    false => say!("nlvid {v}")?,
                 }
                 Ok(ExitCode::SUCCESS)
             }

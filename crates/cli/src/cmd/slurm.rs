@@ -89,7 +89,7 @@ impl Run for Args {
         let (Some(study), Some(out)) = (self.study, self.out) else {
             anyhow::bail!("give a study file and --out DIR, or --status DIR");
         };
-        super::build::read_study(&study)?;
+        nlvid_surrogate::BuildStudy::load(&study)?;
         let nlvid = match self.nlvid {
             Some(p) => p,
             None => std::env::current_exe().context("locating this nlvid program")?,
