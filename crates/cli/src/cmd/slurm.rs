@@ -120,11 +120,8 @@ impl Run for Args {
                 } else {
                     say!("{st}")?;
                 }
-                return Ok(if st.merged {
-                    ExitCode::SUCCESS
-                } else {
-                    ExitCode::FAILURE
-                });
+                // Status 1 until the merge job has finished.
+                return Ok(ExitCode::from(u8::from(!st.merged)));
             }
             Config::Write(s, submit, tasks) => (s, submit, tasks),
         };
