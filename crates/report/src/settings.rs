@@ -197,6 +197,18 @@ const RENAMED: [(&str, &str); 3] = [
 ];
 
 fn renamed(s: &Section) -> std::result::Result<(), StudyError> {
+    // The parameter domain is the one each meta-model was designed on.
+    for key in ["domain", "epsilon"] {
+        if s.has(key) {
+            return Err(s.invalid(
+                key,
+                "the parameter domain (bounds, g1 + g2 <= 1 - epsilon) is now read from the \
+                 meta-model's meta.json, written by `nlvid build --export` from the build \
+                 study's [design] section: remove `domain` and `epsilon` from [fit] (the \
+                 analytic model = \"lee-radok\" takes `constraint_epsilon`)",
+            ));
+        }
+    }
     for (old, new) in RENAMED {
         if s.has(old) {
             return Err(s.invalid(old, format!("this key is now {new}")));
