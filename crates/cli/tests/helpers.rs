@@ -60,3 +60,12 @@ fn command_line_quantities_are_checked_and_converted() {
         "`2 um` is a length (m), expected a time (s)"
     );
 }
+
+#[test]
+fn bars_show_only_on_an_interactive_terminal_outside_ci() {
+    use nlvid_cli::progress::enabled;
+    assert!(enabled(true, false, false));
+    assert!(!enabled(false, false, false));
+    assert!(!enabled(true, true, false));
+    assert!(!enabled(true, false, true));
+}

@@ -53,7 +53,7 @@ mod simulate;
 mod solver;
 mod tables;
 pub mod thesis;
-pub use tables::{table2_1_csv, table2_1_text};
+pub use tables::{reproduction_files, table2_1_csv, table2_1_text};
 
 pub use error::{MembraneError, Result};
 pub use models::{

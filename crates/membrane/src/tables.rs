@@ -1,7 +1,31 @@
 //! The reproduced ch. II data as text: each figure's curves as CSV and
 //! Table 2.1 (initial unloading slopes) as CSV and as a printed table.
 
+use crate::Result;
 use crate::thesis::{Figure, SlopeRow};
+
+/// Every file of the ch. II reproduction as `(name, contents)`: each
+/// figure's CSV and SVG, `table2_1.csv`, and `notes.txt`.
+///
+/// # Errors
+/// A figure cannot be drawn.
+pub fn reproduction_files(
+    figs: &[Figure],
+    rows: &[SlopeRow],
+    notes: &[String],
+) -> Result<Vec<(String, String)>> {
+    let mut files = Vec::new();
+    for f in figs {
+        files.push((format!("{}.csv", f.id), f.to_csv()));
+        files.push((format!("{}.svg", f.id), crate::plot::svg(f)?));
+    }
+    files.push(("table2_1.csv".into(), table2_1_csv(rows)));
+    files.push((
+        "notes.txt".into(),
+        notes.iter().map(|n| format!("{n}\n")).collect(),
+    ));
+    Ok(files)
+}
 
 impl Figure {
     /// `series,x,y`, one row per point, the series label quoted.

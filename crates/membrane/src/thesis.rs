@@ -80,26 +80,33 @@ pub struct Figure {
     pub series: Vec<Series>,
 }
 
-/// One row of Table 2.1 as reproduced.
+/// One row of Table 2.1 as reproduced (serialised with the column names
+/// of `table2_1.csv`, dimensionless quantities of eq. 2.47).
 #[derive(Debug, Clone, Serialize)]
 pub struct SlopeRow {
     /// Maximum displacement D/r0.
+    #[serde(rename = "D_over_r0")]
     pub d_max: f64,
     /// Unloading rate s_u.
+    #[serde(rename = "unloading_rate")]
     pub unload_rate: f64,
     /// Model label.
     pub model: String,
     /// Thesis value (None where the table is blank).
+    #[serde(rename = "thesis_slope")]
     pub thesis: Option<f64>,
     /// Tangent dF̄/dD̄ over the first unloading step (ΔD = s_u·5e-5).
+    #[serde(rename = "tangent_slope")]
     pub slope: f64,
     /// Secant from the peak over the first ΔD/r0 = 0.01 of unloading,
     /// [`SECANT_WINDOW`].
+    #[serde(rename = "secant_slope_dD_0.01")]
     pub secant: f64,
     /// `secant / 2 / thesis`: the secant in the App. D force scale
     /// F/(G10_umat h0 r0) with App. D's UMAT modulus G10_umat = 2 G10 (eq. D.2
     /// drops the 2 of eq. 2.55), over
     /// the thesis value. The NLE rows give 1.00; see docs/theory/membrane.md.
+    #[serde(rename = "secant_over_2_div_thesis")]
     pub ratio: Option<f64>,
 }
 

@@ -183,35 +183,35 @@ pub struct FitSettings {
     pub repeat: bool,
 }
 
-/// Keys of the former second `[fit]` schema, with the key to use instead.
-const RENAMED: [(&str, &str); 3] = [
+/// Keys of earlier `[fit]` schemas, with what to do instead.
+const RENAMED: [(&str, &str); 4] = [
     (
         "checking",
-        "`check` (the summary of `nlvid surrogate check`)",
+        "this key is now `check` (the summary of `nlvid surrogate check`)",
     ),
-    ("epsilon", "`constraint_epsilon`"),
     (
         "checking_error",
-        "`check = \"model.check.json\"` (the output of `nlvid --json surrogate check`)",
+        "this key is now `check = \"model.check.json\"` (the output of `nlvid --json surrogate check`)",
+    ),
+    (
+        "domain",
+        "the parameter domain (bounds, g1 + g2 <= 1 - epsilon) is now read from the \
+         meta-model's meta.json, written by `nlvid build --export` from the build study's \
+         [design] section: remove `domain` from [fit]",
+    ),
+    (
+        "epsilon",
+        "the parameter domain (bounds, g1 + g2 <= 1 - epsilon) is now read from the \
+         meta-model's meta.json, written by `nlvid build --export` from the build study's \
+         [design] section: remove `epsilon` from [fit] (the Table 5.3 domain of \
+         model = \"lee-radok\" takes `constraint_epsilon`)",
     ),
 ];
 
 fn renamed(s: &Section) -> std::result::Result<(), StudyError> {
-    // The parameter domain is the one each meta-model was designed on.
-    for key in ["domain", "epsilon"] {
-        if s.has(key) {
-            return Err(s.invalid(
-                key,
-                "the parameter domain (bounds, g1 + g2 <= 1 - epsilon) is now read from the \
-                 meta-model's meta.json, written by `nlvid build --export` from the build \
-                 study's [design] section: remove `domain` and `epsilon` from [fit] (the \
-                 analytic model = \"lee-radok\" takes `constraint_epsilon`)",
-            ));
-        }
-    }
-    for (old, new) in RENAMED {
+    for (old, why) in RENAMED {
         if s.has(old) {
-            return Err(s.invalid(old, format!("this key is now {new}")));
+            return Err(s.invalid(old, why));
         }
     }
     Ok(())

@@ -89,6 +89,21 @@ pub fn summarise(references: &[Vec<f64>], predictions: &[Vec<f64>]) -> Result<Ch
     })
 }
 
+impl std::fmt::Display for CheckSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} checking cases: range-normalised RMSE (eq. 4.4) min {:.4} %, median {:.4} %, \
+             max {:.4} % (case {})",
+            self.rmse.len(),
+            100.0 * self.min,
+            100.0 * self.median,
+            100.0 * self.max,
+            self.worst
+        )
+    }
+}
+
 /// Time from a `F(t=1.0e0 s) [N]` header as written by `nlvid build --export`.
 fn header_time(h: &str) -> Option<f64> {
     let a = h.find("t=")? + 2;

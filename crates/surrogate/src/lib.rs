@@ -72,6 +72,9 @@ pub use optimise::OptimiserSettings;
 pub use options::FitOptions;
 pub use regression::Regression;
 pub use store::{RunOutcome, RunRecord, RunStore, StoreMeta, merge};
-pub use study::{BuildSettings, build_report, export_report, read_domain, set_dir, shard_sets};
+pub use study::{
+    BuildSettings, BuildStudy, build_report, export_report, merge_report, read_domain, set_dir,
+    shard_sets,
+};
 pub use table::{NamedModel, Predictions, Table, read_table, write_table};
 pub use trend::{Trend, TrendTerm};

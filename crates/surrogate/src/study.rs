@@ -14,6 +14,107 @@ use crate::doe::DesignSettings;
 use crate::error::{Result, SurrogateError};
 use nlvid_model::ForwardModel;
 
+/// A study read for a meta-model build: the forward model of `[forward]`
+/// (+ `[protocol]`, crate `nlvid-forward`) and `[design]`, `[build]`.
+pub struct BuildStudy {
+    /// The forward model.
+    pub model: Box<dyn ForwardModel>,
+    /// `[design]` and `[build]`.
+    pub settings: BuildSettings,
+}
+
+impl BuildStudy {
+    /// Reads the study at `path`; sections of other stages are left alone,
+    /// unknown ones are errors.
+    ///
+    /// # Errors
+    /// Any study error (file, line, key); settings the model cannot use.
+    pub fn load(path: &Path) -> Result<Self> {
+        let bad = |e: &dyn std::fmt::Display| SurrogateError::InvalidSettings(e.to_string());
+        let mut study = Study::load(path).map_err(|e| bad(&e))?;
+        let model = nlvid_forward::ForwardSettings::from_study(&mut study)
+            .and_then(|f| f.build())
+            .map_err(|e| bad(&e))?;
+        let (names, units) = (model.parameter_names(), model.parameter_units());
+        let settings = BuildSettings::from_study(study, &names, &units, model.contact_index())
+            .map_err(|e| bad(&e))?;
+        Ok(Self { model, settings })
+    }
+
+    /// Builds the training design into `store/train` and the checking
+    /// design into `store/check` ([`build_report`]), then exports each to
+    /// `export/train`, `export/check` with the study's filters and domain
+    /// ([`export_report`]); `say` gets each report as it is done.
+    ///
+    /// # Errors
+    /// As [`build_report`] and [`export_report`]; `say` failing.
+    pub fn build_all(
+        &self,
+        store: &Path,
+        export: Option<&Path>,
+        opts: &BuildOptions<'_>,
+        say: &mut dyn FnMut(&str) -> std::io::Result<()>,
+    ) -> Result<()> {
+        let said = |r: std::io::Result<()>| r.map_err(crate::error::io_err("stdout"));
+        let (train, check) = self.settings.design.designs()?;
+        let sets: Vec<_> = [("train", train), ("check", check)]
+            .into_iter()
+            .filter(|(_, d)| !d.is_empty())
+            .collect();
+        for (name, design) in &sets {
+            let text = build_report(name, self.model.as_ref(), design, &store.join(name), opts)?;
+            said(say(&text))?;
+        }
+        for (name, _) in sets.iter().filter(|_| export.is_some()) {
+            let dir = export.map(|e| e.join(name)).unwrap_or_default();
+            let (filters, domain) = (&self.settings.filters, &self.settings.design.domain);
+            said(say(&export_report(
+                &store.join(name),
+                &dir,
+                filters,
+                Some(domain),
+            )?))?;
+        }
+        Ok(())
+    }
+}
+
+/// Merges the shard stores (each a store, or holding the `train/` and
+/// `check/` stores of a study build, [`shard_sets`]) into `out` and
+/// exports each merged store to `export` with `filters` and `domain`.
+/// Returns what it did, for people.
+///
+/// # Errors
+/// Shard directories of neither kind; as [`merge`] and [`export_report`].
+pub fn merge_report(
+    shards: &[PathBuf],
+    out: &Path,
+    export: Option<&Path>,
+    filters: &Admissibility,
+    domain: Option<&Domain>,
+) -> Result<String> {
+    let mut text = String::new();
+    for set in shard_sets(shards)? {
+        let dirs: Vec<PathBuf> = shards.iter().map(|d| set_dir(d, set)).collect();
+        let merged = set_dir(out, set);
+        let n = crate::store::merge(&dirs, &merged)?;
+        text.push_str(&format!(
+            "merged {} shards into {} ({n} runs copied)\n",
+            dirs.len(),
+            merged.display()
+        ));
+        if let Some(dir) = export {
+            text.push_str(&export_report(
+                &merged,
+                &set_dir(dir, set),
+                filters,
+                domain,
+            )?);
+        }
+    }
+    Ok(text)
+}
+
 /// Sections of the other pipeline stages a build study may hold.
 const OTHER_STAGES: [&str; 6] = ["parameters", "fit", "probe", "material", "loading", "cell"];
 

@@ -188,15 +188,20 @@ pub struct Predictions {
 }
 
 impl Predictions {
-    /// CSV header (`<name>`…, then `mse_<name>`…) and rows.
-    pub fn table(&self) -> (Vec<String>, Vec<Vec<f64>>) {
+    /// CSV: header `<name>`…, then `mse_<name>`…, one row per point.
+    ///
+    /// # Errors
+    /// The CSV writer fails (it writes to memory).
+    pub fn to_csv(&self) -> Result<String> {
         let mut header = self.names.clone();
         let mut rows = self.y.clone();
         if let Some(m) = &self.mse {
             header.extend(self.names.iter().map(|n| format!("mse_{n}")));
             rows.iter_mut().zip(m).for_each(|(r, m)| r.extend(m));
         }
-        (header, rows)
+        let mut buf = Vec::new();
+        write_table(&mut buf, &header, &rows)?;
+        Ok(String::from_utf8_lossy(&buf).into_owned())
     }
 
     /// JSON: `outputs` and per point `x`, `y` (and `mse`) keyed by name.
@@ -226,6 +231,28 @@ impl Predictions {
 }
 
 impl NamedModel {
+    /// Fits a model to the sites `x` and responses `y` with `options`,
+    /// keeping the two headers as the input and output names.
+    ///
+    /// # Errors
+    /// Tables of different lengths; as [`crate::FitOptions::settings`] and
+    /// [`KrigingModel::fit`].
+    pub fn fit(x: &Table, y: &Table, options: crate::FitOptions) -> Result<Self> {
+        if x.rows.len() != y.rows.len() {
+            return Err(SurrogateError::InvalidInput(format!(
+                "{} input rows but {} output rows",
+                x.rows.len(),
+                y.rows.len()
+            )));
+        }
+        let settings = options.settings(x)?;
+        Ok(Self {
+            model: KrigingModel::fit(x.mat().as_ref(), y.mat().as_ref(), &settings)?,
+            input_names: x.header.clone(),
+            output_names: y.header.clone(),
+        })
+    }
+
     /// Predicts at every row of `x` (and the MSE with `mse`).
     ///
     /// # Errors

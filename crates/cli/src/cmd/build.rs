@@ -10,17 +10,16 @@
 //!   (`--domain FILE`: the domain the design was sampled in, stored in the
 //!   export's `meta.json` for `nlvid fit`).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 use clap::Args;
-use nlvid_forward::{ForwardSettings, HertzPronySpec};
-use nlvid_model::{Domain, ForwardModel};
-use nlvid_study::Study;
+use nlvid_forward::HertzPronySpec;
+use nlvid_model::ForwardModel;
 use nlvid_surrogate::{
-    Admissibility, BuildOptions, BuildSettings, Shard, build_report, export_report, merge,
-    read_domain, read_table, set_dir, shard_sets,
+    Admissibility, BuildOptions, BuildStudy, Shard, build_report, export_report, merge_report,
+    read_domain, read_table,
 };
 
 use crate::output::print_text;
@@ -54,12 +53,9 @@ pub struct BuildArgs {
     /// done. Overrides `[build] export`.
     #[arg(long)]
     pub export: Option<PathBuf>,
-    /// Admissibility: remove runs whose peak force is below this [N] (flag-only use).
-    #[arg(long, conflicts_with = "study")]
-    pub min_peak_force: Option<f64>,
-    /// Admissibility: remove runs with any non-positive force after contact (flag-only use).
-    #[arg(long, conflicts_with = "study")]
-    pub reject_non_repulsive: bool,
+    /// Admissibility filters (flag-only use).
+    #[command(flatten)]
+    pub filters: Filters,
     /// hertz-prony (flag-only use): time points.
     #[arg(long, default_value_t = 200, conflicts_with = "study")]
     pub points: usize,
@@ -81,70 +77,40 @@ pub struct MergeArgs {
     #[arg(long)]
     pub export: Option<PathBuf>,
     /// Take the admissibility filters from this study's `[build]` section.
-    #[arg(long, conflicts_with_all = ["min_peak_force", "reject_non_repulsive"])]
+    #[arg(long)]
     pub study: Option<PathBuf>,
-    /// Admissibility: peak-force threshold [N].
-    #[arg(long)]
+    /// Admissibility filters (without --study).
+    #[command(flatten)]
+    pub filters: Filters,
+}
+
+/// Admissibility filters given as flags (thesis §5.4.1, App. A.2).
+#[derive(Debug, Args)]
+pub struct Filters {
+    /// Admissibility: remove runs whose peak force is below this [N].
+    #[arg(long, conflicts_with = "study")]
     pub min_peak_force: Option<f64>,
-    /// Admissibility: remove non-repulsive runs.
-    #[arg(long)]
+    /// Admissibility: remove runs with any non-positive force after contact.
+    #[arg(long, conflicts_with = "study")]
     pub reject_non_repulsive: bool,
 }
 
-/// A study read for a meta-model build: the forward model of `[forward]`
-/// and the `[design]` and `[build]` sections (library calls only).
-pub struct BuildStudy {
-    /// The forward model.
-    pub model: Box<dyn ForwardModel>,
-    /// `[design]` and `[build]`.
-    pub settings: BuildSettings,
-}
-
-/// Reads `[forward]` (+ `[protocol]`), `[design]` and `[build]`; sections
-/// of other stages are left alone, unknown ones are errors.
-///
-/// # Errors
-/// Any study error (file, line, key).
-pub fn read_study(path: &Path) -> anyhow::Result<BuildStudy> {
-    let mut study = Study::load(path)?;
-    let model = ForwardSettings::from_study(&mut study)?.build()?;
-    let (names, units) = (model.parameter_names(), model.parameter_units());
-    let settings = BuildSettings::from_study(study, &names, &units, model.contact_index())?;
-    Ok(BuildStudy { model, settings })
-}
-
-/// The admissibility filters of the flags.
-fn filters(min_peak_force: Option<f64>, reject_non_repulsive: bool) -> Admissibility {
-    Admissibility {
-        min_peak_force,
-        reject_non_repulsive,
-        contact_index: 0,
+impl Filters {
+    fn admissibility(&self) -> Admissibility {
+        Admissibility {
+            min_peak_force: self.min_peak_force,
+            reject_non_repulsive: self.reject_non_repulsive,
+            contact_index: 0,
+        }
     }
 }
 
-fn do_export(
-    store: &Path,
-    dir: &Path,
-    filters: &Admissibility,
-    domain: Option<&Domain>,
-) -> anyhow::Result<()> {
-    print_text(&export_report(store, dir, filters, domain)?)
-}
-
-fn run_set(
-    name: &str,
-    model: &dyn ForwardModel,
-    design: &[Vec<f64>],
-    store: &Path,
-    shard: Option<Shard>,
-    quiet: bool,
-) -> anyhow::Result<()> {
-    let opts = BuildOptions {
+fn options(shard: Option<Shard>, quiet: bool) -> BuildOptions<'static> {
+    BuildOptions {
         shard,
         progress: !quiet && crate::progress::progress_enabled(),
         cancel: None,
-    };
-    print_text(&build_report(name, model, design, store, &opts)?)
+    }
 }
 
 impl BuildArgs {
@@ -152,7 +118,7 @@ impl BuildArgs {
     pub fn run(self) -> anyhow::Result<ExitCode> {
         let shard = self.shard.as_deref().map(Shard::parse).transpose()?;
         if let Some(path) = &self.study {
-            let st = read_study(path)?;
+            let st = BuildStudy::load(path)?;
             let Some(store) = self.store.clone().or(st.settings.store.clone()) else {
                 bail!(
                     "{}: no store directory: give --store DIR or `store = \"DIR\"` in [build]",
@@ -165,32 +131,10 @@ impl BuildArgs {
                 Some(_) => self.export.clone(),
                 None => self.export.clone().or(st.settings.export.clone()),
             };
-            let (train, check) = st.settings.design.designs()?;
-            let mut sets = vec![("train", train)];
-            if !check.is_empty() {
-                sets.push(("check", check));
-            }
-            for (name, design) in &sets {
-                run_set(
-                    name,
-                    st.model.as_ref(),
-                    design,
-                    &store.join(name),
-                    shard,
-                    self.quiet,
-                )?;
-            }
-            if let Some(dir) = &export_dir {
-                for (name, _) in &sets {
-                    let domain = Some(&st.settings.design.domain);
-                    do_export(
-                        &store.join(name),
-                        &dir.join(name),
-                        &st.settings.filters,
-                        domain,
-                    )?;
-                }
-            }
+            let opts = options(shard, self.quiet);
+            st.build_all(&store, export_dir.as_deref(), &opts, &mut |t| {
+                std::io::Write::write_all(&mut std::io::stdout(), t.as_bytes())
+            })?;
             return Ok(ExitCode::SUCCESS);
         }
         let (Some(design_path), Some(store)) = (&self.design, &self.store) else {
@@ -216,10 +160,11 @@ impl BuildArgs {
             .map(|p| read_domain(p, &names, &design.rows))
             .transpose()
             .with_context(|| format!("--domain for --design {}", design_path.display()))?;
-        run_set("design", &model, &design.rows, store, shard, self.quiet)?;
+        let opts = options(shard, self.quiet);
+        print_text(&build_report("design", &model, &design.rows, store, &opts)?)?;
         if let Some(dir) = &self.export {
-            let filters = filters(self.min_peak_force, self.reject_non_repulsive);
-            do_export(store, dir, &filters, domain.as_ref())?;
+            let filters = self.filters.admissibility();
+            print_text(&export_report(store, dir, &filters, domain.as_ref())?)?;
         }
         Ok(ExitCode::SUCCESS)
     }
@@ -230,27 +175,19 @@ impl MergeArgs {
     pub fn run(self) -> anyhow::Result<ExitCode> {
         let (filt, domain) = match &self.study {
             Some(p) => {
-                let st = read_study(p).with_context(|| format!("--study {}", p.display()))?;
+                let st = BuildStudy::load(p).with_context(|| format!("--study {}", p.display()))?;
                 (st.settings.filters, Some(st.settings.design.domain))
             }
-            None => (
-                filters(self.min_peak_force, self.reject_non_repulsive),
-                None,
-            ),
+            None => (self.filters.admissibility(), None),
         };
-        for set in shard_sets(&self.shards)? {
-            let dirs: Vec<PathBuf> = self.shards.iter().map(|d| set_dir(d, set)).collect();
-            let out = set_dir(&self.out, set);
-            let n = merge(&dirs, &out)?;
-            say!(
-                "merged {} shards into {} ({n} runs copied)",
-                dirs.len(),
-                out.display()
-            )?;
-            if let Some(dir) = &self.export {
-                do_export(&out, &set_dir(dir, set), &filt, domain.as_ref())?;
-            }
-        }
+        let export = self.export.as_deref();
+        print_text(&merge_report(
+            &self.shards,
+            &self.out,
+            export,
+            &filt,
+            domain.as_ref(),
+        )?)?;
         Ok(ExitCode::SUCCESS)
     }
 }

@@ -110,7 +110,6 @@ impl Run for Args {
 }
 
 fn leaf_json(l: &nlvid_study::Leaf) -> serde_json::Value {
-    let mut v = json!({ "key": l.key, "line": l.line });
     let (value, unit, written) = match &l.value {
         LeafValue::Quantity { text, si } => (json!(si.value), si.dim.si_unit(), json!(text)),
         LeafValue::Number(x) => (json!(x), String::new(), json!(null)),
@@ -118,8 +117,5 @@ fn leaf_json(l: &nlvid_study::Leaf) -> serde_json::Value {
         LeafValue::Bool(b) => (json!(b), String::new(), json!(null)),
         LeafValue::Text(t) | LeafValue::Datetime(t) => (json!(t), String::new(), json!(null)),
     };
-    v["value"] = value;
-    v["unit"] = json!(unit);
-    v["written"] = written;
-    v
+    json!({ "key": l.key, "line": l.line, "value": value, "unit": unit, "written": written })
 }

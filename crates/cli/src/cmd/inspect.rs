@@ -11,7 +11,7 @@ use clap::{Args as ClapArgs, ValueEnum};
 use nlvid_afm::{ContactMethod, QuickFitKind, ReadOptions, quick_fit};
 use nlvid_study::Dimension;
 
-use crate::output::{print_json, print_text};
+use crate::output::{print_json, print_text, write_atomic};
 
 /// A quantity with a unit, or a bare number in SI.
 fn si(text: &str, dim: Dimension) -> Result<f64, String> {
@@ -115,11 +115,9 @@ impl Args {
             }
         };
         if let Some(path) = &self.csv {
-            let file = std::fs::File::create(path)
-                .with_context(|| format!("creating {}", path.display()))?;
-            curve
-                .write_csv(std::io::BufWriter::new(file))
-                .with_context(|| format!("writing {}", path.display()))?;
+            let mut buf = Vec::new();
+            curve.write_csv(&mut buf)?;
+            write_atomic(path, &buf)?;
         }
         if let Some(path) = &self.plot {
             nlvid_afm::write_plot(path, &curve, fit.as_ref())?;

@@ -88,37 +88,16 @@ fn run_reproduce(args: &MembraneArgs, json: bool) -> anyhow::Result<ExitCode> {
     let (figs, rows, notes) = nlvid_membrane::thesis::reproduce().context("reproducing ch. II")?;
     create(&out)?;
     let mut files = Vec::new();
-    for f in &figs {
-        let svg = nlvid_membrane::plot::svg(f).with_context(|| format!("drawing {}", f.id))?;
-        for (ext, text) in [("csv", f.to_csv()), ("svg", svg)] {
-            write_atomic(&out.join(format!("{}.{ext}", f.id)), text.as_bytes())?;
-            files.push(format!("{}.{ext}", f.id));
-        }
+    for (name, text) in nlvid_membrane::reproduction_files(&figs, &rows, &notes)? {
+        write_atomic(&out.join(&name), text.as_bytes())?;
+        files.push(name);
     }
-    let table = nlvid_membrane::table2_1_csv(&rows);
-    write_atomic(&out.join("table2_1.csv"), table.as_bytes())?;
-    let notes_text: String = notes.iter().map(|n| format!("{n}\n")).collect();
-    write_atomic(&out.join("notes.txt"), notes_text.as_bytes())?;
-    files.extend(["table2_1.csv".to_string(), "notes.txt".into()]);
     for n in &notes {
         eprintln!("note: {n}");
     }
     if json {
-        // Dimensionless quantities of eq. 2.47, named as the CSV columns.
-        let table: Vec<_> = rows
-            .iter()
-            .map(|r| {
-                json!({
-                    "D_over_r0": r.d_max, "unloading_rate": r.unload_rate, "model": r.model,
-                    "thesis_slope": r.thesis, "tangent_slope": r.slope,
-                    "secant_slope_dD_0.01": r.secant, "secant_over_2_div_thesis": r.ratio,
-                })
-            })
-            .collect();
-        return print_json(
-            &json!({ "files": files, "table2_1": table, "notes": notes, "out": out }),
-        )
-        .map(|()| ExitCode::SUCCESS);
+        let doc = json!({ "files": files, "table2_1": rows, "notes": notes, "out": out });
+        return print_json(&doc).map(|()| ExitCode::SUCCESS);
     }
     print_text(&nlvid_membrane::table2_1_text(&rows))?;
     say!("wrote {} files to {}", files.len(), out.display())?;

@@ -1,13 +1,5 @@
-//! Command-line surface: one module per subcommand.
-//!
-//! Adding a subcommand `foo`:
-//! 1. `src/cmd/foo.rs` with `pub struct Args` (derive `clap::Args`: the raw
-//!    flags), a validated `Config` built by `Args::validate`, and
-//!    `impl Run for Args` — see `check.rs`. Bad values are rejected in
-//!    `validate`, once, with a message that says what to change.
-//! 2. Here: `mod foo;`, a variant `Foo(foo::Args)` in [`Command`], and one
-//!    arm in [`Command::run`].
-//! 3. `docs/cli/foo.md`.
+//! Command-line surface: one module per subcommand (`Args` → validated
+//! `Config` → one library call → output; how to add one: docs/cli/README.md).
 
 use std::process::ExitCode;
 
@@ -123,13 +115,12 @@ impl Command {
     pub fn run(self, ctx: &Context) -> anyhow::Result<ExitCode> {
         match self {
             Command::Version => {
-                if ctx.json {
-                    crate::output::print_json(&serde_json::json!({
-                        "name": "nlvid",
-                        "version": env!("CARGO_PKG_VERSION"),
-                    }))?;
-                } else {
-                    say!("nlvid {}", env!("CARGO_PKG_VERSION"))?;
+                let v = env!("CARGO_PKG_VERSION");
+                match ctx.json {
+                    true => crate::output::print_json(
+                        &serde_json::json!({"name": "nlvid", "version": v}),
+                    )?,
+                    false => say!("nlvid {v}")?,
                 }
                 Ok(ExitCode::SUCCESS)
             }

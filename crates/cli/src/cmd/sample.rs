@@ -37,7 +37,7 @@ impl SampleArgs {
     /// Run.
     pub fn run(self) -> anyhow::Result<ExitCode> {
         let (domain, train, check) = if let Some(path) = &self.study {
-            let st = super::build::read_study(path)?;
+            let st = nlvid_surrogate::BuildStudy::load(path)?;
             let (train, check) = st.settings.design.designs()?;
             (st.settings.design.domain, train, check)
         } else {

@@ -105,11 +105,10 @@ pub fn report(
             "parameters": parameters_json(&sim.parameters()),
             "curve": curve_json(&run.curve()?),
         });
-        for (k, v) in run.summary_json()?.as_object().into_iter().flatten() {
-            doc[k] = v.clone();
-        }
-        for (k, v) in files.as_object().into_iter().flatten() {
-            doc[k] = v.clone();
+        for extra in [run.summary_json()?, files] {
+            for (k, v) in extra.as_object().into_iter().flatten() {
+                doc[k] = v.clone();
+            }
         }
         return print_json(&doc);
     }

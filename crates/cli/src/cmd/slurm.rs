@@ -9,7 +9,7 @@ use anyhow::Context as _;
 use nlvid_surrogate::slurm::{self, SlurmSettings};
 
 use super::{Context, Run};
-use crate::output::print_json;
+use crate::output::{print_json, print_text};
 
 /// Raw arguments of `nlvid slurm` (defaults: docs/cli/slurm.md).
 #[derive(Debug, clap::Args)]
@@ -89,7 +89,7 @@ impl Run for Args {
         let (Some(study), Some(out)) = (self.study, self.out) else {
             anyhow::bail!("give a study file and --out DIR, or --status DIR");
         };
-        super::build::read_study(&study)?;
+        nlvid_surrogate::BuildStudy::load(&study)?;
         let nlvid = match self.nlvid {
             Some(p) => p,
             None => std::env::current_exe().context("locating this nlvid program")?,
@@ -116,19 +116,12 @@ impl Run for Args {
             Config::Status(dir) => {
                 let st = slurm::status(&dir)?;
                 if ctx.json {
-                    print_json(&serde_json::json!({
-                        "tasks": st.tasks.iter().map(|t| serde_json::json!({
-                            "index": t.index, "state": format!("{:?}", t.state),
-                            "runs": t.runs, "expected": t.expected})).collect::<Vec<_>>(),
-                        "merged": st.merged, "next": st.next_step()}))?;
+                    print_json(&st.to_json())?;
                 } else {
-                    println!("{st}");
+                    say!("{st}")?;
                 }
-                return Ok(if st.merged {
-                    ExitCode::SUCCESS
-                } else {
-                    ExitCode::FAILURE
-                });
+                // Status 1 until the merge job has finished.
+                return Ok(ExitCode::from(u8::from(!st.merged)));
             }
             Config::Write(s, submit, tasks) => (s, submit, tasks),
         };
@@ -140,29 +133,9 @@ impl Run for Args {
             .then(|| slurm::submit(&s, tasks.as_deref(), "sbatch".as_ref()))
             .transpose()?;
         if ctx.json {
-            print_json(&serde_json::json!({
-                "dir": files.dir, "array_script": files.array, "merge_script": files.merge,
-                "submit_script": files.submit,
-                "array_job": ids.as_ref().map(|i| &i.array_job),
-                "merge_job": ids.as_ref().map(|i| &i.merge_job)}))?;
+            print_json(&files.to_json(ids.as_ref()))?;
         } else {
-            println!(
-                "wrote {} and {}",
-                files.array.display(),
-                files.merge.display()
-            );
-            match ids {
-                Some(i) => println!(
-                    "submitted array job {} (tasks {}) and merge job {} (afterok)\nfollow: squeue -j {},{}; nlvid slurm --status {}",
-                    i.array_job,
-                    i.array,
-                    i.merge_job,
-                    i.array_job,
-                    i.merge_job,
-                    files.dir.display()
-                ),
-                None => println!("submit with: {}", files.submit.display()),
-            }
+            print_text(&files.text(ids.as_ref()))?;
         }
         Ok(ExitCode::SUCCESS)
     }

@@ -1,13 +1,12 @@
 //! `nlvid surrogate fit | predict | check`: Kriging on any table.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, bail};
+use anyhow::Context;
 use clap::{Args, Subcommand};
 use nlvid_surrogate::{
-    Correlation, FitOptions, KrigingModel, NamedModel, OptimiserSettings, Regression, Table, check,
-    read_table, write_table,
+    Correlation, FitOptions, NamedModel, OptimiserSettings, Regression, check, read_table,
 };
 
 use crate::output::{print_json, print_text, write_atomic};
@@ -124,20 +123,6 @@ pub struct CheckArgs {
     pub summary: Option<PathBuf>,
 }
 
-fn read_pair(x: &Path, y: &Path) -> anyhow::Result<(Table, Table)> {
-    let (tx, ty) = (read_table(x)?, read_table(y)?);
-    if tx.rows.len() != ty.rows.len() {
-        bail!(
-            "{} has {} rows but {} has {}",
-            x.display(),
-            tx.rows.len(),
-            y.display(),
-            ty.rows.len()
-        );
-    }
-    Ok((tx, ty))
-}
-
 impl SurrogateCmd {
     /// Run.
     pub fn run(self, json: bool) -> anyhow::Result<ExitCode> {
@@ -150,7 +135,7 @@ impl SurrogateCmd {
 }
 
 fn fit(a: FitArgs, json: bool) -> anyhow::Result<ExitCode> {
-    let (x, y) = read_pair(&a.x, &a.y)?;
+    let (x, y) = (read_table(&a.x)?, read_table(&a.y)?);
     let options = FitOptions {
         regression: a.regression,
         correlation: a.correlation,
@@ -170,17 +155,10 @@ fn fit(a: FitArgs, json: bool) -> anyhow::Result<ExitCode> {
         proportional_to: a.proportional_to.map(|c| (c, a.log_coded)),
         log_inputs: a.log_inputs.unwrap_or_default(),
     };
-    let s = options
-        .settings(&x)
-        .with_context(|| format!("{}", a.x.display()))?;
     let t0 = std::time::Instant::now();
-    let model = KrigingModel::fit(x.mat().as_ref(), y.mat().as_ref(), &s)?;
+    let named = NamedModel::fit(&x, &y, options)
+        .with_context(|| format!("{} → {}", a.x.display(), a.y.display()))?;
     let secs = t0.elapsed().as_secs_f64();
-    let named = NamedModel {
-        model,
-        input_names: x.header.clone(),
-        output_names: y.header.clone(),
-    };
     named.save(&a.out)?;
     if json {
         let mut v = named.report_json();
@@ -205,19 +183,16 @@ fn predict(a: PredictArgs, json: bool) -> anyhow::Result<ExitCode> {
         v["model"] = serde_json::json!(a.model);
         return print_json(&v).map(|()| ExitCode::SUCCESS);
     }
-    let (header, rows) = p.table();
-    let mut buf = Vec::new();
-    write_table(&mut buf, &header, &rows)?;
     match &a.out {
-        Some(path) => write_atomic(path, &buf)?,
-        None => print_text(&String::from_utf8_lossy(&buf))?,
+        Some(path) => write_atomic(path, p.to_csv()?.as_bytes())?,
+        None => print_text(&p.to_csv()?)?,
     }
     Ok(ExitCode::SUCCESS)
 }
 
 fn check_cmd(a: CheckArgs, json: bool) -> anyhow::Result<ExitCode> {
     let model = NamedModel::load(&a.model)?.model;
-    let (x, y) = read_pair(&a.x, &a.y)?;
+    let (x, y) = (read_table(&a.x)?, read_table(&a.y)?);
     let (s, saved) = check::check_and_save(
         &model,
         &a.model,
@@ -231,14 +206,7 @@ fn check_cmd(a: CheckArgs, json: bool) -> anyhow::Result<ExitCode> {
     if json {
         say!("{summary}")?;
     } else {
-        say!(
-            "{} checking cases: range-normalised RMSE (eq. 4.4) min {:.4} %, median {:.4} %, max {:.4} % (case {})",
-            s.rmse.len(),
-            100.0 * s.min,
-            100.0 * s.median,
-            100.0 * s.max,
-            s.worst
-        )?;
+        say!("{s}")?;
     }
     Ok(ExitCode::SUCCESS)
 }

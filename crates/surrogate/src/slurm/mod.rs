@@ -23,6 +23,7 @@ use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod report;
 pub use scripts::{
     ARRAY_SCRIPT, MERGE_SCRIPT, SUBMIT_SCRIPT, array_script, merge_script, submit_script,
 };
