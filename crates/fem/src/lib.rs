@@ -5,7 +5,9 @@
 //! solids for the capsules of ch. IV: 8-node F-bar hexahedra ([`hex`],
 //! [`Mesh3`], `Model<M, Solid>`), symmetry rollers, rigid planes above and
 //! below that allow separation, and an enclosed fluid cavity whose pressure
-//! is an unknown ([`cavity`], [`Cavity`]). Newton with line search and
+//! is an unknown ([`cavity`], [`Cavity`]); axisymmetric membrane elements
+//! with the `material` crate's plane-stress update ([`membrane`],
+//! `Model<M, Membrane>`, ch. II §2.5.2). Newton with line search and
 //! adaptive time stepping with cut-backs (thesis §2.4, §4.3, §5.2.2, §5.3).
 //!
 //! Cost: one Newton iteration is one assembly (4 axisymmetric material
@@ -46,6 +48,7 @@ mod error;
 pub mod hex;
 mod history;
 mod kind;
+pub mod membrane;
 pub mod mesh;
 pub mod mesh3;
 mod model;
@@ -56,6 +59,7 @@ mod sparse;
 pub use error::{FemError, NonConvergence, Result};
 pub use history::History;
 pub use kind::{Axisymmetric, ElementKind, Solid, Topology};
+pub use membrane::{Membrane, MembraneMesh, MembranePoint};
 pub use mesh::Mesh;
 pub use mesh3::Mesh3;
 pub use model::{

@@ -409,7 +409,7 @@ struct Assembly {
 
 /// Finite-strain model of an axisymmetric (`K` = [`Axisymmetric`], the
 /// default) or 3D (`K` = [`Solid`]) body (see module docs).
-pub struct Model<M: Material3, K: ElementKind = Axisymmetric> {
+pub struct Model<M: Material3, K: ElementKind<M> = Axisymmetric> {
     mesh: K::Mesh,
     material: M,
     settings: Settings,
@@ -441,7 +441,7 @@ pub struct Model<M: Material3, K: ElementKind = Axisymmetric> {
     counters: Counters,
 }
 
-impl<M: Material3, K: ElementKind> std::fmt::Debug for Model<M, K> {
+impl<M: Material3, K: ElementKind<M>> std::fmt::Debug for Model<M, K> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
@@ -493,7 +493,7 @@ impl<M: Material3> Model<M, Solid> {
     }
 }
 
-impl<M: Material3, K: ElementKind> Model<M, K> {
+impl<M: Material3, K: ElementKind<M>> Model<M, K> {
     /// Builds the model: dof numbering, sparse pattern, symbolic LDLᵀ and LU,
     /// contact penalties, cavity volume.
     ///
@@ -827,6 +827,18 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
         &self.u_committed[..K::DIM * self.mesh.node_count()]
     }
 
+    /// The material, the element geometry, the point histories and the
+    /// converged dofs: read access for this crate's output modules.
+    #[allow(clippy::type_complexity)]
+    pub(crate) fn converged_parts(&self) -> (&M, &[K::Geometry], &History<M::State>, &[f64]) {
+        (
+            &self.material,
+            &self.geometry,
+            &self.history,
+            &self.u_committed,
+        )
+    }
+
     /// Converged probe displacement w (m).
     pub fn probe_displacement(&self) -> f64 {
         self.u_committed[K::DIM * self.mesh.node_count()]
@@ -1002,7 +1014,7 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
             for e in 0..self.mesh.element_count() {
                 let out = &self.element_outs[e];
                 let slots = &self.elem_slots[nd * nd * e..nd * nd * (e + 1)];
-                scatter::<K>(
+                scatter::<M, K>(
                     self.mesh.connectivity(e),
                     out,
                     slots,
@@ -1037,7 +1049,7 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
                     source,
                 })?;
                 let slots = &self.elem_slots[nd * nd * e..nd * nd * (e + 1)];
-                scatter::<K>(
+                scatter::<M, K>(
                     conn,
                     &self.element_out,
                     slots,
@@ -1606,7 +1618,7 @@ impl CavityModel {
 }
 
 /// Adds one element's residual and tangent into the global arrays.
-fn scatter<K: ElementKind>(
+fn scatter<M: Material3, K: ElementKind<M>>(
     conn: &[usize],
     out: &K::Output,
     slots: &[usize],
