@@ -53,6 +53,9 @@ pub trait Topology: Send + Sync {
     /// # Errors
     /// [`FemError::Mesh`] if there is no such surface.
     fn contact_weights(&self, name: &str) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>)>;
+    /// The VTK cell type of the elements (9 quadrilateral, 12 hexahedron,
+    /// 3 line), for [`crate::vtu`].
+    fn vtk_cell_type(&self) -> u8;
     /// The cells bounding the cavity `name`.
     ///
     /// # Errors
@@ -81,6 +84,9 @@ impl Topology for Mesh {
         let nodes = self.nodes_in(name)?.to_vec();
         let (area, len) = tributary(&self.nodes, &nodes);
         Ok((nodes, area, len))
+    }
+    fn vtk_cell_type(&self) -> u8 {
+        9
     }
     /// An ordered node set read as a polyline (consecutive nodes joined).
     fn cavity_cells(&self, name: &str) -> Result<CavityCells> {
@@ -114,6 +120,9 @@ impl Topology for Mesh3 {
     }
     fn contact_weights(&self, name: &str) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>)> {
         self.tributary(name)
+    }
+    fn vtk_cell_type(&self) -> u8 {
+        12
     }
     fn cavity_cells(&self, name: &str) -> Result<CavityCells> {
         let faces = self.faces_in(name)?;

@@ -42,6 +42,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod afm;
+pub mod capsule;
 pub mod cavity;
 pub mod element;
 mod error;
@@ -55,7 +56,9 @@ mod model;
 pub mod reference;
 pub mod shell;
 mod sparse;
+pub mod vtu;
 
+pub use capsule::{CapsuleRecord, ContactPatch, Footprint, LiftOff, PatchSpec, Symmetry};
 pub use error::{FemError, NonConvergence, Result};
 pub use history::History;
 pub use kind::{Axisymmetric, ElementKind, Solid, Topology};

@@ -207,6 +207,9 @@ impl Topology for MembraneMesh {
         let (area, len) = crate::kind::tributary(&self.nodes, &nodes);
         Ok((nodes, area, len))
     }
+    fn vtk_cell_type(&self) -> u8 {
+        3
+    }
     /// An ordered node set read as a polyline (consecutive nodes joined).
     fn cavity_cells(&self, name: &str) -> Result<CavityCells> {
         let nodes = self.nodes_in(name)?;

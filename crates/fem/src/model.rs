@@ -912,6 +912,39 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             .collect()
     }
 
+    /// Gap of every node of plane `index` (in the order of
+    /// [`Parts::planes`]) at the converged state: (node, gap in m, negative
+    /// when the node penetrates the plane). Empty for a missing plane.
+    pub fn plane_contact_gaps(&self, index: usize) -> Vec<(usize, f64)> {
+        let plane_z = self.control.plane_z;
+        let dim = K::DIM;
+        let Some((side, set)) = self.planes.get(index) else {
+            return Vec::new();
+        };
+        set.nodes
+            .iter()
+            .map(|&a| {
+                let z = self.mesh.position(a)[dim - 1] + self.u_committed[dim * a + dim - 1];
+                let g = match side {
+                    PlaneSide::Above => plane_z - z,
+                    PlaneSide::Below(zb) => z - zb,
+                };
+                (a, g)
+            })
+            .collect()
+    }
+
+    /// Side of plane `index` (in the order of [`Parts::planes`]), if there
+    /// is one.
+    pub fn plane_side(&self, index: usize) -> Option<PlaneSide> {
+        self.planes.get(index).map(|p| p.0)
+    }
+
+    /// Loads of the last converged step.
+    pub fn last_control(&self) -> Control {
+        self.control
+    }
+
     /// Records of all converged steps so far.
     pub fn records(&self) -> &[StepRecord] {
         &self.records
