@@ -44,6 +44,10 @@ pub struct Symmetry {
     /// Copies of the modelled part of one plate's contact patch (force and
     /// area).
     pub patch_copies: f64,
+    /// Share of the plates' approach d that the modelled plate moves: 1/2
+    /// when the model is cut by z = 0 (each plate moves by d/2 toward it),
+    /// 1 when the top plate moves by d against a fixed bottom plate.
+    pub plate_share: f64,
 }
 
 impl Symmetry {
@@ -51,22 +55,26 @@ impl Symmetry {
     pub const FULL: Self = Self {
         volume_copies: 1.0,
         patch_copies: 1.0,
+        plate_share: 1.0,
     };
     /// Cut by x = 0 and y = 0, both plates modelled.
     pub const QUARTER: Self = Self {
         volume_copies: 4.0,
         patch_copies: 4.0,
+        plate_share: 1.0,
     };
     /// Cut by x = 0, y = 0 and z = 0 (symmetric load).
     pub const EIGHTH: Self = Self {
         volume_copies: 8.0,
         patch_copies: 4.0,
+        plate_share: 0.5,
     };
     /// Axisymmetric upper half (z ≥ 0): areas and forces of axisymmetric
     /// models are already those of the whole revolution.
     pub const AXISYMMETRIC_HALF: Self = Self {
         volume_copies: 2.0,
         patch_copies: 1.0,
+        plate_share: 0.5,
     };
 }
 

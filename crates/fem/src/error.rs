@@ -48,6 +48,9 @@ pub enum FemError {
     /// The sparse factorisation failed (singular tangent).
     #[error("sparse solver: {0}")]
     Solver(String),
+    /// A loading program cannot be run on this model (what and why).
+    #[error("plate program: {0}")]
+    Program(String),
     /// An output file could not be written.
     #[error("cannot write `{}`: {source}", file.display())]
     Io {

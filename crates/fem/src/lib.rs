@@ -53,6 +53,7 @@ pub mod membrane;
 pub mod mesh;
 pub mod mesh3;
 mod model;
+pub mod plates;
 pub mod reference;
 pub mod shell;
 mod sparse;
@@ -69,3 +70,4 @@ pub use model::{
     Cavity, Component, Control, Counters, Fluid, Model, Parts, PlaneSide, ProbeDrive, RigidPlane,
     Settings, SphereProbe, Stage, StepRecord, Support,
 };
+pub use plates::{PlateProgram, PlateRun, PlateSample, run_plate_program};

@@ -868,6 +868,32 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         total
     }
 
+    /// The element with the smallest det F over its Gauss points at the
+    /// converged state (plain F, not F̄), and that determinant; None for an
+    /// empty mesh.
+    pub fn smallest_jacobian(&self) -> Option<(usize, f64)> {
+        let dim = K::DIM;
+        let nd = K::NODES * dim;
+        let mut ue = [0.0; 24];
+        let mut best: Option<(usize, f64)> = None;
+        for e in 0..self.mesh.element_count() {
+            let conn = self.mesh.connectivity(e);
+            for k in 0..nd {
+                ue[k] = self.u_committed[dim * conn[k / dim] + k % dim];
+            }
+            let smallest = std::cell::Cell::new(f64::INFINITY);
+            K::energy(&self.geometry[e], &ue[..nd], false, &|f: &Mat3| {
+                smallest.set(smallest.get().min(f.determinant()));
+                0.0
+            });
+            let j = smallest.get();
+            if best.is_none_or(|b| j < b.1) {
+                best = Some((e, j));
+            }
+        }
+        best
+    }
+
     /// Energy stored in the contact penalties at the converged state,
     /// `Σ ½ ε_a ⟨−g_a⟩²` over the planes (J).
     pub fn plane_contact_energy(&self) -> f64 {
@@ -1422,6 +1448,19 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
     /// `min_step_fraction × stage duration` without converging; the model
     /// keeps the last converged state.
     pub fn run_stage(&mut self, stage: &Stage<'_>) -> Result<()> {
+        self.run_stage_observed(stage, &mut |_| Ok(()))
+    }
+
+    /// [`Model::run_stage`], calling `observe` after every converged step
+    /// (e.g. to record outputs that need the full state).
+    ///
+    /// # Errors
+    /// As [`Model::run_stage`]; an error of `observe` ends the stage.
+    pub fn run_stage_observed(
+        &mut self,
+        stage: &Stage<'_>,
+        observe: &mut dyn FnMut(&Self) -> Result<()>,
+    ) -> Result<()> {
         let duration = stage.end - self.time;
         if !(duration >= 0.0) || !(stage.dt_max > 0.0) || !(stage.dt_initial > 0.0) {
             return Err(FemError::Setting {
@@ -1436,6 +1475,9 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         let dt_min = self.settings.min_step_fraction * duration;
         let mut dt = stage.dt_initial.min(stage.dt_max);
         let mut first = true;
+        // The last attempt of the current step that met an inadmissible
+        // deformation (reported if the step finally fails for another cause).
+        let mut inadmissible: Option<String> = None;
         while self.time < stage.end - 1e-12 * duration {
             let remaining = stage.end - self.time;
             if dt > remaining || remaining - dt < 0.01 * dt {
@@ -1486,6 +1528,8 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                         cavity_volume: if has_cavity { asm.volume } else { f64::NAN },
                         iterations,
                     });
+                    inadmissible = None;
+                    observe(self)?;
                     if iterations <= self.settings.easy_iterations {
                         dt = (dt * self.settings.growth).min(stage.dt_max);
                     }
@@ -1496,16 +1540,28 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                     }
                     self.counters.cutbacks += 1;
                     self.u.copy_from_slice(&self.u_committed);
+                    if cause.starts_with("material at element") {
+                        inadmissible = Some(cause.clone());
+                    }
                     if dt <= dt_min * (1.0 + 1e-9) {
                         // Leave the residual vector of the converged state.
                         let _ = self.assemble(&(stage.control)(self.time), 0.0, false);
+                        let mut cause = format!("stage `{}`: {cause}", stage.name);
+                        if let Some(m) = inadmissible.filter(|m| !cause.ends_with(m.as_str())) {
+                            cause.push_str(&format!("; an earlier attempt: {m}"));
+                        }
+                        if let Some((e, j)) = self.smallest_jacobian().filter(|x| x.1 < 0.1) {
+                            cause.push_str(&format!(
+                                "; element {e} has det F = {j:.3e} at the last converged state (collapsing)"
+                            ));
+                        }
                         return Err(FemError::NonConvergence(Box::new(NonConvergence {
                             time: self.time,
                             dt,
                             residual,
                             tolerance,
                             iterations,
-                            cause: format!("stage `{}`: {cause}", stage.name),
+                            cause,
                         })));
                     }
                     dt = (dt * self.settings.cutback).max(dt_min);
