@@ -10,16 +10,12 @@
 #![allow(clippy::needless_range_loop, clippy::unwrap_used)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use nlvid_fem::afm::{self, AfmParams, AfmSetup};
+use nlvid_fem::afm::{self, AfmSetup};
+use nlvid_model::{Relaxation, names};
 
 fn bench(c: &mut Criterion) {
-    let params = AfmParams {
-        g0: 1e3,
-        g1: 0.3,
-        tau1: 0.5,
-        g2: 0.3,
-        tau2: 10.0,
-    };
+    // G0 = 1 kPa (shear modulus), g1 = g2 = 0.3, tau1 = 0.5 s, tau2 = 10 s.
+    let params = Relaxation::from_named(&names::PRONY2, &[1e3, 0.3, 0.3, 0.5, 10.0]).unwrap();
     faer::set_global_parallelism(faer::Par::Seq);
     let setup = AfmSetup::thesis_setup1();
     let mut two = setup.clone();

@@ -16,21 +16,7 @@ use crate::model::{
 use crate::reference::PronyNeoHookean;
 use crate::{FemError, Mesh, Model, Result};
 use nlvid_material::Material3;
-
-/// The five NLV parameters of eq. 5.1: G(s) = G₀ [g_∞ + Σ g_k e^{−s/τ_k}].
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct AfmParams {
-    /// Instantaneous shear modulus G₀ = C₁ (Pa).
-    pub g0: f64,
-    /// First Prony weight.
-    pub g1: f64,
-    /// First relaxation time (s).
-    pub tau1: f64,
-    /// Second Prony weight.
-    pub g2: f64,
-    /// Second relaxation time (s).
-    pub tau2: f64,
-}
+use nlvid_model::Relaxation;
 
 /// How the probe is held.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -255,44 +241,38 @@ pub struct AfmRun {
 }
 
 /// The cell material of eq. 5.1 from the `material` crate (ABAQUS-form
-/// finite-strain Prony viscoelasticity, §4.3, neo-Hookean elastic part).
-///
-/// `g0` is read as eq. 5.1 defines it, the instantaneous *shear modulus*
-/// G(0); the neo-Hookean constant is then C1 = G0/2 (W = C1(Ī1 − 3)). The
-/// thesis also calls G0 "the neo-Hookean parameter C1" (§5.4.1): reading it
-/// that way doubles the stiffness; see docs/theory/fem.md.
+/// finite-strain Prony viscoelasticity, §4.3, neo-Hookean elastic part):
+/// `shear` is the shear relaxation modulus G(t) = G0 [g∞ + Σ g_k e^{−t/τ_k}]
+/// (parameters `G0, g1, g2, tau1, tau2`, `nlvid_model::names::PRONY2`), so
+/// the neo-Hookean constant is C1 = G0/2 (`PronyViscoelastic::cell`,
+/// docs/theory/model.md); the bulk modulus is `bulk_ratio × G0`.
 ///
 /// # Errors
 /// [`FemError::Material`] naming the offending parameter.
 pub fn cell_material(
-    params: &AfmParams,
+    shear: &Relaxation,
     bulk_ratio: f64,
 ) -> Result<nlvid_material::PronyViscoelastic> {
-    nlvid_material::PronyViscoelastic::cell(
-        0.5 * params.g0,
-        params.g1,
-        params.tau1,
-        params.g2,
-        params.tau2,
-        bulk_ratio * params.g0,
-    )
-    .map_err(|source| FemError::Material {
-        element: 0,
-        point: 0,
-        source,
+    nlvid_material::PronyViscoelastic::cell(shear, bulk_ratio * shear.g0()).map_err(|source| {
+        FemError::Material {
+            element: 0,
+            point: 0,
+            source,
+        }
     })
 }
 
-/// One run of the model for the eq. 5.1 parameters with the `material`
-/// crate's cell model ([`cell_material`]) and bulk modulus
-/// `setup.bulk_ratio × G₀`. This is the forward model of the surrogate stage.
+/// One run of the model for the shear relaxation modulus `shear` of eq. 5.1
+/// with the `material` crate's cell model ([`cell_material`]) and bulk
+/// modulus `setup.bulk_ratio × G₀`. This is the forward model of the
+/// surrogate stage.
 ///
 /// # Errors
 /// [`FemError::Setting`] / [`FemError::Material`] for bad parameters,
 /// [`FemError::NonConvergence`] when a step cannot be completed (time,
 /// step, residual in the error).
-pub fn run(params: &AfmParams, setup: &AfmSetup) -> Result<AfmRun> {
-    run_with(cell_material(params, setup.bulk_ratio)?, setup)
+pub fn run(shear: &Relaxation, setup: &AfmSetup) -> Result<AfmRun> {
+    run_with(cell_material(shear, setup.bulk_ratio)?, setup)
 }
 
 /// [`run`] with the fem crate's own Simo-form Prony neo-Hookean
@@ -301,17 +281,15 @@ pub fn run(params: &AfmParams, setup: &AfmSetup) -> Result<AfmRun> {
 ///
 /// # Errors
 /// As [`run`].
-pub fn run_reference(params: &AfmParams, setup: &AfmSetup) -> Result<AfmRun> {
-    let material = PronyNeoHookean::new(
-        params.g0,
-        setup.bulk_ratio * params.g0,
-        vec![(params.g1, params.tau1), (params.g2, params.tau2)],
-    )
-    .map_err(|source| FemError::Material {
-        element: 0,
-        point: 0,
-        source,
-    })?;
+pub fn run_reference(shear: &Relaxation, setup: &AfmSetup) -> Result<AfmRun> {
+    let material =
+        PronyNeoHookean::new(shear.clone(), setup.bulk_ratio * shear.g0()).map_err(|source| {
+            FemError::Material {
+                element: 0,
+                point: 0,
+                source,
+            }
+        })?;
     run_with(material, setup)
 }
 

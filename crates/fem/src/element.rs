@@ -334,6 +334,16 @@ mod tests {
         }
     }
 
+    /// G(t) of the AFM cell model in the tests below: G0 = 1 (C1 = 0.5),
+    /// g1 = g2 = 0.3, τ1 = 0.5, τ2 = 10.
+    fn afm_cell_shear() -> nlvid_model::Relaxation {
+        nlvid_model::Relaxation::from_named(
+            &nlvid_model::names::PRONY2,
+            &[1.0, 0.3, 0.3, 0.5, 10.0],
+        )
+        .unwrap()
+    }
+
     #[test]
     fn regrouped_tangent_equals_direct_form() {
         let neo = crate::reference::NeoHookean {
@@ -344,8 +354,7 @@ mod tests {
         compare_with_direct_form(&neo, false);
         // A history-dependent material of the `material` crate (the AFM cell
         // model), evaluated with a time step so the viscous terms enter.
-        let cell =
-            nlvid_material::PronyViscoelastic::cell(0.5, 0.3, 0.5, 0.3, 10.0, 1000.0).unwrap();
+        let cell = nlvid_material::PronyViscoelastic::cell(&afm_cell_shear(), 1000.0).unwrap();
         compare_with_direct_form(&cell, true);
     }
 
@@ -356,8 +365,7 @@ mod tests {
         // round-off (it is the Hessian of the incremental potential), so the
         // lower triangle carries all of it; `Lower` computes exactly that
         // triangle and leaves the rest zero.
-        let cell =
-            nlvid_material::PronyViscoelastic::cell(0.5, 0.3, 0.5, 0.3, 10.0, 100.0).unwrap();
+        let cell = nlvid_material::PronyViscoelastic::cell(&afm_cell_shear(), 100.0).unwrap();
         let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
         let geo = element_geometry(&x);
         let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];

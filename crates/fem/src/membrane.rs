@@ -528,7 +528,8 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nlvid_material::{MooneyRivlin, PipkinRogers, Prony, Relaxation};
+    use nlvid_material::{MooneyRivlin, PipkinRogers};
+    use nlvid_model::{Prony, Relaxation};
 
     fn pipkin_rogers() -> PipkinRogers {
         let g1 = Relaxation::new("G1", 1.0e6, Prony::new("G1", &[(0.5, 0.7)]).unwrap()).unwrap();

@@ -2,17 +2,13 @@
 
 #![allow(clippy::needless_range_loop, clippy::unwrap_used)]
 
-use nlvid_fem::afm::{self, AfmParams, AfmSetup, Cantilever};
+use nlvid_fem::afm::{self, AfmSetup, Cantilever};
 use nlvid_fem::{FemError, Settings};
+use nlvid_model::{Relaxation, names};
 
-fn params() -> AfmParams {
-    AfmParams {
-        g0: 1e3,
-        g1: 0.3,
-        tau1: 0.5,
-        g2: 0.3,
-        tau2: 10.0,
-    }
+fn params() -> Relaxation {
+    // G0 = 1 kPa (shear modulus), g1 = g2 = 0.3, tau1 = 0.5 s, tau2 = 10 s.
+    Relaxation::from_named(&names::PRONY2, &[1e3, 0.3, 0.3, 0.5, 10.0]).unwrap()
 }
 
 fn short_setup(cantilever: Cantilever) -> AfmSetup {
@@ -191,4 +187,36 @@ fn material_crate_cell_model_agrees_with_reference_prony_solid() {
     assert!(rel < 0.01, "peak forces differ by {rel}");
     let relf = (a.final_force / b.final_force - 1.0).abs();
     assert!(relf < 0.01, "final forces differ by {relf}");
+}
+
+/// G0 is the shear modulus (docs/theory/model.md): the FE cell model of a
+/// `Relaxation` with G0 is, bit for bit, the neo-Hookean material with
+/// C1 = G0/2 (eq. 4.1) and the same Prony series, and reading G0 as C1
+/// would change the force by about a factor 2.
+#[test]
+fn cell_model_of_shear_modulus_g0_is_the_neo_hookean_solid_with_c1_half_of_g0() {
+    use nlvid_material::{MooneyRivlin, PronyViscoelastic};
+    let mut setup = short_setup(Cantilever::Rigid);
+    // No force-controlled engagement: the probe follows the piezo only.
+    setup.engagement.force = 0.0;
+    let shear = params();
+    let kappa = setup.bulk_ratio * shear.g0();
+    let by_hand = |c1: f64, kappa: f64| {
+        PronyViscoelastic::new(
+            MooneyRivlin::neo_hookean(c1, kappa).unwrap(),
+            shear.prony().clone(),
+        )
+    };
+    let a = afm::run(&shear, &setup).unwrap();
+    let b = afm::run_with(by_hand(500.0, kappa), &setup).unwrap();
+    assert_eq!(a.force, b.force, "G0 = 1 kPa must be C1 = 500 Pa exactly");
+    // The same material read with C1 = G0 (bulk ratio kept): every stress
+    // doubles, so under the rigid, displacement-driven probe so does F.
+    let doubled = afm::run_with(by_hand(1000.0, 2.0 * kappa), &setup).unwrap();
+    let ratio = doubled.peak_force / a.peak_force;
+    eprintln!("peak force with C1 = G0 over C1 = G0/2: {ratio}");
+    assert!(
+        (ratio - 2.0).abs() < 1e-9,
+        "C1 = G0 would double the force: ratio {ratio}"
+    );
 }

@@ -140,13 +140,24 @@ impl Curve {
         }
         out.push('\n');
         for (i, t) in self.time.iter().enumerate() {
-            out.push_str(&format!("{t:e}"));
+            out.push_str(&number(*t));
             for c in &self.channels {
-                out.push_str(&format!(",{:e}", c.values[i]));
+                out.push(',');
+                out.push_str(&number(c.values[i]));
             }
             out.push('\n');
         }
         out
+    }
+}
+
+/// Shortest text that reads back to exactly `x`: plain for 1e-4 ≤ |x| <
+/// 1e15 and 0 (`0`, `1`, `10.5`), exponent form otherwise (`2.5e-9`).
+fn number(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e15).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
     }
 }
 

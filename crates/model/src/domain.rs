@@ -58,11 +58,14 @@ impl Parameter {
         }
     }
 
-    /// Physical value x of a scaled coordinate u.
+    /// Physical value x of a scaled coordinate u. On a log axis
+    /// x = exp(ln lo + u (ln hi − ln lo)): the expression every stored
+    /// design was drawn with, so designs — and the study hashes of run
+    /// stores built from them — are reproduced bit for bit.
     pub fn from_unit(&self, u: f64) -> f64 {
         match self.scale {
             Scale::Linear => self.lower + u * (self.upper - self.lower),
-            Scale::Log => self.lower * ((self.upper / self.lower).ln() * u).exp(),
+            Scale::Log => (self.lower.ln() + u * (self.upper.ln() - self.lower.ln())).exp(),
         }
     }
 

@@ -15,8 +15,11 @@ pub const C1: &str = "C1";
 pub const C2: &str = "C2";
 /// Mooney–Rivlin ratio α = C2/C1 of eq. 4.1 (dimensionless).
 pub const ALPHA: &str = "alpha";
-/// Ch. II's instantaneous Pipkin–Rogers modulus G1(0) (Pa): the "C1" of
-/// eq. 2.4, equal to 2 C1 of eq. 4.1.
+/// Ch. II's instantaneous Pipkin–Rogers modulus G1(0) of eqs. 2.53–2.56
+/// (Pa), which §2.5 calls "C1 = G1(0)". Eq. 2.53 carries a factor 2, so
+/// G10 is the eq. 4.1 constant C1 of the instantaneous Mooney–Rivlin
+/// response (small-strain shear modulus 2(G10 + G20)); the "C1" of eq. 2.4,
+/// which has no factor 2, is 2 G10 (`docs/theory/model.md`).
 pub const G10: &str = "G10";
 /// Ch. II's instantaneous Mooney–Rivlin parameter γ0 = G2(0)/G1(0).
 pub const GAMMA0: &str = "gamma0";
@@ -56,7 +59,7 @@ pub fn describe(name: &str) -> Option<String> {
         C1 => "Mooney–Rivlin C1 of eq. 4.1 (G0 = 2(C1 + C2))".into(),
         C2 => "Mooney–Rivlin C2 of eq. 4.1".into(),
         ALPHA => "Mooney–Rivlin ratio C2/C1 of eq. 4.1".into(),
-        G10 => "ch. II instantaneous modulus G1(0) (the C1 of eq. 2.4)".into(),
+        G10 => "ch. II instantaneous modulus G1(0) of eqs. 2.53–2.56".into(),
         GAMMA0 => "ch. II Mooney–Rivlin parameter G2(0)/G1(0)".into(),
         _ if indexed(name, "tau") => format!("relaxation time of Prony term {}", &name[3..]),
         _ if indexed(name, "g") => format!("weight of Prony term {} (eq. 4.2)", &name[1..]),
