@@ -9,6 +9,10 @@
 //! with the `material` crate's plane-stress update ([`membrane`],
 //! `Model<M, Membrane>`, ch. II §2.5.2). Newton with line search and
 //! adaptive time stepping with cut-backs (thesis §2.4, §4.3, §5.2.2, §5.3).
+//! Capsule runs: plate programs (RH, RR, measured tables; [`plates`]), the
+//! capsule's outputs per time (force, pressure, volume, contact area two
+//! ways, loss of contact; [`capsule`]) and the deformed mesh as VTU
+//! ([`vtu`]).
 //!
 //! Cost: one Newton iteration is one assembly (4 axisymmetric material
 //! updates per element, optionally on several threads; near convergence

@@ -331,10 +331,10 @@ where
     let share = p.patch.symmetry.plate_share;
     // The state at the start (no step yet: zero loads, fluid at V₀).
     let mut first = model.capsule_record(&p.patch)?;
-    first.pressure = 0.0;
-    first.volume = model
-        .cavity_reference_volume()
-        .map_or(f64::NAN, |v| p.patch.symmetry.volume_copies * v);
+    let v0 = model.cavity_reference_volume();
+    first.pressure = v0.map_or(f64::NAN, |_| 0.0);
+    first.volume = v0.map_or(f64::NAN, |v| p.patch.symmetry.volume_copies * v);
+    first.plate_z = z_top - share * prog.value(t0);
     let mut steps = vec![(prog.value(t0), first)];
     let control = |t: f64| Control {
         plane_z: z_top - share * prog.value(t),
