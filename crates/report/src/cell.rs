@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
 use crate::input::{CellInput, Geometry};
-use crate::settings::{CohortSettings, ForwardModel};
+use crate::settings::{CohortSettings, FitModel};
 
 /// Outcome class of a cell.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -181,12 +181,12 @@ impl CellModel {
     /// Bad ε; unreadable or mismatched meta-model files (naming them).
     pub fn load(settings: &CohortSettings) -> Result<Self> {
         match (&settings.model, &settings.surrogate) {
-            (ForwardModel::LeeRadok, _) => Ok(Self::LeeRadok(domain(settings)?)),
-            (ForwardModel::Surrogate, Some(f)) => {
+            (FitModel::LeeRadok, _) => Ok(Self::LeeRadok(domain(settings)?)),
+            (FitModel::Surrogate, Some(f)) => {
                 let s = load_kriging_surrogate(&f.model, &f.meta, Coordinates::Physical)?;
                 Ok(Self::Surrogate(Box::new(SurrogateFitter::new(s, None)?)))
             }
-            (ForwardModel::Surrogate, None) => Err(crate::ReportError::InvalidSetting(
+            (FitModel::Surrogate, None) => Err(crate::ReportError::InvalidSetting(
                 "fit.model = \"surrogate\" needs fit.surrogate and fit.meta".into(),
             )),
         }

@@ -48,7 +48,7 @@ use crate::error::{ReportError, Result};
 
 /// The model every curve is fitted with.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum ForwardModel {
+pub enum FitModel {
     /// Small-strain Lee–Radok linear-viscoelastic Hertz contact, rigid
     /// sphere, run with each cell's measured indentation.
     LeeRadok,
@@ -57,15 +57,15 @@ pub enum ForwardModel {
     Surrogate,
 }
 
-impl ForwardModel {
+impl FitModel {
     /// One-line description shown in outputs and the report.
     pub fn describe(&self) -> &'static str {
         match self {
-            ForwardModel::LeeRadok => {
+            FitModel::LeeRadok => {
                 "small-strain Lee–Radok (linear-viscoelastic Hertz, rigid sphere), \
                  run with each cell's measured indentation; no surrogate"
             }
-            ForwardModel::Surrogate => {
+            FitModel::Surrogate => {
                 "Kriging meta-model (nlvid surrogate fit) of the forward model named in \
                  the study, on the nominal ramp-hold protocol"
             }
@@ -151,7 +151,7 @@ pub struct FitSettings {
     /// The study file.
     pub study: PathBuf,
     /// Surrogate or analytic Lee–Radok.
-    pub model: ForwardModel,
+    pub model: FitModel,
     /// ε of g1 + g2 ≤ 1 − ε of the Table 5.3 domain of the analytic
     /// Lee–Radok model; a meta-model brings the domain stored in its
     /// `meta.json` instead.
@@ -244,13 +244,13 @@ impl FitSettings {
         let model = s.enum_or(
             "model",
             &[
-                ("lee-radok", ForwardModel::LeeRadok),
-                ("surrogate", ForwardModel::Surrogate),
+                ("lee-radok", FitModel::LeeRadok),
+                ("surrogate", FitModel::Surrogate),
             ],
             if s.has("surrogate") || s.has("experiment") {
-                ForwardModel::Surrogate
+                FitModel::Surrogate
             } else {
-                ForwardModel::LeeRadok
+                FitModel::LeeRadok
             },
         )?;
         let inputs = s.enum_or(
@@ -391,14 +391,10 @@ fn read_columns(s: &mut Section) -> Result<DataColumns> {
 }
 
 /// One experiment's keys, from `[fit]` itself or a `[[fit.experiment]]`.
-fn read_experiment(
-    s: &mut Section,
-    model: ForwardModel,
-    study: &Path,
-) -> Result<ExperimentSettings> {
+fn read_experiment(s: &mut Section, model: FitModel, study: &Path) -> Result<ExperimentSettings> {
     let label = s.opt_str("label")?;
     let (surrogate, meta, check) = match model {
-        ForwardModel::Surrogate => {
+        FitModel::Surrogate => {
             let check = match s.opt_path("check")? {
                 Some(p) if !p.is_file() => {
                     return Err(s
@@ -413,7 +409,7 @@ fn read_experiment(
                 check,
             )
         }
-        ForwardModel::LeeRadok => {
+        FitModel::LeeRadok => {
             for key in ["surrogate", "meta", "check"] {
                 if s.has(key) {
                     return Err(s.invalid(key, "only with model = \"surrogate\"").into());
@@ -554,8 +550,8 @@ pub struct CohortSettings {
     /// End of the hold (end of the fitted window), s.
     pub hold_end: f64,
     /// Forward model.
-    pub model: ForwardModel,
-    /// The meta-model's files (when `model` is [`ForwardModel::Surrogate`]).
+    pub model: FitModel,
+    /// The meta-model's files (when `model` is [`FitModel::Surrogate`]).
     pub surrogate: Option<SurrogateFiles>,
     /// Multistart starts per cell.
     pub starts: usize,
