@@ -48,6 +48,17 @@ pub enum FemError {
     /// The sparse factorisation failed (singular tangent).
     #[error("sparse solver: {0}")]
     Solver(String),
+    /// A loading program cannot be run on this model (what and why).
+    #[error("plate program: {0}")]
+    Program(String),
+    /// An output file could not be written.
+    #[error("cannot write `{}`: {source}", file.display())]
+    Io {
+        /// The file.
+        file: std::path::PathBuf,
+        /// The system's error.
+        source: std::io::Error,
+    },
     /// The adaptive step reached its minimum size without converging.
     #[error(
         "no convergence after t = {:.6e} s with step {:.3e} s: residual {:.3e} N > tolerance {:.3e} N \

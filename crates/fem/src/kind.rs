@@ -53,6 +53,9 @@ pub trait Topology: Send + Sync {
     /// # Errors
     /// [`FemError::Mesh`] if there is no such surface.
     fn contact_weights(&self, name: &str) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>)>;
+    /// The VTK cell type of the elements (9 quadrilateral, 12 hexahedron,
+    /// 3 line), for [`crate::vtu`].
+    fn vtk_cell_type(&self) -> u8;
     /// The cells bounding the cavity `name`.
     ///
     /// # Errors
@@ -79,8 +82,11 @@ impl Topology for Mesh {
     }
     fn contact_weights(&self, name: &str) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>)> {
         let nodes = self.nodes_in(name)?.to_vec();
-        let (area, len) = tributary(self, &nodes);
+        let (area, len) = tributary(&self.nodes, &nodes);
         Ok((nodes, area, len))
+    }
+    fn vtk_cell_type(&self) -> u8 {
+        9
     }
     /// An ordered node set read as a polyline (consecutive nodes joined).
     fn cavity_cells(&self, name: &str) -> Result<CavityCells> {
@@ -115,6 +121,9 @@ impl Topology for Mesh3 {
     fn contact_weights(&self, name: &str) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>)> {
         self.tributary(name)
     }
+    fn vtk_cell_type(&self) -> u8 {
+        12
+    }
     fn cavity_cells(&self, name: &str) -> Result<CavityCells> {
         let faces = self.faces_in(name)?;
         if faces.is_empty() {
@@ -125,13 +134,14 @@ impl Topology for Mesh3 {
 }
 
 /// Consistent tributary areas 2π∫N_a r ds and spacings of an ordered
-/// surface node set of an axisymmetric mesh.
-fn tributary(mesh: &Mesh, nodes: &[usize]) -> (Vec<f64>, Vec<f64>) {
+/// surface node set of an axisymmetric mesh with node positions `x`
+/// (reference or current).
+pub(crate) fn tributary(x: &[[f64; 2]], nodes: &[usize]) -> (Vec<f64>, Vec<f64>) {
     let mut area = vec![0.0; nodes.len()];
     let mut len = vec![0.0; nodes.len()];
     for k in 0..nodes.len().saturating_sub(1) {
-        let a = mesh.nodes[nodes[k]];
-        let b = mesh.nodes[nodes[k + 1]];
+        let a = x[nodes[k]];
+        let b = x[nodes[k + 1]];
         let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
         let tp = 2.0 * std::f64::consts::PI * l;
         area[k] += tp * (a[0] / 3.0 + b[0] / 6.0);
@@ -149,9 +159,11 @@ fn tributary(mesh: &Mesh, nodes: &[usize]) -> (Vec<f64>, Vec<f64>) {
     (area, len)
 }
 
-/// An element kind (module docs). Implemented by [`Axisymmetric`] and
-/// [`Solid`] only.
-pub trait ElementKind: Send + Sync + 'static {
+/// An element kind (module docs) for the material `M`. Implemented by
+/// [`Axisymmetric`] and [`Solid`] (any [`Material3`]) and
+/// [`crate::Membrane`] (materials that also have a plane-stress membrane
+/// update, [`nlvid_material::MembraneMaterial`]).
+pub trait ElementKind<M: Material3>: Send + Sync + 'static {
     /// Displacement components per node.
     const DIM: usize;
     /// Nodes per element.
@@ -182,7 +194,7 @@ pub trait ElementKind: Send + Sync + 'static {
     /// element for its dof values `u` (node-major).
     #[doc(hidden)]
     #[allow(clippy::too_many_arguments)]
-    fn evaluate<M: Material3>(
+    fn evaluate(
         material: &M,
         geometry: &Self::Geometry,
         u: &[f64],
@@ -214,7 +226,7 @@ fn bad_length(n: usize) -> PointFailure {
     )
 }
 
-impl ElementKind for Axisymmetric {
+impl<M: Material3> ElementKind<M> for Axisymmetric {
     const DIM: usize = 2;
     const NODES: usize = 4;
     const POINTS: usize = 4;
@@ -234,7 +246,7 @@ impl ElementKind for Axisymmetric {
             .collect())
     }
 
-    fn evaluate<M: Material3>(
+    fn evaluate(
         material: &M,
         geometry: &[PointGeometry; 4],
         u: &[f64],
@@ -267,7 +279,7 @@ impl ElementKind for Axisymmetric {
     }
 }
 
-impl ElementKind for Solid {
+impl<M: Material3> ElementKind<M> for Solid {
     const DIM: usize = 3;
     const NODES: usize = 8;
     const POINTS: usize = 8;
@@ -293,7 +305,7 @@ impl ElementKind for Solid {
             .collect()
     }
 
-    fn evaluate<M: Material3>(
+    fn evaluate(
         material: &M,
         geometry: &[HexPoint; 8],
         u: &[f64],

@@ -5,8 +5,14 @@
 //! solids for the capsules of ch. IV: 8-node F-bar hexahedra ([`hex`],
 //! [`Mesh3`], `Model<M, Solid>`), symmetry rollers, rigid planes above and
 //! below that allow separation, and an enclosed fluid cavity whose pressure
-//! is an unknown ([`cavity`], [`Cavity`]). Newton with line search and
+//! is an unknown ([`cavity`], [`Cavity`]); axisymmetric membrane elements
+//! with the `material` crate's plane-stress update ([`membrane`],
+//! `Model<M, Membrane>`, ch. II §2.5.2). Newton with line search and
 //! adaptive time stepping with cut-backs (thesis §2.4, §4.3, §5.2.2, §5.3).
+//! Capsule runs: plate programs (RH, RR, measured tables; [`plates`]), the
+//! capsule's outputs per time (force, pressure, volume, contact area two
+//! ways, loss of contact; [`capsule`]) and the deformed mesh as VTU
+//! ([`vtu`]).
 //!
 //! Cost: one Newton iteration is one assembly (4 axisymmetric material
 //! updates per element, optionally on several threads; near convergence
@@ -40,25 +46,32 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod afm;
+pub mod capsule;
 pub mod cavity;
 pub mod element;
 mod error;
 pub mod hex;
 mod history;
 mod kind;
+pub mod membrane;
 pub mod mesh;
 pub mod mesh3;
 mod model;
+pub mod plates;
 pub mod reference;
 pub mod shell;
 mod sparse;
+pub mod vtu;
 
+pub use capsule::{CapsuleRecord, ContactPatch, Footprint, LiftOff, PatchSpec, Symmetry};
 pub use error::{FemError, NonConvergence, Result};
 pub use history::History;
 pub use kind::{Axisymmetric, ElementKind, Solid, Topology};
+pub use membrane::{Membrane, MembraneMesh, MembranePoint};
 pub use mesh::Mesh;
 pub use mesh3::Mesh3;
 pub use model::{
     Cavity, Component, Control, Counters, Fluid, Model, Parts, PlaneSide, ProbeDrive, RigidPlane,
     Settings, SphereProbe, Stage, StepRecord, Support,
 };
+pub use plates::{PlateProgram, PlateRun, PlateSample, run_plate_program};

@@ -409,7 +409,7 @@ struct Assembly {
 
 /// Finite-strain model of an axisymmetric (`K` = [`Axisymmetric`], the
 /// default) or 3D (`K` = [`Solid`]) body (see module docs).
-pub struct Model<M: Material3, K: ElementKind = Axisymmetric> {
+pub struct Model<M: Material3, K: ElementKind<M> = Axisymmetric> {
     mesh: K::Mesh,
     material: M,
     settings: Settings,
@@ -441,7 +441,7 @@ pub struct Model<M: Material3, K: ElementKind = Axisymmetric> {
     counters: Counters,
 }
 
-impl<M: Material3, K: ElementKind> std::fmt::Debug for Model<M, K> {
+impl<M: Material3, K: ElementKind<M>> std::fmt::Debug for Model<M, K> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
@@ -493,7 +493,7 @@ impl<M: Material3> Model<M, Solid> {
     }
 }
 
-impl<M: Material3, K: ElementKind> Model<M, K> {
+impl<M: Material3, K: ElementKind<M>> Model<M, K> {
     /// Builds the model: dof numbering, sparse pattern, symbolic LDLᵀ and LU,
     /// contact penalties, cavity volume.
     ///
@@ -827,6 +827,18 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
         &self.u_committed[..K::DIM * self.mesh.node_count()]
     }
 
+    /// The material, the element geometry, the point histories and the
+    /// converged dofs: read access for this crate's output modules.
+    #[allow(clippy::type_complexity)]
+    pub(crate) fn converged_parts(&self) -> (&M, &[K::Geometry], &History<M::State>, &[f64]) {
+        (
+            &self.material,
+            &self.geometry,
+            &self.history,
+            &self.u_committed,
+        )
+    }
+
     /// Converged probe displacement w (m).
     pub fn probe_displacement(&self) -> f64 {
         self.u_committed[K::DIM * self.mesh.node_count()]
@@ -854,6 +866,32 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
             total += K::energy(&self.geometry[e], &ue[..nd], self.settings.fbar, psi);
         }
         total
+    }
+
+    /// The element with the smallest det F over its Gauss points at the
+    /// converged state (plain F, not F̄), and that determinant; None for an
+    /// empty mesh.
+    pub fn smallest_jacobian(&self) -> Option<(usize, f64)> {
+        let dim = K::DIM;
+        let nd = K::NODES * dim;
+        let mut ue = [0.0; 24];
+        let mut best: Option<(usize, f64)> = None;
+        for e in 0..self.mesh.element_count() {
+            let conn = self.mesh.connectivity(e);
+            for k in 0..nd {
+                ue[k] = self.u_committed[dim * conn[k / dim] + k % dim];
+            }
+            let smallest = std::cell::Cell::new(f64::INFINITY);
+            K::energy(&self.geometry[e], &ue[..nd], false, &|f: &Mat3| {
+                smallest.set(smallest.get().min(f.determinant()));
+                0.0
+            });
+            let j = smallest.get();
+            if best.is_none_or(|b| j < b.1) {
+                best = Some((e, j));
+            }
+        }
+        best
     }
 
     /// Energy stored in the contact penalties at the converged state,
@@ -898,6 +936,39 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
                 (a, (-set.eps[k] * g).max(0.0))
             })
             .collect()
+    }
+
+    /// Gap of every node of plane `index` (in the order of
+    /// [`Parts::planes`]) at the converged state: (node, gap in m, negative
+    /// when the node penetrates the plane). Empty for a missing plane.
+    pub fn plane_contact_gaps(&self, index: usize) -> Vec<(usize, f64)> {
+        let plane_z = self.control.plane_z;
+        let dim = K::DIM;
+        let Some((side, set)) = self.planes.get(index) else {
+            return Vec::new();
+        };
+        set.nodes
+            .iter()
+            .map(|&a| {
+                let z = self.mesh.position(a)[dim - 1] + self.u_committed[dim * a + dim - 1];
+                let g = match side {
+                    PlaneSide::Above => plane_z - z,
+                    PlaneSide::Below(zb) => z - zb,
+                };
+                (a, g)
+            })
+            .collect()
+    }
+
+    /// Side of plane `index` (in the order of [`Parts::planes`]), if there
+    /// is one.
+    pub fn plane_side(&self, index: usize) -> Option<PlaneSide> {
+        self.planes.get(index).map(|p| p.0)
+    }
+
+    /// Loads of the last converged step.
+    pub fn last_control(&self) -> Control {
+        self.control
     }
 
     /// Records of all converged steps so far.
@@ -1002,7 +1073,7 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
             for e in 0..self.mesh.element_count() {
                 let out = &self.element_outs[e];
                 let slots = &self.elem_slots[nd * nd * e..nd * nd * (e + 1)];
-                scatter::<K>(
+                scatter::<M, K>(
                     self.mesh.connectivity(e),
                     out,
                     slots,
@@ -1037,7 +1108,7 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
                     source,
                 })?;
                 let slots = &self.elem_slots[nd * nd * e..nd * nd * (e + 1)];
-                scatter::<K>(
+                scatter::<M, K>(
                     conn,
                     &self.element_out,
                     slots,
@@ -1377,6 +1448,19 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
     /// `min_step_fraction × stage duration` without converging; the model
     /// keeps the last converged state.
     pub fn run_stage(&mut self, stage: &Stage<'_>) -> Result<()> {
+        self.run_stage_observed(stage, &mut |_| Ok(()))
+    }
+
+    /// [`Model::run_stage`], calling `observe` after every converged step
+    /// (e.g. to record outputs that need the full state).
+    ///
+    /// # Errors
+    /// As [`Model::run_stage`]; an error of `observe` ends the stage.
+    pub fn run_stage_observed(
+        &mut self,
+        stage: &Stage<'_>,
+        observe: &mut dyn FnMut(&Self) -> Result<()>,
+    ) -> Result<()> {
         let duration = stage.end - self.time;
         if !(duration >= 0.0) || !(stage.dt_max > 0.0) || !(stage.dt_initial > 0.0) {
             return Err(FemError::Setting {
@@ -1391,6 +1475,9 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
         let dt_min = self.settings.min_step_fraction * duration;
         let mut dt = stage.dt_initial.min(stage.dt_max);
         let mut first = true;
+        // The last attempt of the current step that met an inadmissible
+        // deformation (reported if the step finally fails for another cause).
+        let mut inadmissible: Option<String> = None;
         while self.time < stage.end - 1e-12 * duration {
             let remaining = stage.end - self.time;
             if dt > remaining || remaining - dt < 0.01 * dt {
@@ -1441,6 +1528,8 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
                         cavity_volume: if has_cavity { asm.volume } else { f64::NAN },
                         iterations,
                     });
+                    inadmissible = None;
+                    observe(self)?;
                     if iterations <= self.settings.easy_iterations {
                         dt = (dt * self.settings.growth).min(stage.dt_max);
                     }
@@ -1451,16 +1540,28 @@ impl<M: Material3, K: ElementKind> Model<M, K> {
                     }
                     self.counters.cutbacks += 1;
                     self.u.copy_from_slice(&self.u_committed);
+                    if cause.starts_with("material at element") {
+                        inadmissible = Some(cause.clone());
+                    }
                     if dt <= dt_min * (1.0 + 1e-9) {
                         // Leave the residual vector of the converged state.
                         let _ = self.assemble(&(stage.control)(self.time), 0.0, false);
+                        let mut cause = format!("stage `{}`: {cause}", stage.name);
+                        if let Some(m) = inadmissible.filter(|m| !cause.ends_with(m.as_str())) {
+                            cause.push_str(&format!("; an earlier attempt: {m}"));
+                        }
+                        if let Some((e, j)) = self.smallest_jacobian().filter(|x| x.1 < 0.1) {
+                            cause.push_str(&format!(
+                                "; element {e} has det F = {j:.3e} at the last converged state (collapsing)"
+                            ));
+                        }
                         return Err(FemError::NonConvergence(Box::new(NonConvergence {
                             time: self.time,
                             dt,
                             residual,
                             tolerance,
                             iterations,
-                            cause: format!("stage `{}`: {cause}", stage.name),
+                            cause,
                         })));
                     }
                     dt = (dt * self.settings.cutback).max(dt_min);
@@ -1606,7 +1707,7 @@ impl CavityModel {
 }
 
 /// Adds one element's residual and tangent into the global arrays.
-fn scatter<K: ElementKind>(
+fn scatter<M: Material3, K: ElementKind<M>>(
     conn: &[usize],
     out: &K::Output,
     slots: &[usize],

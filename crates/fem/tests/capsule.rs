@@ -7,8 +7,8 @@
 
 use nlvid_fem::shell::{ShellPart, ShellSpec, ellipsoidal_shell};
 use nlvid_fem::{
-    Axisymmetric, Cavity, Component, Control, Fluid, Mesh, Model, Parts, RigidPlane, Settings,
-    Solid, Stage, Support,
+    Axisymmetric, Cavity, Component, ContactPatch, Control, Fluid, LiftOff, Mesh, Model, Parts,
+    PatchSpec, RigidPlane, Settings, Solid, Stage, Support, Symmetry,
 };
 use nlvid_material::MooneyRivlin;
 use std::f64::consts::PI;
@@ -55,38 +55,20 @@ struct Outcome {
     pressure: f64,
     /// Cavity reference volume, whole capsule (m³).
     volume: f64,
-    /// Contact radius (m): where the gap along the outer meridian, linearly
-    /// interpolated between its last closed and first open node, vanishes.
+    /// Contact radius (m) from the lift-off profile along the outer
+    /// meridian (`nlvid_fem::capsule` module docs).
     radius: f64,
 }
 
-/// Contact radius from a meridian's current (radial, vertical) positions,
-/// ordered from the pole, under a plate at height `plane_z`.
-///
-/// Which node is the last one closed is decided at the penalty's
-/// penetration scale (nm), so the last closed node jumps by a whole
-/// spacing between models that agree to 1e-3 elsewhere. The boundary is
-/// therefore taken from the lift-off profile just outside: near the edge
-/// of a frictionless contact whose pressure vanishes continuously the gap
-/// grows as (r − a)^{3/2} (Hertz), so g^{2/3} is linear in r and its zero,
-/// through the first two open nodes clear of the penetration scale (gap
-/// above 10 × the deepest penetration), is a.
-fn contact_radius(meridian: &[[f64; 2]], plane_z: f64) -> f64 {
-    let gap = |p: &[f64; 2]| plane_z - p[1];
-    let penetration = meridian.iter().map(|p| -gap(p)).fold(0.0f64, f64::max);
-    assert!(penetration > 0.0, "no contact");
-    // The outermost closed node (the pole may have lifted off: loss of
-    // contact inside the patch, thesis Fig. 4.16).
-    let last = meridian.iter().rposition(|p| gap(p) <= 0.0).unwrap();
-    let open: Vec<[f64; 2]> = meridian[last + 1..]
-        .iter()
-        .filter(|p| gap(p) > 10.0 * penetration)
-        .take(2)
-        .copied()
-        .collect();
-    assert!(open.len() == 2 && last > 0, "contact edge not resolved");
-    let (s1, s2) = (gap(&open[0]).powf(2.0 / 3.0), gap(&open[1]).powf(2.0 / 3.0));
-    open[0][0] - s1 * (open[1][0] - open[0][0]) / (s2 - s1)
+/// Contact radius of the top plate's patch: the library's lift-off reading
+/// of the contact edge (`nlvid_fem::capsule`), asserted resolved.
+fn contact_radius(patch: &ContactPatch) -> f64 {
+    let a = patch.semi_axes[0];
+    assert!(
+        a.is_finite() && a > 0.0,
+        "contact edge not resolved: {patch:?}"
+    );
+    a
 }
 
 /// The axisymmetric model with `n_arc` elements along the meridian.
@@ -108,20 +90,20 @@ fn axisymmetric(n_arc: usize) -> Outcome {
     };
     model.run_stage(&stage(&control)).unwrap();
     let last = *model.records().last().unwrap();
-    let u: Vec<[f64; 2]> = model.displacements().collect();
-    let mesh = model.mesh();
-    let meridian: Vec<[f64; 2]> = mesh
-        .nodes_in("outer")
-        .unwrap()
-        .iter()
-        .map(|&a| [mesh.nodes[a][0] + u[a][0], mesh.nodes[a][1] + u[a][1]])
-        .collect();
+    let patch = model
+        .contact_patch(&PatchSpec {
+            plane: 0,
+            surface: "outer".into(),
+            symmetry: Symmetry::AXISYMMETRIC_HALF,
+            lift_off: LiftOff::Solid,
+        })
+        .unwrap();
     Outcome {
         force: last.plane_force,
         pressure: last.cavity_pressure,
         // The model is the upper half (symmetry plane z = 0).
         volume: 2.0 * model.cavity_reference_volume().unwrap(),
-        radius: contact_radius(&meridian, R - SQUEEZE),
+        radius: contact_radius(&patch),
     }
 }
 
@@ -184,29 +166,15 @@ fn solid(part: ShellPart, m: usize) -> Outcome {
             "{last:?}"
         );
     }
-    let u: Vec<[f64; 3]> = model.displacements().collect();
-    let mesh = model.mesh();
-    // The outer meridian in the plane y = 0, x ≥ 0, from the top pole.
-    let mut meridian: Vec<(f64, [f64; 2])> = mesh
-        .nodes_in("outer")
-        .unwrap()
-        .iter()
-        .filter(|&&a| mesh.nodes[a][1] == 0.0 && mesh.nodes[a][0] >= 0.0 && mesh.nodes[a][2] >= 0.0)
-        .map(|&a| {
-            let x = mesh.nodes[a];
-            (x[0].atan2(x[2]), [x[0] + u[a][0], x[2] + u[a][2]])
+    // The top plate's patch (the plate above, index 0, in every part).
+    let patch = model
+        .contact_patch(&PatchSpec {
+            plane: 0,
+            surface: "outer".into(),
+            symmetry: Symmetry::FULL,
+            lift_off: LiftOff::Solid,
         })
-        .collect();
-    meridian.sort_by(|p, q| p.0.total_cmp(&q.0));
-    let meridian: Vec<[f64; 2]> = meridian.into_iter().map(|p| p.1).collect();
-    // Plate height relative to the capsule's centre (which the unsymmetric
-    // parts translate down by SQUEEZE): shift the meridian instead.
-    let shift = if part == ShellPart::Eighth {
-        0.0
-    } else {
-        SQUEEZE
-    };
-    let meridian: Vec<[f64; 2]> = meridian.iter().map(|p| [p[0], p[1] + shift]).collect();
+        .unwrap();
     let (copies_force, copies_volume) = match part {
         ShellPart::Eighth => (4.0, 8.0),
         ShellPart::Quarter => (4.0, 4.0),
@@ -216,7 +184,7 @@ fn solid(part: ShellPart, m: usize) -> Outcome {
         force: copies_force * last.plane_force,
         pressure: last.cavity_pressure,
         volume: copies_volume * model.cavity_reference_volume().unwrap(),
-        radius: contact_radius(&meridian, R - SQUEEZE),
+        radius: contact_radius(&patch),
     }
 }
 
