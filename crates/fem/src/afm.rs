@@ -78,8 +78,11 @@ pub struct AfmSetup {
     pub cantilever: Cantilever,
     /// Step 1.
     pub engagement: Engagement,
-    /// Step 2: piezo position Z (m, toward the cell, relative to its value
-    /// at the end of step 1) at increasing times (s) from 0, linear between.
+    /// Step 2: piezo position Z (m, toward the cell) at increasing times (s)
+    /// from 0, linear between. With an engagement step, only Z(t) − Z(0)
+    /// matters (the free end moves from its engaged position); without one,
+    /// Z is measured from first contact, so the probe starts at δ = Z(0) ≤ 0
+    /// (above the cell for Z(0) < 0) with the spring relaxed.
     pub piezo: Vec<(f64, f64)>,
     /// Mesh density.
     pub mesh: MeshSpec,
@@ -190,6 +193,15 @@ impl AfmSetup {
                 name: "piezo program",
                 value: self.piezo.len() as f64,
                 reason: "needs ≥ 2 points starting at t = 0",
+            });
+        }
+        if self.engagement.force == 0.0 && self.piezo[0].1 > 0.0 {
+            return Err(FemError::Setting {
+                name: "piezo program start Z(0)",
+                value: self.piezo[0].1,
+                reason: "starts the probe inside the cell: without an engagement step Z is \
+                         measured from first contact, so Z(0) must be ≤ 0 (probe above or \
+                         touching the cell)",
             });
         }
         for w in self.piezo.windows(2) {
@@ -378,7 +390,8 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
     } else {
         0.0
     };
-    model.set_time(-t_engage);
+    // 0 − t (not −t): no engagement starts the clock at +0, not −0.
+    model.set_time(0.0 - t_engage);
     if eng.force > 0.0 {
         let ramp_end = -eng.hold;
         let force_at = move |t: f64| {
@@ -409,11 +422,17 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
             })?;
         }
     }
-    // Step 2 clock starts here.
+    // Step 2 clock starts here. Without engagement Z is measured from
+    // first contact: the probe starts at δ = Z(0) ≤ 0 (above the cell,
+    // spring relaxed); with it, Z(t) − Z(0) moves the engaged free end.
+    let z_start = setup.piezo[0].1;
+    if eng.force == 0.0 {
+        model.set_probe_displacement(-z_start);
+    }
     let w0 = model.probe_displacement();
     let (k, free0) = match setup.cantilever {
-        Cantilever::Spring { stiffness } => (stiffness, w0 - eng.force / stiffness),
-        Cantilever::Rigid => (f64::INFINITY, w0),
+        Cantilever::Spring { stiffness } => (stiffness, w0 - eng.force / stiffness + z_start),
+        Cantilever::Rigid => (f64::INFINITY, w0 + z_start),
     };
     let n_engage_records = model.records().len();
     let piezo = &setup.piezo;
@@ -456,7 +475,7 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
     // Traces at the converged steps, starting with the engaged state.
     let recs: &[StepRecord] = model.records();
     let mut ts = vec![0.0];
-    let mut zs = vec![0.0];
+    let mut zs = vec![z_start];
     let mut fs = vec![eng.force];
     let mut ws = vec![w0];
     for r in &recs[n_engage_records..] {

@@ -192,3 +192,56 @@ fn material_crate_cell_model_agrees_with_reference_prony_solid() {
     let relf = (a.final_force / b.final_force - 1.0).abs();
     assert!(relf < 0.01, "final forces differ by {relf}");
 }
+
+/// A plain piezo ramp (no engagement step) on a near-incompressible cell,
+/// κ/G₀ = 10⁴ (issue 15: failed at its first step with a tolerance scaled
+/// to a near-zero force): it converges from first touch and from a probe
+/// starting 0.1 µm above the cell.
+#[test]
+fn bulk_ratio_1e4_converges_from_first_touch_and_from_above() {
+    for z_start in [0.0, -0.1e-6] {
+        let mut setup = short_setup(Cantilever::Spring { stiffness: 0.12 });
+        setup.bulk_ratio = 1e4;
+        setup.engagement.force = 0.0;
+        setup.piezo = vec![(0.0, z_start), (0.2, 1e-6)];
+        setup.output_times = (0..=20).map(|i| 0.01 * i as f64).collect();
+        let run = afm::run(&params(), &setup).unwrap_or_else(|e| panic!("Z(0) = {z_start:e}: {e}"));
+        assert_eq!(run.force[0], 0.0);
+        assert!((run.piezo[0] - z_start).abs() < 1e-15);
+        assert!(run.final_force > 1e-9, "final force {}", run.final_force);
+    }
+}
+
+/// A failure at the first step of a run without engagement reports t = 0,
+/// not "−0" (the clock used to start at −0.0).
+#[test]
+fn failure_at_time_zero_prints_no_negative_zero() {
+    let mut setup = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    setup.engagement.force = 0.0;
+    setup.settings = Settings {
+        max_iterations: 0,
+        min_step_fraction: 0.2,
+        ..Settings::default()
+    };
+    let err = afm::run(&params(), &setup).unwrap_err();
+    let text = err.to_string();
+    assert!(text.contains("after t = 0.000000e0 s"), "{text}");
+    assert!(!text.contains("-0."), "{text}");
+}
+
+/// Without an engagement step Z is measured from first contact, so a
+/// program that starts with Z(0) > 0 would start the probe inside the cell:
+/// a setting error naming the program start, not a run.
+#[test]
+fn probe_starting_inside_the_cell_is_a_setting_error() {
+    let mut setup = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    setup.engagement.force = 0.0;
+    setup.piezo[0].1 = 0.2e-6;
+    match afm::run(&params(), &setup) {
+        Err(FemError::Setting { name, value, .. }) => {
+            assert!(name.contains("Z(0)"), "{name}");
+            assert_eq!(value, 0.2e-6);
+        }
+        other => panic!("expected a setting error, got {other:?}"),
+    }
+}
