@@ -14,7 +14,7 @@ use crate::model::{
     Component, Control, ProbeDrive, Settings, SphereProbe, Stage, StepRecord, Support,
 };
 use crate::reference::PronyNeoHookean;
-use crate::{FemError, Mesh, Model, Result};
+use crate::{ContactMesh, FemError, Mesh, Model, Result};
 use nlvid_material::Material3;
 
 /// The five NLV parameters of eq. 5.1: G(s) = G₀ [g_∞ + Σ g_k e^{−s/τ_k}].
@@ -30,6 +30,29 @@ pub struct AfmParams {
     pub g2: f64,
     /// Second relaxation time (s).
     pub tau2: f64,
+}
+
+impl AfmParams {
+    /// The elastic cell (no relaxation): neo-Hookean with shear modulus
+    /// `g0`, g1 = g2 = 0.
+    pub fn elastic(g0: f64) -> Self {
+        Self {
+            g0,
+            g1: 0.0,
+            tau1: 1.0,
+            g2: 0.0,
+            tau2: 1.0,
+        }
+    }
+
+    /// The Prony terms (g_k, τ_k) of eq. 5.1 with g_k ≠ 0: a zero weight
+    /// removes its term, whatever its τ_k.
+    pub fn prony_terms(&self) -> Vec<(f64, f64)> {
+        [(self.g1, self.tau1), (self.g2, self.tau2)]
+            .into_iter()
+            .filter(|&(g, _)| g != 0.0)
+            .collect()
+    }
 }
 
 /// How the probe is held.
@@ -55,7 +78,19 @@ pub struct Engagement {
     pub hold: f64,
 }
 
-/// Mesh density of the cell (see [`Mesh::oblate_cell`]).
+/// Which mesh the cell gets.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum MeshLayout {
+    /// Rings graded to the contact point ([`Mesh::contact_graded_cell`]);
+    /// the default since issue 15 (converged from δ = 0.05 µm).
+    ContactGraded(ContactMesh),
+    /// The sessions-1–3 single transfinite patch ([`Mesh::oblate_cell`])
+    /// sized by [`AfmSetup::mesh`].
+    Coons,
+}
+
+/// Density of the Coons-patch cell mesh (see [`Mesh::oblate_cell`]), used
+/// with [`MeshLayout::Coons`].
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MeshSpec {
     /// Elements per side (n × n elements).
@@ -84,7 +119,9 @@ pub struct AfmSetup {
     /// Z is measured from first contact, so the probe starts at δ = Z(0) ≤ 0
     /// (above the cell for Z(0) < 0) with the spring relaxed.
     pub piezo: Vec<(f64, f64)>,
-    /// Mesh density.
+    /// Which mesh: graded to the contact (default) or the Coons patch.
+    pub mesh_layout: MeshLayout,
+    /// Density of the Coons-patch mesh (only with [`MeshLayout::Coons`]).
     pub mesh: MeshSpec,
     /// Bulk modulus over G₀ (near-incompressibility penalty; the thesis
     /// cell is incompressible). Default 200: the force error against the
@@ -140,6 +177,7 @@ impl AfmSetup {
                 hold: 0.0,
             },
             piezo,
+            mesh_layout: MeshLayout::ContactGraded(ContactMesh::cell_default(2.5e-6)),
             mesh: MeshSpec {
                 elements_per_side: 35,
                 bias: 4.0,
@@ -274,25 +312,25 @@ pub struct AfmRun {
 /// thesis also calls G0 "the neo-Hookean parameter C1" (§5.4.1): reading it
 /// that way doubles the stiffness; see docs/theory/fem.md.
 ///
+/// A Prony term with g_k = 0 is left out (its τ_k is not used), so
+/// g1 = g2 = 0 is the elastic neo-Hookean cell ([`AfmParams::elastic`]).
+///
 /// # Errors
 /// [`FemError::Material`] naming the offending parameter.
 pub fn cell_material(
     params: &AfmParams,
     bulk_ratio: f64,
 ) -> Result<nlvid_material::PronyViscoelastic> {
-    nlvid_material::PronyViscoelastic::cell(
-        0.5 * params.g0,
-        params.g1,
-        params.tau1,
-        params.g2,
-        params.tau2,
-        bulk_ratio * params.g0,
-    )
-    .map_err(|source| FemError::Material {
+    let material = |source| FemError::Material {
         element: 0,
         point: 0,
         source,
-    })
+    };
+    Ok(nlvid_material::PronyViscoelastic::new(
+        nlvid_material::MooneyRivlin::neo_hookean(0.5 * params.g0, bulk_ratio * params.g0)
+            .map_err(material)?,
+        nlvid_material::Prony::new("G", &params.prony_terms()).map_err(material)?,
+    ))
 }
 
 /// One run of the model for the eq. 5.1 parameters with the `material`
@@ -317,7 +355,7 @@ pub fn run_reference(params: &AfmParams, setup: &AfmSetup) -> Result<AfmRun> {
     let material = PronyNeoHookean::new(
         params.g0,
         setup.bulk_ratio * params.g0,
-        vec![(params.g1, params.tau1), (params.g2, params.tau2)],
+        params.prony_terms(),
     )
     .map_err(|source| FemError::Material {
         element: 0,
@@ -350,12 +388,17 @@ pub fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
 /// As [`Model::new`].
 pub fn build<M: Material3>(material: M, setup: &AfmSetup) -> Result<Model<M>> {
     setup.check()?;
-    let mesh = Mesh::oblate_cell(
-        setup.height,
-        setup.diameter,
-        setup.mesh.elements_per_side,
-        setup.mesh.bias,
-    )?;
+    let mesh = match &setup.mesh_layout {
+        MeshLayout::ContactGraded(spec) => {
+            Mesh::contact_graded_cell(setup.height, setup.diameter, spec)?
+        }
+        MeshLayout::Coons => Mesh::oblate_cell(
+            setup.height,
+            setup.diameter,
+            setup.mesh.elements_per_side,
+            setup.mesh.bias,
+        )?,
+    };
     let supports = [
         Support::fixed("axis", Component::R),
         Support::fixed("base", Component::R),

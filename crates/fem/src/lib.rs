@@ -36,10 +36,12 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod afm;
+mod contact;
 pub mod element;
 mod error;
 mod history;
 pub mod mesh;
+mod mesh_graded;
 mod model;
 pub mod reference;
 mod sparse;
@@ -47,6 +49,7 @@ mod sparse;
 pub use error::{FemError, NonConvergence, Result};
 pub use history::History;
 pub use mesh::Mesh;
+pub use mesh_graded::ContactMesh;
 pub use model::{
     Component, Control, Counters, Model, ProbeDrive, RigidPlane, Settings, SphereProbe, Stage,
     StepRecord, Support,

@@ -15,6 +15,7 @@
 //! g_a the gap between surface node a and the sphere (or plane), so the
 //! tangent is the exact Hessian and symmetric for hyperelastic materials.
 
+use crate::contact::{self, ContactSurface, Obstacle};
 use crate::element::{ElementOutput, PointGeometry, TangentPart, element_geometry, fbar_element};
 use crate::history::History;
 use crate::sparse::{NO_SLOT, SparseSystem};
@@ -235,13 +236,6 @@ pub struct Counters {
     pub lu_fallbacks: usize,
 }
 
-struct ContactSet {
-    nodes: Vec<usize>,
-    eps: Vec<f64>,
-    /// Per node, 3×3 slots over (u_r, u_z, w) (plane: w unused).
-    slots: Vec<[usize; 9]>,
-}
-
 #[derive(Debug, Default, Clone, Copy)]
 struct Assembly {
     scale: f64,
@@ -266,8 +260,8 @@ pub struct Model<M: Material3> {
     time: f64,
     last_dt: f64,
     elem_slots: Vec<usize>,
-    probe: Option<(SphereProbe, ContactSet)>,
-    plane: Option<ContactSet>,
+    probe: Option<(SphereProbe, ContactSurface)>,
+    plane: Option<ContactSurface>,
     system: SparseSystem,
     residual: Vec<f64>,
     rhs: Vec<f64>,
@@ -277,9 +271,10 @@ pub struct Model<M: Material3> {
     pool: Option<rayon::ThreadPool>,
     probe_diag: f64,
     length: f64,
+    /// Shear modulus at F = I (Pa).
+    modulus: f64,
     /// Force below which residuals are round-off, whatever the loads:
-    /// (`rtol` G + 32 ε K) L² (G the shear modulus and K ≈ the stiffest
-    /// modulus at F = I, L the model size).
+    /// 32 ε K L² (K ≈ the stiffest modulus at F = I, L the model size).
     force_floor: f64,
     records: Vec<StepRecord>,
     counters: Counters,
@@ -295,29 +290,6 @@ impl<M: Material3> std::fmt::Debug for Model<M> {
             self.system
         )
     }
-}
-
-fn tributary(mesh: &crate::Mesh, nodes: &[usize]) -> (Vec<f64>, Vec<f64>) {
-    let mut area = vec![0.0; nodes.len()];
-    let mut len = vec![0.0; nodes.len()];
-    for k in 0..nodes.len().saturating_sub(1) {
-        let a = mesh.nodes[nodes[k]];
-        let b = mesh.nodes[nodes[k + 1]];
-        let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
-        let tp = 2.0 * std::f64::consts::PI * l;
-        area[k] += tp * (a[0] / 3.0 + b[0] / 6.0);
-        area[k + 1] += tp * (a[0] / 6.0 + b[0] / 3.0);
-        len[k] += 0.5 * l;
-        len[k + 1] += 0.5 * l;
-    }
-    // End nodes have one segment: use its full length as the spacing.
-    if let Some(f) = len.first_mut() {
-        *f *= 2.0;
-    }
-    if let Some(l) = len.last_mut() {
-        *l *= 2.0;
-    }
-    (area, len)
 }
 
 impl<M: Material3> Model<M> {
@@ -378,18 +350,16 @@ impl<M: Material3> Model<M> {
             Some(p) => mesh.nodes_in(&p.surface)?.to_vec(),
             None => Vec::new(),
         };
+        let plane_nodes = match &plane {
+            Some(p) => mesh.nodes_in(&p.surface)?.to_vec(),
+            None => Vec::new(),
+        };
         if probe.is_some() {
-            // The probe couples with each surface node, not nodes with each other.
-            for &a in &probe_nodes {
-                blocks.push(
-                    [dof_eq[2 * a], dof_eq[2 * a + 1], dof_eq[wdof]]
-                        .into_iter()
-                        .filter(|&e| e != NO_SLOT)
-                        .collect(),
-                );
-            }
+            // The probe couples with each surface segment's two nodes.
+            blocks.extend(contact::blocks(&probe_nodes, &dof_eq, Some(dof_eq[wdof])));
             blocks.push(vec![dof_eq[wdof]]);
         }
+        blocks.extend(contact::blocks(&plane_nodes, &dof_eq, None));
         let system = SparseSystem::new(neq, &blocks, settings.symmetric)?;
         let mut elem_slots = Vec::with_capacity(64 * mesh.elements.len());
         let mut tmp = Vec::with_capacity(64);
@@ -429,37 +399,36 @@ impl<M: Material3> Model<M> {
             let stiffest = resp.tangent.iter().fold(0.0f64, |m, c| m.max(c.abs()));
             (resp.tangent[(1, 1)], stiffest)
         };
-        let mut make_set = |nodes: Vec<usize>, with_w: bool| -> Result<ContactSet> {
-            let (area, len) = tributary(&mesh, &nodes);
-            let eps = area
-                .iter()
-                .zip(&len)
-                .map(|(a, h)| settings.penalty * g0 * a / h.max(f64::MIN_POSITIVE))
-                .collect();
-            let mut slots = Vec::with_capacity(nodes.len());
-            for &a in &nodes {
-                let w = if with_w { dof_eq[wdof] } else { NO_SLOT };
-                system.block_slots(&[dof_eq[2 * a], dof_eq[2 * a + 1], w], &mut tmp)?;
-                let mut s = [NO_SLOT; 9];
-                s.copy_from_slice(&tmp);
-                slots.push(s);
-            }
-            Ok(ContactSet { nodes, eps, slots })
-        };
         let probe = match probe {
             Some(p) => {
-                let set = make_set(probe_nodes, true)?;
-                Some((p, set))
+                let surface = ContactSurface::new(
+                    &mesh.nodes,
+                    &probe_nodes,
+                    &dof_eq,
+                    Some(dof_eq[wdof]),
+                    settings.penalty,
+                    g0,
+                    &system,
+                )?;
+                Some((p, surface))
             }
             None => None,
         };
         let plane = match plane {
-            Some(p) => Some(make_set(mesh.nodes_in(&p.surface)?.to_vec(), false)?),
+            Some(_) => Some(ContactSurface::new(
+                &mesh.nodes,
+                &plane_nodes,
+                &dof_eq,
+                None,
+                settings.penalty,
+                g0,
+                &system,
+            )?),
             None => None,
         };
         let probe_diag = probe
             .as_ref()
-            .map(|(_, s)| s.eps.iter().cloned().fold(0.0, f64::max))
+            .map(|(_, s)| s.stiffness_scale())
             .unwrap_or(1.0)
             .max(f64::MIN_POSITIVE);
         let length = mesh
@@ -505,12 +474,12 @@ impl<M: Material3> Model<M> {
             },
             probe_diag,
             length,
-            // Residual round-off: pressures K(J − 1) carry an absolute
-            // error ≈ ε K whatever the deformation (measured: the residual
-            // of a 1e-12 m indentation stalls at ≈ 5 ε K L² for K = 1e6 G).
-            force_floor: (settings.rtol * g0.abs() + 32.0 * f64::EPSILON * stiffest)
-                * length
-                * length,
+            modulus: g0,
+            // Residual round-off: stresses, in particular the pressure
+            // K(J − 1), carry an absolute error ≈ ε K whatever the
+            // deformation (measured: the residual of a 1e-12 m indentation
+            // stalls at ≈ 5 ε K L² for K = 1e6 G).
+            force_floor: 32.0 * f64::EPSILON * stiffest * length * length,
             records: Vec::new(),
             counters: Counters::default(),
             system,
@@ -706,78 +675,37 @@ impl<M: Material3> Model<M> {
         let nn = self.mesh.nodes.len();
         let wdof = 2 * nn;
         let w_free = !matches!(ctl.probe, ProbeDrive::Displacement(_));
-        if let Some((probe, set)) = &self.probe {
-            let cz = probe.centre_z + self.u[wdof];
-            for (k, &a) in set.nodes.iter().enumerate() {
-                let x = [
-                    self.mesh.nodes[a][0] + self.u[2 * a],
-                    self.mesh.nodes[a][1] + self.u[2 * a + 1],
-                ];
-                let d = [x[0], x[1] - cz];
-                let dist = (d[0] * d[0] + d[1] * d[1]).sqrt();
-                let g = dist - probe.radius;
-                if g > 0.0 || dist <= 0.0 {
-                    continue;
-                }
-                let n = [d[0] / dist, d[1] / dist];
-                let eps = set.eps[k];
-                let f = eps * g;
-                self.residual[2 * a] += f * n[0];
-                self.residual[2 * a + 1] += f * n[1];
-                self.residual[wdof] -= f * n[1];
-                asm.contact_force += f * n[1];
-                asm.penetration = asm.penetration.max(-g);
-                asm.active += 1;
-                if tangent {
-                    let dg = [n[0], n[1], -n[1]];
-                    // ∂²g = Bᵀ (I − n nᵀ)/|d| B, B = [[1,0,0],[0,1,−1]].
-                    let p = [
-                        [1.0 - n[0] * n[0], -n[0] * n[1]],
-                        [-n[0] * n[1], 1.0 - n[1] * n[1]],
-                    ];
-                    let bmat = [[1.0, 0.0, 0.0], [0.0, 1.0, -1.0]];
-                    for i in 0..3 {
-                        if i == 2 && !w_free {
-                            continue;
-                        }
-                        for j in 0..3 {
-                            if j == 2 && !w_free {
-                                continue;
-                            }
-                            let s = set.slots[k][3 * i + j];
-                            if s == NO_SLOT {
-                                continue;
-                            }
-                            let mut h = 0.0;
-                            for r in 0..2 {
-                                for c in 0..2 {
-                                    h += bmat[r][i] * p[r][c] * bmat[c][j];
-                                }
-                            }
-                            self.system.values[s] += eps * dg[i] * dg[j] + f * h / dist;
-                        }
-                    }
-                }
-            }
+        if let Some((probe, surface)) = &mut self.probe {
+            let sums = surface.assemble(
+                &self.mesh.nodes,
+                &self.u,
+                wdof,
+                Obstacle::Sphere {
+                    centre_z: probe.centre_z + self.u[wdof],
+                    radius: probe.radius,
+                },
+                w_free,
+                tangent,
+                &mut self.residual,
+                &mut self.system.values,
+            );
+            asm.contact_force = sums.force;
+            asm.penetration = sums.penetration;
+            asm.active = sums.active;
             asm.scale = asm.scale.max(asm.contact_force.abs());
         }
-        if let Some(set) = &self.plane {
-            for (k, &a) in set.nodes.iter().enumerate() {
-                let z = self.mesh.nodes[a][1] + self.u[2 * a + 1];
-                let g = ctl.plane_z - z;
-                if g > 0.0 {
-                    continue;
-                }
-                let eps = set.eps[k];
-                self.residual[2 * a + 1] -= eps * g;
-                asm.plane_force -= eps * g;
-                if tangent {
-                    let s = set.slots[k][4];
-                    if s != NO_SLOT {
-                        self.system.values[s] += eps;
-                    }
-                }
-            }
+        if let Some(surface) = &mut self.plane {
+            let sums = surface.assemble(
+                &self.mesh.nodes,
+                &self.u,
+                wdof,
+                Obstacle::Plane { z: ctl.plane_z },
+                false,
+                tangent,
+                &mut self.residual,
+                &mut self.system.values,
+            );
+            asm.plane_force = sums.force;
             asm.scale = asm.scale.max(asm.plane_force.abs());
         }
         if self.probe.is_some() {
@@ -817,14 +745,26 @@ impl<M: Material3> Model<M> {
         Ok(asm)
     }
 
-    /// Residual norm that counts as converged: `rtol` × the gross force of
-    /// the assembly (element forces, contact, spring, applied force), but
-    /// never below the round-off floor (`rtol` G + 32 ε K) L², so a state with
-    /// near-zero forces (t = 0, first touch, a probe out of contact) is not
-    /// asked for a residual below round-off, at any bulk modulus. The floor
-    /// counts only after at least one Newton correction.
+    /// Residual norm reported as the tolerance: `rtol` × the gross force
+    /// of the assembly, or the round-off floor if that is larger.
     fn tolerance(&self, asm: &Assembly) -> f64 {
         (self.settings.rtol * asm.scale).max(self.force_floor)
+    }
+
+    /// Convergence test of a Newton iterate with residual norm `norm`
+    /// (`previous` before the last correction; `corrected`: at least one
+    /// correction made): `norm` ≤ `rtol` × the gross force of the assembly
+    /// (element forces, contact, spring, applied force); or, when the
+    /// forces are so small that this is below round-off (t = 0, first
+    /// touch, a probe out of contact, any bulk modulus), `norm` below the
+    /// round-off floor 32 ε K L² *and* stagnating (the last correction
+    /// gained less than 10×), so a Newton iteration that is still
+    /// converging quadratically is never cut short by the floor, and a
+    /// predictor is never accepted because its forces are tiny.
+    fn converged(&self, norm: f64, previous: f64, asm: &Assembly, corrected: bool) -> bool {
+        norm == 0.0
+            || norm <= self.settings.rtol * asm.scale
+            || (corrected && norm <= self.force_floor && norm > 0.1 * previous)
     }
 
     fn rhs_norm(&self) -> f64 {
@@ -837,6 +777,32 @@ impl<M: Material3> Model<M> {
         }
         if let (Some(_), ProbeDrive::Displacement(w)) = (&self.probe, ctl.probe) {
             self.u[2 * self.mesh.nodes.len()] = w;
+        }
+    }
+
+    /// A force-driven probe that touches the body at most at a point (first
+    /// touch) or not at all has no contact stiffness, and Newton cannot
+    /// start there. Predictor: lower the probe to first contact and then by
+    /// the Hertz depth of the set force on an incompressible half-space,
+    /// δ = (3F / (16 G √R))^{2/3} (eq. 1.1 with E = 3G); Newton then starts
+    /// in contact and converges from there.
+    fn force_drive_predictor(&mut self, ctl: &Control) {
+        let (ProbeDrive::Force(force), Some((probe, surface))) = (ctl.probe, &self.probe) else {
+            return;
+        };
+        if !(force > 0.0) {
+            return;
+        }
+        let wdof = 2 * self.mesh.nodes.len();
+        let obstacle = Obstacle::Sphere {
+            centre_z: probe.centre_z + self.u[wdof],
+            radius: probe.radius,
+        };
+        let gap = surface.min_gap(&self.mesh.nodes, &self.u, obstacle);
+        let depth = (3.0 * force / (16.0 * self.modulus * probe.radius.sqrt())).powf(2.0 / 3.0);
+        // Touching (|gap| at round-off) or above: no usable stiffness yet.
+        if gap.is_finite() && gap > -1e-3 * depth {
+            self.u[wdof] -= gap + depth;
         }
     }
 
@@ -856,11 +822,13 @@ impl<M: Material3> Model<M> {
         dt: f64,
     ) -> std::result::Result<(usize, Assembly), (f64, f64, usize, String)> {
         self.apply_prescribed(ctl);
+        self.force_drive_predictor(ctl);
         let mut asm = match self.assemble(ctl, dt, true) {
             Ok(a) => a,
             Err(e) => return Err((f64::NAN, 0.0, 0, e.to_string())),
         };
         let mut norm = self.rhs_norm();
+        let mut previous_norm = f64::INFINITY;
         let mut du = vec![0.0; self.rhs.len()];
         let mut base = self.u.clone();
         let growth_limit = self.settings.residual_growth;
@@ -885,11 +853,7 @@ impl<M: Material3> Model<M> {
                     asm.active, asm.contact_force, node[0], node[1]
                 );
             }
-            // The round-off floor only after a Newton correction: a
-            // predictor is never taken as converged because its forces are
-            // tiny.
-            let floor_ok = it > 0 && norm <= self.force_floor;
-            if norm <= self.settings.rtol * asm.scale || floor_ok || norm == 0.0 {
+            if self.converged(norm, previous_norm, &asm, it > 0) {
                 return Ok((it, asm));
             }
             if !norm.is_finite() {
@@ -967,6 +931,7 @@ impl<M: Material3> Model<M> {
                         };
                         if n.is_finite() && n <= limit {
                             asm = a;
+                            previous_norm = norm;
                             norm = n;
                             accepted = true;
                             break;
@@ -992,8 +957,7 @@ impl<M: Material3> Model<M> {
                 }
                 return Err((norm, tol, it + 1, last_err));
             }
-            let converged = norm <= self.tolerance(&asm); // after a correction
-            if lazy && !converged && norm != 0.0 {
+            if lazy && !self.converged(norm, previous_norm, &asm, true) {
                 // Predicted convergence did not happen: the next iteration
                 // needs the tangent at this point.
                 asm = match self.assemble(ctl, dt, true) {

@@ -2,7 +2,7 @@
 
 #![allow(clippy::needless_range_loop, clippy::unwrap_used)]
 
-use nlvid_fem::afm::{self, AfmParams, AfmSetup, Cantilever};
+use nlvid_fem::afm::{self, AfmParams, AfmSetup, Cantilever, MeshLayout};
 use nlvid_fem::{FemError, Settings};
 
 fn params() -> AfmParams {
@@ -18,6 +18,8 @@ fn params() -> AfmParams {
 fn short_setup(cantilever: Cantilever) -> AfmSetup {
     let mut setup = AfmSetup::thesis_setup1();
     setup.cantilever = cantilever;
+    // The coarse Coons patch: fast, and what these checks were written for.
+    setup.mesh_layout = MeshLayout::Coons;
     setup.mesh.elements_per_side = 14;
     // 0 → 1 µm at 10 µm/s, back 0.5 µm, to 1 µm, hold 5 s.
     setup.piezo = vec![
@@ -243,5 +245,54 @@ fn probe_starting_inside_the_cell_is_a_setting_error() {
             assert_eq!(value, 0.2e-6);
         }
         other => panic!("expected a setting error, got {other:?}"),
+    }
+}
+
+/// Elastic materials need no Prony terms (issue 15: the cell model needed
+/// g = [1e-9, 1e-9]): g1 = g2 = 0 is accepted, holds do not relax, and the
+/// run matches the fem crate's own neo-Hookean (μ = G0, an independent
+/// implementation) and the g = 1e-9 workaround.
+#[test]
+fn elastic_cell_needs_no_prony_terms() {
+    let mut setup = short_setup(Cantilever::Rigid);
+    setup.output_times = vec![0.0, 0.1, 0.2, 1.0, 5.2];
+    let elastic = AfmParams::elastic(1e3);
+    assert!(elastic.prony_terms().is_empty());
+    let run = afm::run(&elastic, &setup).unwrap();
+    // The hold (t ≥ 0.2 s at Z = 1 µm) does not relax.
+    let hold: Vec<f64> = run.force[2..].to_vec();
+    for f in &hold {
+        assert!((f / hold[0] - 1.0).abs() < 1e-6, "hold forces {hold:?}");
+    }
+    let reference = afm::run_with(
+        nlvid_fem::reference::NeoHookean {
+            mu: 1e3,
+            kappa: setup.bulk_ratio * 1e3,
+        },
+        &setup,
+    )
+    .unwrap();
+    let tiny = AfmParams {
+        g1: 1e-9,
+        g2: 1e-9,
+        ..AfmParams::elastic(1e3)
+    };
+    let workaround = afm::run(&tiny, &setup).unwrap();
+    for i in 1..run.force.len() {
+        let (f, r, w) = (run.force[i], reference.force[i], workaround.force[i]);
+        eprintln!(
+            "t = {}: elastic {f:e}, reference {r:e}, g = 1e-9 {w:e}",
+            run.time[i]
+        );
+        assert!(
+            (f / r - 1.0).abs() < 1e-8,
+            "vs reference at t = {}",
+            run.time[i]
+        );
+        assert!(
+            (f / w - 1.0).abs() < 1e-6,
+            "vs g = 1e-9 at t = {}",
+            run.time[i]
+        );
     }
 }
