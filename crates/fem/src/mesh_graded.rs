@@ -44,8 +44,8 @@ impl ContactMesh {
     /// `probe_radius` (docs/theory/fem.md, "Mesh").
     pub fn cell_default(probe_radius: f64) -> Self {
         Self {
-            spacing: probe_radius / 100.0,
-            core: 4,
+            spacing: probe_radius / 250.0,
+            core: 12,
             core_depth: 4,
             growth: 1.1,
         }
