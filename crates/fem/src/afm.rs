@@ -14,7 +14,7 @@ use crate::model::{
     Component, Control, ProbeDrive, Settings, SphereProbe, Stage, StepRecord, Support,
 };
 use crate::reference::PronyNeoHookean;
-use crate::{ContactMesh, FemError, Mesh, Model, Result};
+use crate::{ContactMesh, FemError, Mesh, Model, Result, dense};
 use nlvid_material::Material3;
 
 /// The five NLV parameters of eq. 5.1: G(s) = G₀ [g_∞ + Σ g_k e^{−s/τ_k}].
@@ -515,27 +515,25 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
             control: &drive,
         })?;
     }
-    // Traces at the converged steps, starting with the engaged state.
-    let recs: &[StepRecord] = model.records();
-    let mut ts = vec![0.0];
-    let mut zs = vec![z_start];
-    let mut fs = vec![eng.force];
-    let mut ws = vec![w0];
-    for r in &recs[n_engage_records..] {
-        let z_piezo = interpolate(
-            &piezo.iter().map(|p| p.0).collect::<Vec<_>>(),
-            &piezo.iter().map(|p| p.1).collect::<Vec<_>>(),
-            r.time,
-        );
-        ts.push(r.time);
-        zs.push(z_piezo);
-        let f = match setup.cantilever {
-            Cantilever::Spring { stiffness } => stiffness * (r.probe_w - r.free_end),
-            Cantilever::Rigid => r.contact_force,
-        };
-        fs.push(f);
-        ws.push(r.probe_w);
-    }
+    // Step 2's records, starting with the engaged (or initial) state.
+    let recs: &[StepRecord] = &model.records()[n_engage_records.saturating_sub(1)..];
+    let (piezo_t, piezo_z): (Vec<f64>, Vec<f64>) = piezo.iter().copied().unzip();
+    let z_at = |t: f64| interpolate(&piezo_t, &piezo_z, t);
+    // Probe displacement w (dense output) and force at time t: spring
+    // F = k (w − z_free) with the free end z_free = free0 − Z(t) exact from
+    // the program; rigid: w exact, F the contact force (dense output).
+    let w_at = |t: f64| match setup.cantilever {
+        Cantilever::Spring { .. } => dense::interpolate_records(recs, t, |r| r.probe_w),
+        Cantilever::Rigid => free0 - z_at(t),
+    };
+    let f_at = |t: f64, w: f64| match setup.cantilever {
+        Cantilever::Spring { stiffness } => stiffness * (w - (free0 - z_at(t))),
+        Cantilever::Rigid => dense::interpolate_records(recs, t, |r| r.contact_force),
+    };
+    let peak_force = recs
+        .iter()
+        .map(|r| f_at(r.time, r.probe_w))
+        .fold(f64::NEG_INFINITY, f64::max);
     // Absolute piezo position: Z_abs = −z_free, so that δ = −w = Z − d.
     let z_offset = -free0;
     let mut out = AfmRun {
@@ -544,7 +542,7 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
         deflection: Vec::with_capacity(setup.output_times.len()),
         force: Vec::with_capacity(setup.output_times.len()),
         indentation: Vec::with_capacity(setup.output_times.len()),
-        peak_force: fs.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+        peak_force,
         final_force: 0.0,
         steps: model.counters().steps,
         cutbacks: model.counters().cutbacks,
@@ -568,9 +566,9 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
         elements_connectivity: model.mesh().elements.clone(),
     };
     for &t in &setup.output_times {
-        let f = interpolate(&ts, &fs, t);
-        let w = interpolate(&ts, &ws, t);
-        let z = interpolate(&ts, &zs, t) + z_offset;
+        let w = w_at(t);
+        let f = f_at(t, w);
+        let z = z_at(t) + z_offset;
         let d = if k.is_finite() { f / k } else { 0.0 };
         out.piezo.push(z);
         out.deflection.push(d);

@@ -37,6 +37,7 @@
 
 pub mod afm;
 mod contact;
+pub mod dense;
 pub mod element;
 mod error;
 mod history;

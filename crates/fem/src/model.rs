@@ -150,6 +150,12 @@ pub struct Settings {
     /// point turns out not converged. 0 disables. Default 1e4 (measured on
     /// the thesis run: 105 tangent assemblies saved, 3 redone).
     pub lazy_tangent: f64,
+    /// Dense output: largest estimated interpolation error of the probe
+    /// (or plane) force between steps, relative to the force (floor
+    /// 1e-7 G L²); steps that exceed 1.5× it are redone smaller, and the
+    /// next step is sized for it (module `dense`). 0 disables. Default
+    /// 2e-4.
+    pub output_tolerance: f64,
     /// Threads for the element loop (material updates); 0 or 1 = serial. The
     /// result is bitwise the same for any number (element outputs are
     /// computed in parallel, then added in element order).
@@ -172,6 +178,7 @@ impl Default for Settings {
             symmetric: true,
             residual_growth: 1.0,
             lazy_tangent: 1e4,
+            output_tolerance: 2e-4,
             threads: 1,
         }
     }
@@ -208,6 +215,9 @@ pub struct StepRecord {
     pub penetration: f64,
     /// Newton iterations of the step.
     pub iterations: usize,
+    /// Stage of the step (1, 2, … in the order run; 0: the initial state).
+    /// Dense output does not interpolate across stages.
+    pub stage: usize,
 }
 
 /// Counters of a run. Times are CPU time of the calling thread
@@ -226,6 +236,9 @@ pub struct Counters {
     pub steps: usize,
     /// Failed attempts that were cut back.
     pub cutbacks: usize,
+    /// Converged steps rejected for their dense-output error and redone
+    /// smaller.
+    pub rejected_steps: usize,
     /// Newton iterations (linear solves) in total.
     pub iterations: usize,
     /// Global assemblies in total (including line-search trials).
@@ -273,6 +286,10 @@ pub struct Model<M: Material3> {
     length: f64,
     /// Shear modulus at F = I (Pa).
     modulus: f64,
+    /// Stages run so far (the current one during `run_stage`).
+    stage: usize,
+    /// Absolute floor of the dense-output force scale: 1e-7 G L².
+    output_floor: f64,
     /// Force below which residuals are round-off, whatever the loads:
     /// 32 ε K L² (K ≈ the stiffest modulus at F = I, L the model size).
     force_floor: f64,
@@ -475,6 +492,8 @@ impl<M: Material3> Model<M> {
             probe_diag,
             length,
             modulus: g0,
+            stage: 0,
+            output_floor: 1e-7 * g0.abs() * length * length,
             // Residual round-off: stresses, in particular the pressure
             // K(J − 1), carry an absolute error ≈ ε K whatever the
             // deformation (measured: the residual of a 1e-12 m indentation
@@ -975,6 +994,62 @@ impl<M: Material3> Model<M> {
         ))
     }
 
+    fn push_record(&mut self, time: f64, ctl: &Control, asm: &Assembly, iterations: usize) {
+        let free_end = match ctl.probe {
+            ProbeDrive::Spring { free_end, .. } => free_end,
+            _ => f64::NAN,
+        };
+        self.records.push(StepRecord {
+            time,
+            probe_w: self.u[2 * self.mesh.nodes.len()],
+            free_end,
+            contact_force: asm.contact_force,
+            plane_force: asm.plane_force,
+            penetration: asm.penetration,
+            iterations,
+            stage: self.stage,
+        });
+    }
+
+    /// Dense-output error of a candidate step to `t_new` with force
+    /// `force` (probe or plane), relative to `output_tolerance` × the
+    /// force scale, and the step that would meet the tolerance (from the
+    /// third-order error law, ×0.9, between ×0.2 and ×2); (0, ∞) when the
+    /// stage has fewer than three earlier points or control is off.
+    fn output_error(&self, t_new: f64, force: f64, dt: f64) -> (f64, f64) {
+        let tol = self.settings.output_tolerance;
+        let n = self.records.len();
+        if !(tol > 0.0) || n < 3 {
+            return (0.0, f64::INFINITY);
+        }
+        // The stage's records and its start point.
+        let in_stage = self.records[n - 3..]
+            .iter()
+            .skip(1)
+            .all(|r| r.stage == self.stage);
+        if !in_stage {
+            return (0.0, f64::INFINITY);
+        }
+        let value = |r: &StepRecord| {
+            if self.probe.is_some() {
+                r.contact_force
+            } else {
+                r.plane_force
+            }
+        };
+        let p = &self.records[n - 3..];
+        let ts = [p[0].time, p[1].time, p[2].time, t_new];
+        let ys = [value(&p[0]), value(&p[1]), value(&p[2]), force];
+        let scale = ys[2].abs().max(force.abs()) + self.output_floor;
+        let ratio = crate::dense::interpolation_error(ts, ys) / (tol * scale);
+        let factor = if ratio > 0.0 {
+            (0.9 * ratio.powf(-1.0 / 3.0)).clamp(0.2, 2.0)
+        } else {
+            2.0
+        };
+        (ratio, dt * factor)
+    }
+
     /// Advances through `stage` with adaptive steps: a failed attempt is
     /// cut back by `Settings::cutback`, easy steps grow by
     /// `Settings::growth` up to `stage.dt_max`.
@@ -998,6 +1073,14 @@ impl<M: Material3> Model<M> {
         let dt_min = self.settings.min_step_fraction * duration;
         let mut dt = stage.dt_initial.min(stage.dt_max);
         let mut first = true;
+        if self.records.is_empty() {
+            // The initial state, the start point of the first stage.
+            let ctl = (stage.control)(self.time);
+            self.u.copy_from_slice(&self.u_committed);
+            let asm = self.assemble(&ctl, 0.0, false)?;
+            self.push_record(self.time, &ctl, &asm, 0);
+        }
+        self.stage += 1;
         while self.time < stage.end - 1e-12 * duration {
             let remaining = stage.end - self.time;
             if dt > remaining || remaining - dt < 0.01 * dt {
@@ -1023,6 +1106,25 @@ impl<M: Material3> Model<M> {
                             asm.contact_force
                         );
                     }
+                    // Dense-output error of the new interval (module
+                    // `dense`): reject and retry smaller if it is too large.
+                    let force = if self.probe.is_some() {
+                        asm.contact_force
+                    } else {
+                        asm.plane_force
+                    };
+                    let (ratio, dt_error) = self.output_error(t_new, force, dt);
+                    if ratio > 1.5 && dt > dt_min * (1.0 + 1e-9) {
+                        if trace() {
+                            eprintln!(
+                                "reject t={t_new:.5} dt={dt:.3e} output error {ratio:.2} × tolerance"
+                            );
+                        }
+                        self.counters.rejected_steps += 1;
+                        self.u.copy_from_slice(&self.u_committed);
+                        dt = dt_error.max(dt_min);
+                        continue;
+                    }
                     self.history.commit();
                     self.u_previous.copy_from_slice(&self.u_committed);
                     self.u_committed.copy_from_slice(&self.u);
@@ -1030,22 +1132,11 @@ impl<M: Material3> Model<M> {
                     self.last_dt = dt;
                     first = false;
                     self.counters.steps += 1;
-                    let (free_end, contact_force) = match ctl.probe {
-                        ProbeDrive::Spring { free_end, .. } => (free_end, asm.contact_force),
-                        _ => (f64::NAN, asm.contact_force),
-                    };
-                    self.records.push(StepRecord {
-                        time: t_new,
-                        probe_w: self.u[2 * self.mesh.nodes.len()],
-                        free_end,
-                        contact_force,
-                        plane_force: asm.plane_force,
-                        penetration: asm.penetration,
-                        iterations,
-                    });
+                    self.push_record(t_new, &ctl, &asm, iterations);
                     if iterations <= self.settings.easy_iterations {
-                        dt = (dt * self.settings.growth).min(stage.dt_max);
+                        dt *= self.settings.growth;
                     }
+                    dt = dt.min(dt_error).min(stage.dt_max);
                 }
                 Err((residual, tolerance, iterations, cause)) => {
                     if trace() {
