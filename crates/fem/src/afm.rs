@@ -242,6 +242,27 @@ impl AfmSetup {
                          touching the cell)",
             });
         }
+        // Deepest indentation: the piezo travel (from first contact without
+        // engagement, from the engaged position with it; the engagement
+        // adds its own small depth).
+        let z_ref = if self.engagement.force == 0.0 {
+            0.0
+        } else {
+            self.piezo[0].1
+        };
+        let travel = self
+            .piezo
+            .iter()
+            .map(|p| p.1 - z_ref)
+            .fold(f64::NEG_INFINITY, f64::max);
+        if travel >= self.height {
+            return Err(FemError::Setting {
+                name: "piezo program depth",
+                value: travel,
+                reason: "the indentation would be deeper than the cell height: the probe \
+                         would reach the substrate; lower the program's largest Z",
+            });
+        }
         for w in self.piezo.windows(2) {
             if !(w[1].0 > w[0].0) {
                 return Err(FemError::Setting {
@@ -390,15 +411,24 @@ pub fn build<M: Material3>(material: M, setup: &AfmSetup) -> Result<Model<M>> {
     setup.check()?;
     let mesh = match &setup.mesh_layout {
         MeshLayout::ContactGraded(spec) => {
-            Mesh::contact_graded_cell(setup.height, setup.diameter, spec)?
+            Mesh::contact_graded_cell(setup.height, setup.diameter, spec)
         }
         MeshLayout::Coons => Mesh::oblate_cell(
             setup.height,
             setup.diameter,
             setup.mesh.elements_per_side,
             setup.mesh.bias,
-        )?,
-    };
+        ),
+    }
+    .map_err(|e| match e {
+        // An inverted element: name the settings that made it.
+        FemError::Mesh(m) => FemError::Mesh(format!(
+            "{m}: the mesh settings {:?} (Coons: {:?}) do not fit the cell of height {:e} m \
+             and diameter {:e} m; refine the mesh (smaller spacing or growth, more elements)",
+            setup.mesh_layout, setup.mesh, setup.height, setup.diameter
+        )),
+        other => other,
+    })?;
     let supports = [
         Support::fixed("axis", Component::R),
         Support::fixed("base", Component::R),

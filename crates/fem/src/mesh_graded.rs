@@ -254,6 +254,22 @@ impl Mesh {
             });
         }
         let top = move |r: f64| hh * (1.0 - (r / a).powi(2)).max(0.0).sqrt();
+        // The core is a flat block under a curved surface: the surface must
+        // drop by less than half the core depth over the core width.
+        let (width, depth) = (
+            spec.spacing * spec.core as f64,
+            spec.spacing * spec.core_depth as f64,
+        );
+        if width >= a || hh - top(width) >= 0.5 * depth {
+            return Err(FemError::Setting {
+                name: "mesh spacing",
+                value: spec.spacing,
+                reason: "the cell surface curves too much over the mesh core (spacing × core \
+                         elements) and would invert its elements: the pole's radius of \
+                         curvature D²/(4H) is too small for this spacing; use a smaller \
+                         spacing (or fewer core elements)",
+            });
+        }
         let ellipse = move |theta: f64| [a * theta.sin(), hh * theta.cos()];
         // Surface point at distance ρ from the pole: bisection on the
         // parametric angle (the distance grows with it on [0, π/2]).

@@ -337,3 +337,38 @@ fn plain_ramp_hold_matches_a_breakpoint_at_every_sample() {
         assert!(worst.0 <= 1e-3, "{cantilever:?}: {worst:?}");
     }
 }
+
+/// An indentation deeper than the cell (the probe would reach the
+/// substrate) is a setting error naming the piezo program, not a run.
+#[test]
+fn indentation_deeper_than_the_cell_is_a_setting_error() {
+    for engaged in [false, true] {
+        let mut setup = short_setup(Cantilever::Spring { stiffness: 0.12 });
+        if !engaged {
+            setup.engagement.force = 0.0;
+        }
+        setup.piezo = vec![(0.0, 0.0), (1.0, 13e-6)];
+        match afm::run(&params(), &setup) {
+            Err(FemError::Setting { name, value, .. }) => {
+                assert_eq!(name, "piezo program depth");
+                assert_eq!(value, 13e-6);
+            }
+            other => panic!("expected a setting error, got {other:?}"),
+        }
+    }
+}
+
+/// A mesh that would invert elements is an error naming the mesh setting:
+/// the contact-graded core under a sharply curved pole (a 2 µm wide,
+/// 12 µm tall cell: radius of curvature 0.08 µm). (The Coons patch did
+/// not invert for any cell tried, 0.05–30 µm tall, 0.2–30 µm wide.)
+#[test]
+fn mesh_that_would_invert_elements_names_the_setting() {
+    let mut setup = short_setup(Cantilever::Rigid);
+    setup.mesh_layout = AfmSetup::thesis_setup1().mesh_layout;
+    setup.diameter = 2e-6;
+    match afm::run(&params(), &setup) {
+        Err(FemError::Setting { name, .. }) => assert_eq!(name, "mesh spacing"),
+        other => panic!("expected a setting error, got {other:?}"),
+    }
+}
