@@ -533,8 +533,11 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
                 setup.hold_step_max.min(duration),
             )
         } else {
+            // A ramp starts with h/8: its first interval is written before
+            // the dense-output error can be estimated (it needs four
+            // points), so it starts small and grows under control.
             let h = setup.ramp_step_fraction * duration;
-            (h, h)
+            (h / 8.0, h)
         };
         let name = format!("piezo segment {seg}");
         model.run_stage(&Stage {
