@@ -190,7 +190,9 @@ impl AfmSetup {
             bulk_ratio: 200.0,
             output_times: (0..m).map(|i| end * i as f64 / (m - 1) as f64).collect(),
             ramp_step_fraction: 0.1,
-            hold_step_max: 2.0,
+            // Holds: the dense-output control sizes the steps; 10 s only
+            // bounds them (was 2 s: 8 more steps on the thesis run).
+            hold_step_max: 10.0,
             settings: Settings::default(),
         }
     }
