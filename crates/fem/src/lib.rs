@@ -9,8 +9,10 @@
 //! without the tangent) plus one sparse supernodal LDLᵀ factorisation of
 //! the lower triangle, stored in the fill-reducing order so the symbolic
 //! analysis is reused for the whole run (LU fallback); the thesis-scale AFM
-//! run (1225 elements, ≈ 130 steps, ≈ 500 iterations) takes ≈ 1.9 s of CPU
-//! time on one core; see `docs/theory/fem.md` for the measured breakdown.
+//! run (912 elements graded to the contact, ≈ 220 steps with curves written
+//! to 0.1 % at the samples, ≈ 900 iterations) takes ≈ 1.6–2.1 s of CPU
+//! time on one (shared) core; see `docs/theory/fem.md` for the measured
+//! breakdown.
 //!
 //! ```
 //! use nlvid_fem::{Component, Control, Mesh, Model, ProbeDrive, Settings, SphereProbe, Stage, Support};
