@@ -8,9 +8,9 @@ mkdir -p work
 python3 make_data.py
 "$NLVID" sample --domain domain.toml -n 200 --check 40 --seed 1 --out work/design
 "$NLVID" build --design work/design/train.csv --model hertz-prony --points 100 \
-    --store work/store --export work/export --quiet
+    --domain domain.toml --store work/store --export work/export --quiet
 "$NLVID" build --design work/design/check.csv --model hertz-prony --points 100 \
-    --store work/store-check --export work/export-check --quiet
+    --domain domain.toml --store work/store-check --export work/export-check --quiet
 # The force of this (linear viscoelastic) model is exactly proportional to
 # G0, and G0, tau1, tau2 are designed on log axes: krige F/G0 in ln G0, ln tau
 # (docs/cli/fit.md, "Choosing the surrogate").

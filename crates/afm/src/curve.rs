@@ -66,7 +66,11 @@ pub struct Segment {
 }
 
 /// Channel names JPK uses for the measured (closed-loop sensor) height, in order of preference.
-const MEASURED_HEIGHT: [&str; 2] = ["strainGaugeHeight", "capacitiveSensorHeight"];
+const MEASURED_HEIGHT: [&str; 3] = [
+    "strainGaugeHeight",
+    "capacitiveSensorHeight",
+    "measuredHeight",
+];
 
 impl Segment {
     /// Number of samples.
@@ -118,12 +122,19 @@ impl Segment {
         Ok(self.force()?.iter().map(|f| f / k).collect())
     }
 
-    /// Piezo height, m (channel `height`, open-loop actuator signal).
+    /// Piezo height, m (channel `height`, open-loop actuator signal; `head-height` on
+    /// instruments that move the head).
     ///
     /// # Errors
-    /// [`AfmError::MissingChannel`] if absent.
+    /// [`AfmError::MissingChannel`] if neither is present.
     pub fn height_piezo(&self) -> Result<&[f64]> {
-        Ok(&self.channel("height")?.values)
+        match self.channel("height") {
+            Ok(c) => Ok(&c.values),
+            Err(e) => self
+                .channel("head-height")
+                .map(|c| c.values.as_slice())
+                .map_err(|_| e),
+        }
     }
 
     /// Measured height, m (`strainGaugeHeight` or `capacitiveSensorHeight`), falling back

@@ -34,6 +34,12 @@ pub enum AfmError {
         /// Why the archive was rejected.
         detail: String,
     },
+    /// The bytes are not an Igor binary wave force curve (Asylum Research `.ibw`).
+    #[error("not an Asylum Research .ibw force curve: {detail}")]
+    NotIbw {
+        /// What is missing or inconsistent.
+        detail: String,
+    },
     /// An archive entry could not be decompressed (CRC mismatch, damaged deflate stream).
     #[error("corrupt entry '{entry}': {detail}")]
     Corrupt {

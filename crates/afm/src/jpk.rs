@@ -12,26 +12,31 @@
 //! segments/<m>/channels/<ch>.dat         raw samples
 //! ```
 //!
-//! A force map holds the same tree once per curve under `index/<n>/`.
+//! A force map (`.jpk-force-map`, `.jpk-qi-data`) holds the same tree once per curve under
+//! `index/<n>/`; a QI series (`.jpk-qi-series`) and a curve extracted from a map have the
+//! single-curve tree. Segment headers may refer to the shared header for their channel
+//! descriptions and segment settings (see [`header`]).
 //!
 //! Decoding a channel: raw integer (or float) → volts with the *encoder* scaling
 //! `v = offset + multiplier·raw`; then along the channel's conversion set from the
 //! base slot (`volts`) to the default slot, each step `y = offset + multiplier·x`
 //! (`vDeflection`: volts → distance [m] → force [N]).
 
-use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
-use std::io::{Cursor, Read};
+mod channel;
+mod header;
+
+use std::collections::{BTreeMap, BTreeSet, HashSet};
+use std::io::Cursor;
 use std::path::Path;
 
 use zip::ZipArchive;
 
-use crate::curve::{Calibration, CalibrationSource, Channel, ForceCurve, Segment, SegmentKind};
+use crate::curve::{Calibration, Channel, ForceCurve, Segment, SegmentKind};
 use crate::error::{AfmError, Result};
+use channel::ChannelSpec;
+use header::{Hdr, Merged, Props, SHARED, Shared, read_entry, read_props};
 
-/// Largest archive entry the reader will decompress (guards against zip bombs).
-const MAX_ENTRY_BYTES: u64 = 1 << 30;
-/// Longest conversion chain followed (guards against cycles).
-const MAX_CHAIN: usize = 16;
+type Zip<'a> = ZipArchive<Cursor<&'a [u8]>>;
 
 /// Options that change how a file is read.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -87,94 +92,195 @@ pub fn read_force_map(path: impl AsRef<Path>, options: &ReadOptions) -> Result<V
 /// and in [`ForceCurve::source`].
 ///
 /// # Errors
-/// As [`read_force_curve`]; never panics on any input bytes.
+/// As [`read_force_curve`]; the first curve that fails fails the whole file (see
+/// [`read_jpk_each`] to keep the others); never panics on any input bytes.
 pub fn read_jpk_bytes(
     bytes: &[u8],
     source: &str,
     options: &ReadOptions,
 ) -> Result<Vec<ForceCurve>> {
-    check_override(options)?;
-    let mut zip = ZipArchive::new(Cursor::new(bytes)).map_err(|e| AfmError::NotZip {
-        detail: e.to_string(),
-    })?;
-    let names: HashSet<String> = zip.file_names().map(str::to_owned).collect();
-    if !names.contains("header.properties") {
-        return Err(AfmError::NotJpk {
-            detail: "ZIP archive without header.properties".into(),
-        });
-    }
-    let header = read_props(&mut zip, "header.properties")?;
-    if !header.contains_key("jpk-data-file") && !header.contains_key("file-format-version") {
-        return Err(AfmError::NotJpk {
-            detail: "header.properties has neither 'jpk-data-file' nor 'file-format-version'"
-                .into(),
-        });
-    }
-    let format_version = header
-        .get("file-format-version")
-        .cloned()
-        .unwrap_or_else(|| "unknown".into());
-    let shared = if names.contains("shared-data/header.properties") {
-        Some(read_props(&mut zip, "shared-data/header.properties")?)
-    } else {
-        None
-    };
-    // Shortest non-empty `...description.instrument` key (HashMap order is not stable).
-    let instrument = header
-        .iter()
-        .filter(|(k, v)| k.ends_with("description.instrument") && !v.trim().is_empty())
-        .min_by_key(|(k, _)| (k.len(), k.as_str()))
-        .map(|(_, v)| v.clone());
+    read_jpk_each(bytes, source, options)?
+        .into_iter()
+        .map(|(_, c)| c)
+        .collect()
+}
 
-    // One pass over the entry names: segment ids per curve (None = single curve,
-    // Some(n) = curve n of a map under index/<n>/).
-    let mut layout: BTreeMap<Option<usize>, BTreeSet<usize>> = BTreeMap::new();
-    for n in &names {
-        let (curve, rest) = match n.strip_prefix("index/") {
-            Some(r) => match r.split_once('/') {
-                Some((i, rest)) => match i.parse::<usize>() {
-                    Ok(i) => (Some(i), rest),
-                    Err(_) => continue,
-                },
-                None => continue,
-            },
-            None => (None, n.as_str()),
-        };
-        if let Some(seg) = rest
-            .strip_prefix("segments/")
-            .and_then(|r| r.strip_suffix("/segment-header.properties"))
-            .and_then(|id| id.parse::<usize>().ok())
-        {
-            layout.entry(curve).or_default().insert(seg);
+/// Decode a JPK file held in memory curve by curve: file-level damage (not a ZIP, no
+/// JPK header, no segments) is an error; each curve of a map is returned with its index
+/// (`None` for a single-curve file) and its own result, so one bad curve does not lose
+/// the others.
+///
+/// # Errors
+/// As [`JpkArchive::open`].
+pub fn read_jpk_each(
+    bytes: &[u8],
+    source: &str,
+    options: &ReadOptions,
+) -> Result<Vec<(Option<usize>, Result<ForceCurve>)>> {
+    let archive = JpkArchive::open(bytes, source, options)?;
+    Ok((0..archive.len())
+        .map(|i| (archive.index(i), archive.read(i)))
+        .collect())
+}
+
+/// A JPK archive held in memory, opened: headers read and curves located, no channel
+/// decoded yet. [`JpkArchive::read`] decodes one curve; it takes `&self`, so the curves
+/// of a map can be decoded in parallel.
+pub struct JpkArchive<'a> {
+    zip: Zip<'a>,
+    source: String,
+    names: HashSet<String>,
+    header: Props,
+    shared: Option<Shared>,
+    format_version: String,
+    instrument: Option<String>,
+    /// (curve index in the map or None, segment ids), in index order.
+    curves: Vec<(Option<usize>, BTreeSet<usize>)>,
+    options: ReadOptions,
+}
+
+impl<'a> JpkArchive<'a> {
+    /// Open the archive `bytes`, named `source` in errors and in [`ForceCurve::source`].
+    ///
+    /// # Errors
+    /// [`AfmError::NotZip`], [`AfmError::NotJpk`], or a reader error in the top-level or
+    /// shared header; [`AfmError::InvalidInput`] for a nonsensical calibration override.
+    pub fn open(bytes: &'a [u8], source: &str, options: &ReadOptions) -> Result<Self> {
+        check_override(options)?;
+        let mut zip = ZipArchive::new(Cursor::new(bytes)).map_err(|e| AfmError::NotZip {
+            detail: e.to_string(),
+        })?;
+        let names: HashSet<String> = zip.file_names().map(str::to_owned).collect();
+        if !names.contains("header.properties") {
+            return Err(AfmError::NotJpk {
+                detail: "ZIP archive without header.properties".into(),
+            });
         }
-    }
-    if layout.contains_key(&None) && layout.len() > 1 {
-        return Err(AfmError::NotJpk {
-            detail: "archive mixes a single-curve segments/ tree with force-map index/<n>/ curves"
-                .into(),
-        });
-    }
-    if layout.is_empty() {
-        return Err(AfmError::NotJpk {
-            detail: "no segments/<n>/segment-header.properties in the archive".into(),
-        });
+        let header = read_props(&mut zip, "header.properties")?;
+        // A curve extracted from a map keeps the map's curve header
+        // (`type=force-scan-series`) in place of the file header.
+        let extracted = header
+            .get("type")
+            .is_some_and(|t| t.trim() == "force-scan-series");
+        if !header.contains_key("jpk-data-file")
+            && !header.contains_key("file-format-version")
+            && !extracted
+        {
+            return Err(AfmError::NotJpk {
+                detail: "header.properties has neither 'jpk-data-file' nor 'file-format-version' nor 'type=force-scan-series'"
+                    .into(),
+            });
+        }
+        let shared_props = if names.contains(SHARED) {
+            Some(read_props(&mut zip, SHARED)?)
+        } else {
+            None
+        };
+        let format_version = header
+            .get("file-format-version")
+            .or_else(|| shared_props.as_ref()?.get("file-format-version"))
+            .cloned()
+            .unwrap_or_else(|| {
+                if shared_props.is_some() {
+                    "2.0"
+                } else {
+                    "unknown"
+                }
+                .into()
+            });
+        let shared = shared_props.as_ref().map(Shared::new);
+        // Shortest non-empty `...description.instrument` key (HashMap order is not stable).
+        let instrument = header
+            .iter()
+            .filter(|(k, v)| k.ends_with("description.instrument") && !v.trim().is_empty())
+            .min_by_key(|(k, _)| (k.len(), k.as_str()))
+            .map(|(_, v)| v.clone());
+
+        // One pass over the entry names: segment ids per curve (None = single curve,
+        // Some(n) = curve n of a map under index/<n>/).
+        let mut layout: BTreeMap<Option<usize>, BTreeSet<usize>> = BTreeMap::new();
+        for n in &names {
+            let (curve, rest) = match n.strip_prefix("index/") {
+                Some(r) => match r.split_once('/') {
+                    Some((i, rest)) => match i.parse::<usize>() {
+                        Ok(i) => (Some(i), rest),
+                        Err(_) => continue,
+                    },
+                    None => continue,
+                },
+                None => (None, n.as_str()),
+            };
+            if let Some(seg) = rest
+                .strip_prefix("segments/")
+                .and_then(|r| r.strip_suffix("/segment-header.properties"))
+                .and_then(|id| id.parse::<usize>().ok())
+            {
+                layout.entry(curve).or_default().insert(seg);
+            }
+        }
+        if layout.contains_key(&None) && layout.len() > 1 {
+            return Err(AfmError::NotJpk {
+                detail:
+                    "archive mixes a single-curve segments/ tree with force-map index/<n>/ curves"
+                        .into(),
+            });
+        }
+        if layout.is_empty() {
+            return Err(AfmError::NotJpk {
+                detail: "no segments/<n>/segment-header.properties in the archive".into(),
+            });
+        }
+        Ok(JpkArchive {
+            zip,
+            source: source.to_string(),
+            names,
+            header,
+            shared,
+            format_version,
+            instrument,
+            curves: layout.into_iter().collect(),
+            options: *options,
+        })
     }
 
-    let ctx = Ctx {
-        shared: shared.as_ref(),
-        options,
-    };
-    let mut curves = Vec::with_capacity(layout.len());
-    for (index, seg_ids) in layout {
+    /// Number of curves (1 for a single-curve file).
+    pub fn len(&self) -> usize {
+        self.curves.len()
+    }
+
+    /// True if the archive holds no curve (never after a successful [`JpkArchive::open`]).
+    pub fn is_empty(&self) -> bool {
+        self.curves.is_empty()
+    }
+
+    /// Index in the map of the `i`-th curve (`None` for a single-curve file).
+    pub fn index(&self, i: usize) -> Option<usize> {
+        self.curves.get(i).and_then(|c| c.0)
+    }
+
+    /// Decode the `i`-th curve (0-based position, not the map index).
+    ///
+    /// # Errors
+    /// Reader errors of that curve ([`AfmError`]); [`AfmError::InvalidInput`] if `i` is
+    /// out of range.
+    pub fn read(&self, i: usize) -> Result<ForceCurve> {
+        let (index, seg_ids) = self.curves.get(i).ok_or_else(|| {
+            AfmError::InvalidInput(format!(
+                "{}: curve {i} requested, the file holds {}",
+                self.source,
+                self.curves.len()
+            ))
+        })?;
         let (prefix, name) = match index {
-            None => (String::new(), source.to_string()),
-            Some(i) => (format!("index/{i}/"), format!("{source}#{i}")),
+            None => (String::new(), self.source.clone()),
+            Some(i) => (format!("index/{i}/"), format!("{}#{i}", self.source)),
         };
+        let mut zip = self.zip.clone();
         let curve_header = if prefix.is_empty() {
             None
         } else {
             let entry = format!("{prefix}header.properties");
-            if names.contains(&entry) {
+            if self.names.contains(&entry) {
                 Some(read_props(&mut zip, &entry)?)
             } else {
                 None
@@ -183,18 +289,21 @@ pub fn read_jpk_bytes(
         let position = curve_header
             .as_ref()
             .and_then(position_of)
-            .or_else(|| position_of(&header));
-        let mut curve = read_curve(&mut zip, &names, &prefix, &seg_ids, &ctx)?;
+            .or_else(|| position_of(&self.header));
+        let ctx = Ctx {
+            shared: self.shared.as_ref(),
+            options: &self.options,
+        };
+        let mut curve = read_curve(&mut zip, &self.names, &prefix, seg_ids, &ctx)?;
         curve.source = name;
-        curve.format_version = format_version.clone();
-        curve.instrument = instrument.clone();
+        curve.format_version = self.format_version.clone();
+        curve.instrument = self.instrument.clone();
         curve.position = position;
-        curves.push(curve);
+        Ok(curve)
     }
-    Ok(curves)
 }
 
-fn check_override(options: &ReadOptions) -> Result<()> {
+pub(crate) fn check_override(options: &ReadOptions) -> Result<()> {
     for (name, v) in [
         ("spring constant", options.spring_constant),
         ("sensitivity", options.sensitivity),
@@ -210,11 +319,8 @@ fn check_override(options: &ReadOptions) -> Result<()> {
     Ok(())
 }
 
-type Props = HashMap<String, String>;
-type Zip<'a> = ZipArchive<Cursor<&'a [u8]>>;
-
 struct Ctx<'a> {
-    shared: Option<&'a Props>,
+    shared: Option<&'a Shared>,
     options: &'a ReadOptions,
 }
 
@@ -226,98 +332,6 @@ fn position_of(p: &Props) -> Option<(f64, f64)> {
             .and_then(|(_, v)| v.parse::<f64>().ok())
     };
     Some((get("position.x")?, get("position.y")?))
-}
-
-fn read_entry(zip: &mut Zip<'_>, name: &str) -> Result<Vec<u8>> {
-    let mut file = zip.by_name(name).map_err(|e| AfmError::Corrupt {
-        entry: name.into(),
-        detail: e.to_string(),
-    })?;
-    if file.size() > MAX_ENTRY_BYTES {
-        return Err(AfmError::Corrupt {
-            entry: name.into(),
-            detail: format!(
-                "entry claims {} bytes (limit {MAX_ENTRY_BYTES})",
-                file.size()
-            ),
-        });
-    }
-    let mut buf = Vec::new();
-    file.by_ref()
-        .take(MAX_ENTRY_BYTES + 1)
-        .read_to_end(&mut buf)
-        .map_err(|e| AfmError::Corrupt {
-            entry: name.into(),
-            detail: e.to_string(),
-        })?;
-    Ok(buf)
-}
-
-fn read_props(zip: &mut Zip<'_>, name: &str) -> Result<Props> {
-    let bytes = read_entry(zip, name)?;
-    // Decode ISO-8859-1 (the .properties encoding) here and hand java-properties valid
-    // UTF-8: its own decoder sniffs byte-order marks and panics on a UTF-16 BOM followed
-    // by an odd byte count (found by fuzzing, java-properties 2.0.0 / encoding_rs 0.8).
-    // Latin-1 text re-encoded as UTF-8 can hold neither a BOM nor an incomplete sequence.
-    let text: String = bytes.iter().map(|&b| char::from(b)).collect();
-    let mut props = Props::new();
-    java_properties::PropertiesIter::new_with_encoding(text.as_bytes(), encoding_rs::UTF_8)
-        .read_into(|k, v| {
-            props.insert(k, v);
-        })
-        .map_err(|e| AfmError::Properties {
-            entry: name.into(),
-            line: e.line_number().unwrap_or(0),
-            detail: e.to_string(),
-        })?;
-    Ok(props)
-}
-
-/// A header file together with its name, for error messages.
-#[derive(Clone, Copy)]
-struct Hdr<'a> {
-    entry: &'a str,
-    props: &'a Props,
-}
-
-impl<'a> Hdr<'a> {
-    fn opt(&self, key: &str) -> Option<&'a str> {
-        self.props.get(key).map(String::as_str)
-    }
-    fn get(&self, key: &str) -> Result<&'a str> {
-        self.opt(key).ok_or_else(|| AfmError::MissingKey {
-            entry: self.entry.into(),
-            key: key.into(),
-        })
-    }
-    fn bad(&self, key: &str, value: &str, expected: &str) -> AfmError {
-        AfmError::BadValue {
-            entry: self.entry.into(),
-            key: key.into(),
-            value: value.into(),
-            expected: expected.into(),
-        }
-    }
-    fn f64(&self, key: &str) -> Result<f64> {
-        let v = self.get(key)?;
-        v.trim()
-            .parse::<f64>()
-            .map_err(|_| self.bad(key, v, "a number"))
-    }
-    fn finite(&self, key: &str) -> Result<f64> {
-        let x = self.f64(key)?;
-        if x.is_finite() {
-            Ok(x)
-        } else {
-            Err(self.bad(key, self.opt(key).unwrap_or(""), "a finite number"))
-        }
-    }
-    fn usize(&self, key: &str) -> Result<usize> {
-        let v = self.get(key)?;
-        v.trim()
-            .parse::<usize>()
-            .map_err(|_| self.bad(key, v, "a non-negative integer"))
-    }
 }
 
 fn read_curve(
@@ -335,11 +349,8 @@ fn read_curve(
         let dir = format!("{seg_prefix}{id}/");
         let entry = format!("{dir}segment-header.properties");
         let props = read_props(zip, &entry)?;
-        let hdr = Hdr {
-            entry: &entry,
-            props: &props,
-        };
-        let (segment, cal) = read_segment(zip, names, &dir, hdr, index, t0, ctx)?;
+        let merged = Merged::new(&entry, props, ctx.shared)?;
+        let (segment, cal) = read_segment(zip, names, &dir, merged.hdr(), index, t0, ctx)?;
         t0 += segment.duration;
         if calibration.is_none() {
             calibration = cal;
@@ -375,10 +386,7 @@ fn segment_kind(hdr: Hdr<'_>) -> Result<SegmentKind> {
     let style = hdr
         .opt(style_key)
         .or_else(|| hdr.opt("force-segment-header.settings.segment-settings.style"))
-        .ok_or_else(|| AfmError::MissingKey {
-            entry: hdr.entry.into(),
-            key: style_key.into(),
-        })?;
+        .ok_or_else(|| hdr.missing(style_key))?;
     let seg_type = hdr
         .opt("force-segment-header.settings.segment-settings.type")
         .unwrap_or("");
@@ -426,33 +434,40 @@ fn read_segment(
     let mut channels = Vec::new();
     let mut calibration = None;
     for ch in list.split_whitespace() {
-        let spec = ChannelSpec::resolve(hdr, ch, ctx.shared)?;
-        let file_key = format!("channel.{ch}.data.file.name");
-        let file = hdr.get(&file_key)?;
-        let format_key = format!("channel.{ch}.data.file.format");
-        if let Some(fmt) = hdr.opt(&format_key)
-            && fmt != "raw"
-        {
-            return Err(AfmError::Unsupported {
-                entry: hdr.entry.into(),
-                what: format!("channel file format '{fmt}' (key {format_key}; only 'raw')"),
-            });
-        }
+        let spec = ChannelSpec::resolve(hdr, ch)?;
         let points = match hdr.opt(&format!("channel.{ch}.data.num-points")) {
             Some(_) => hdr.usize(&format!("channel.{ch}.data.num-points"))?,
             None => n,
         };
-        let entry = format!("{dir}{file}");
-        if !names.contains(&entry) {
-            return Err(AfmError::Corrupt {
-                entry,
-                detail: format!("channel file named by {file_key} is missing from the archive"),
-            });
-        }
-        let bytes = read_entry(zip, &entry)?;
-        let volts = spec.decode(&bytes, points, &entry)?;
+        let volts = if spec.is_computed() {
+            spec.raster(points)?
+        } else {
+            let file_key = format!("channel.{ch}.data.file.name");
+            let file = hdr.get(&file_key)?;
+            let format_key = format!("channel.{ch}.data.file.format");
+            if let Some(fmt) = hdr.opt(&format_key)
+                && fmt != "raw"
+            {
+                return Err(hdr.unsupported(
+                    &format_key,
+                    format!("channel file format '{fmt}' (only 'raw')"),
+                ));
+            }
+            let entry = format!("{dir}{file}");
+            if !names.contains(&entry) {
+                return Err(AfmError::Corrupt {
+                    entry,
+                    detail: format!(
+                        "channel file named by {file_key} in {} is missing from the archive",
+                        hdr.entry()
+                    ),
+                });
+            }
+            let bytes = read_entry(zip, &entry)?;
+            spec.decode(&bytes, points, &entry)?
+        };
         let (values, unit, conversion) = if ch == "vDeflection" {
-            let (cal, force) = deflection_to_force(&spec, volts, ctx.options)?;
+            let (cal, force) = spec.deflection_to_force(volts, ctx.options)?;
             calibration = Some(cal);
             (force, "N".to_string(), "force".to_string())
         } else {
@@ -468,7 +483,7 @@ fn read_segment(
     let len = channels.iter().map(|c| c.values.len()).min().unwrap_or(n);
     if let Some(bad) = channels.iter().find(|c| c.values.len() != len) {
         return Err(AfmError::Corrupt {
-            entry: hdr.entry.into(),
+            entry: hdr.entry().into(),
             detail: format!(
                 "channel '{}' has {} points but another channel has {len}",
                 bad.name,
@@ -488,339 +503,5 @@ fn read_segment(
             channels,
         },
         calibration,
-    ))
-}
-
-/// Raw sample storage of a channel file.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Storage {
-    I16,
-    U16,
-    I32,
-    U32,
-    I64,
-    F32,
-    F64,
-}
-
-impl Storage {
-    fn width(self) -> usize {
-        match self {
-            Storage::I16 | Storage::U16 => 2,
-            Storage::I32 | Storage::U32 | Storage::F32 => 4,
-            Storage::I64 | Storage::F64 => 8,
-        }
-    }
-}
-
-/// Where a channel's description lives and how to decode it.
-struct ChannelSpec<'a> {
-    name: String,
-    /// Header holding the encoder and conversion-set keys.
-    hdr: Hdr<'a>,
-    /// Key prefix, e.g. `channel.height.` (0.12) or `lcd-info.0.` (2.0).
-    prefix: String,
-    storage: Storage,
-    /// Encoder scaling (offset, multiplier) raw → volts; None for float data.
-    encoder: Option<(f64, f64)>,
-}
-
-impl<'a> ChannelSpec<'a> {
-    fn resolve(seg: Hdr<'a>, ch: &str, shared: Option<&'a Props>) -> Result<Self> {
-        let lcd_key = format!("channel.{ch}.lcd-info.*");
-        let (hdr, prefix, type_key, enc_prefix) = if let Some(idx) = seg.opt(&lcd_key) {
-            let props = shared.ok_or_else(|| AfmError::MissingKey {
-                entry: "shared-data/header.properties".into(),
-                key: format!("lcd-info.{idx}.* (the file refers to shared data it lacks)"),
-            })?;
-            let hdr = Hdr {
-                entry: "shared-data/header.properties",
-                props,
-            };
-            let p = format!("lcd-info.{}.", idx.trim());
-            (hdr, p.clone(), format!("{p}type"), format!("{p}encoder."))
-        } else {
-            let p = format!("channel.{ch}.");
-            (
-                seg,
-                p.clone(),
-                format!("{p}data.type"),
-                format!("{p}data.encoder."),
-            )
-        };
-        let dtype = hdr.get(&type_key)?;
-        let enc_type = hdr.opt(&format!("{enc_prefix}type")).unwrap_or("");
-        let unsigned = enc_type.starts_with("unsigned");
-        let storage = match dtype {
-            "short" | "short-data" | "shortdata" | "memory-short-data" => {
-                if unsigned {
-                    Storage::U16
-                } else {
-                    Storage::I16
-                }
-            }
-            "integer" | "integer-data" | "memory-integer-data" => {
-                if unsigned {
-                    Storage::U32
-                } else {
-                    Storage::I32
-                }
-            }
-            "long" | "long-data" | "memory-long-data" => Storage::I64,
-            "float" | "float-data" | "memory-float-data" => Storage::F32,
-            "double" | "double-data" | "memory-double-data" => Storage::F64,
-            other => {
-                return Err(AfmError::Unsupported {
-                    entry: hdr.entry.into(),
-                    what: format!("channel data type '{other}' (key {type_key})"),
-                });
-            }
-        };
-        let encoder = if hdr
-            .opt(&format!("{enc_prefix}scaling.multiplier"))
-            .is_some()
-        {
-            Some(scaling(hdr, &format!("{enc_prefix}scaling."))?)
-        } else if matches!(storage, Storage::F32 | Storage::F64) {
-            None
-        } else {
-            return Err(AfmError::MissingKey {
-                entry: hdr.entry.into(),
-                key: format!("{enc_prefix}scaling.multiplier"),
-            });
-        };
-        Ok(ChannelSpec {
-            name: ch.to_string(),
-            hdr,
-            prefix,
-            storage,
-            encoder,
-        })
-    }
-
-    /// Raw big-endian samples → volts (encoder scaling).
-    fn decode(&self, bytes: &[u8], points: usize, entry: &str) -> Result<Vec<f64>> {
-        let w = self.storage.width();
-        let expected_bytes = points.checked_mul(w).ok_or_else(|| AfmError::Corrupt {
-            entry: entry.into(),
-            detail: format!("absurd point count {points}"),
-        })?;
-        if bytes.len() < expected_bytes {
-            return Err(AfmError::Truncated {
-                entry: entry.into(),
-                expected: points,
-                expected_bytes,
-                found_bytes: bytes.len(),
-            });
-        }
-        let raw = bytes[..expected_bytes].chunks_exact(w);
-        let mut out = Vec::with_capacity(points);
-        let s = self.storage;
-        for c in raw {
-            let x = match s {
-                Storage::I16 => f64::from(i16::from_be_bytes([c[0], c[1]])),
-                Storage::U16 => f64::from(u16::from_be_bytes([c[0], c[1]])),
-                Storage::I32 => f64::from(i32::from_be_bytes([c[0], c[1], c[2], c[3]])),
-                Storage::U32 => f64::from(u32::from_be_bytes([c[0], c[1], c[2], c[3]])),
-                Storage::F32 => f64::from(f32::from_be_bytes([c[0], c[1], c[2], c[3]])),
-                Storage::I64 => {
-                    i64::from_be_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]) as f64
-                }
-                Storage::F64 => {
-                    f64::from_be_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]])
-                }
-            };
-            out.push(x);
-        }
-        if let Some((offset, multiplier)) = self.encoder {
-            for x in &mut out {
-                *x = offset + multiplier * *x;
-            }
-        }
-        Ok(out)
-    }
-
-    fn conv_key(&self, slot: &str, rest: &str) -> String {
-        format!("{}conversion-set.conversion.{slot}.{rest}", self.prefix)
-    }
-
-    fn base_slot(&self) -> &'a str {
-        self.hdr
-            .opt(&format!("{}conversion-set.conversions.base", self.prefix))
-            .unwrap_or("volts")
-    }
-
-    fn default_slot(&self) -> &'a str {
-        self.hdr
-            .opt(&format!(
-                "{}conversion-set.conversions.default",
-                self.prefix
-            ))
-            .unwrap_or_else(|| self.base_slot())
-    }
-
-    fn is_defined(&self, slot: &str) -> bool {
-        self.hdr.opt(&self.conv_key(slot, "defined")) == Some("true")
-    }
-
-    /// Linear steps (offset, multiplier) from the base slot to `target`, in application order.
-    fn chain(&self, target: &str) -> Result<Vec<(f64, f64)>> {
-        let base = self.base_slot();
-        let mut steps = Vec::new();
-        let mut slot = target.to_string();
-        while slot != base {
-            if steps.len() >= MAX_CHAIN {
-                return Err(AfmError::Unsupported {
-                    entry: self.hdr.entry.into(),
-                    what: format!(
-                        "conversion chain of channel '{}' longer than {MAX_CHAIN} steps (cycle?)",
-                        self.name
-                    ),
-                });
-            }
-            if !self.is_defined(&slot) {
-                return Err(AfmError::BadValue {
-                    entry: self.hdr.entry.into(),
-                    key: self.conv_key(&slot, "defined"),
-                    value: self
-                        .hdr
-                        .opt(&self.conv_key(&slot, "defined"))
-                        .unwrap_or("<absent>")
-                        .into(),
-                    expected: "true (conversion needed by the chain)".into(),
-                });
-            }
-            steps.push(scaling(self.hdr, &self.conv_key(&slot, "scaling."))?);
-            slot = self
-                .hdr
-                .get(&self.conv_key(&slot, "base-calibration-slot"))?
-                .to_string();
-        }
-        steps.reverse();
-        Ok(steps)
-    }
-
-    fn unit_of(&self, slot: &str) -> String {
-        if slot == self.base_slot() {
-            return "V".into();
-        }
-        self.hdr
-            .opt(&self.conv_key(slot, "scaling.unit.unit"))
-            .or_else(|| self.hdr.opt(&self.conv_key(slot, "scaling.unit")))
-            .unwrap_or("?")
-            .to_string()
-    }
-
-    /// Volts → the channel's default conversion. Falls back to volts if the default
-    /// slot is not defined (JPK marks unused channels that way).
-    fn convert_default(&self, mut v: Vec<f64>) -> Result<(Vec<f64>, String, String)> {
-        let mut slot = self.default_slot();
-        if slot != self.base_slot() && !self.is_defined(slot) {
-            slot = self.base_slot();
-        }
-        for (offset, multiplier) in self.chain(slot)? {
-            for x in &mut v {
-                *x = offset + multiplier * *x;
-            }
-        }
-        let name = if slot == self.base_slot() {
-            "volts"
-        } else {
-            slot
-        };
-        Ok((v, self.unit_of(slot), name.to_string()))
-    }
-}
-
-/// Linear `offsetmultiplier` scaling at `prefix` (`...scaling.`): returns (offset, multiplier).
-fn scaling(hdr: Hdr<'_>, prefix: &str) -> Result<(f64, f64)> {
-    let type_key = format!("{prefix}type");
-    if let Some(t) = hdr.opt(&type_key)
-        && t != "linear"
-    {
-        return Err(AfmError::Unsupported {
-            entry: hdr.entry.into(),
-            what: format!("scaling type '{t}' (key {type_key}; only 'linear')"),
-        });
-    }
-    let style_key = format!("{prefix}style");
-    if let Some(s) = hdr.opt(&style_key)
-        && s != "offsetmultiplier"
-    {
-        return Err(AfmError::Unsupported {
-            entry: hdr.entry.into(),
-            what: format!("scaling style '{s}' (key {style_key}; only 'offsetmultiplier')"),
-        });
-    }
-    let offset = match hdr.opt(&format!("{prefix}offset")) {
-        Some(_) => hdr.finite(&format!("{prefix}offset"))?,
-        None => 0.0,
-    };
-    let multiplier = hdr.finite(&format!("{prefix}multiplier"))?;
-    Ok((offset, multiplier))
-}
-
-/// vDeflection volts → force, N; returns the calibration used.
-///
-/// With the file's calibration the conversion chain is followed exactly (volts → distance
-/// → force). An override replaces the corresponding multiplier; offsets of the chain
-/// are kept.
-fn deflection_to_force(
-    spec: &ChannelSpec<'_>,
-    mut v: Vec<f64>,
-    options: &ReadOptions,
-) -> Result<(Calibration, Vec<f64>)> {
-    let slot_step = |slot: &str| -> Option<(f64, f64)> {
-        if !spec.is_defined(slot) {
-            return None;
-        }
-        let (o, m) = scaling(spec.hdr, &spec.conv_key(slot, "scaling.")).ok()?;
-        (m.is_finite() && m > 0.0).then_some((o, m))
-    };
-    if spec.is_defined("force")
-        && let Some(base) = spec
-            .hdr
-            .opt(&spec.conv_key("force", "base-calibration-slot"))
-        && base != "distance"
-    {
-        return Err(AfmError::Unsupported {
-            entry: spec.hdr.entry.into(),
-            what: format!("vDeflection force conversion based on '{base}' (expected 'distance')"),
-        });
-    }
-    let (d_off, sens, sens_src) = match (options.sensitivity, slot_step("distance")) {
-        (Some(s), file) => (file.map_or(0.0, |f| f.0), s, CalibrationSource::Override),
-        (None, Some((o, m))) => (o, m, CalibrationSource::File),
-        (None, None) => {
-            return Err(AfmError::NoCalibration {
-                quantity: "deflection sensitivity",
-                entry: spec.hdr.entry.into(),
-                conversion: "distance".into(),
-            });
-        }
-    };
-    let (f_off, k, k_src) = match (options.spring_constant, slot_step("force")) {
-        (Some(k), file) => (file.map_or(0.0, |f| f.0), k, CalibrationSource::Override),
-        (None, Some((o, m))) => (o, m, CalibrationSource::File),
-        (None, None) => {
-            return Err(AfmError::NoCalibration {
-                quantity: "spring constant",
-                entry: spec.hdr.entry.into(),
-                conversion: "force".into(),
-            });
-        }
-    };
-    for x in &mut v {
-        let d = d_off + sens * *x;
-        *x = f_off + k * d;
-    }
-    Ok((
-        Calibration {
-            spring_constant: k,
-            sensitivity: sens,
-            spring_constant_source: k_src,
-            sensitivity_source: sens_src,
-        },
-        v,
     ))
 }

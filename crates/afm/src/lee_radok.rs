@@ -6,20 +6,23 @@
 //!
 //! ```text
 //! F(t) = (16/3) √R ∫₀ᵗ G(t − s) d(δ^{3/2})/ds ds,
-//! G(t) = G∞ + Σₖ Gₖ exp(−t/τₖ)                         (Prony series)
+//! G(t) = G0 (g∞ + Σₖ gₖ exp(−t/τₖ))                  (eq. 5.1)
 //! ```
 //!
 //! (the elastic limit G = E/3 gives back eq. 1.1 with ν = ½). It is the small-strain limit
-//! of the thesis's NLV models (§2.2, eq. 4.2–4.3 / 5.1 with `G(t) = G0 (g∞ + Σ g_k e^{−t/τ_k})`).
+//! of the thesis's NLV models (§2.2, eqs. 4.2–4.3 / 5.1).
 //!
-//! The integral is evaluated recursively, exactly for u = δ^{3/2} piecewise linear between
-//! samples: `h_k(t_{n+1}) = e^{−Δ/τ_k} h_k(t_n) + (Δu/Δ) τ_k (1 − e^{−Δ/τ_k})`, O(n) per
-//! evaluation. The moduli enter linearly, so the fit is a variable projection: Nelder–Mead
-//! (argmin) over log τₖ, non-negative least squares for (G∞, Gₖ) at each trial. Non-negative
-//! moduli make G(t) monotonically non-increasing by construction.
+//! The integral is the one Lee–Radok kernel of the pipeline, `nlvid_forward::LeeRadok`,
+//! on the measured indentation (exact for u = δ^{3/2} piecewise linear between samples),
+//! O(n) per evaluation. The moduli G∞ = G0 g∞ and Gₖ = G0 gₖ enter linearly, so the fit
+//! is a variable projection: Nelder–Mead (argmin) over log τₖ, non-negative least squares
+//! for (G∞, Gₖ) at each trial. Non-negative moduli make G(t) monotonically non-increasing
+//! by construction; the result is an `nlvid_model::Relaxation`.
 
 use argmin::core::{CostFunction, Executor, State, TerminationReason, TerminationStatus};
 use argmin::solver::neldermead::NelderMead;
+use nlvid_forward::LeeRadok;
+use nlvid_model::{Prony, Relaxation};
 
 use crate::curve::{ForceCurve, SegmentKind};
 use crate::error::{AfmError, Result};
@@ -28,113 +31,18 @@ use crate::prepare::{
     tip_sample_separation,
 };
 
-/// A Prony series shear relaxation modulus `G(t) = G∞ + Σ Gₖ exp(−t/τₖ)`, moduli in Pa.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Prony {
-    /// Long-term modulus G∞, Pa.
-    pub g_inf: f64,
-    /// Terms (Gₖ in Pa, τₖ in s), sorted by τ.
-    pub terms: Vec<(f64, f64)>,
+/// The kernel on a measured curve (ν = ½), with the crate's error type.
+fn kernel(time: &[f64], delta: &[f64], tip_radius: f64) -> Result<LeeRadok> {
+    LeeRadok::sampled(tip_radius, 0.5, time.to_vec(), delta)
+        .map_err(|e| AfmError::InvalidInput(e.to_string()))
 }
 
-impl Prony {
-    /// G(t), Pa.
-    pub fn g(&self, t: f64) -> f64 {
-        self.g_inf
-            + self
-                .terms
-                .iter()
-                .map(|(gk, tau)| gk * (-t / tau).exp())
-                .sum::<f64>()
-    }
-
-    /// Instantaneous modulus G(0) = G∞ + Σ Gₖ, Pa.
-    pub fn g0(&self) -> f64 {
-        self.g_inf + self.terms.iter().map(|t| t.0).sum::<f64>()
-    }
-
-    /// Prony *weights* in the thesis's ch. IV–V sense: (g∞, [(gₖ, τₖ)]) with gₖ = Gₖ/G(0)
-    /// and g∞ = 1 − Σ gₖ (eq. 4.2–4.3). Not ch. II's long-term fraction g_α (eq. 2.56).
-    pub fn weights(&self) -> (f64, Vec<(f64, f64)>) {
-        let g0 = self.g0();
-        (
-            self.g_inf / g0,
-            self.terms.iter().map(|(g, t)| (g / g0, *t)).collect(),
-        )
-    }
-}
-
-/// Force history F(t) of the Lee–Radok integral for indentation δ(t) (δ ≤ 0 counts as no
-/// contact) and relaxation modulus `prony`, probe radius `tip_radius`.
-///
-/// # Errors
-/// [`AfmError::InvalidInput`] if lengths differ, times do not increase, or R ≤ 0.
-pub fn lee_radok_force(
-    time: &[f64],
-    delta: &[f64],
-    prony: &Prony,
-    tip_radius: f64,
-) -> Result<Vec<f64>> {
-    check_series(time, delta, tip_radius)?;
-    let taus: Vec<f64> = prony.terms.iter().map(|t| t.1).collect();
-    let cols = basis(time, delta, &taus, tip_radius);
-    let coef: Vec<f64> = std::iter::once(prony.g_inf)
-        .chain(prony.terms.iter().map(|t| t.0))
-        .collect();
-    Ok((0..time.len())
-        .map(|i| cols.iter().zip(&coef).map(|(c, g)| c[i] * g).sum())
-        .collect())
-}
-
-fn check_series(time: &[f64], delta: &[f64], tip_radius: f64) -> Result<()> {
-    if time.len() != delta.len() || time.is_empty() {
-        return Err(AfmError::InvalidInput(format!(
-            "time has {} samples, indentation {}",
-            time.len(),
-            delta.len()
-        )));
-    }
-    if time
-        .windows(2)
-        .any(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
-        || delta.iter().any(|d| !d.is_finite())
-    {
-        return Err(AfmError::InvalidInput(
-            "times must increase strictly and indentations be finite".into(),
-        ));
-    }
-    if !(tip_radius.is_finite() && tip_radius > 0.0) {
-        return Err(AfmError::InvalidInput(format!(
-            "tip radius must be positive, got {tip_radius} m"
-        )));
-    }
-    Ok(())
-}
-
-/// Columns [K u, K h_1, ..., K h_m] with K = (16/3)√R.
-fn basis(time: &[f64], delta: &[f64], taus: &[f64], r: f64) -> Vec<Vec<f64>> {
-    let k = 16.0 / 3.0 * r.sqrt();
-    let n = time.len();
-    let u: Vec<f64> = delta.iter().map(|d| d.max(0.0).powf(1.5)).collect();
-    let mut cols = Vec::with_capacity(taus.len() + 1);
-    cols.push(u.iter().map(|v| k * v).collect::<Vec<_>>());
-    for &tau in taus {
-        let mut h = Vec::with_capacity(n);
-        // the history starts at u(t0): a jump at t0 is an instantaneous load
-        let mut acc = u[0];
-        h.push(k * acc);
-        for i in 1..n {
-            let dt = time[i] - time[i - 1];
-            let e = (-dt / tau).exp();
-            let slope = (u[i] - u[i - 1]) / dt;
-            // τ(1 − e^{−Δ/τ}) computed stably for Δ ≪ τ
-            let w = -tau * (-dt / tau).exp_m1();
-            acc = e * acc + slope * w;
-            h.push(k * acc);
-        }
-        cols.push(h);
-    }
-    cols
+/// Columns [P u, P h_1, ..., P h_m] with P = (16/3)√R: the force per unit modulus of the
+/// long-term part and of each term.
+fn basis(kernel: &LeeRadok, taus: &[f64]) -> Vec<Vec<f64>> {
+    std::iter::once(kernel.elastic())
+        .chain(taus.iter().map(|&tau| kernel.hereditary(tau)))
+        .collect()
 }
 
 /// Settings of a Lee–Radok Prony fit.
@@ -162,8 +70,8 @@ impl LeeRadokSettings {
 /// Result of a Lee–Radok Prony fit.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LeeRadokFit {
-    /// Fitted relaxation modulus.
-    pub prony: Prony,
+    /// Fitted shear relaxation modulus G(t) (eq. 5.1), terms sorted by τ.
+    pub relaxation: Relaxation,
     /// Root-mean-square residual, N.
     pub rmse: f64,
     /// RMSE divided by the range of the measured force (eq. 5.2 convention).
@@ -175,10 +83,8 @@ pub struct LeeRadokFit {
 }
 
 struct VarPro<'a> {
-    time: &'a [f64],
-    delta: &'a [f64],
+    kernel: &'a LeeRadok,
     force: &'a [f64],
-    r: f64,
     log_tau_bounds: (f64, f64),
     scale: f64,
 }
@@ -194,7 +100,7 @@ impl VarPro<'_> {
         }
         let mut taus: Vec<f64> = log_tau.iter().map(|l| l.exp()).collect();
         taus.sort_by(f64::total_cmp);
-        let cols = basis(self.time, self.delta, &taus, self.r);
+        let cols = basis(self.kernel, &taus);
         let (g, sse) = nnls(&cols, self.force)?;
         Some((taus, g, sse))
     }
@@ -316,7 +222,7 @@ pub fn fit_lee_radok(
     force: &[f64],
     settings: &LeeRadokSettings,
 ) -> Result<LeeRadokFit> {
-    check_series(time, delta, settings.tip_radius)?;
+    let kernel = kernel(time, delta, settings.tip_radius)?;
     if force.len() != time.len() || force.iter().any(|f| !f.is_finite()) {
         return Err(AfmError::InvalidInput(
             "force must be finite and as long as time".into(),
@@ -349,10 +255,8 @@ pub fn fit_lee_radok(
     // Unscaled problem for the final solve; the search minimises the
     // range-normalised RMSE² (the same problem, scaled).
     let unscaled = VarPro {
-        time,
-        delta,
+        kernel: &kernel,
         force,
-        r: settings.tip_radius,
         log_tau_bounds: (dt_min.ln(), (10.0 * span).ln()),
         scale: 1.0,
     };
@@ -406,21 +310,30 @@ pub fn fit_lee_radok(
             detail: "no non-negative Prony moduli fit the data".into(),
             hint: "check the contact point and baseline (force must rise with indentation)",
         })?;
-    let prony = Prony {
-        g_inf: g[0],
-        terms: g[1..].iter().copied().zip(taus).collect(),
-    };
-    if !prony.g0().is_finite() || prony.g0() <= 0.0 {
+    let g0: f64 = g.iter().sum();
+    if !g0.is_finite() || g0 <= 0.0 {
         return Err(AfmError::NotConverged {
             fit: "Lee–Radok",
-            detail: format!("instantaneous modulus G(0) = {} Pa", prony.g0()),
+            detail: format!("instantaneous modulus G(0) = {g0} Pa"),
             hint: "check the contact point and baseline",
         });
     }
-    let force_fit = lee_radok_force(time, delta, &prony, settings.tip_radius)?;
+    let weights: Vec<(f64, f64)> = g[1..].iter().map(|gk| gk / g0).zip(taus).collect();
+    let relaxation = Prony::new("G", &weights)
+        .and_then(|p| Relaxation::new("G0", g0, p))
+        .map_err(|e| AfmError::NotConverged {
+            fit: "Lee–Radok",
+            detail: format!(
+                "the best moduli have no long-term part (G∞ = {:e} Pa): {e}",
+                g[0]
+            ),
+            hint: "the force has not levelled off by the end of the hold: record a longer hold \
+                   or fit fewer Prony terms",
+        })?;
+    let force_fit = kernel.force(&relaxation);
     let rmse = (sse / n as f64).sqrt();
     Ok(LeeRadokFit {
-        prony,
+        relaxation,
         rmse,
         range_normalised_rmse: rmse / range,
         iterations,

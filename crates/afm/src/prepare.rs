@@ -9,6 +9,7 @@
 
 use std::ops::Range;
 
+use crate::curve::{ForceCurve, SegmentKind};
 use crate::error::{AfmError, Result};
 
 /// A straight baseline `F_b(x) = offset + slope·x` of the non-contact part of a curve.
@@ -321,4 +322,46 @@ fn piecewise_break(s: &[f64], f: &[f64]) -> Result<(usize, f64)> {
         return Err(AfmError::NoContact("piecewise fit found no break".into()));
     }
     Ok(best)
+}
+
+/// Baseline and contact point of the extend segment `curve.segments[extend]`, whose
+/// separation and force are `separation`, `force`.
+///
+/// A pause recorded just before the approach (the probe still free, ≥ 16 samples) is the
+/// better baseline, since the force may rise from the very first extend sample (ramp-hold
+/// files, docs/theory/afm.md choice 5): with the deviation method its mean and noise give
+/// the baseline and [`contact_point_from_baseline`] the contact. Otherwise the contact is
+/// found on the extend with `method` and the baseline fitted (offset only) to the samples
+/// before it.
+///
+/// # Errors
+/// As [`contact_point`], [`contact_point_from_baseline`] and [`Baseline::fit`]; missing
+/// channels of the pause.
+pub fn approach_baseline(
+    curve: &ForceCurve,
+    extend: usize,
+    separation: &[f64],
+    force: &[f64],
+    method: ContactMethod,
+) -> Result<(ContactPoint, Baseline)> {
+    let pre = extend
+        .checked_sub(1)
+        .and_then(|i| curve.segments.get(i))
+        .filter(|s| s.kind == SegmentKind::Hold && s.len() >= 16);
+    match (method, pre) {
+        (ContactMethod::Deviation { n_sigma, .. }, Some(pre)) => {
+            let fp = pre.force()?;
+            let sp = tip_sample_separation(pre.height()?, fp, curve.calibration.spring_constant)?;
+            let base = Baseline::fit(&sp, fp, 0..fp.len(), false)?;
+            Ok((
+                contact_point_from_baseline(separation, force, &base, n_sigma)?,
+                base,
+            ))
+        }
+        _ => {
+            let contact = contact_point(separation, force, method)?;
+            let base = Baseline::fit(separation, force, 0..contact.index.max(2), false)?;
+            Ok((contact, base))
+        }
+    }
 }

@@ -59,3 +59,40 @@ fn randomly_damaged_real_files_never_panic() {
     // most damage must be detected (CRC, structure); some flips land in unused bytes
     assert!(err > 200, "ok {ok}, err {err}");
 }
+
+#[test]
+fn damaged_headers_of_maps_with_shared_references_never_panic() {
+    // QI map and QI series with a header damaged before re-packing: the damage passes
+    // the CRC and reaches the properties parser, the shared references and the raster
+    // channels.
+    let mut rng = ChaCha8Rng::seed_from_u64(14);
+    let mut inputs = Vec::new();
+    for name in [QI_DATA, QI_SERIES] {
+        let bytes = std::fs::read(data(name)).expect("read");
+        let e: Vec<_> = entries(&bytes)
+            .into_iter()
+            .filter(|(n, _)| n.ends_with(".properties"))
+            .collect();
+        inputs.push((bytes, e));
+    }
+    let mut failed = 0;
+    for round in 0..200 {
+        let (bytes, headers) = &inputs[round % 2];
+        let (name, text) = &headers[(round / 2) % headers.len()];
+        let new = mutate(&mut rng, text);
+        let damaged = with_entry(bytes, name, |_| new.clone());
+        // every curve's own result, never a panic
+        match nlvid_afm::read_jpk_each(&damaged, "damaged", &ReadOptions::default()) {
+            Ok(curves) => {
+                for (_, c) in curves {
+                    if let Err(e) = c {
+                        assert!(!e.to_string().is_empty());
+                        failed += 1;
+                    }
+                }
+            }
+            Err(_) => failed += 1,
+        }
+    }
+    assert!(failed > 50, "only {failed} of 200 damaged headers detected");
+}

@@ -3,22 +3,23 @@
 //!
 //! Conventions every subcommand follows:
 //! - two-stage arguments: raw clap `Args` → validated `Config` ([`cmd::Run`]);
+//!   then one call into a library crate, then output;
 //! - `--json`: stdout carries exactly one JSON document ([`output::print_json`]);
-//! - curves as CSV with unit-suffixed headers, written atomically
-//!   ([`output::Table`], [`output::write_atomic`]);
+//! - curves as CSV and JSON with unit-suffixed headers (`force_N`), written
+//!   atomically ([`output::curve_json`], [`output::write_atomic`]);
+//! - stdout written with [`say!`] / [`output::print_text`]: a closed pipe
+//!   (`nlvid … | head`) ends the command quietly, never a panic;
 //! - progress bars on stderr, hidden off-terminal and in CI ([`progress::bar`]);
 //! - logs on stderr via `tracing` (`-v`, `NLVID_LOG`);
-//! - `--shard i/n` for batches split over a cluster ([`args::Shard`]);
+//! - `--shard i/n` for batches split over a cluster (`nlvid_surrogate::Shard`);
 //! - outputs record the study hash ([`output::provenance`]).
 //!
 //! Cost: negligible; the work is in the pipeline crates.
 //!
 //! ```
-//! use nlvid_cli::output::{Column, Table};
-//! let mut t = Table::new(vec![Column::new("time", "s"), Column::new("sigma_1", "Pa")]);
-//! t.push_row(&[0.0, 2940.0])?;
-//! assert_eq!(t.to_csv()?, "time_s,sigma_1_Pa\n0,2940\n");
-//! # Ok::<(), anyhow::Error>(())
+//! use nlvid_cli::output::parameters_json;
+//! let p = parameters_json(&[("G0".into(), 1e3, "Pa".into()), ("g1".into(), 0.3, "1".into())]);
+//! assert_eq!(p.to_string(), r#"{"G0_Pa":1000.0,"g1":0.3}"#);
 //! ```
 #![warn(missing_docs)]
 
@@ -27,8 +28,9 @@ use std::process::ExitCode;
 use clap::Parser;
 
 pub mod args;
-pub mod cmd;
+#[macro_use]
 pub mod output;
+pub mod cmd;
 pub mod progress;
 
 /// Parses the command line, sets up logging and runs the subcommand.

@@ -62,7 +62,7 @@ fn text_output_lists_the_excluded_cell_and_the_tests() {
         s.contains("excluded mcf-7-09 (MCF-7, line 18): failed: fit did not converge"),
         "{s}"
     );
-    assert!(s.contains("relaxation at 52 s"), "{s}");
+    assert!(s.contains("relaxation 1 − G(52 s)/G(0)"), "{s}");
     assert!(s.contains("p < 0.05 at 5 of 5 times"), "{s}");
     std::fs::remove_dir_all(&dir).ok();
 }
@@ -85,4 +85,55 @@ fn bad_arguments_are_reported() {
     let out = nlvid(&["compare", "/nonexistent/results.csv"]);
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).contains("/nonexistent/results.csv"));
+}
+
+/// `--out-dir` names a folder that does not exist yet: it is created.
+#[test]
+fn out_dir_is_created_when_missing() {
+    let base = out_dir("mkdir");
+    let dir = base.join("new/nested");
+    assert!(!dir.exists());
+    let out = nlvid(&["compare", EXAMPLE, "--out-dir", dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(dir.join("results_example.groups.csv").is_file());
+    assert!(dir.join("results_example.pvalues.csv").is_file());
+    std::fs::remove_dir_all(&base).ok();
+}
+
+/// `--json` carries p(t) at every time of a non-uniform `--times` grid,
+/// equal to the pvalues CSV; at t = 0 and 52 s the 8-vs-8 groups are
+/// completely separated in G: exact p = 2 / C(16, 8).
+#[test]
+fn json_has_p_of_t_on_a_non_uniform_grid() {
+    let dir = out_dir("times");
+    let out = nlvid(&[
+        "--json",
+        "compare",
+        EXAMPLE,
+        "--times",
+        "0 s,0.1 s,1 s,10 s,52 s",
+        "--out-dir",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let pt = v["comparison"]["p_of_t"].as_array().unwrap();
+    let t: Vec<f64> = pt.iter().map(|r| r["time_s"].as_f64().unwrap()).collect();
+    assert_eq!(t, [0.0, 0.1, 1.0, 10.0, 52.0]);
+    assert_eq!(v["t_end_s"], 52.0);
+    let p52 = pt[4]["p_G"].as_f64().unwrap();
+    assert!((p52 - 2.0 / 12870.0).abs() < 1e-15, "{p52}");
+    let csv = std::fs::read_to_string(dir.join("results_example.pvalues.csv")).unwrap();
+    for (line, row) in csv.lines().skip(1).zip(pt) {
+        let p: f64 = line.split(',').nth(1).unwrap().parse().unwrap();
+        assert_eq!(p, row["p_G"].as_f64().unwrap(), "{line}");
+    }
+    let out = nlvid(&["compare", EXAMPLE, "--times", "0 s,2 s,1 s"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        text(&out.stderr).contains("increasing"),
+        "{}",
+        text(&out.stderr)
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -15,7 +15,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
 
-use nlvid_surrogate::{ForwardModel, HertzProny};
+use nlvid_forward::HertzProny;
+use nlvid_model::ForwardModel;
 
 /// Truth in the `hertz-prony` order (G0, g1, g2, tau1, tau2).
 const TRUTH: [f64; 5] = [1200.0, 0.35, 0.3, 0.3, 6.0];
@@ -152,6 +153,8 @@ fn pipeline() -> &'static Path {
                     "hertz-prony",
                     "--points",
                     "100",
+                    "--domain",
+                    domain,
                     "--store",
                     store,
                     "--export",
@@ -226,7 +229,7 @@ impl Normal {
 
 /// The data model of the 10-s build protocol: t = 0.01, …, 10 s.
 fn data_model() -> HertzProny {
-    HertzProny::new(RADIUS, RATE, RAMP, END, 1000)
+    HertzProny::new(RADIUS, RATE, RAMP, END, 1000).unwrap()
 }
 
 /// Clean force of `model` at `truth`, with t = 0 (F = 0) prepended.
@@ -264,7 +267,7 @@ fn afm_csv_with_piezo(
 
 /// [`afm_csv_with_piezo`] with the model's own ramp.
 fn afm_csv_of(model: &HertzProny, truth: &[f64; 5], seed: u64) -> String {
-    afm_csv_with_piezo(model, truth, seed, model.rate, model.ramp_time)
+    afm_csv_with_piezo(model, truth, seed, model.rate(), model.ramp_time())
 }
 
 /// [`afm_csv_of`] the 10-s build protocol.
@@ -308,8 +311,6 @@ fn study(name: &str, fit_extra: &str, calibration: &str, tail: &str) -> PathBuf 
 surrogate = "{w}/model.json"
 meta = "{w}/export/meta.json"
 inputs = "physical"
-domain = "table-5.3"
-epsilon = 0.01
 data = "afm"
 starts = 8
 seed = 1
@@ -438,7 +439,7 @@ fn misfit_of(model: &dyn ForwardModel, x: &[f64; 5], csv: &str) -> f64 {
 /// Eq. 5.3 of the forward model at TRUTH (ramp at `rate` for 1 s) against
 /// the force in an AFM CSV, on the surrogate grid (0.1 … 10 s).
 fn misfit_at_truth(csv: &Path, rate: f64) -> f64 {
-    let model = HertzProny::new(RADIUS, rate, RAMP, END, 100);
+    let model = HertzProny::new(RADIUS, rate, RAMP, END, 100).unwrap();
     misfit_of(&model, &TRUTH, &std::fs::read_to_string(csv).unwrap())
 }
 
@@ -450,7 +451,7 @@ fn fit_recovers_the_truth_and_reports_units_modulus_misfits_flags_and_a_plotters
     let study = study("e2e.toml", "", SENSITIVITY, PROTOCOL);
     let doc = fit_json(dir, &study, &["cell1.csv"], &["--plot", "plots"]);
 
-    // Parameters with units, in the Table 5.3 order.
+    // Parameters with units, in the one order G0, g1, g2, tau1, tau2.
     let units: Vec<(String, String)> = doc["parameters"]
         .as_array()
         .unwrap()
@@ -465,8 +466,8 @@ fn fit_recovers_the_truth_and_reports_units_modulus_misfits_flags_and_a_plotters
     let want = [
         ("G0", "Pa"),
         ("g1", ""),
-        ("tau1", "s"),
         ("g2", ""),
+        ("tau1", "s"),
         ("tau2", "s"),
     ];
     assert_eq!(units.len(), 5);
@@ -678,6 +679,50 @@ fn set_field(l: &str, k: usize, v: &str) -> String {
     f.join(",")
 }
 
+/// The domain is read from meta.json: the old `[fit] domain`/`epsilon` keys
+/// are refused naming the key and what to do, and a meta.json without a
+/// domain names the command that re-exports it.
+#[test]
+fn the_domain_comes_from_meta_json_and_old_keys_or_files_say_what_to_do() {
+    let dir = pipeline();
+    std::fs::write(dir.join("cell-dom.csv"), afm_csv(&TRUTH, 6)).unwrap();
+    for extra in ["domain = \"table-5.3\"\n", "epsilon = 0.01\n"] {
+        let study = study("e2e-old-domain.toml", extra, SENSITIVITY, PROTOCOL);
+        let out = nlvid(&["fit", study.to_str().unwrap(), "cell-dom.csv"], dir);
+        let err = text(&out.stderr);
+        assert!(!out.status.success(), "{extra}: fit succeeded");
+        let key = extra.split(' ').next().unwrap();
+        assert!(
+            err.contains("e2e-old-domain.toml:")
+                && err.contains(&format!("fit.{key}"))
+                && err.contains("read from the meta-model's meta.json"),
+            "{err}"
+        );
+    }
+    // A meta.json as written before it stored the domain.
+    let mut meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("work/export/meta.json")).unwrap())
+            .unwrap();
+    meta.as_object_mut().unwrap().remove("domain");
+    let old = dir.join("work/old-meta.json");
+    std::fs::write(&old, meta.to_string()).unwrap();
+    let study = study("e2e-old-meta.toml", "", SENSITIVITY, PROTOCOL);
+    let text_ = std::fs::read_to_string(&study).unwrap().replace(
+        &format!("{}", dir.join("work/export/meta.json").display()),
+        &format!("{}", old.display()),
+    );
+    std::fs::write(&study, text_).unwrap();
+    let out = nlvid(&["fit", study.to_str().unwrap(), "cell-dom.csv"], dir);
+    let err = text(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        err.contains("old-meta.json")
+            && err.contains("`domain` missing")
+            && err.contains("--export"),
+        "{err}"
+    );
+}
+
 #[test]
 fn malformed_data_fails_naming_the_file_row_and_column() {
     let good = afm_csv(&TRUTH, 6);
@@ -726,7 +771,7 @@ fn malformed_data_fails_naming_the_file_row_and_column() {
         &furlong,
         &study,
         &[
-            "bad-unit.csv: row 1, column 'deflection': unit 'furlong' is not a unit of [Voltage, Length, Force]",
+            "bad-unit.csv: row 1, column 'deflection': unit 'furlong' is not a unit of a voltage (V) or length (m) or force (N)",
         ],
     );
 
@@ -907,7 +952,7 @@ fn the_real_model_can_be_the_forward_model_of_a_study_and_its_misfit_is_eq_5_3_o
     let doc = fit_json(dir, &s, &["cell-fw.csv"], &["--starts", "4"]);
     // Independently: run HertzProny at the fitted parameters, take the data
     // on the same grid, eq. 5.3 by hand.
-    let model = HertzProny::new(RADIUS, RATE, RAMP, END, 100);
+    let model = HertzProny::new(RADIUS, RATE, RAMP, END, 100).unwrap();
     let want = misfit_of(&model, &fitted(&doc), &csv);
     let got = doc["experiments"][0]["misfit_real"].as_f64().unwrap();
     assert!((got - want).abs() <= 1e-9 * want, "{got} vs {want}");
@@ -930,7 +975,7 @@ fn two_ramp_hold_depths_are_fitted_together_with_one_parameter_set() {
     );
 
     std::fs::write(dir.join("depth-1.csv"), afm_csv(&TRUTH, 21)).unwrap();
-    let deep = HertzProny::new(RADIUS, s * RATE, RAMP, END, 1000);
+    let deep = HertzProny::new(RADIUS, s * RATE, RAMP, END, 1000).unwrap();
     std::fs::write(dir.join("depth-1.5.csv"), afm_csv_of(&deep, &TRUTH, 22)).unwrap();
 
     let depths = multi_study(
@@ -1177,7 +1222,7 @@ fn ten_cases(
 fn ten_seeded_cases_recover_g0_sum_and_g52_through_the_cli() {
     let dir = pipeline();
     let study = study("e2e-ten.toml", "", SENSITIVITY, PROTOCOL);
-    let real = HertzProny::new(RADIUS, RATE, RAMP, END, 100);
+    let real = HertzProny::new(RADIUS, RATE, RAMP, END, 100).unwrap();
     let r = ten_cases(dir, &study, &real, |case, truth| afm_csv(truth, 100 + case));
     let ok_issue = r.iter().filter(|c| c.pass()).count();
     let ok_g10 = r
@@ -1221,7 +1266,6 @@ first_hold_step = "1 ms"
             r#"[fit]
 surrogate = "model.json"
 meta = "export/train/meta.json"
-domain = "table-5.3"
 data = "afm"
 modulus_times = ["10 s", "52 s"]
 {AFM_COLUMNS}{SENSITIVITY}
@@ -1239,7 +1283,7 @@ study = "build.toml"
     .unwrap();
     let mut st = nlvid_study::Study::load(dir.join("build.toml")).unwrap();
     let real = nlvid_forward::from_study(&mut st).unwrap();
-    let data = HertzProny::new(2.5e-6, 10e-6, 0.2, 52.0, 52_000);
+    let data = HertzProny::new(2.5e-6, 10e-6, 0.2, 52.0, 52_000).unwrap();
     let r = ten_cases(&dir, &dir.join("fit.toml"), real.as_ref(), |case, truth| {
         afm_csv_of(&data, truth, 100 + case)
     });

@@ -72,6 +72,9 @@ fn json_output_carries_the_same_curve_and_provenance() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["model"], "neo-hookean-prony");
     assert_eq!(v["mode"], "simple-shear");
+    // The study gives the shear modulus G0 = 1 kPa; the neo-Hookean C1 of
+    // eq. 4.1 is G0/2 (docs/theory/model.md).
+    assert_eq!(v["parameters"]["G0_Pa"], 1000.0);
     assert_eq!(v["parameters"]["C1_Pa"], 500.0);
     assert_eq!(v["provenance"]["study_sha256"].as_str().unwrap().len(), 64);
     let csv = std::fs::read_to_string(&out_csv).unwrap();

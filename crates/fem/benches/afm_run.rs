@@ -11,16 +11,12 @@
 #![allow(clippy::needless_range_loop, clippy::unwrap_used)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use nlvid_fem::afm::{self, AfmParams, AfmSetup, Cantilever, Engagement};
+use nlvid_fem::afm::{self, AfmSetup, Cantilever, Engagement};
+use nlvid_model::{Prony, Relaxation, names};
 
 fn bench(c: &mut Criterion) {
-    let params = AfmParams {
-        g0: 1e3,
-        g1: 0.3,
-        tau1: 0.5,
-        g2: 0.3,
-        tau2: 10.0,
-    };
+    // G0 = 1 kPa (shear modulus), g1 = g2 = 0.3, tau1 = 0.5 s, tau2 = 10 s.
+    let params = Relaxation::from_named(&names::PRONY2, &[1e3, 0.3, 0.3, 0.5, 10.0]).unwrap();
     faer::set_global_parallelism(faer::Par::Seq);
     let setup = AfmSetup::thesis_setup1();
     let mut two = setup.clone();
@@ -45,7 +41,7 @@ fn bench(c: &mut Criterion) {
     dome.bulk_ratio = 1000.0;
     dome.piezo = vec![(0.0, 0.0), (1.0, 2e-6)];
     dome.output_times = (0..=200).map(|i| i as f64 / 200.0).collect();
-    let elastic = AfmParams::elastic(1e3);
+    let elastic = Relaxation::new(names::G0, 1e3, Prony::elastic()).unwrap();
     group.bench_function("elastic_dome_default_mesh", |b| {
         b.iter(|| afm::run(&elastic, &dome).map(|r| r.peak_force))
     });

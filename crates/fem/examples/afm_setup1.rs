@@ -9,16 +9,12 @@
 
 #![allow(clippy::needless_range_loop, clippy::unwrap_used)]
 
-use nlvid_fem::afm::{self, AfmParams, AfmSetup};
+use nlvid_fem::afm::{self, AfmSetup};
+use nlvid_model::{Relaxation, names};
 
-fn params() -> AfmParams {
-    AfmParams {
-        g0: 1e3,
-        g1: 0.3,
-        tau1: 0.5,
-        g2: 0.3,
-        tau2: 10.0,
-    }
+fn params() -> Relaxation {
+    // G0 = 1 kPa (shear modulus), g1 = g2 = 0.3, tau1 = 0.5 s, tau2 = 10 s.
+    Relaxation::from_named(&names::PRONY2, &[1e3, 0.3, 0.3, 0.5, 10.0]).unwrap()
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -12,16 +12,11 @@
 //! compared run's settings.
 
 #![allow(clippy::unwrap_used)]
-use nlvid_fem::afm::{self, AfmParams, AfmSetup};
+use nlvid_fem::afm::{self, AfmSetup};
+use nlvid_model::{Relaxation, names};
 fn main() {
     faer::set_global_parallelism(faer::Par::Seq);
-    let p = AfmParams {
-        g0: 1e3,
-        g1: 0.3,
-        tau1: 0.5,
-        g2: 0.3,
-        tau2: 10.0,
-    };
+    let p = Relaxation::from_named(&names::PRONY2, &[1e3, 0.3, 0.3, 0.5, 10.0]).unwrap();
     let mut reference = AfmSetup::thesis_setup1();
     reference.settings.output_tolerance = 2e-6;
     reference.ramp_step_fraction = 0.02;

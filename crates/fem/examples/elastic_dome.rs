@@ -11,7 +11,8 @@
 
 #![allow(clippy::unwrap_used)]
 
-use nlvid_fem::afm::{self, AfmParams, AfmSetup, Cantilever, Engagement};
+use nlvid_fem::afm::{self, AfmSetup, Cantilever, Engagement};
+use nlvid_model::{Prony, Relaxation, names};
 
 /// The benchmark setup.
 fn setup() -> AfmSetup {
@@ -39,17 +40,17 @@ fn main() {
     if let Ok(v) = std::env::var("NLVID_FEM_RAMP_STEPS") {
         setup.ramp_step_fraction = 1.0 / v.parse::<f64>().unwrap();
     }
-    if let Ok(v) = std::env::var("NLVID_FEM_REFINE") {
-        if let afm::MeshLayout::ContactGraded(spec) = setup.mesh_layout {
-            setup.mesh_layout = afm::MeshLayout::ContactGraded(spec.refined(v.parse().unwrap()));
-        }
+    if let Ok(v) = std::env::var("NLVID_FEM_REFINE")
+        && let afm::MeshLayout::ContactGraded(spec) = setup.mesh_layout
+    {
+        setup.mesh_layout = afm::MeshLayout::ContactGraded(spec.refined(v.parse().unwrap()));
     }
     let repeats = if std::env::var_os("NLVID_FEM_DUMP").is_some() {
         1
     } else {
         5
     };
-    let params = AfmParams::elastic(1e3);
+    let params = Relaxation::new(names::G0, 1e3, Prony::elastic()).unwrap();
     let mut cpu = Vec::new();
     let mut last = None;
     for _ in 0..repeats {

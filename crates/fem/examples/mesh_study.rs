@@ -17,10 +17,12 @@
 
 #![allow(clippy::unwrap_used)]
 
-use nlvid_fem::afm::{self, AfmParams, AfmSetup, Cantilever, Engagement, MeshLayout};
+use nlvid_fem::afm::{self, AfmSetup, Cantilever, Engagement, MeshLayout};
+use nlvid_model::{Prony, Relaxation, names};
 
 fn forces(setup: &AfmSetup) -> (Vec<f64>, Vec<f64>, usize, f64) {
-    let run = afm::run(&AfmParams::elastic(1e3), setup).unwrap();
+    let elastic = Relaxation::new(names::G0, 1e3, Prony::elastic()).unwrap();
+    let run = afm::run(&elastic, setup).unwrap();
     (run.indentation, run.force, run.elements, run.cpu_seconds)
 }
 

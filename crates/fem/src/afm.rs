@@ -16,44 +16,7 @@ use crate::model::{
 use crate::reference::PronyNeoHookean;
 use crate::{ContactMesh, FemError, Mesh, Model, Result, dense};
 use nlvid_material::Material3;
-
-/// The five NLV parameters of eq. 5.1: G(s) = G₀ [g_∞ + Σ g_k e^{−s/τ_k}].
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct AfmParams {
-    /// Instantaneous shear modulus G₀ = C₁ (Pa).
-    pub g0: f64,
-    /// First Prony weight.
-    pub g1: f64,
-    /// First relaxation time (s).
-    pub tau1: f64,
-    /// Second Prony weight.
-    pub g2: f64,
-    /// Second relaxation time (s).
-    pub tau2: f64,
-}
-
-impl AfmParams {
-    /// The elastic cell (no relaxation): neo-Hookean with shear modulus
-    /// `g0`, g1 = g2 = 0.
-    pub fn elastic(g0: f64) -> Self {
-        Self {
-            g0,
-            g1: 0.0,
-            tau1: 1.0,
-            g2: 0.0,
-            tau2: 1.0,
-        }
-    }
-
-    /// The Prony terms (g_k, τ_k) of eq. 5.1 with g_k ≠ 0: a zero weight
-    /// removes its term, whatever its τ_k.
-    pub fn prony_terms(&self) -> Vec<(f64, f64)> {
-        [(self.g1, self.tau1), (self.g2, self.tau2)]
-            .into_iter()
-            .filter(|&(g, _)| g != 0.0)
-            .collect()
-    }
-}
+use nlvid_model::Relaxation;
 
 /// How the probe is held.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -328,44 +291,41 @@ pub struct AfmRun {
 }
 
 /// The cell material of eq. 5.1 from the `material` crate (ABAQUS-form
-/// finite-strain Prony viscoelasticity, §4.3, neo-Hookean elastic part).
+/// finite-strain Prony viscoelasticity, §4.3, neo-Hookean elastic part):
+/// `shear` is the shear relaxation modulus G(t) = G0 [g∞ + Σ g_k e^{−t/τ_k}]
+/// (parameters `G0, g1, g2, tau1, tau2`, `nlvid_model::names::PRONY2`), so
+/// the neo-Hookean constant is C1 = G0/2 (`PronyViscoelastic::cell`,
+/// docs/theory/model.md); the bulk modulus is `bulk_ratio × G0`.
 ///
-/// `g0` is read as eq. 5.1 defines it, the instantaneous *shear modulus*
-/// G(0); the neo-Hookean constant is then C1 = G0/2 (W = C1(Ī1 − 3)). The
-/// thesis also calls G0 "the neo-Hookean parameter C1" (§5.4.1): reading it
-/// that way doubles the stiffness; see docs/theory/fem.md.
-///
-/// A Prony term with g_k = 0 is left out (its τ_k is not used), so
-/// g1 = g2 = 0 is the elastic neo-Hookean cell ([`AfmParams::elastic`]).
+/// An elastic cell is a relaxation modulus without Prony terms
+/// (`nlvid_model::Prony::elastic()`).
 ///
 /// # Errors
 /// [`FemError::Material`] naming the offending parameter.
 pub fn cell_material(
-    params: &AfmParams,
+    shear: &Relaxation,
     bulk_ratio: f64,
 ) -> Result<nlvid_material::PronyViscoelastic> {
-    let material = |source| FemError::Material {
-        element: 0,
-        point: 0,
-        source,
-    };
-    Ok(nlvid_material::PronyViscoelastic::new(
-        nlvid_material::MooneyRivlin::neo_hookean(0.5 * params.g0, bulk_ratio * params.g0)
-            .map_err(material)?,
-        nlvid_material::Prony::new("G", &params.prony_terms()).map_err(material)?,
-    ))
+    nlvid_material::PronyViscoelastic::cell(shear, bulk_ratio * shear.g0()).map_err(|source| {
+        FemError::Material {
+            element: 0,
+            point: 0,
+            source,
+        }
+    })
 }
 
-/// One run of the model for the eq. 5.1 parameters with the `material`
-/// crate's cell model ([`cell_material`]) and bulk modulus
-/// `setup.bulk_ratio × G₀`. This is the forward model of the surrogate stage.
+/// One run of the model for the shear relaxation modulus `shear` of eq. 5.1
+/// with the `material` crate's cell model ([`cell_material`]) and bulk
+/// modulus `setup.bulk_ratio × G₀`. This is the forward model of the
+/// surrogate stage.
 ///
 /// # Errors
 /// [`FemError::Setting`] / [`FemError::Material`] for bad parameters,
 /// [`FemError::NonConvergence`] when a step cannot be completed (time,
 /// step, residual in the error).
-pub fn run(params: &AfmParams, setup: &AfmSetup) -> Result<AfmRun> {
-    run_with(cell_material(params, setup.bulk_ratio)?, setup)
+pub fn run(shear: &Relaxation, setup: &AfmSetup) -> Result<AfmRun> {
+    run_with(cell_material(shear, setup.bulk_ratio)?, setup)
 }
 
 /// [`run`] with the fem crate's own Simo-form Prony neo-Hookean
@@ -374,17 +334,15 @@ pub fn run(params: &AfmParams, setup: &AfmSetup) -> Result<AfmRun> {
 ///
 /// # Errors
 /// As [`run`].
-pub fn run_reference(params: &AfmParams, setup: &AfmSetup) -> Result<AfmRun> {
-    let material = PronyNeoHookean::new(
-        params.g0,
-        setup.bulk_ratio * params.g0,
-        params.prony_terms(),
-    )
-    .map_err(|source| FemError::Material {
-        element: 0,
-        point: 0,
-        source,
-    })?;
+pub fn run_reference(shear: &Relaxation, setup: &AfmSetup) -> Result<AfmRun> {
+    let material =
+        PronyNeoHookean::new(shear.clone(), setup.bulk_ratio * shear.g0()).map_err(|source| {
+            FemError::Material {
+                element: 0,
+                point: 0,
+                source,
+            }
+        })?;
     run_with(material, setup)
 }
 

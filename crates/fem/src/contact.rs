@@ -1,6 +1,7 @@
 //! Frictionless penalty contact of a surface polyline with a rigid sphere
-//! (the AFM probe, moving along the axis with the unknown w) or a rigid
-//! horizontal plane, **integrated along the surface segments**.
+//! (the AFM probe, moving along the axis with the unknown w),
+//! **integrated along the surface segments** (axisymmetric models; the
+//! rigid planes of 2D and 3D models keep nodal penalties, `model.rs`).
 //!
 //! Potential: Π_c = ∫_Γ ½ κ ⟨−g⟩² dA₀ with dA₀ = 2π r dS the reference
 //! area, κ = `penalty` · G / L the pressure per unit penetration (G the
@@ -31,7 +32,8 @@ const GAUSS_3: [(f64, f64); 3] = [
     (0.887_298_334_620_741_7, 5.0 / 18.0),
 ];
 
-/// The rigid obstacle at one instant.
+/// The rigid obstacle at one instant (an enum so that other analytic
+/// surfaces can join).
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum Obstacle {
     /// Sphere on the axis: centre height (m, current), radius (m); its
@@ -41,11 +43,6 @@ pub(crate) enum Obstacle {
         centre_z: f64,
         /// Radius.
         radius: f64,
-    },
-    /// Plane z = `z`, facing down (the body is below).
-    Plane {
-        /// Height.
-        z: f64,
     },
 }
 
@@ -69,7 +66,7 @@ struct NodeGap {
     g: f64,
     /// Outward normal of the obstacle at the node's closest point.
     n: [f64; 2],
-    /// 1/|x − c| (sphere) or 0 (plane): curvature of the gap.
+    /// 1/|x − c|: curvature of the gap.
     inv_dist: f64,
 }
 
@@ -93,11 +90,6 @@ fn node_gap(x: [f64; 2], obstacle: Obstacle) -> NodeGap {
                 }
             }
         }
-        Obstacle::Plane { z } => NodeGap {
-            g: z - x[1],
-            n: [0.0, -1.0],
-            inv_dist: 0.0,
-        },
     }
 }
 
@@ -144,7 +136,7 @@ pub(crate) fn blocks(surface: &[usize], dof_eq: &[usize], w_eq: Option<usize>) -
 
 impl ContactSurface {
     /// The segments of the ordered node list `surface`; `w_eq` the probe's
-    /// equation (None for a plane); `modulus` the shear modulus at F = I.
+    /// equation; `modulus` the shear modulus at F = I.
     pub(crate) fn new(
         nodes: &[[f64; 2]],
         surface: &[usize],
@@ -211,7 +203,7 @@ impl ContactSurface {
 
     /// Adds the contact residual (and tangent) at displacements `u`
     /// (nodal (u_r, u_z) pairs, then w at `w_dof`). `w_coupled`: the w
-    /// row and column take part (false for a plane or a prescribed w).
+    /// row and column take part (false for a prescribed w).
     ///
     /// The gap is interpolated linearly between the nodal gaps,
     /// g(ξ) = N_a g_a + N_b g_b, and ∫ ½ κ ⟨−g⟩² 2π r L dξ is integrated

@@ -122,7 +122,10 @@ mod tests {
             free_end: f64::NAN,
             contact_force: f,
             plane_force: 0.0,
+            base_force: 0.0,
             penetration: 0.0,
+            cavity_pressure: f64::NAN,
+            cavity_volume: f64::NAN,
             iterations: 0,
             stage,
         }

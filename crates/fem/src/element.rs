@@ -334,6 +334,16 @@ mod tests {
         }
     }
 
+    /// G(t) of the AFM cell model in the tests below: G0 = 1 (C1 = 0.5),
+    /// g1 = g2 = 0.3, τ1 = 0.5, τ2 = 10.
+    fn afm_cell_shear() -> nlvid_model::Relaxation {
+        nlvid_model::Relaxation::from_named(
+            &nlvid_model::names::PRONY2,
+            &[1.0, 0.3, 0.3, 0.5, 10.0],
+        )
+        .unwrap()
+    }
+
     #[test]
     fn regrouped_tangent_equals_direct_form() {
         let neo = crate::reference::NeoHookean {
@@ -344,8 +354,7 @@ mod tests {
         compare_with_direct_form(&neo, false);
         // A history-dependent material of the `material` crate (the AFM cell
         // model), evaluated with a time step so the viscous terms enter.
-        let cell =
-            nlvid_material::PronyViscoelastic::cell(0.5, 0.3, 0.5, 0.3, 10.0, 1000.0).unwrap();
+        let cell = nlvid_material::PronyViscoelastic::cell(&afm_cell_shear(), 1000.0).unwrap();
         compare_with_direct_form(&cell, true);
     }
 
@@ -356,8 +365,7 @@ mod tests {
         // round-off (it is the Hessian of the incremental potential), so the
         // lower triangle carries all of it; `Lower` computes exactly that
         // triangle and leaves the rest zero.
-        let cell =
-            nlvid_material::PronyViscoelastic::cell(0.5, 0.3, 0.5, 0.3, 10.0, 100.0).unwrap();
+        let cell = nlvid_material::PronyViscoelastic::cell(&afm_cell_shear(), 100.0).unwrap();
         let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
         let geo = element_geometry(&x);
         let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
@@ -436,8 +444,9 @@ mod tests {
 }
 
 /// Residual and tangent of one element.
+#[doc(hidden)]
 #[derive(Debug, Clone)]
-pub(crate) struct ElementOutput {
+pub struct ElementOutput {
     /// Internal force ∂W/∂u (N).
     pub r: [f64; 8],
     /// Tangent ∂r/∂u (N/m).
@@ -445,7 +454,8 @@ pub(crate) struct ElementOutput {
 }
 
 impl ElementOutput {
-    pub(crate) fn zero() -> Self {
+    /// All zero.
+    pub fn zero() -> Self {
         Self {
             r: [0.0; 8],
             k: [[0.0; 8]; 8],
@@ -454,8 +464,9 @@ impl ElementOutput {
 }
 
 /// Which part of the element tangent to compute.
+#[doc(hidden)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum TangentPart {
+pub enum TangentPart {
     /// Residual only.
     None,
     /// The full 8×8 matrix.
@@ -467,7 +478,8 @@ pub(crate) enum TangentPart {
 }
 
 /// Where an element evaluation failed: Gauss point and the material error.
-pub(crate) type PointFailure = (usize, nlvid_material::MaterialError);
+#[doc(hidden)]
+pub type PointFailure = (usize, nlvid_material::MaterialError);
 
 /// Internal force and tangent of one axisymmetric element (module docs),
 /// F-bar if `fbar`, plain displacement element otherwise (for the locking
@@ -727,6 +739,54 @@ fn add_bt_m_b_structured(
             ro[k] += c[0] * mb[2][k] + c[1] * mb[3][k];
         }
     }
+}
+
+/// The stored energy `Σ_q w_q ψ(F̄_q)` of one element for a strain-energy
+/// density `psi` (J, full revolution): the potential whose gradient
+/// [`fbar_element`] returns.
+pub(crate) fn element_energy(
+    geometry: &[PointGeometry; 4],
+    u: &[f64],
+    fbar: bool,
+    psi: &dyn Fn(&nlvid_material::Mat3) -> f64,
+) -> f64 {
+    let Ok(u) = <&[f64; 8]>::try_from(u) else {
+        return f64::NAN;
+    };
+    let f: Vec<[f64; 5]> = geometry
+        .iter()
+        .map(|g| deformation_structured(g, u))
+        .collect();
+    let j: Vec<f64> = f.iter().map(|f| jacobian_derivatives(f).0).collect();
+    let vol: f64 = geometry.iter().map(|g| g.weight).sum();
+    let jbar = geometry
+        .iter()
+        .zip(&j)
+        .map(|(g, j)| g.weight * j)
+        .sum::<f64>()
+        / vol;
+    let mut e = 0.0;
+    for q in 0..4 {
+        let a = if fbar {
+            nlvid_material::cube_root(jbar / j[q])
+        } else {
+            1.0
+        };
+        let fq = f[q];
+        let m = nlvid_material::Mat3::new(
+            a * fq[0],
+            a * fq[1],
+            0.0,
+            a * fq[2],
+            a * fq[3],
+            0.0,
+            0.0,
+            0.0,
+            a * fq[4],
+        );
+        e += geometry[q].weight * psi(&m);
+    }
+    e
 }
 
 #[cfg(test)]

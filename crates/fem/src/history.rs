@@ -9,27 +9,29 @@ use nlvid_material::Material3;
 pub struct History<S> {
     committed: Vec<S>,
     trial: Vec<S>,
+    per_element: usize,
 }
 
 impl<S: Clone> History<S> {
-    /// `points` undeformed points of `material`.
-    pub fn new<M: Material3<State = S>>(material: &M, points: usize) -> Self {
+    /// Undeformed points of `material`: `per_element` for each of
+    /// `elements` elements.
+    pub fn new<M: Material3<State = S>>(material: &M, elements: usize, per_element: usize) -> Self {
         let s = material.initial_state();
+        let points = elements * per_element;
         Self {
             committed: vec![s.clone(); points],
             trial: vec![s; points],
+            per_element,
         }
     }
 
-    /// Converged and trial states of element `e` (four points).
+    /// Converged and trial states of element `e`.
     pub fn element(&mut self, e: usize) -> (&[S], &mut [S]) {
-        (
-            &self.committed[4 * e..4 * e + 4],
-            &mut self.trial[4 * e..4 * e + 4],
-        )
+        let (a, b) = (self.per_element * e, self.per_element * (e + 1));
+        (&self.committed[a..b], &mut self.trial[a..b])
     }
 
-    /// All converged and all trial states (four per element, in order).
+    /// All converged and all trial states (element by element, in order).
     pub(crate) fn split(&mut self) -> (&[S], &mut [S]) {
         (&self.committed, &mut self.trial)
     }

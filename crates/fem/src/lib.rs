@@ -1,7 +1,11 @@
-//! Finite-strain implicit finite elements for the cell-indentation model of
-//! thesis §5.3: axisymmetric F-bar solids, frictionless penalty contact with
-//! a rigid sphere and a rigid plane, a linear spring (the AFM cantilever)
-//! between the sphere and a prescribed point, Newton with line search and
+//! Finite-strain implicit finite elements: the cell-indentation model of
+//! thesis §5.3 (axisymmetric F-bar solids, frictionless penalty contact with
+//! a rigid sphere and a rigid plane, a linear spring — the AFM cantilever —
+//! between the sphere and a prescribed point) and, on the same engine, 3D
+//! solids for the capsules of ch. IV: 8-node F-bar hexahedra ([`hex`],
+//! [`Mesh3`], `Model<M, Solid>`), symmetry rollers, rigid planes above and
+//! below that allow separation, and an enclosed fluid cavity whose pressure
+//! is an unknown ([`cavity`], [`Cavity`]). Newton with line search and
 //! adaptive time stepping with cut-backs (thesis §2.4, §4.3, §5.2.2, §5.3).
 //!
 //! Cost: one Newton iteration is one assembly (4 axisymmetric material
@@ -38,22 +42,29 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod afm;
+pub mod cavity;
 mod contact;
 pub mod dense;
 pub mod element;
 mod error;
+pub mod hex;
 mod history;
+mod kind;
 pub mod mesh;
+pub mod mesh3;
 mod mesh_graded;
 mod model;
 pub mod reference;
+pub mod shell;
 mod sparse;
 
 pub use error::{FemError, NonConvergence, Result};
 pub use history::History;
+pub use kind::{Axisymmetric, ElementKind, Solid, Topology};
 pub use mesh::Mesh;
 pub use mesh_graded::ContactMesh;
+pub use mesh3::Mesh3;
 pub use model::{
-    Component, Control, Counters, Model, ProbeDrive, RigidPlane, Settings, SphereProbe, Stage,
-    StepRecord, Support,
+    Cavity, Component, Control, Counters, Fluid, Model, Parts, PlaneSide, ProbeDrive, RigidPlane,
+    Settings, SphereProbe, Stage, StepRecord, Support,
 };

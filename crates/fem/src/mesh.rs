@@ -233,6 +233,67 @@ impl Mesh {
     }
 }
 
+impl Mesh {
+    /// A quarter of a spherical shell in the (r, z) half-plane, r, z ≥ 0
+    /// (the axisymmetric counterpart of [`crate::shell`]'s sphere): outer
+    /// radius `radius`, uniform `wall`, `layers` elements through the wall
+    /// and `n_arc` along the meridian from the pole (θ = 0) to the equator
+    /// (θ = π/2), equally spaced in θ — the spacing of the 3D cube-sphere
+    /// mesh's meridians in the coordinate planes when `n_arc` = 2m.
+    ///
+    /// Sets: `axis` (r = 0), `equator` (z = 0), and the ordered surfaces
+    /// `outer` and `inner` (from the pole to the equator).
+    ///
+    /// # Errors
+    /// [`FemError::Setting`] for non-positive sizes, a wall not thinner than
+    /// the radius, or zero counts.
+    pub fn spherical_shell(radius: f64, wall: f64, layers: usize, n_arc: usize) -> Result<Self> {
+        positive("shell radius", radius)?;
+        positive("shell wall", wall)?;
+        if !(wall < radius) {
+            return Err(FemError::Setting {
+                name: "shell wall",
+                value: wall,
+                reason: "must be thinner than the radius",
+            });
+        }
+        if layers == 0 || n_arc == 0 {
+            return Err(FemError::Setting {
+                name: "elements per side",
+                value: 0.0,
+                reason: "must be at least 1",
+            });
+        }
+        let id = |i: usize, j: usize| j * (n_arc + 1) + i;
+        let mut nodes = Vec::with_capacity((n_arc + 1) * (layers + 1));
+        for j in 0..=layers {
+            let rho = radius - wall + wall * j as f64 / layers as f64;
+            for i in 0..=n_arc {
+                let theta = 0.5 * std::f64::consts::PI * i as f64 / n_arc as f64;
+                // Exact zeros on the axis and the equator.
+                let (s, c) = match i {
+                    0 => (0.0, 1.0),
+                    _ if i == n_arc => (1.0, 0.0),
+                    _ => theta.sin_cos(),
+                };
+                nodes.push([rho * s, rho * c]);
+            }
+        }
+        let mut elements = Vec::with_capacity(n_arc * layers);
+        for j in 0..layers {
+            for i in 0..n_arc {
+                elements.push([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let mut mesh = Self::new(nodes, elements)?;
+        mesh.set_nodes("axis", (0..=layers).map(|j| id(0, j)).collect());
+        mesh.set_nodes("equator", (0..=layers).map(|j| id(n_arc, j)).collect());
+        mesh.set_nodes("outer", (0..=n_arc).map(|i| id(i, layers)).collect());
+        mesh.set_nodes("inner", (0..=n_arc).map(|i| id(i, 0)).collect());
+        Ok(mesh)
+    }
+}
+
 fn positive(name: &'static str, value: f64) -> Result<()> {
     if value > 0.0 && value.is_finite() {
         Ok(())

@@ -1,23 +1,35 @@
-//! The finite-element model: mesh + material + supports + rigid bodies,
-//! global assembly, Newton with line search and adaptive time stepping.
+//! The finite-element model: mesh + material + supports + rigid bodies +
+//! fluid cavity, global assembly, Newton with line search and adaptive time
+//! stepping — for axisymmetric ([`Axisymmetric`]) and 3D ([`Solid`])
+//! meshes alike (`Model<M>` is the axisymmetric model, `Model<M, Solid>`
+//! the 3D one).
 //!
-//! Unknowns are the nodal displacements (u_r, u_z) and one vertical
-//! displacement `w` of the rigid spherical probe. The probe is driven in one
-//! of three ways ([`ProbeDrive`]): its displacement prescribed (rigid
-//! cantilever), a force applied to it (force-controlled engagement), or a
-//! linear spring between it and a prescribed point (the cantilever whose
-//! free end follows the piezo). The total potential is
+//! Unknowns are the nodal displacements ((u_r, u_z) or (u_x, u_y, u_z)),
+//! one vertical displacement `w` of the rigid spherical probe
+//! (axisymmetric only), and, with a fluid cavity, its pressure p (stored as
+//! `s = p L / G`, L = V₀^{1/3}, so that its equation is a force in N). The
+//! probe is driven in one of three ways ([`ProbeDrive`]): its displacement
+//! prescribed (rigid cantilever), a force applied to it (force-controlled
+//! engagement), or a linear spring between it and a prescribed point (the
+//! cantilever whose free end follows the piezo). The total potential is
 //!
 //! ```text
-//! Π = Σ_e ∫ Ψ(F̄) dV₀ + Σ_a ½ ε_a ⟨−g_a⟩² + ½ k (w − z_free)² + F w ,
+//! Π = Σ_e ∫ Ψ(F̄) dV₀ + Σ_a ½ ε_a ⟨−g_a⟩² + ½ k (w − z_free)² + F w
+//!     − p (V(u) − V₀ − ΔV_in) − p² V₀ / (2 K_f) ,
 //! ```
 //!
-//! g_a the gap between surface node a and the sphere (or plane), so the
-//! tangent is the exact Hessian and symmetric for hyperelastic materials.
+//! g_a the gap between surface node a and the sphere (or a plane), V the
+//! enclosed cavity volume ([`crate::cavity`]), ΔV_in the fluid injected
+//! ([`Control::fluid_injected`]), K_f the fluid's bulk modulus (∞ for an
+//! incompressible fluid: then V = V₀ + ΔV_in exactly). The tangent is the
+//! exact Hessian and symmetric for hyperelastic materials (indefinite with
+//! a cavity: p is a Lagrange multiplier).
 
+use crate::cavity::{quad_area_normals, quad_volume, segment_area_normals, segment_volume};
 use crate::contact::{self, ContactSurface, Obstacle};
-use crate::element::{ElementOutput, PointGeometry, TangentPart, element_geometry, fbar_element};
+use crate::element::TangentPart;
 use crate::history::History;
+use crate::kind::{Axisymmetric, CavityCells, ElementKind, Solid, Topology};
 use crate::sparse::{NO_SLOT, SparseSystem};
 use crate::{FemError, NonConvergence, Result};
 use nlvid_material::{Mat3, Material3};
@@ -25,10 +37,34 @@ use nlvid_material::{Mat3, Material3};
 /// Displacement component of a support.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Component {
-    /// Radial.
+    /// Radial (axisymmetric models).
     R,
-    /// Axial.
+    /// Axial (axisymmetric) or vertical (3D).
     Z,
+    /// x (3D models).
+    X,
+    /// y (3D models).
+    Y,
+}
+
+impl Component {
+    /// The component's index among a node's `dim` dofs, if it has one.
+    fn index(self, dim: usize) -> Option<usize> {
+        match (self, dim) {
+            (Component::R, 2) | (Component::X, 3) => Some(0),
+            (Component::Y, 3) => Some(1),
+            (Component::Z, _) => Some(dim - 1),
+            _ => None,
+        }
+    }
+
+    fn checked_index(self, dim: usize) -> Result<usize> {
+        self.index(dim).ok_or(FemError::Setting {
+            name: "support component",
+            value: dim as f64,
+            reason: "R and Z apply to axisymmetric models (2 dofs per node), X, Y and Z to 3D ones",
+        })
+    }
 }
 
 /// A prescribed displacement on every node of a named set; its value at
@@ -66,12 +102,81 @@ pub struct SphereProbe {
     pub surface: String,
 }
 
-/// A rigid horizontal plane above the body (facing down), its height given
-/// by [`Control::plane_z`], in frictionless penalty contact with a surface.
+/// A rigid horizontal plane (normal along z), in frictionless penalty
+/// contact with a surface that may separate from it again.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RigidPlane {
-    /// Ordered surface node set that may touch it.
+    /// The surface that may touch it: an ordered node set (axisymmetric) or
+    /// a face set (3D).
     pub surface: String,
+    /// Where it is and which way it faces.
+    pub side: PlaneSide,
+}
+
+/// Position of a [`RigidPlane`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PlaneSide {
+    /// Above the body, facing down, at height [`Control::plane_z`] (the
+    /// moving plate).
+    Above,
+    /// Below the body, facing up, fixed at this height (m).
+    Below(f64),
+}
+
+impl RigidPlane {
+    /// The plane above `surface` driven by [`Control::plane_z`].
+    pub fn above(surface: &str) -> Self {
+        Self {
+            surface: surface.to_owned(),
+            side: PlaneSide::Above,
+        }
+    }
+
+    /// A fixed plane at height `z` below `surface`.
+    pub fn below(surface: &str, z: f64) -> Self {
+        Self {
+            surface: surface.to_owned(),
+            side: PlaneSide::Below(z),
+        }
+    }
+}
+
+/// The fluid filling a [`Cavity`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Fluid {
+    /// Volume conserved exactly (the thesis's oil, §4.3): p is a Lagrange
+    /// multiplier.
+    Incompressible,
+    /// Linear barotropic fluid p = K_f (V₀ + ΔV_in − V)/V₀.
+    Compressible {
+        /// Bulk modulus K_f (Pa).
+        bulk_modulus: f64,
+    },
+}
+
+/// A closed fluid-filled cavity bounded by a surface of the body (and by
+/// symmetry planes through the origin, which need no cells; see
+/// [`crate::cavity`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cavity {
+    /// Its boundary: an ordered (r, z) node polyline (axisymmetric) or a
+    /// face set (3D) with consistently oriented faces.
+    pub boundary: String,
+    /// The fluid.
+    pub fluid: Fluid,
+}
+
+/// Everything a model holds besides its mesh and material.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Parts {
+    /// Prescribed displacements (supports, symmetry rollers).
+    pub supports: Vec<Support>,
+    /// The rigid sphere (axisymmetric models only).
+    pub probe: Option<SphereProbe>,
+    /// Rigid planes.
+    pub planes: Vec<RigidPlane>,
+    /// A fluid cavity.
+    pub cavity: Option<Cavity>,
 }
 
 /// How the probe's vertical displacement w is driven.
@@ -100,6 +205,10 @@ pub struct Control {
     pub plane_z: f64,
     /// Scale of the prescribed support displacements.
     pub support_scale: f64,
+    /// Volume of fluid injected into the cavity since t = 0 (m³; the
+    /// cavity's own volume units: the full revolved volume for
+    /// axisymmetric models, the modelled part for cut 3D models).
+    pub fluid_injected: f64,
 }
 
 impl Default for Control {
@@ -108,6 +217,7 @@ impl Default for Control {
             probe: ProbeDrive::Displacement(0.0),
             plane_z: f64::INFINITY,
             support_scale: 1.0,
+            fluid_injected: 0.0,
         }
     }
 }
@@ -119,6 +229,12 @@ pub struct Settings {
     pub fbar: bool,
     /// Residual tolerance relative to the gross internal force.
     pub rtol: f64,
+    /// Absolute residual tolerance (N): a step also counts as converged when
+    /// the residual norm is below it. 0 (the default) disables it; set it
+    /// to ≈ rtol × the run's peak force when the load passes through zero
+    /// (contact separation), where `rtol` × the vanishing current force is
+    /// below round-off.
+    pub atol: f64,
     /// Newton iterations allowed per attempt.
     pub max_iterations: usize,
     /// Step halvings allowed in the line search.
@@ -167,6 +283,7 @@ impl Default for Settings {
         Self {
             fbar: true,
             rtol: 1e-9,
+            atol: 0.0,
             max_iterations: 14,
             line_search: 6,
             penalty: 100.0,
@@ -209,10 +326,16 @@ pub struct StepRecord {
     pub free_end: f64,
     /// Upward force of the body on the probe from contact (N).
     pub contact_force: f64,
-    /// Upward force of the body on the plane (N).
+    /// Upward force of the body on the plane(s) above it (N).
     pub plane_force: f64,
+    /// Downward force of the body on the plane(s) below it (N).
+    pub base_force: f64,
     /// Deepest penetration into the probe (m, ≥ 0).
     pub penetration: f64,
+    /// Cavity pressure p (Pa); NaN without a cavity.
+    pub cavity_pressure: f64,
+    /// Cavity volume V (m³); NaN without a cavity.
+    pub cavity_volume: f64,
     /// Newton iterations of the step.
     pub iterations: usize,
     /// Stage of the step (1, 2, … in the order run; 0: the initial state).
@@ -249,21 +372,62 @@ pub struct Counters {
     pub lu_fallbacks: usize,
 }
 
+struct ContactSet {
+    nodes: Vec<usize>,
+    eps: Vec<f64>,
+    /// Per node, 3×3 slots over (first, last displacement component, w)
+    /// (plane: only the vertical diagonal, slot 4, is used).
+    slots: Vec<[usize; 9]>,
+}
+
+/// The fluid cavity's data in the model (module docs).
+struct CavityModel {
+    cells: CavityCells,
+    /// +1 or −1: makes the reference volume positive.
+    sign: f64,
+    /// Reference volume V₀ (m³).
+    v0: f64,
+    /// p = k s (Pa per m).
+    k: f64,
+    /// 1/K_f (0: incompressible).
+    compliance: f64,
+    /// Dof of s.
+    dof: usize,
+    /// Per cell, its local tangent slots (row-major, local dof count²).
+    cell_slots: Vec<usize>,
+    /// Per free boundary dof d: (d, slot of (d, s), slot of (s, d)).
+    coupling: Vec<(usize, usize, usize)>,
+    /// Dofs the pressure acts on, and whether the force is p × the area
+    /// normal (a supported dof normal to a symmetry plane) rather than
+    /// −p ∂V/∂u (all others), so that reactions are physical.
+    loaded: Vec<(usize, bool)>,
+    /// Scratch: area-weighted normals over all dofs.
+    normals: Vec<f64>,
+    /// Slot of (s, s).
+    diagonal: usize,
+    /// Scratch: ∂V/∂u over all dofs.
+    dvdu: Vec<f64>,
+}
+
 #[derive(Debug, Default, Clone, Copy)]
 struct Assembly {
     scale: f64,
     contact_force: f64,
     plane_force: f64,
+    base_force: f64,
     penetration: f64,
+    pressure: f64,
+    volume: f64,
     active: usize,
 }
 
-/// Axisymmetric finite-strain model (see module docs).
-pub struct Model<M: Material3> {
-    mesh: crate::Mesh,
+/// Finite-strain model of an axisymmetric (`K` = [`Axisymmetric`], the
+/// default) or 3D (`K` = [`Solid`]) body (see module docs).
+pub struct Model<M: Material3, K: ElementKind = Axisymmetric> {
+    mesh: K::Mesh,
     material: M,
     settings: Settings,
-    geometry: Vec<[PointGeometry; 4]>,
+    geometry: Vec<K::Geometry>,
     history: History<M::State>,
     dof_eq: Vec<usize>,
     prescribed: Vec<(usize, f64)>,
@@ -274,13 +438,16 @@ pub struct Model<M: Material3> {
     last_dt: f64,
     elem_slots: Vec<usize>,
     probe: Option<(SphereProbe, ContactSurface)>,
-    plane: Option<ContactSurface>,
+    /// Reference (r, z) of every node (2D models with a probe; else empty).
+    positions2: Vec<[f64; 2]>,
+    planes: Vec<(PlaneSide, ContactSet)>,
+    cavity: Option<CavityModel>,
     system: SparseSystem,
     residual: Vec<f64>,
     rhs: Vec<f64>,
-    element_out: ElementOutput,
+    element_out: K::Output,
     /// Per-element outputs for the parallel element loop (empty if serial).
-    element_outs: Vec<ElementOutput>,
+    element_outs: Vec<K::Output>,
     pool: Option<rayon::ThreadPool>,
     probe_diag: f64,
     length: f64,
@@ -294,29 +461,29 @@ pub struct Model<M: Material3> {
     /// 32 ε K L² (K ≈ the stiffest modulus at F = I, L the model size).
     force_floor: f64,
     records: Vec<StepRecord>,
+    /// Loads of the last converged step.
+    control: Control,
     counters: Counters,
 }
 
-impl<M: Material3> std::fmt::Debug for Model<M> {
+impl<M: Material3, K: ElementKind> std::fmt::Debug for Model<M, K> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
             "Model({} nodes, {} elements, {:?})",
-            self.mesh.nodes.len(),
-            self.mesh.elements.len(),
+            self.mesh.node_count(),
+            self.mesh.element_count(),
             self.system
         )
     }
 }
 
 impl<M: Material3> Model<M> {
-    /// Builds the model: dof numbering, sparse pattern, symbolic LDLᵀ and LU,
-    /// contact penalties.
+    /// Builds an axisymmetric model with at most one (upper) plane: see
+    /// [`Model::build`].
     ///
     /// # Errors
-    /// [`FemError::Mesh`] for a missing node set; [`FemError::Material`] if
-    /// the material cannot be evaluated at F = I; [`FemError::Solver`] if
-    /// the symbolic factorisation fails.
+    /// As [`Model::build`].
     pub fn new(
         mesh: crate::Mesh,
         material: M,
@@ -325,14 +492,63 @@ impl<M: Material3> Model<M> {
         plane: Option<RigidPlane>,
         settings: Settings,
     ) -> Result<Self> {
-        let nn = mesh.nodes.len();
-        let ndof = 2 * nn + 1;
-        let wdof = 2 * nn;
+        let parts = Parts {
+            supports: supports.to_vec(),
+            probe,
+            planes: plane.into_iter().collect(),
+            cavity: None,
+        };
+        Self::build(mesh, material, &parts, settings)
+    }
+
+    /// Converged nodal displacements, (u_r, u_z) per node.
+    pub fn displacements(&self) -> impl Iterator<Item = [f64; 2]> + '_ {
+        self.u_committed[..2 * self.mesh.node_count()]
+            .chunks_exact(2)
+            .map(|c| [c[0], c[1]])
+    }
+}
+
+impl<M: Material3> Model<M, Solid> {
+    /// Converged nodal displacements, (u_x, u_y, u_z) per node.
+    pub fn displacements(&self) -> impl Iterator<Item = [f64; 3]> + '_ {
+        self.u_committed[..3 * self.mesh.node_count()]
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+    }
+}
+
+impl<M: Material3, K: ElementKind> Model<M, K> {
+    /// Builds the model: dof numbering, sparse pattern, symbolic LDLᵀ and LU,
+    /// contact penalties, cavity volume.
+    ///
+    /// # Errors
+    /// [`FemError::Mesh`] for a missing node or face set or a degenerate
+    /// cavity; [`FemError::Setting`] for a support component the mesh does
+    /// not have, a probe on a 3D mesh or a non-positive fluid bulk modulus;
+    /// [`FemError::Material`] if the material cannot be evaluated at F = I;
+    /// [`FemError::Solver`] if the symbolic factorisation fails.
+    pub fn build(mesh: K::Mesh, material: M, parts: &Parts, settings: Settings) -> Result<Self> {
+        let dim = K::DIM;
+        let nd = K::NODES * dim;
+        let nn = mesh.node_count();
+        let wdof = dim * nn;
+        let sdof = wdof + 1;
+        let ndof = wdof + 1 + usize::from(parts.cavity.is_some());
+        let probe = parts.probe.clone();
+        if probe.is_some() && dim != 2 {
+            return Err(FemError::Setting {
+                name: "probe",
+                value: dim as f64,
+                reason: "the rigid sphere moves along the axis of an axisymmetric model; 3D models take planes",
+            });
+        }
         let mut constrained = vec![false; ndof];
         let mut prescribed = Vec::new();
-        for s in supports {
-            for &a in mesh.nodes_in(&s.set)? {
-                let dof = 2 * a + usize::from(s.component == Component::Z);
+        for s in &parts.supports {
+            let c = s.component.checked_index(dim)?;
+            for &a in mesh.node_set(&s.set)? {
+                let dof = dim * a + c;
                 if !constrained[dof] {
                     constrained[dof] = true;
                     prescribed.push((dof, s.value));
@@ -351,55 +567,107 @@ impl<M: Material3> Model<M> {
                 neq += 1;
             }
         }
-        let elem_eqs = |conn: &[usize; 4]| -> Vec<usize> {
-            (0..8).map(|k| dof_eq[2 * conn[k / 2] + k % 2]).collect()
+        let elem_eqs = |conn: &[usize]| -> Vec<usize> {
+            (0..nd)
+                .map(|k| dof_eq[dim * conn[k / dim] + k % dim])
+                .collect()
         };
-        let mut blocks: Vec<Vec<usize>> = Vec::with_capacity(mesh.elements.len() + 1);
-        for conn in &mesh.elements {
+        let ne = mesh.element_count();
+        let mut blocks: Vec<Vec<usize>> = Vec::with_capacity(ne + 1);
+        for e in 0..ne {
             blocks.push(
-                elem_eqs(conn)
+                elem_eqs(mesh.connectivity(e))
                     .into_iter()
                     .filter(|&e| e != NO_SLOT)
                     .collect(),
             );
         }
         let probe_nodes = match &probe {
-            Some(p) => mesh.nodes_in(&p.surface)?.to_vec(),
-            None => Vec::new(),
-        };
-        let plane_nodes = match &plane {
-            Some(p) => mesh.nodes_in(&p.surface)?.to_vec(),
+            Some(p) => mesh.node_set(&p.surface)?.to_vec(),
             None => Vec::new(),
         };
         if probe.is_some() {
-            // The probe couples with each surface segment's two nodes.
+            // The probe couples with each surface segment's two nodes (2D).
             blocks.extend(contact::blocks(&probe_nodes, &dof_eq, Some(dof_eq[wdof])));
             blocks.push(vec![dof_eq[wdof]]);
         }
-        blocks.extend(contact::blocks(&plane_nodes, &dof_eq, None));
+        // The cavity: each cell couples its nodes; s couples with every
+        // boundary node (not the nodes with each other).
+        let cavity_cells = match &parts.cavity {
+            Some(c) => Some(mesh.cavity_cells(&c.boundary)?),
+            None => None,
+        };
+        let cell_nodes = |cells: &CavityCells| -> Vec<Vec<usize>> {
+            match cells {
+                CavityCells::Segments(v) => v.iter().map(|c| c.to_vec()).collect(),
+                CavityCells::Quads(v) => v.iter().map(|c| c.to_vec()).collect(),
+            }
+        };
+        let mut cavity_dofs = Vec::new();
+        let mut loaded_dofs = Vec::new();
+        if let Some(cells) = &cavity_cells {
+            let cn = cell_nodes(cells);
+            for nodes in &cn {
+                blocks.push(
+                    nodes
+                        .iter()
+                        .flat_map(|&a| (0..dim).map(move |i| dim * a + i))
+                        .map(|d| dof_eq[d])
+                        .filter(|&e| e != NO_SLOT)
+                        .collect(),
+                );
+            }
+            let mut nodes: Vec<usize> = cn.into_iter().flatten().collect();
+            nodes.sort_unstable();
+            nodes.dedup();
+            for a in nodes {
+                // The pressure's force −p ∂V/∂u on every dof except a
+                // supported one normal to a coordinate plane the node lies
+                // on: there ∂V/∂u is that of the volume formula with the
+                // symmetry plane moved, and the physical force is p × the
+                // area-weighted normal (`crate::cavity`).
+                for i in 0..dim {
+                    let on_plane = dof_eq[dim * a + i] == NO_SLOT && mesh.position(a)[i] == 0.0;
+                    loaded_dofs.push((dim * a + i, on_plane));
+                }
+                let mut b: Vec<usize> = (0..dim)
+                    .map(|i| dim * a + i)
+                    .filter(|&d| dof_eq[d] != NO_SLOT)
+                    .collect();
+                cavity_dofs.extend_from_slice(&b);
+                b.iter_mut().for_each(|d| *d = dof_eq[*d]);
+                b.push(dof_eq[sdof]);
+                blocks.push(b);
+            }
+            blocks.push(vec![dof_eq[sdof]]);
+        }
         let system = SparseSystem::new(neq, &blocks, settings.symmetric)?;
-        let mut elem_slots = Vec::with_capacity(64 * mesh.elements.len());
-        let mut tmp = Vec::with_capacity(64);
-        for conn in &mesh.elements {
-            system.block_slots(&elem_eqs(conn), &mut tmp)?;
+        let mut elem_slots = Vec::with_capacity(nd * nd * ne);
+        let mut tmp = Vec::with_capacity(nd * nd);
+        // Local (row, column) → stored slot; in symmetric mode the element
+        // (or cell) computes its lower triangle only (`TangentPart::Lower`):
+        // entry (a, b), b ≤ a, goes to the stored slot of the pair,
+        // whichever orientation is stored.
+        let lower_slots = |tmp: &[usize], n: usize, out: &mut Vec<usize>| {
             if settings.symmetric {
-                // The element computes its lower triangle only
-                // (`TangentPart::Lower`): entry (a, b), b ≤ a, goes to the
-                // stored slot of the pair, whichever orientation is stored.
-                for a in 0..8 {
-                    for b in 0..8 {
-                        elem_slots.push(if b > a {
+                for a in 0..n {
+                    for b in 0..n {
+                        out.push(if b > a {
                             NO_SLOT
-                        } else if tmp[8 * a + b] != NO_SLOT {
-                            tmp[8 * a + b]
+                        } else if tmp[n * a + b] != NO_SLOT {
+                            tmp[n * a + b]
                         } else {
-                            tmp[8 * b + a]
+                            tmp[n * b + a]
                         });
                     }
                 }
             } else {
-                elem_slots.extend_from_slice(&tmp);
+                out.extend_from_slice(tmp);
             }
+        };
+        for e in 0..ne {
+            system.block_slots(&elem_eqs(mesh.connectivity(e)), &mut tmp)?;
+            lower_slots(&tmp, nd, &mut elem_slots);
         }
         // Shear modulus at F = I for the penalty scale, and the stiffest
         // modulus (≈ K + 4G/3) for the round-off floor of the residual.
@@ -416,10 +684,39 @@ impl<M: Material3> Model<M> {
             let stiffest = resp.tangent.iter().fold(0.0f64, |m, c| m.max(c.abs()));
             (resp.tangent[(1, 1)], stiffest)
         };
+        let make_set = |surface: &str, with_w: bool, tmp: &mut Vec<usize>| -> Result<ContactSet> {
+            let (nodes, area, len) = mesh.contact_weights(surface)?;
+            let eps = area
+                .iter()
+                .zip(&len)
+                .map(|(a, h)| settings.penalty * g0 * a / h.max(f64::MIN_POSITIVE))
+                .collect();
+            let mut slots = Vec::with_capacity(nodes.len());
+            for &a in &nodes {
+                let w = if with_w { dof_eq[wdof] } else { NO_SLOT };
+                system.block_slots(&[dof_eq[dim * a], dof_eq[dim * a + dim - 1], w], tmp)?;
+                let mut s = [NO_SLOT; 9];
+                s.copy_from_slice(tmp);
+                slots.push(s);
+            }
+            Ok(ContactSet { nodes, eps, slots })
+        };
+        // The probe (2D only, checked above): contact integrated along the
+        // surface segments (`crate::contact`).
+        let positions2: Vec<[f64; 2]> = if probe.is_some() {
+            (0..nn)
+                .map(|a| {
+                    let x = mesh.position(a);
+                    [x[0], x[dim - 1]]
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         let probe = match probe {
             Some(p) => {
                 let surface = ContactSurface::new(
-                    &mesh.nodes,
+                    &positions2,
                     &probe_nodes,
                     &dof_eq,
                     Some(dof_eq[wdof]),
@@ -431,33 +728,81 @@ impl<M: Material3> Model<M> {
             }
             None => None,
         };
-        let plane = match plane {
-            Some(_) => Some(ContactSurface::new(
-                &mesh.nodes,
-                &plane_nodes,
-                &dof_eq,
-                None,
-                settings.penalty,
-                g0,
-                &system,
-            )?),
-            None => None,
-        };
+        let mut planes = Vec::with_capacity(parts.planes.len());
+        for p in &parts.planes {
+            planes.push((p.side, make_set(&p.surface, false, &mut tmp)?));
+        }
         let probe_diag = probe
             .as_ref()
             .map(|(_, s)| s.stiffness_scale())
             .unwrap_or(1.0)
             .max(f64::MIN_POSITIVE);
-        let length = mesh
-            .nodes
-            .iter()
-            .fold(0.0, |m: f64, p| m.max(p[0].abs()).max(p[1].abs()));
-        let geometry = mesh
-            .elements
-            .iter()
-            .map(|conn| element_geometry(&conn.map(|a| mesh.nodes[a])))
-            .collect();
-        let history = History::new(&material, 4 * mesh.elements.len());
+        let geometry = K::geometry(&mesh)?;
+        let history = History::new(&material, ne, K::POINTS);
+        let length = (0..nn)
+            .flat_map(|a| mesh.position(a).iter())
+            .fold(0.0, |m: f64, p| m.max(p.abs()));
+        let cavity = match (&parts.cavity, cavity_cells) {
+            (Some(spec), Some(cells)) => {
+                let compliance = match spec.fluid {
+                    Fluid::Incompressible => 0.0,
+                    Fluid::Compressible { bulk_modulus } => {
+                        if !(bulk_modulus > 0.0 && bulk_modulus.is_finite()) {
+                            return Err(FemError::Setting {
+                                name: "fluid bulk modulus",
+                                value: bulk_modulus,
+                                reason: "must be positive and finite (Pa); use Fluid::Incompressible for K_f = ∞",
+                            });
+                        }
+                        1.0 / bulk_modulus
+                    }
+                };
+                let mut cell_slots = Vec::new();
+                for nodes in cell_nodes(&cells) {
+                    let eqs: Vec<usize> = nodes
+                        .iter()
+                        .flat_map(|&a| (0..dim).map(move |i| dim * a + i))
+                        .map(|d| dof_eq[d])
+                        .collect();
+                    system.block_slots(&eqs, &mut tmp)?;
+                    lower_slots(&tmp, eqs.len(), &mut cell_slots);
+                }
+                let seq = dof_eq[sdof];
+                let mut coupling = Vec::with_capacity(cavity_dofs.len());
+                for &d in &cavity_dofs {
+                    let (r, c) = (system.slot(dof_eq[d], seq)?, system.slot(seq, dof_eq[d])?);
+                    coupling.push((d, r, if settings.symmetric { NO_SLOT } else { c }));
+                }
+                let mut model = CavityModel {
+                    cells,
+                    sign: 1.0,
+                    v0: 0.0,
+                    k: 0.0,
+                    compliance,
+                    dof: sdof,
+                    cell_slots,
+                    coupling,
+                    loaded: loaded_dofs,
+                    normals: vec![0.0; ndof],
+                    diagonal: system.slot(seq, seq)?,
+                    dvdu: vec![0.0; ndof],
+                };
+                let zero = vec![0.0; ndof];
+                let v = model.volume(&mesh, dim, &zero);
+                if !(v.abs() > 0.0) || !v.is_finite() {
+                    return Err(FemError::Mesh(format!(
+                        "cavity `{}` encloses no volume (V₀ = {v:.3e} m³): its cells must form \
+                         the closed boundary together with symmetry planes through the origin",
+                        spec.boundary
+                    )));
+                }
+                model.sign = v.signum();
+                model.v0 = v.abs();
+                model.k = g0 / model.v0.cbrt();
+                Some(model)
+            }
+            _ => None,
+        };
         Ok(Self {
             geometry,
             history,
@@ -470,12 +815,13 @@ impl<M: Material3> Model<M> {
             last_dt: 0.0,
             elem_slots,
             probe,
-            plane,
+            planes,
+            cavity,
             residual: vec![0.0; ndof],
             rhs: vec![0.0; neq],
-            element_out: ElementOutput::zero(),
+            element_out: K::output(),
             element_outs: if settings.threads > 1 {
-                vec![ElementOutput::zero(); mesh.elements.len()]
+                (0..ne).map(|_| K::output()).collect()
             } else {
                 Vec::new()
             },
@@ -499,7 +845,9 @@ impl<M: Material3> Model<M> {
             // deformation (measured: the residual of a 1e-12 m indentation
             // stalls at ≈ 5 ε K L² for K = 1e6 G).
             force_floor: 32.0 * f64::EPSILON * stiffest * length * length,
+            positions2,
             records: Vec::new(),
+            control: Control::default(),
             counters: Counters::default(),
             system,
             mesh,
@@ -509,7 +857,7 @@ impl<M: Material3> Model<M> {
     }
 
     /// The mesh.
-    pub fn mesh(&self) -> &crate::Mesh {
+    pub fn mesh(&self) -> &K::Mesh {
         &self.mesh
     }
 
@@ -526,22 +874,88 @@ impl<M: Material3> Model<M> {
     /// Places the probe at displacement `w` (m, z up) before the first
     /// stage, e.g. above the body so that it starts out of contact.
     pub fn set_probe_displacement(&mut self, w: f64) {
-        let wdof = 2 * self.mesh.nodes.len();
+        let wdof = K::DIM * self.mesh.node_count();
         self.u[wdof] = w;
         self.u_committed[wdof] = w;
         self.u_previous[wdof] = w;
     }
 
-    /// Converged nodal displacements, (u_r, u_z) per node.
-    pub fn displacements(&self) -> impl Iterator<Item = [f64; 2]> + '_ {
-        self.u_committed[..2 * self.mesh.nodes.len()]
-            .chunks_exact(2)
-            .map(|c| [c[0], c[1]])
+    /// Converged nodal displacements, node-major (`K::DIM` per node).
+    pub fn nodal_displacements(&self) -> &[f64] {
+        &self.u_committed[..K::DIM * self.mesh.node_count()]
     }
 
     /// Converged probe displacement w (m).
     pub fn probe_displacement(&self) -> f64 {
-        self.u_committed[2 * self.mesh.nodes.len()]
+        self.u_committed[K::DIM * self.mesh.node_count()]
+    }
+
+    /// Reference volume V₀ of the cavity (m³), if there is one.
+    pub fn cavity_reference_volume(&self) -> Option<f64> {
+        self.cavity.as_ref().map(|c| c.v0)
+    }
+
+    /// Stored energy `Σ_e Σ_q w_q ψ(F̄_q)` of the converged state for a
+    /// strain-energy density `psi` of the deformation gradient (J; the full
+    /// revolved body for axisymmetric models): the potential the elements
+    /// are the gradient of, when `psi` is the material's.
+    pub fn strain_energy(&self, psi: &dyn Fn(&Mat3) -> f64) -> f64 {
+        let dim = K::DIM;
+        let nd = K::NODES * dim;
+        let mut ue = [0.0; 24];
+        let mut total = 0.0;
+        for e in 0..self.mesh.element_count() {
+            let conn = self.mesh.connectivity(e);
+            for k in 0..nd {
+                ue[k] = self.u_committed[dim * conn[k / dim] + k % dim];
+            }
+            total += K::energy(&self.geometry[e], &ue[..nd], self.settings.fbar, psi);
+        }
+        total
+    }
+
+    /// Energy stored in the contact penalties at the converged state,
+    /// `Σ ½ ε_a ⟨−g_a⟩²` over the planes (J).
+    pub fn plane_contact_energy(&self) -> f64 {
+        let plane_z = self.control.plane_z;
+        let dim = K::DIM;
+        let mut total = 0.0;
+        for (side, set) in &self.planes {
+            for (k, &a) in set.nodes.iter().enumerate() {
+                let z = self.mesh.position(a)[dim - 1] + self.u_committed[dim * a + dim - 1];
+                let g = match side {
+                    PlaneSide::Above => plane_z - z,
+                    PlaneSide::Below(zb) => z - zb,
+                };
+                if g < 0.0 {
+                    total += 0.5 * set.eps[k] * g * g;
+                }
+            }
+        }
+        total
+    }
+
+    /// Contact force of every node of plane `index` (in the order of
+    /// [`Parts::planes`]) at the converged state: (node, force ≥ 0 in N).
+    /// Empty for a missing plane.
+    pub fn plane_contact_forces(&self, index: usize) -> Vec<(usize, f64)> {
+        let plane_z = self.control.plane_z;
+        let dim = K::DIM;
+        let Some((side, set)) = self.planes.get(index) else {
+            return Vec::new();
+        };
+        set.nodes
+            .iter()
+            .enumerate()
+            .map(|(k, &a)| {
+                let z = self.mesh.position(a)[dim - 1] + self.u_committed[dim * a + dim - 1];
+                let g = match side {
+                    PlaneSide::Above => plane_z - z,
+                    PlaneSide::Below(zb) => z - zb,
+                };
+                (a, (-set.eps[k] * g).max(0.0))
+            })
+            .collect()
     }
 
     /// Records of all converged steps so far.
@@ -563,14 +977,16 @@ impl<M: Material3> Model<M> {
     /// converged state: the support reaction on the body there (N).
     ///
     /// # Errors
-    /// [`FemError::Mesh`] for a missing set.
+    /// [`FemError::Mesh`] for a missing set; [`FemError::Setting`] for a
+    /// component the mesh does not have.
     pub fn reaction(&self, set: &str, component: Component) -> Result<f64> {
-        let c = usize::from(component == Component::Z);
+        let dim = K::DIM;
+        let c = component.checked_index(dim)?;
         Ok(self
             .mesh
-            .nodes_in(set)?
+            .node_set(set)?
             .iter()
-            .map(|&a| self.residual[2 * a + c])
+            .map(|&a| self.residual[dim * a + c])
             .sum())
     }
 
@@ -598,6 +1014,9 @@ impl<M: Material3> Model<M> {
             (true, false) => TangentPart::Full,
         };
         let clock = cpu_time::ThreadTime::now();
+        let dim = K::DIM;
+        let nd = K::NODES * dim;
+        let np = K::POINTS;
         if let Some(pool) = &self.pool {
             let (committed, trial) = self.history.split();
             let (mesh, material, geometry, u) =
@@ -606,19 +1025,19 @@ impl<M: Material3> Model<M> {
                 use rayon::prelude::*;
                 self.element_outs
                     .par_iter_mut()
-                    .zip(trial.par_chunks_mut(4))
+                    .zip(trial.par_chunks_mut(np))
                     .enumerate()
                     .map(|(e, (out, tr))| {
-                        let conn = &mesh.elements[e];
-                        let mut ue = [0.0; 8];
-                        for k in 0..8 {
-                            ue[k] = u[2 * conn[k / 2] + k % 2];
+                        let conn = mesh.connectivity(e);
+                        let mut ue = [0.0; 24];
+                        for k in 0..nd {
+                            ue[k] = u[dim * conn[k / dim] + k % dim];
                         }
-                        fbar_element(
+                        K::evaluate(
                             material,
                             &geometry[e],
-                            &ue,
-                            &committed[4 * e..4 * e + 4],
+                            &ue[..nd],
+                            &committed[np * e..np * e + np],
                             tr,
                             dt,
                             fbar,
@@ -638,11 +1057,11 @@ impl<M: Material3> Model<M> {
                     source,
                 });
             }
-            for (e, conn) in self.mesh.elements.iter().enumerate() {
+            for e in 0..self.mesh.element_count() {
                 let out = &self.element_outs[e];
-                let slots = &self.elem_slots[64 * e..64 * e + 64];
-                scatter(
-                    conn,
+                let slots = &self.elem_slots[nd * nd * e..nd * nd * (e + 1)];
+                scatter::<K>(
+                    self.mesh.connectivity(e),
                     out,
                     slots,
                     tangent,
@@ -652,16 +1071,17 @@ impl<M: Material3> Model<M> {
                 );
             }
         } else {
-            for (e, conn) in self.mesh.elements.iter().enumerate() {
-                let mut ue = [0.0; 8];
-                for k in 0..8 {
-                    ue[k] = self.u[2 * conn[k / 2] + k % 2];
+            for e in 0..self.mesh.element_count() {
+                let conn = self.mesh.connectivity(e);
+                let mut ue = [0.0; 24];
+                for k in 0..nd {
+                    ue[k] = self.u[dim * conn[k / dim] + k % dim];
                 }
                 let (committed, trial) = self.history.element(e);
-                fbar_element(
+                K::evaluate(
                     &self.material,
                     &self.geometry[e],
-                    &ue,
+                    &ue[..nd],
                     committed,
                     trial,
                     dt,
@@ -674,8 +1094,8 @@ impl<M: Material3> Model<M> {
                     point,
                     source,
                 })?;
-                let slots = &self.elem_slots[64 * e..64 * e + 64];
-                scatter(
+                let slots = &self.elem_slots[nd * nd * e..nd * nd * (e + 1)];
+                scatter::<K>(
                     conn,
                     &self.element_out,
                     slots,
@@ -691,12 +1111,12 @@ impl<M: Material3> Model<M> {
             scale: gross.sqrt(),
             ..Assembly::default()
         };
-        let nn = self.mesh.nodes.len();
-        let wdof = 2 * nn;
+        let nn = self.mesh.node_count();
+        let wdof = dim * nn;
         let w_free = !matches!(ctl.probe, ProbeDrive::Displacement(_));
         if let Some((probe, surface)) = &mut self.probe {
             let sums = surface.assemble(
-                &self.mesh.nodes,
+                &self.positions2,
                 &self.u,
                 wdof,
                 Obstacle::Sphere {
@@ -713,19 +1133,54 @@ impl<M: Material3> Model<M> {
             asm.active = sums.active;
             asm.scale = asm.scale.max(asm.contact_force.abs());
         }
-        if let Some(surface) = &mut self.plane {
-            let sums = surface.assemble(
-                &self.mesh.nodes,
+        for (side, set) in &self.planes {
+            // Gap g and its derivative ∂g/∂z: above, g = z_plane − z; below,
+            // g = z − z_plane.
+            let (z_plane, dg) = match *side {
+                PlaneSide::Above => (ctl.plane_z, -1.0),
+                PlaneSide::Below(zb) => (zb, 1.0),
+            };
+            for (k, &a) in set.nodes.iter().enumerate() {
+                let z = self.mesh.position(a)[dim - 1] + self.u[dim * a + dim - 1];
+                let g = if dg < 0.0 { z_plane - z } else { z - z_plane };
+                if g > 0.0 {
+                    continue;
+                }
+                let eps = set.eps[k];
+                if dg < 0.0 {
+                    self.residual[dim * a + dim - 1] -= eps * g;
+                    asm.plane_force -= eps * g;
+                } else {
+                    self.residual[dim * a + dim - 1] += eps * g;
+                    asm.base_force -= eps * g;
+                }
+                if tangent {
+                    let s = set.slots[k][4];
+                    if s != NO_SLOT {
+                        self.system.values[s] += eps;
+                    }
+                }
+            }
+            asm.scale = asm.scale.max(if dg < 0.0 {
+                asm.plane_force.abs()
+            } else {
+                asm.base_force.abs()
+            });
+        }
+        if let Some(cav) = &mut self.cavity {
+            let (p, v) = cav.assemble(
+                &self.mesh,
+                dim,
                 &self.u,
-                wdof,
-                Obstacle::Plane { z: ctl.plane_z },
-                false,
+                ctl.fluid_injected,
                 tangent,
                 &mut self.residual,
                 &mut self.system.values,
             );
-            asm.plane_force = sums.force;
-            asm.scale = asm.scale.max(asm.plane_force.abs());
+            asm.pressure = p;
+            asm.volume = v;
+            // The pressure's force on the wall, p V₀^{2/3}.
+            asm.scale = asm.scale.max(p.abs() * cav.v0.powf(2.0 / 3.0));
         }
         if self.probe.is_some() {
             let weq = self.dof_eq[wdof];
@@ -767,7 +1222,9 @@ impl<M: Material3> Model<M> {
     /// Residual norm reported as the tolerance: `rtol` × the gross force
     /// of the assembly, or the round-off floor if that is larger.
     fn tolerance(&self, asm: &Assembly) -> f64 {
-        (self.settings.rtol * asm.scale).max(self.force_floor)
+        (self.settings.rtol * asm.scale)
+            .max(self.settings.atol)
+            .max(self.force_floor)
     }
 
     /// Convergence test of a Newton iterate with residual norm `norm`
@@ -782,7 +1239,7 @@ impl<M: Material3> Model<M> {
     /// predictor is never accepted because its forces are tiny.
     fn converged(&self, norm: f64, previous: f64, asm: &Assembly, corrected: bool) -> bool {
         norm == 0.0
-            || norm <= self.settings.rtol * asm.scale
+            || norm <= (self.settings.rtol * asm.scale).max(self.settings.atol)
             || (corrected && norm <= self.force_floor && norm > 0.1 * previous)
     }
 
@@ -795,7 +1252,7 @@ impl<M: Material3> Model<M> {
             self.u[dof] = v * ctl.support_scale;
         }
         if let (Some(_), ProbeDrive::Displacement(w)) = (&self.probe, ctl.probe) {
-            self.u[2 * self.mesh.nodes.len()] = w;
+            self.u[K::DIM * self.mesh.node_count()] = w;
         }
     }
 
@@ -812,12 +1269,12 @@ impl<M: Material3> Model<M> {
         if !(force > 0.0) {
             return;
         }
-        let wdof = 2 * self.mesh.nodes.len();
+        let wdof = K::DIM * self.mesh.node_count();
         let obstacle = Obstacle::Sphere {
             centre_z: probe.centre_z + self.u[wdof],
             radius: probe.radius,
         };
-        let gap = surface.min_gap(&self.mesh.nodes, &self.u, obstacle);
+        let gap = surface.min_gap(&self.positions2, &self.u, obstacle);
         let depth = (3.0 * force / (16.0 * self.modulus * probe.radius.sqrt())).powf(2.0 / 3.0);
         // Touching (|gap| at round-off) or above: no usable stiffness yet.
         if gap.is_finite() && gap > -1e-3 * depth {
@@ -861,12 +1318,12 @@ impl<M: Material3> Model<M> {
                         dmax = d;
                     }
                 }
-                let node = self
-                    .mesh
-                    .nodes
-                    .get(dmax / 2)
-                    .copied()
-                    .unwrap_or([f64::NAN; 2]);
+                let node = if dmax / K::DIM < self.mesh.node_count() {
+                    let x = self.mesh.position(dmax / K::DIM);
+                    [x[0], x[x.len() - 1]]
+                } else {
+                    [f64::NAN; 2]
+                };
                 eprintln!(
                     "    it {it} |R| {norm:.3e} tol {tol:.3e} active {} F {:.5e} max |R| {rmax:.2e} at dof {dmax} (node at {:.3e}, {:.3e})",
                     asm.active, asm.contact_force, node[0], node[1]
@@ -999,13 +1456,17 @@ impl<M: Material3> Model<M> {
             ProbeDrive::Spring { free_end, .. } => free_end,
             _ => f64::NAN,
         };
+        let has_cavity = self.cavity.is_some();
         self.records.push(StepRecord {
             time,
-            probe_w: self.u[2 * self.mesh.nodes.len()],
+            probe_w: self.u[K::DIM * self.mesh.node_count()],
             free_end,
             contact_force: asm.contact_force,
             plane_force: asm.plane_force,
+            base_force: asm.base_force,
             penetration: asm.penetration,
+            cavity_pressure: if has_cavity { asm.pressure } else { f64::NAN },
+            cavity_volume: if has_cavity { asm.volume } else { f64::NAN },
             iterations,
             stage: self.stage,
         });
@@ -1132,6 +1593,7 @@ impl<M: Material3> Model<M> {
                     self.last_dt = dt;
                     first = false;
                     self.counters.steps += 1;
+                    self.control = ctl;
                     self.push_record(t_new, &ctl, &asm, iterations);
                     if iterations <= self.settings.easy_iterations {
                         dt *= self.settings.growth;
@@ -1166,24 +1628,161 @@ impl<M: Material3> Model<M> {
     }
 }
 
+impl CavityModel {
+    /// Current positions of a cell's nodes, flattened (`dim` per node).
+    fn positions(mesh: &impl Topology, dim: usize, u: &[f64], nodes: &[usize], out: &mut [f64]) {
+        for (k, &a) in nodes.iter().enumerate() {
+            let x = mesh.position(a);
+            for i in 0..dim {
+                out[dim * k + i] = x[i] + u[dim * a + i];
+            }
+        }
+    }
+
+    /// Signed volume Σ cells (times `sign`) at displacements `u`.
+    fn volume(&self, mesh: &impl Topology, dim: usize, u: &[f64]) -> f64 {
+        let mut x = [0.0; 12];
+        let mut v = 0.0;
+        match &self.cells {
+            CavityCells::Segments(cells) => {
+                for c in cells {
+                    Self::positions(mesh, dim, u, c, &mut x);
+                    v += segment_volume(&[[x[0], x[1]], [x[2], x[3]]]).0;
+                }
+            }
+            CavityCells::Quads(cells) => {
+                for c in cells {
+                    Self::positions(mesh, dim, u, c, &mut x);
+                    v += quad_volume(&[
+                        [x[0], x[1], x[2]],
+                        [x[3], x[4], x[5]],
+                        [x[6], x[7], x[8]],
+                        [x[9], x[10], x[11]],
+                    ])
+                    .0;
+                }
+            }
+        }
+        self.sign * v
+    }
+
+    /// Adds the fluid's terms of the potential (module docs) to the
+    /// residual and, if `tangent`, to the matrix; returns (p, V).
+    #[allow(clippy::too_many_arguments)]
+    fn assemble(
+        &mut self,
+        mesh: &impl Topology,
+        dim: usize,
+        u: &[f64],
+        injected: f64,
+        tangent: bool,
+        residual: &mut [f64],
+        values: &mut [f64],
+    ) -> (f64, f64) {
+        let s = u[self.dof];
+        let p = self.k * s;
+        let sign = self.sign;
+        let (dvdu, normals, cell_slots) = (&mut self.dvdu, &mut self.normals, &self.cell_slots);
+        dvdu.fill(0.0);
+        normals.fill(0.0);
+        let mut x = [0.0; 12];
+        let mut volume = 0.0;
+        let mut cell = 0;
+        // One cell's volume v, gradient and Hessian (local dofs, node-major).
+        let mut add_cell = |nodes: &[usize],
+                            v: f64,
+                            grad: &[f64],
+                            hess: &dyn Fn(usize, usize) -> f64,
+                            normal: &[f64]| {
+            volume += v;
+            let n = grad.len();
+            for (k, (&g, &a)) in grad.iter().zip(normal).enumerate() {
+                dvdu[dim * nodes[k / dim] + k % dim] += sign * g;
+                normals[dim * nodes[k / dim] + k % dim] += sign * a;
+            }
+            if tangent {
+                let slots = &cell_slots[cell..cell + n * n];
+                for r in 0..n {
+                    for c in 0..n {
+                        let slot = slots[n * r + c];
+                        if slot != NO_SLOT {
+                            values[slot] -= p * sign * hess(r, c);
+                        }
+                    }
+                }
+            }
+            cell += n * n;
+        };
+        match &self.cells {
+            CavityCells::Segments(cells) => {
+                for c in cells {
+                    Self::positions(mesh, dim, u, c, &mut x);
+                    let seg = [[x[0], x[1]], [x[2], x[3]]];
+                    let (v, g, h) = segment_volume(&seg);
+                    add_cell(c, v, &g, &|r, c| h[r][c], &segment_area_normals(&seg));
+                }
+            }
+            CavityCells::Quads(cells) => {
+                for c in cells {
+                    Self::positions(mesh, dim, u, c, &mut x);
+                    let quad = [
+                        [x[0], x[1], x[2]],
+                        [x[3], x[4], x[5]],
+                        [x[6], x[7], x[8]],
+                        [x[9], x[10], x[11]],
+                    ];
+                    let (v, g, h) = quad_volume(&quad);
+                    add_cell(c, v, &g, &|r, c| h[r][c], &quad_area_normals(&quad));
+                }
+            }
+        }
+        let volume = self.sign * volume;
+        for &(d, on_plane) in &self.loaded {
+            residual[d] -= p * if on_plane {
+                self.normals[d]
+            } else {
+                self.dvdu[d]
+            };
+        }
+        for &(d, rs, sr) in &self.coupling {
+            if tangent {
+                values[rs] -= self.k * self.dvdu[d];
+                if sr != NO_SLOT {
+                    values[sr] -= self.k * self.dvdu[d];
+                }
+            }
+        }
+        residual[self.dof] = -self.k * (volume - self.v0 - injected)
+            - self.k * self.k * s * self.v0 * self.compliance;
+        if tangent {
+            values[self.diagonal] -= self.k * self.k * self.v0 * self.compliance;
+        }
+        (p, volume)
+    }
+}
+
 /// Adds one element's residual and tangent into the global arrays.
-fn scatter(
-    conn: &[usize; 4],
-    out: &ElementOutput,
+fn scatter<K: ElementKind>(
+    conn: &[usize],
+    out: &K::Output,
     slots: &[usize],
     tangent: bool,
     residual: &mut [f64],
     values: &mut [f64],
     gross: &mut f64,
 ) {
-    for a in 0..8 {
-        residual[2 * conn[a / 2] + a % 2] += out.r[a];
-        *gross += out.r[a] * out.r[a];
+    let dim = K::DIM;
+    let nd = K::NODES * dim;
+    let r = K::residual(out);
+    for a in 0..nd {
+        residual[dim * conn[a / dim] + a % dim] += r[a];
+        *gross += r[a] * r[a];
         if tangent {
-            for b in 0..8 {
-                let s = slots[8 * a + b];
+            let k = K::tangent_row(out, a);
+            for b in 0..nd {
+                let s = slots[nd * a + b];
                 if s != NO_SLOT {
-                    values[s] += out.k[a][b];
+                    values[s] += k[b];
                 }
             }
         }
@@ -1192,4 +1791,124 @@ fn scatter(
 
 fn trace() -> bool {
     std::env::var_os("NLVID_FEM_TRACE").is_some()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shell::{ShellPart, ShellSpec, ellipsoidal_shell};
+
+    /// A coarse eighth of a spherical shell (R = 1 mm, wall 0.2 mm) on
+    /// rollers, a plate above and a fluid cavity.
+    fn shell_model(fluid: Fluid, symmetric: bool) -> Model<nlvid_material::MooneyRivlin, Solid> {
+        let mesh = ellipsoidal_shell(&ShellSpec::sphere(
+            1e-3,
+            0.2e-3,
+            2,
+            0.6e-3,
+            ShellPart::Eighth,
+        ))
+        .unwrap();
+        let parts = Parts {
+            supports: vec![
+                Support::fixed("x0", Component::X),
+                Support::fixed("y0", Component::Y),
+                Support::fixed("z0", Component::Z),
+            ],
+            planes: vec![RigidPlane::above("outer")],
+            cavity: Some(Cavity {
+                boundary: "inner".into(),
+                fluid,
+            }),
+            ..Parts::default()
+        };
+        let material = nlvid_material::MooneyRivlin::with_ratio(1e6, 0.3, 1e8).unwrap();
+        let settings = Settings {
+            symmetric,
+            ..Settings::default()
+        };
+        Model::build(mesh, material, &parts, settings).unwrap()
+    }
+
+    /// Central differences of the assembled residual against the assembled
+    /// tangent (full storage), over every free equation.
+    fn check_tangent(fluid: Fluid) {
+        let mut model = shell_model(fluid, false);
+        let ctl = Control {
+            plane_z: 0.93e-3,
+            ..Control::default()
+        };
+        // A smooth, non-uniform displacement (flattening + bulge), a
+        // pressure, supports respected.
+        let nn = model.mesh.nodes.len();
+        for a in 0..nn {
+            let x = model.mesh.nodes[a];
+            let w = [
+                0.03 * x[0] * (1.0 + 300.0 * x[2]),
+                0.02 * x[1] * (1.0 - 200.0 * x[0]),
+                -0.05 * x[2] * (1.0 + 400.0 * x[1]),
+            ];
+            for i in 0..3 {
+                model.u[3 * a + i] = w[i];
+            }
+        }
+        model.apply_prescribed(&ctl);
+        let sdof = model.cavity.as_ref().unwrap().dof;
+        model.u[sdof] = 2e-5;
+        model.assemble(&ctl, 0.0, true).unwrap();
+        let neq = model.system.dim();
+        let free: Vec<usize> = (0..model.u.len())
+            .filter(|&d| model.dof_eq[d] != NO_SLOT)
+            .collect();
+        assert_eq!(free.len(), neq);
+        let k = |r: usize, c: usize| {
+            model
+                .system
+                .slot(r, c)
+                .map(|s| model.system.values[s])
+                .unwrap_or(0.0)
+        };
+        let kd: Vec<Vec<f64>> = (0..neq)
+            .map(|r| (0..neq).map(|c| k(r, c)).collect())
+            .collect();
+        let kmax = kd.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        let active = model
+            .mesh
+            .nodes_in("outer")
+            .unwrap()
+            .iter()
+            .filter(|&&a| model.mesh.nodes[a][2] + model.u[3 * a + 2] > ctl.plane_z)
+            .count();
+        let u0 = model.u.clone();
+        let h = 1e-9;
+        for (c, &d) in free.iter().enumerate() {
+            model.u.copy_from_slice(&u0);
+            model.u[d] += h;
+            model.assemble(&ctl, 0.0, false).unwrap();
+            let rp = model.rhs.clone();
+            model.u[d] -= 2.0 * h;
+            model.assemble(&ctl, 0.0, false).unwrap();
+            for r in 0..neq {
+                let fd = -(rp[r] - model.rhs[r]) / (2.0 * h);
+                assert!(
+                    (fd - kd[r][c]).abs() < 1e-6 * kmax,
+                    "K[{r}][{c}] = {} vs fd {fd} (kmax {kmax})",
+                    kd[r][c]
+                );
+            }
+        }
+        // The check covered contact and the fluid coupling.
+        assert!(kd.iter().all(|row| row.len() == neq));
+        assert!(active > 0, "no node in contact");
+    }
+
+    #[test]
+    fn tangent_with_plate_and_incompressible_cavity_matches_finite_differences() {
+        check_tangent(Fluid::Incompressible);
+    }
+
+    #[test]
+    fn tangent_with_plate_and_compressible_cavity_matches_finite_differences() {
+        check_tangent(Fluid::Compressible { bulk_modulus: 2e7 });
+    }
 }

@@ -6,11 +6,13 @@
 //!   Ψ = μ/2 (J^{-2/3} I₁ − 3) + κ/2 (J − 1)².
 //! - [`PronyNeoHookean`]: the same with Simo's (1987) finite-strain Prony
 //!   relaxation of the isochoric second Piola–Kirchhoff stress,
-//!   G(t) = μ (g_∞ + Σ g_k e^{−t/τ_k}), g_∞ = 1 − Σ g_k (eq. 5.1). In the
+//!   G(t) = μ (g_∞ + Σ g_k e^{−t/τ_k}), g_∞ = 1 − Σ g_k (eq. 5.1), held as
+//!   the shared `nlvid_model::Relaxation`. In the
 //!   small-strain limit it is exactly linear viscoelasticity with G(t) and a
 //!   constant bulk modulus κ, which is what the Lee–Radok check needs.
 
 use nlvid_material::{Mat3, Material3, MaterialError, PointResponse3, Tangent3};
+use nlvid_model::Relaxation;
 
 /// Decoupled compressible neo-Hookean solid.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -107,15 +109,14 @@ pub const MAX_TERMS: usize = 4;
 /// Neo-Hookean solid with Prony-series relaxation of its isochoric part
 /// (Simo 1987): S = S_vol + g_∞ S_iso + Σ g_k h_k with
 /// h_k(t) = ∫ e^{−(t−s)/τ_k} dS_iso/ds ds, updated exactly for S_iso linear
-/// in time over a step.
+/// in time over a step. The shear modulus relaxes as the shared
+/// [`Relaxation`] G(t) = G0 [g∞ + Σ g_k e^{−t/τ_k}] (eq. 5.1).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PronyNeoHookean {
-    /// Instantaneous shear modulus G₀ = μ (Pa).
-    pub mu: f64,
+    /// Shear relaxation modulus; G0 = μ (Pa).
+    pub shear: Relaxation,
     /// Bulk modulus κ (Pa), not relaxing.
     pub kappa: f64,
-    /// Prony weights g_k and times τ_k (s), Σ g_k < 1.
-    pub terms: Vec<(f64, f64)>,
 }
 
 /// History of one [`PronyNeoHookean`] point.
@@ -126,12 +127,13 @@ pub struct PronyState {
 }
 
 impl PronyNeoHookean {
-    /// Checks the parameters.
+    /// Checks the parameters (the series itself is checked by
+    /// [`Relaxation`]).
     ///
     /// # Errors
-    /// [`MaterialError::Parameter`] for non-positive moduli or times, more
-    /// than [`MAX_TERMS`] terms, or Σ g_k ≥ 1.
-    pub fn new(mu: f64, kappa: f64, terms: Vec<(f64, f64)>) -> nlvid_material::Result<Self> {
+    /// [`MaterialError::Parameter`] for non-positive G0 or κ, or more than
+    /// [`MAX_TERMS`] terms.
+    pub fn new(shear: Relaxation, kappa: f64) -> nlvid_material::Result<Self> {
         let bad = |name, value, reason| {
             Err(MaterialError::Parameter {
                 name,
@@ -139,41 +141,16 @@ impl PronyNeoHookean {
                 reason,
             })
         };
-        if !(mu > 0.0) {
-            return bad("G0", mu, "must be positive");
+        if !(shear.g0() > 0.0) {
+            return bad("G0", shear.g0(), "must be positive");
         }
         if !(kappa > 0.0) {
             return bad("bulk modulus", kappa, "must be positive");
         }
-        if terms.len() > MAX_TERMS {
-            return bad("Prony terms", terms.len() as f64, "at most 4");
+        if shear.prony().len() > MAX_TERMS {
+            return bad("Prony terms", shear.prony().len() as f64, "at most 4");
         }
-        let mut sum = 0.0;
-        for &(g, tau) in &terms {
-            if !(g >= 0.0) {
-                return bad("g_k", g, "must be ≥ 0");
-            }
-            if !(tau > 0.0) {
-                return bad("tau_k", tau, "must be positive");
-            }
-            sum += g;
-        }
-        if !(sum < 1.0) {
-            return bad("sum of g_k", sum, "must be < 1");
-        }
-        Ok(Self { mu, kappa, terms })
-    }
-
-    /// Relaxation modulus G(t) = μ (g_∞ + Σ g_k e^{−t/τ_k}) (eq. 5.1).
-    pub fn relaxation_modulus(&self, t: f64) -> f64 {
-        let ginf = 1.0 - self.terms.iter().map(|t| t.0).sum::<f64>();
-        self.mu
-            * (ginf
-                + self
-                    .terms
-                    .iter()
-                    .map(|&(g, tau)| g * (-t / tau).exp())
-                    .sum::<f64>())
+        Ok(Self { shear, kappa })
     }
 }
 
@@ -198,13 +175,15 @@ impl Material3 for PronyNeoHookean {
         let fi = f
             .try_inverse()
             .ok_or_else(|| MaterialError::Deformation("singular F".into()))?;
-        let s_iso = self.mu * fi * s.p_iso;
+        let mu = self.shear.g0();
+        let s_iso = mu * fi * s.p_iso;
         // S = S_vol + g_∞ S_iso + Σ g_k h_k, with the hereditary variables
         // h_k^{n+1} = e^{−x} h_k^n + (1 − e^{−x})/x (S_iso^{n+1} − S_iso^n),
         // x = Δt/τ_k; so S = S_vol + β S_iso + H with H fixed by the history.
-        let mut beta = 1.0 - self.terms.iter().map(|t| t.0).sum::<f64>();
+        let mut beta = self.shear.prony().long_term_weight();
         let mut hist = Mat3::zeros();
-        for (k, &(g, tau)) in self.terms.iter().enumerate() {
+        for (k, term) in self.shear.prony().terms().iter().enumerate() {
+            let (g, tau) = (term.weight, term.tau);
             let x = dt / tau;
             let (e, c) = if x > 1e-8 {
                 ((-x).exp(), (1.0 - (-x).exp()) / x)
@@ -216,8 +195,8 @@ impl Material3 for PronyNeoHookean {
             hist += g * (e * state_n.h[k] - c * state_n.s_iso);
         }
         trial.s_iso = s_iso;
-        let p = self.kappa * s.p_vol + beta * self.mu * s.p_iso + f * hist;
-        let mut a = self.kappa * s.a_vol + beta * self.mu * s.a_iso;
+        let p = self.kappa * s.p_vol + beta * mu * s.p_iso + f * hist;
+        let mut a = self.kappa * s.a_vol + beta * mu * s.a_iso;
         for i in 0..3 {
             for jj in 0..3 {
                 for l in 0..3 {
@@ -232,6 +211,11 @@ impl Material3 for PronyNeoHookean {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nlvid_model::Prony;
+
+    fn shear(g0: f64, terms: &[(f64, f64)]) -> Relaxation {
+        Relaxation::new("G0", g0, Prony::new("G", terms).unwrap()).unwrap()
+    }
 
     fn fd_check<M: Material3>(m: &M, state: &M::State, dt: f64) {
         let f = Mat3::new(1.12, 0.08, 0.0, -0.05, 0.91, 0.0, 0.0, 0.0, 1.04);
@@ -274,7 +258,7 @@ mod tests {
 
     #[test]
     fn prony_tangent_matches_finite_differences_with_history() {
-        let m = PronyNeoHookean::new(1.0, 50.0, vec![(0.3, 0.5), (0.3, 10.0)]).unwrap();
+        let m = PronyNeoHookean::new(shear(1.0, &[(0.3, 0.5), (0.3, 10.0)]), 50.0).unwrap();
         let mut s0 = m.initial_state();
         let mut s1 = s0.clone();
         let f0 = Mat3::new(1.05, 0.02, 0.0, 0.01, 0.97, 0.0, 0.0, 0.0, 0.99);
@@ -286,7 +270,7 @@ mod tests {
     #[test]
     fn small_shear_relaxes_like_the_prony_series() {
         // Step shear γ held: σ_12(t)/γ → G(t) for γ ≪ 1.
-        let m = PronyNeoHookean::new(2.0, 1e4, vec![(0.3, 0.5), (0.3, 10.0)]).unwrap();
+        let m = PronyNeoHookean::new(shear(2.0, &[(0.3, 0.5), (0.3, 10.0)]), 1e4).unwrap();
         let gamma = 1e-6;
         let f = Mat3::new(1.0, gamma, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);
         let mut s = m.initial_state();
@@ -301,7 +285,7 @@ mod tests {
             s = trial.clone();
             let g = r.cauchy[(0, 1)] / gamma;
             assert!(
-                (g - m.relaxation_modulus(t)).abs() < 1e-5 * m.mu,
+                (g - m.shear.value(t)).abs() < 1e-5 * m.shear.g0(),
                 "t={t} {g}"
             );
         }

@@ -2,17 +2,13 @@
 
 #![allow(clippy::needless_range_loop, clippy::unwrap_used)]
 
-use nlvid_fem::afm::{self, AfmParams, AfmSetup, Cantilever, MeshLayout};
+use nlvid_fem::afm::{self, AfmSetup, Cantilever, MeshLayout};
 use nlvid_fem::{FemError, Settings};
+use nlvid_model::{Relaxation, names};
 
-fn params() -> AfmParams {
-    AfmParams {
-        g0: 1e3,
-        g1: 0.3,
-        tau1: 0.5,
-        g2: 0.3,
-        tau2: 10.0,
-    }
+fn params() -> Relaxation {
+    // G0 = 1 kPa (shear modulus), g1 = g2 = 0.3, tau1 = 0.5 s, tau2 = 10 s.
+    Relaxation::from_named(&names::PRONY2, &[1e3, 0.3, 0.3, 0.5, 10.0]).unwrap()
 }
 
 fn short_setup(cantilever: Cantilever) -> AfmSetup {
@@ -251,15 +247,14 @@ fn probe_starting_inside_the_cell_is_a_setting_error() {
 }
 
 /// Elastic materials need no Prony terms (issue 15: the cell model needed
-/// g = [1e-9, 1e-9]): g1 = g2 = 0 is accepted, holds do not relax, and the
-/// run matches the fem crate's own neo-Hookean (μ = G0, an independent
-/// implementation) and the g = 1e-9 workaround.
+/// g = [1e-9, 1e-9]): a relaxation without terms is accepted, holds do not
+/// relax, and the run matches the fem crate's own neo-Hookean (μ = G0, an
+/// independent implementation) and the g = 1e-9 workaround.
 #[test]
 fn elastic_cell_needs_no_prony_terms() {
     let mut setup = short_setup(Cantilever::Rigid);
     setup.output_times = vec![0.0, 0.1, 0.2, 1.0, 5.2];
-    let elastic = AfmParams::elastic(1e3);
-    assert!(elastic.prony_terms().is_empty());
+    let elastic = Relaxation::new("G0", 1e3, nlvid_model::Prony::elastic()).unwrap();
     let run = afm::run(&elastic, &setup).unwrap();
     // The hold (t ≥ 0.2 s at Z = 1 µm) does not relax.
     let hold: Vec<f64> = run.force[2..].to_vec();
@@ -274,11 +269,7 @@ fn elastic_cell_needs_no_prony_terms() {
         &setup,
     )
     .unwrap();
-    let tiny = AfmParams {
-        g1: 1e-9,
-        g2: 1e-9,
-        ..AfmParams::elastic(1e3)
-    };
+    let tiny = Relaxation::from_named(&names::PRONY2, &[1e3, 1e-9, 1e-9, 1.0, 1.0]).unwrap();
     let workaround = afm::run(&tiny, &setup).unwrap();
     for i in 1..run.force.len() {
         let (f, r, w) = (run.force[i], reference.force[i], workaround.force[i]);
@@ -371,4 +362,36 @@ fn mesh_that_would_invert_elements_names_the_setting() {
         Err(FemError::Setting { name, .. }) => assert_eq!(name, "mesh spacing"),
         other => panic!("expected a setting error, got {other:?}"),
     }
+}
+
+/// G0 is the shear modulus (docs/theory/model.md): the FE cell model of a
+/// `Relaxation` with G0 is, bit for bit, the neo-Hookean material with
+/// C1 = G0/2 (eq. 4.1) and the same Prony series, and reading G0 as C1
+/// would change the force by about a factor 2.
+#[test]
+fn cell_model_of_shear_modulus_g0_is_the_neo_hookean_solid_with_c1_half_of_g0() {
+    use nlvid_material::{MooneyRivlin, PronyViscoelastic};
+    let mut setup = short_setup(Cantilever::Rigid);
+    // No force-controlled engagement: the probe follows the piezo only.
+    setup.engagement.force = 0.0;
+    let shear = params();
+    let kappa = setup.bulk_ratio * shear.g0();
+    let by_hand = |c1: f64, kappa: f64| {
+        PronyViscoelastic::new(
+            MooneyRivlin::neo_hookean(c1, kappa).unwrap(),
+            shear.prony().clone(),
+        )
+    };
+    let a = afm::run(&shear, &setup).unwrap();
+    let b = afm::run_with(by_hand(500.0, kappa), &setup).unwrap();
+    assert_eq!(a.force, b.force, "G0 = 1 kPa must be C1 = 500 Pa exactly");
+    // The same material read with C1 = G0 (bulk ratio kept): every stress
+    // doubles, so under the rigid, displacement-driven probe so does F.
+    let doubled = afm::run_with(by_hand(1000.0, 2.0 * kappa), &setup).unwrap();
+    let ratio = doubled.peak_force / a.peak_force;
+    eprintln!("peak force with C1 = G0 over C1 = G0/2: {ratio}");
+    assert!(
+        (ratio - 2.0).abs() < 1e-9,
+        "C1 = G0 would double the force: ratio {ratio}"
+    );
 }

@@ -9,6 +9,7 @@ use nlvid_fem::{
     Component, Control, Mesh, Model, ProbeDrive, RigidPlane, Settings, SphereProbe, Stage, Support,
 };
 use nlvid_material::Material3;
+use nlvid_model::{Prony, Relaxation};
 
 const R: f64 = 2.5e-6;
 
@@ -200,9 +201,13 @@ fn lee_radok_ramp_hold_within_3_percent() {
     // G(t) = G0 (0.4 + 0.3 e^{−t/0.5} + 0.3 e^{−t/10}); ramp to δ0 = 0.05 R
     // in 1 s, hold to 12 s. Lee–Radok: F = 16/3 √R ∫ G(t−s) d(δ^{3/2})/ds ds.
     let g0 = 1e3;
-    let terms = vec![(0.3, 0.5), (0.3, 10.0)];
-    let material = PronyNeoHookean::new(g0, 1e4 * g0, terms).unwrap();
-    let relax = material.clone();
+    let relax = Relaxation::new(
+        "G0",
+        g0,
+        Prony::new("G", &[(0.3, 0.5), (0.3, 10.0)]).unwrap(),
+    )
+    .unwrap();
+    let material = PronyNeoHookean::new(relax.clone(), 1e4 * g0).unwrap();
     let mut model = block(material, 40, 40.0, 250.0);
     let (t_ramp, t_end, d0) = (1.0, 12.0, 0.05 * R);
     let delta = move |t: f64| d0 * (t / t_ramp).min(1.0);
@@ -237,7 +242,7 @@ fn lee_radok_ramp_hold_within_3_percent() {
         for i in 0..n {
             let s = (i as f64 + 0.5) * h;
             let rate = 1.5 * d0.powf(1.5) * s.sqrt() / t_ramp.powf(1.5);
-            sum += relax.relaxation_modulus(t - s) * rate * h;
+            sum += relax.value(t - s) * rate * h;
         }
         16.0 / 3.0 * R.sqrt() * sum
     };
@@ -259,9 +264,7 @@ fn frictionless_plate_compression_matches_homogeneous_neo_hookean() {
         Support::fixed("axis", Component::R),
         Support::fixed("base", Component::Z),
     ];
-    let plane = RigidPlane {
-        surface: "top".into(),
-    };
+    let plane = RigidPlane::above("top");
     let mut model = Model::new(
         mesh,
         NeoHookean {

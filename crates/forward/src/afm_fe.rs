@@ -1,13 +1,19 @@
 //! `model = "afm-fe"`: the axisymmetric finite-element AFM cell model of
 //! thesis §5.3 (`nlvid_fem::afm::run`) driven by the two-step script of
 //! `nlvid-protocol` (force-controlled engagement, then the piezo program
-//! of Fig. 5.2), parameters `[G0, g1, g2, τ1, τ2]` of eq. 5.1 / Table 5.3.
+//! of Fig. 5.2) or by any continuous piezo program Z(t) without engagement,
+//! parameters `[G0, g1, g2, τ1, τ2]` of eq. 5.1 / Table 5.3.
+//!
+//! `nlvid simulate`, `nlvid build` and `nlvid fit` (real model) read these
+//! same `[forward]` keys with the same defaults; the defaults are the fem
+//! crate's (`AfmSetup::thesis_setup1`: 35 × 35 mesh, bias 4, κ/G0 = 200),
+//! which give the verified setup-1 forces (docs/theory/forward.md).
 
 use nlvid_fem::FemError;
-use nlvid_fem::afm::{AfmParams, AfmSetup, Cantilever, Engagement, MeshSpec};
-use nlvid_protocol::{AfmScript, Program};
+use nlvid_fem::afm::{AfmSetup, Cantilever, Engagement, MeshSpec};
+use nlvid_model::{FailureKind, ForwardModel, Relaxation, RunFailure, names};
+use nlvid_protocol::{Loading as ProtocolLoading, Program, Quantity};
 use nlvid_study::{Bounds, Dimension, Section};
-use nlvid_surrogate::{FailureKind, ForwardModel, RunFailure};
 
 use crate::error::{ForwardError, Result};
 
@@ -23,8 +29,9 @@ pub struct AfmFeSpec {
     pub probe_radius: f64,
     /// Cantilever spring constant k [N/m]; `None`: rigid (δ = Z).
     pub spring_constant: Option<f64>,
-    /// The two-step script (engagement + piezo program), from `[protocol]`.
-    pub script: AfmScript,
+    /// From `[protocol]`: the two-step AFM script (engagement + piezo
+    /// program), or a continuous piezo program Z(t) driven directly.
+    pub loading: ProtocolLoading,
     /// Output points m, equally spaced over step 2 (thesis: 5095).
     pub points: usize,
     /// Mesh: elements per side (n × n).
@@ -43,16 +50,29 @@ impl AfmFeSpec {
     /// Reads the `[forward]` keys (`height`, `diameter`, `probe_radius`,
     /// `spring_constant` or `cantilever = "rigid"`, `points`,
     /// `elements_per_side`, `mesh_bias`, `bulk_ratio`,
-    /// `ramp_step_fraction`, `hold_step_max`); `script` is the
-    /// `[protocol]` section's AFM script.
+    /// `ramp_step_fraction`, `hold_step_max`); `loading` is the
+    /// `[protocol]` section's. Defaults are those of
+    /// `AfmSetup::thesis_setup1` (probe radius 2.5 µm, 35 elements per
+    /// side, mesh bias 4, bulk ratio 200, ramp step fraction 0.1, hold step
+    /// 2 s).
     ///
     /// # Errors
     /// Missing key, wrong unit, out-of-range value (file, line, key).
-    pub fn from_section(s: &mut Section, script: AfmScript, points: usize) -> Result<Self> {
+    pub fn from_section(s: &mut Section, loading: ProtocolLoading, points: usize) -> Result<Self> {
         let pos = Bounds::positive();
+        let d = AfmSetup::thesis_setup1();
+        for (old, new) in [
+            ("k", "spring_constant"),
+            ("bias", "mesh_bias"),
+            ("rigid", "cantilever = \"rigid\""),
+        ] {
+            if s.has(old) {
+                return Err(s.invalid(old, format!("this key is now `{new}`")).into());
+            }
+        }
         let height = s.req_quantity("height", Dimension::LENGTH, pos)?;
         let diameter = s.req_quantity("diameter", Dimension::LENGTH, pos)?;
-        let probe_radius = s.req_quantity("probe_radius", Dimension::LENGTH, pos)?;
+        let probe_radius = s.quantity_or("probe_radius", Dimension::LENGTH, pos, d.probe_radius)?;
         let rigid = match s.opt_str("cantilever")?.as_deref() {
             None | Some("spring") => false,
             Some("rigid") => true,
@@ -88,18 +108,22 @@ impl AfmFeSpec {
         };
         let elements_per_side = s
             .opt_usize("elements_per_side", Bounds::closed(2.0, 10_000.0))?
-            .unwrap_or(35);
-        let mesh_bias = s.f64_or("mesh_bias", Bounds::at_least(1.0), 4.0)?;
-        let bulk_ratio = s.f64_or("bulk_ratio", pos, 1000.0)?;
-        let ramp_step_fraction =
-            s.f64_or("ramp_step_fraction", Bounds::open_closed(0.0, 1.0), 0.1)?;
-        let hold_step_max = s.quantity_or("hold_step_max", Dimension::TIME, pos, 2.0)?;
+            .unwrap_or(d.mesh.elements_per_side);
+        let mesh_bias = s.f64_or("mesh_bias", Bounds::at_least(1.0), d.mesh.bias)?;
+        let bulk_ratio = s.f64_or("bulk_ratio", Bounds::at_least(1.0), d.bulk_ratio)?;
+        let ramp_step_fraction = s.f64_or(
+            "ramp_step_fraction",
+            Bounds::open_closed(0.0, 1.0),
+            d.ramp_step_fraction,
+        )?;
+        let hold_step_max =
+            s.quantity_or("hold_step_max", Dimension::TIME, pos, d.hold_step_max)?;
         Ok(Self {
             height,
             diameter,
             probe_radius,
             spring_constant,
-            script,
+            loading,
             points,
             elements_per_side,
             mesh_bias,
@@ -120,7 +144,43 @@ impl AfmFeSpec {
             model: "afm-fe",
             message: e.to_string(),
         };
-        let piezo = self.script.piezo().map_err(bad)?;
+        let (piezo, engagement) = match &self.loading {
+            ProtocolLoading::Afm(script) => (
+                script.piezo().map_err(bad)?,
+                Engagement {
+                    force: script.engage.setpoint_force,
+                    ramp: script.engage.ramp_time,
+                    hold: script.engage.hold,
+                },
+            ),
+            ProtocolLoading::Program(p) => {
+                if p.quantity() != Quantity::Displacement {
+                    return Err(ForwardError::Setting {
+                        model: "afm-fe",
+                        message: "[protocol]: the piezo program must be a displacement \
+                                  (control = \"displacement\", lengths with units)"
+                            .into(),
+                    });
+                }
+                if let Some(j) = p.segments().iter().find(|s| s.is_jump()) {
+                    return Err(ForwardError::Setting {
+                        model: "afm-fe",
+                        message: format!(
+                            "[protocol]: the piezo program jumps at t = {} s; the FE model \
+                             needs a continuous Z(t)",
+                            j.t0
+                        ),
+                    });
+                }
+                // No engagement step: the probe starts touching the cell.
+                let none = Engagement {
+                    force: 0.0,
+                    ramp: 1.0,
+                    hold: 0.0,
+                };
+                (p.clone(), none)
+            }
+        };
         let mut setup = AfmSetup::thesis_setup1();
         setup.height = self.height;
         setup.diameter = self.diameter;
@@ -129,18 +189,20 @@ impl AfmFeSpec {
             Some(stiffness) => Cantilever::Spring { stiffness },
             None => Cantilever::Rigid,
         };
-        setup.engagement = Engagement {
-            force: self.script.engage.setpoint_force,
-            ramp: self.script.engage.ramp_time,
-            hold: self.script.engage.hold,
-        };
+        setup.engagement = engagement;
         setup.piezo = breakpoints(&piezo);
         setup.mesh = MeshSpec {
             elements_per_side: self.elements_per_side,
             bias: self.mesh_bias,
         };
         setup.bulk_ratio = self.bulk_ratio;
-        setup.output_times = piezo.uniform_grid(self.points).map_err(bad)?;
+        let t0 = piezo.start();
+        setup.output_times = piezo
+            .uniform_grid(self.points)
+            .map_err(bad)?
+            .into_iter()
+            .map(|t| t - t0)
+            .collect();
         setup.ramp_step_fraction = self.ramp_step_fraction;
         setup.hold_step_max = self.hold_step_max;
         Ok(setup)
@@ -155,7 +217,8 @@ impl AfmFeSpec {
     }
 }
 
-/// The piezo program as (t, Z) points (every breakpoint, linear between).
+/// The piezo program as (t, Z) points (every breakpoint, linear between),
+/// its clock shifted to start at t = 0 (step 2 starts at 0).
 fn breakpoints(p: &Program) -> Vec<(f64, f64)> {
     let mut pts = Vec::with_capacity(p.segments().len() + 1);
     for seg in p.segments() {
@@ -163,6 +226,10 @@ fn breakpoints(p: &Program) -> Vec<(f64, f64)> {
             pts.push((seg.t0, seg.v0));
         }
         pts.push((seg.t1, seg.v1));
+    }
+    let t0 = pts.first().map_or(0.0, |p| p.0);
+    for p in &mut pts {
+        p.0 -= t0;
     }
     pts
 }
@@ -211,10 +278,10 @@ pub fn fem_failure(e: &FemError) -> RunFailure {
 
 impl ForwardModel for AfmFeModel {
     fn parameter_names(&self) -> Vec<String> {
-        nlvid_surrogate::PRONY2_NAMES.map(String::from).to_vec()
+        nlvid_model::names::PRONY2.map(String::from).to_vec()
     }
     fn parameter_units(&self) -> Vec<String> {
-        nlvid_surrogate::PRONY2_UNITS.map(String::from).to_vec()
+        nlvid_model::names::PRONY2_UNITS.map(String::from).to_vec()
     }
     fn time_grid(&self) -> &[f64] {
         &self.setup.output_times
@@ -223,23 +290,12 @@ impl ForwardModel for AfmFeModel {
         self.identity.clone()
     }
     fn run(&self, p: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
-        let &[g0, g1, g2, tau1, tau2] = p else {
-            return Err(RunFailure {
-                kind: FailureKind::InvalidParameters,
-                time: None,
-                message: format!(
-                    "afm-fe expects 5 parameters [G0, g1, g2, tau1, tau2], got {}",
-                    p.len()
-                ),
-            });
-        };
-        let params = AfmParams {
-            g0,
-            g1,
-            tau1,
-            g2,
-            tau2,
-        };
+        // Parameters in `names::PRONY2` order (G0 the shear modulus).
+        let params = Relaxation::from_named(&names::PRONY2, p).map_err(|e| RunFailure {
+            kind: FailureKind::InvalidParameters,
+            time: None,
+            message: format!("afm-fe: {e}"),
+        })?;
         nlvid_fem::afm::run(&params, &self.setup)
             .map(|r| r.force)
             .map_err(|e| fem_failure(&e))

@@ -1,13 +1,14 @@
-//! `model = "hertz-prony"`: the analytic Lee–Radok ramp-hold model of the
-//! surrogate crate ([`HertzProny`]) with every setting from the study, on
-//! an equally spaced output grid or on a graded one (dense ramp, optionally
-//! log-spaced hold) that resolves a fast ramp and fast relaxation with few
-//! points.
+//! `model = "hertz-prony"`: the analytic Lee–Radok ramp-hold model
+//! ([`HertzProny`], the exact kernel of [`crate::LeeRadok`]) with every
+//! setting from the study, on an equally spaced output grid or on a graded
+//! one (dense ramp, optionally log-spaced hold) that resolves a fast ramp
+//! and fast relaxation with few points.
 
+use nlvid_model::{FailureKind, ForwardModel, Relaxation, RunFailure, names};
 use nlvid_study::{Bounds, Dimension, Section};
-use nlvid_surrogate::{ForwardModel, HertzProny, RunFailure};
 
-use crate::error::Result;
+use crate::error::{ForwardError, Result};
+use crate::lee_radok::LeeRadok;
 
 /// How the output times are placed.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -149,89 +150,159 @@ impl HertzPronySpec {
         }
     }
 
-    /// The model.
-    pub fn build(&self) -> HertzPronyModel {
-        let uniform = HertzProny::new(
-            self.probe_radius,
-            self.rate,
-            self.ramp,
-            self.ramp + self.hold,
-            self.points,
-        );
-        let graded = match self.grid {
-            HertzGrid::Uniform => None,
+    /// Indentation δ(t) of the nominal ramp-hold (m): `rate · min(t, ramp)`,
+    /// 0 before contact.
+    pub fn indentation(&self, t: f64) -> f64 {
+        self.rate * t.clamp(0.0, self.ramp)
+    }
+
+    /// The model on [`Self::times`]. On the uniform grid its identity is
+    /// that of [`HertzProny::new`] with the same settings.
+    ///
+    /// # Errors
+    /// Settings the kernel refuses ([`LeeRadok::ramp_hold`]); never for
+    /// settings read by [`Self::from_section`].
+    pub fn build(&self) -> Result<HertzProny> {
+        let end = self.ramp + self.hold;
+        let base = identity(self.probe_radius, self.rate, self.ramp, self.points, end);
+        let identity = match self.grid {
+            HertzGrid::Uniform => base,
             HertzGrid::Graded {
                 ramp_points,
                 first_hold_step,
             } => {
-                let times = self.times();
-                // One single-time model per output time: the same quadrature
-                // as the uniform model, evaluated at exactly t_i.
-                let at = times
-                    .iter()
-                    .map(|&t| HertzProny::new(self.probe_radius, self.rate, self.ramp, t, 1))
-                    .collect();
                 let hold = match first_hold_step {
                     None => "uniform".to_string(),
                     Some(f) => format!("log from {f:e}"),
                 };
-                Some(Graded {
-                    identity: format!(
-                        "{}+grid(ramp_points={ramp_points},hold={hold})",
-                        uniform.identity()
-                    ),
-                    times,
-                    at,
-                })
+                format!("{base}+grid(ramp_points={ramp_points},hold={hold})")
             }
         };
-        HertzPronyModel { uniform, graded }
+        HertzProny::on_grid(
+            self.probe_radius,
+            self.rate,
+            self.ramp,
+            self.times(),
+            identity,
+        )
     }
 }
 
-/// [`HertzProny`] on the grid of a [`HertzPronySpec`]. On the uniform grid
-/// it is exactly `HertzProny` (same times, forces and identity).
-#[derive(Debug, Clone)]
-pub struct HertzPronyModel {
-    uniform: HertzProny,
-    graded: Option<Graded>,
+/// The identity string of the uniform-grid model: its settings and the
+/// last of its m times, `end·m/m` (unchanged since the model was evaluated
+/// by quadrature: same model, same settings, so existing run stores stay
+/// valid).
+fn identity(radius: f64, rate: f64, ramp: f64, m: usize, end: f64) -> String {
+    let last = end * m as f64 / m as f64;
+    format!("HertzProny(R={radius:e},v={rate:e},tr={ramp:e},m={m},tend={last:e})")
 }
 
+/// Linear-viscoelastic Hertz indentation by a rigid sphere (ν = ½), ramp at
+/// constant rate then hold, through the exact Lee–Radok kernel
+/// ([`LeeRadok::ramp_hold`]):
+/// `F(t) = (16/3)√R ∫₀ᵗ G(t − s) d(δ^{3/2})/ds ds` with the two-term Prony
+/// G(t) of eq. 5.1; parameters [`names::PRONY2`] = `[G0, g1, g2, τ1, τ2]`
+/// (Pa, 1, 1, s, s). Microseconds per run.
 #[derive(Debug, Clone)]
-struct Graded {
-    times: Vec<f64>,
-    at: Vec<HertzProny>,
+pub struct HertzProny {
+    kernel: LeeRadok,
+    radius: f64,
+    rate: f64,
+    ramp_time: f64,
     identity: String,
 }
 
-impl ForwardModel for HertzPronyModel {
+impl HertzProny {
+    /// Probe of radius R (m), ramp at `rate` (m/s) for `ramp_time` (s), then
+    /// hold until `end_time`; `m` equally spaced output times in
+    /// (0, end_time].
+    ///
+    /// # Errors
+    /// [`ForwardError::Setting`] for non-positive settings or m = 0.
+    pub fn new(radius: f64, rate: f64, ramp_time: f64, end_time: f64, m: usize) -> Result<Self> {
+        if m == 0 || !(end_time > 0.0) {
+            return Err(ForwardError::Setting {
+                model: "hertz-prony",
+                message: format!(
+                    "need at least one output time and end time > 0, got m = {m}, end = {end_time} s"
+                ),
+            });
+        }
+        let times = (1..=m).map(|i| end_time * i as f64 / m as f64).collect();
+        Self::on_grid(
+            radius,
+            rate,
+            ramp_time,
+            times,
+            identity(radius, rate, ramp_time, m, end_time),
+        )
+    }
+
+    /// The same model on any strictly increasing grid, with the identity
+    /// the caller gives (it enters the build's study hash).
+    ///
+    /// # Errors
+    /// As [`LeeRadok::ramp_hold`].
+    pub fn on_grid(
+        radius: f64,
+        rate: f64,
+        ramp_time: f64,
+        times: Vec<f64>,
+        identity: String,
+    ) -> Result<Self> {
+        Ok(Self {
+            kernel: LeeRadok::ramp_hold(radius, 0.5, rate, ramp_time, times)?,
+            radius,
+            rate,
+            ramp_time,
+            identity,
+        })
+    }
+
+    /// The kernel (for its Jacobian, [`LeeRadok::force_and_jacobian`]).
+    pub fn kernel(&self) -> &LeeRadok {
+        &self.kernel
+    }
+
+    /// Probe radius R (m).
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// Indentation rate on the ramp (m/s).
+    pub fn rate(&self) -> f64 {
+        self.rate
+    }
+
+    /// Ramp duration (s).
+    pub fn ramp_time(&self) -> f64 {
+        self.ramp_time
+    }
+}
+
+impl ForwardModel for HertzProny {
     fn parameter_names(&self) -> Vec<String> {
-        self.uniform.parameter_names()
+        names::PRONY2.map(String::from).to_vec()
     }
     fn parameter_units(&self) -> Vec<String> {
-        self.uniform.parameter_units()
+        names::PRONY2_UNITS.map(String::from).to_vec()
     }
     fn time_grid(&self) -> &[f64] {
-        match &self.graded {
-            None => self.uniform.time_grid(),
-            Some(g) => &g.times,
-        }
+        self.kernel.times()
     }
     fn identity(&self) -> String {
-        match &self.graded {
-            None => self.uniform.identity(),
-            Some(g) => g.identity.clone(),
-        }
+        self.identity.clone()
     }
-    fn run(&self, params: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
-        let Some(g) = &self.graded else {
-            return self.uniform.run(params);
-        };
-        let mut f = Vec::with_capacity(g.times.len());
-        for m in &g.at {
-            f.extend(m.run(params)?);
+    fn run(&self, p: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
+        let g = Relaxation::from_named(&names::PRONY2, p)
+            .map_err(|e| RunFailure::new(FailureKind::InvalidParameters, e.to_string()))?;
+        if g.g0() <= 0.0 {
+            return Err(RunFailure::new(
+                FailureKind::InvalidParameters,
+                format!("G0 must be > 0, got {} Pa", g.g0()),
+            ));
         }
-        Ok(f)
+        Ok(self.kernel.force(&g))
     }
 }
 
@@ -291,8 +362,9 @@ points = 10
             points: 11,
             ..graded.clone()
         }
-        .build();
-        let uniform = HertzProny::new(2.5e-6, 10e-6, 0.2, 2.0, 20);
+        .build()
+        .unwrap();
+        let uniform = HertzProny::new(2.5e-6, 10e-6, 0.2, 2.0, 20).unwrap();
         let p = [1500.0, 0.4, 0.3, 0.03, 5.0];
         let (fg, fu) = (model.run(&p).unwrap(), uniform.run(&p).unwrap());
         assert_eq!(model.time_grid().len(), 11);
@@ -307,7 +379,8 @@ points = 10
         // g1 = g2 = 0: F = (16/3) G0 √R δ^{3/2}, δ = v·min(t, ramp).
         let log = spec("ramp_points = 4\nfirst_hold_step = \"1 ms\"\n")
             .unwrap()
-            .build();
+            .build()
+            .unwrap();
         let f = log.run(&[1500.0, 0.0, 0.0, 0.03, 5.0]).unwrap();
         for (t, f) in log.time_grid().iter().zip(&f) {
             let delta = 10e-6 * t.min(0.2);
@@ -318,8 +391,8 @@ points = 10
 
     #[test]
     fn the_grid_is_part_of_the_identity_and_the_uniform_model_is_unchanged() {
-        let uniform = spec("").unwrap().build();
-        let plain = HertzProny::new(2.5e-6, 10e-6, 0.2, 2.0, 10);
+        let uniform = spec("").unwrap().build().unwrap();
+        let plain = HertzProny::new(2.5e-6, 10e-6, 0.2, 2.0, 10).unwrap();
         assert_eq!(uniform.identity(), plain.identity());
         assert_eq!(uniform.time_grid(), plain.time_grid());
         let ids = [
@@ -328,13 +401,40 @@ points = 10
             "ramp_points = 4\nfirst_hold_step = \"1 ms\"\n",
             "ramp_points = 4\nfirst_hold_step = \"2 ms\"\n",
         ]
-        .map(|e| spec(e).unwrap().build().identity());
+        .map(|e| spec(e).unwrap().build().unwrap().identity());
         for (i, a) in ids.iter().enumerate() {
             assert_ne!(a, &plain.identity());
             for b in &ids[i + 1..] {
                 assert_ne!(a, b);
             }
         }
+    }
+
+    #[test]
+    fn the_identity_of_the_bundled_demo_meta_model_is_kept() {
+        // examples/demo/metamodel/meta.json records this string (built when
+        // the model was evaluated by quadrature); the exact kernel is the
+        // same model, so stores and meta-models of it stay valid.
+        let m = HertzProny::new(2.5e-6, 2e-6, 1.0, 52.0, 520).unwrap();
+        assert_eq!(
+            m.identity(),
+            "HertzProny(R=2.5e-6,v=2e-6,tr=1e0,m=520,tend=5.2e1)"
+        );
+    }
+
+    #[test]
+    fn bad_parameters_are_a_typed_failure() {
+        let m = HertzProny::new(5e-6, 1e-6, 1.0, 4.0, 8).unwrap();
+        for p in [
+            vec![800.0, 0.7, 0.6, 1.0, 2.0],
+            vec![0.0, 0.3, 0.3, 1.0, 2.0],
+            vec![800.0, 0.3, 0.3, -1.0, 2.0],
+            vec![800.0, 0.3, 0.3, 1.0],
+        ] {
+            let e = m.run(&p).unwrap_err();
+            assert_eq!(e.kind, FailureKind::InvalidParameters, "{p:?}: {e}");
+        }
+        assert!(HertzProny::new(5e-6, 1e-6, 1.0, 4.0, 0).is_err());
     }
 
     #[test]

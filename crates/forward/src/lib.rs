@@ -1,21 +1,25 @@
 //! Forward models from study files: one place that turns a study's
 //! `[forward]` section (and, for the AFM and membrane models, its
-//! `[protocol]` section) into a [`nlvid_surrogate::ForwardModel`] — the
+//! `[protocol]` section) into a [`nlvid_model::ForwardModel`] — the
 //! parameters → force-curve map that meta-model builds, Kriging checks and
-//! fits evaluate.
+//! fits evaluate — and the one Lee–Radok kernel ([`LeeRadok`]) that the
+//! analytic model, the fits (`nlvid-inverse`), `nlvid inspect`
+//! (`nlvid-afm`) and the demo's curves (`nlvid-report`) evaluate.
 //!
 //! Models (`model = "…"`):
 //! * `hertz-prony` — analytic Lee–Radok ramp-hold indentation (equally
 //!   spaced or graded output grid, [`HertzGrid`]) with a
-//!   2-term Prony G(t) ([`HertzPronySpec`]); parameters `[G0, g1, g2, τ1, τ2]`;
-//!   microseconds per run.
+//!   2-term Prony G(t) ([`HertzPronySpec`], [`HertzProny`]); parameters
+//!   `[G0, g1, g2, τ1, τ2]`; microseconds per run.
 //! * `afm-fe` — the axisymmetric finite-element AFM cell model of thesis
 //!   §5.3 (`nlvid_fem::afm::run`) with the two-step script of
 //!   `nlvid-protocol` ([`AfmFeSpec`], [`AfmFeModel`]); parameters
 //!   `[G0, g1, g2, τ1, τ2]` (eq. 5.1, Table 5.3); seconds to minutes per run.
 //! * `membrane` — the ch. II membrane solver (`nlvid_membrane::simulate`)
 //!   ([`MembraneSpec`], [`MembraneModel`]); parameters
-//!   `[C1, γ0, g1, g2, τ1, τ2]` (eq. 2.56); tenths of a second per run.
+//!   `[G10, gamma0, g1_long_term, g2_long_term, tau1, tau2]`
+//!   ([`MEMBRANE_PARAMETERS`], eq. 2.56: ch. II's G1(0) and long-term
+//!   fractions); tenths of a second per run.
 //!
 //! Every model reports SI units (`parameter_units`) and an `identity`
 //! string holding every setting, which enters the build's study hash.
@@ -46,20 +50,25 @@
 mod afm_fe;
 mod error;
 mod hertz;
+mod lee_radok;
 mod membrane;
+pub mod simulate;
 
 use std::time::Duration;
 
+use nlvid_model::{ForwardModel, RunFailure};
 use nlvid_protocol::{Loading as ProtocolLoading, ProtocolSettings};
 use nlvid_study::FromSection as _;
 use nlvid_study::{Bounds, Dimension, Section, Study};
-use nlvid_surrogate::{ForwardModel, RunFailure};
 
 pub use afm_fe::{AfmFeModel, AfmFeSpec, fem_failure};
 pub use error::{ForwardError, Result};
-pub use hertz::{HertzGrid, HertzPronyModel, HertzPronySpec};
-pub use membrane::{MembraneModel, MembraneSpec, membrane_failure};
-pub use nlvid_surrogate::HertzProny;
+pub use hertz::{HertzGrid, HertzProny, HertzPronySpec};
+pub use lee_radok::LeeRadok;
+pub use membrane::{
+    MembraneModel, MembraneSpec, PARAMETERS as MEMBRANE_PARAMETERS, membrane_failure,
+};
+pub use simulate::{SimulateStudy, Simulation};
 
 /// Which forward model, with all its settings.
 #[derive(Debug, Clone, PartialEq)]
@@ -136,17 +145,9 @@ impl ForwardSettings {
             Kind::AfmFe => {
                 let mut ps = study.section("protocol")?;
                 let settings = ProtocolSettings::from_section(&mut ps)?;
-                let ProtocolLoading::Afm(script) = &settings.loading else {
-                    return Err(ps
-                        .invalid(
-                            "kind",
-                            "model `afm-fe` needs kind = \"afm\" (the two-step AFM script)",
-                        )
-                        .into());
-                };
                 let m = points(&mut f, Some((&ps, &settings)))?;
                 ps.finish()?;
-                ForwardSpec::AfmFe(AfmFeSpec::from_section(&mut f, script.clone(), m)?)
+                ForwardSpec::AfmFe(AfmFeSpec::from_section(&mut f, settings.loading, m)?)
             }
             Kind::Membrane => {
                 let mut ps = study.section("protocol")?;
@@ -179,7 +180,7 @@ impl ForwardSettings {
     /// Settings the model cannot use (see each spec's `build`).
     pub fn build(&self) -> Result<Box<dyn ForwardModel>> {
         let model: Box<dyn ForwardModel> = match &self.spec {
-            ForwardSpec::HertzProny(s) => Box::new(s.build()),
+            ForwardSpec::HertzProny(s) => Box::new(s.build()?),
             ForwardSpec::AfmFe(s) => Box::new(s.build()?),
             ForwardSpec::Membrane(s) => Box::new(s.build()?),
         };

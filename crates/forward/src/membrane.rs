@@ -2,19 +2,34 @@
 //! fluid-filled Pipkin–Rogers membrane between two plates
 //! (`nlvid_membrane::simulate`, eqs. 2.33–2.56), in physical units.
 //!
-//! Parameters `[C1 (Pa), gamma0, g1, g2, tau1 (s), tau2 (s)]`:
-//! G1(t) = C1 [g1 + (1 − g1) e^{−t/τ1}], G2(t) = γ0 C1 [g2 + (1 − g2) e^{−t/τ2}]
-//! (eq. 2.56; g1, g2 are the long-term *fractions* Gα∞/Gα0, in (0, 1], not
-//! ABAQUS Prony weights), c = τ1/τ2. The plate displacement D(t) per plate
-//! comes from `[protocol]` in metres and is divided by r0; the solver's
-//! dimensionless force F/(C1 h0 r0) (eq. 2.47) is multiplied back to newtons.
+//! Parameters `[G10 (Pa), gamma0, g1_long_term, g2_long_term, tau1 (s),
+//! tau2 (s)]` (names as in `docs/theory/model.md`):
+//! G1(t) = G10 [g1 + (1 − g1) e^{−t/τ1}], G2(t) = γ0 G10 [g2 + (1 − g2) e^{−t/τ2}]
+//! (eq. 2.56; G10 = G1(0), ch. II's modulus; g1, g2 are the long-term
+//! *fractions* Gα∞/Gα0, in (0, 1], not Prony weights, hence
+//! `g1_long_term`, `g2_long_term`), c = τ1/τ2. The plate displacement D(t)
+//! per plate comes from `[protocol]` in metres and is divided by r0; the
+//! solver's dimensionless force F/(G10 h0 r0) (eq. 2.47) is multiplied back
+//! to newtons.
 
 use nlvid_membrane::{ControlKind, Geometry, Loading, MembraneError, PipkinRogersParams, simulate};
+use nlvid_model::{FailureKind, ForwardModel, RunFailure};
 use nlvid_protocol::{Program, ProgramBuilder, Quantity};
 use nlvid_study::{Bounds, Dimension, Section};
-use nlvid_surrogate::{FailureKind, ForwardModel, RunFailure};
 
 use crate::error::{ForwardError, Result};
+
+/// Parameter names of the membrane model, in order: ch. II's `G10` =
+/// G1(0) (Pa), `gamma0` = G2(0)/G1(0), the long-term fractions of eq. 2.56
+/// and the two relaxation times (s).
+pub const PARAMETERS: [&str; 6] = [
+    nlvid_model::names::G10,
+    nlvid_model::names::GAMMA0,
+    "g1_long_term",
+    "g2_long_term",
+    "tau1",
+    "tau2",
+];
 
 /// Settings of the membrane forward model (everything but the six material
 /// parameters).
@@ -132,8 +147,8 @@ fn scale(p: &Program, factor: f64) -> nlvid_protocol::Result<Program> {
     b.build()
 }
 
-/// The membrane solver as a [`ForwardModel`]: parameters
-/// `[C1 (Pa), gamma0, g1, g2, tau1 (s), tau2 (s)]`, response F(t) [N] on
+/// The membrane solver as a [`ForwardModel`]: parameters [`PARAMETERS`]
+/// `[G10 (Pa), gamma0, g1_long_term, g2_long_term, tau1 (s), tau2 (s)]`, response F(t) [N] on
 /// the solve times (the uniform grid plus the program's breakpoints).
 #[derive(Debug, Clone)]
 pub struct MembraneModel {
@@ -156,18 +171,19 @@ impl MembraneModel {
     }
     /// The material parameters of one run (eq. 2.56 with c = τ1/τ2).
     pub fn params(&self, p: &[f64]) -> std::result::Result<PipkinRogersParams, RunFailure> {
-        let &[c1, gamma0, g1, g2, tau1, tau2] = p else {
+        let &[g10, gamma0, g1, g2, tau1, tau2] = p else {
             return Err(RunFailure {
                 kind: FailureKind::InvalidParameters,
                 time: None,
                 message: format!(
-                    "membrane expects 6 parameters [C1, gamma0, g1, g2, tau1, tau2], got {}",
+                    "membrane expects 6 parameters [{}], got {}",
+                    PARAMETERS.join(", "),
                     p.len()
                 ),
             });
         };
         Ok(PipkinRogersParams {
-            c1,
+            g10,
             gamma0,
             g1,
             g2,
@@ -194,11 +210,38 @@ pub fn membrane_failure(e: &MembraneError) -> RunFailure {
     }
 }
 
+impl MembraneModel {
+    /// One full run at `p` (SI, the order of `parameter_names`): the
+    /// dimensionless history and the profiles kept at the solve times
+    /// nearest to `profile_times` (s). Scale the history with
+    /// [`MembraneModel::scales`].
+    ///
+    /// # Errors
+    /// Bad parameters; the solver's errors (wrinkling, non-convergence).
+    pub fn run_full(
+        &self,
+        p: &[f64],
+        profile_times: &[f64],
+    ) -> std::result::Result<nlvid_membrane::MembraneRun, RunFailure> {
+        let params = self.params(p)?;
+        let loading = self.loading.clone().with_profiles(profile_times);
+        simulate(&params, &self.geometry, &loading).map_err(|e| membrane_failure(&e))
+    }
+
+    /// The scales of eq. 2.47 at `p`: length r0 (m), wall thickness h0 (m)
+    /// and stress G1(0) (Pa): force F = F̄·G1(0)·h0·r0, pressure
+    /// p = p̄·G1(0)·h0/r0, tension T = T̄·G1(0)·h0.
+    ///
+    /// # Errors
+    /// A parameter vector of the wrong length.
+    pub fn scales(&self, p: &[f64]) -> std::result::Result<(f64, f64, f64), RunFailure> {
+        Ok((self.r0, self.h0, self.params(p)?.g10))
+    }
+}
+
 impl ForwardModel for MembraneModel {
     fn parameter_names(&self) -> Vec<String> {
-        ["C1", "gamma0", "g1", "g2", "tau1", "tau2"]
-            .map(String::from)
-            .to_vec()
+        PARAMETERS.map(String::from).to_vec()
     }
     fn parameter_units(&self) -> Vec<String> {
         ["Pa", "1", "1", "1", "s", "s"].map(String::from).to_vec()
@@ -217,7 +260,7 @@ impl ForwardModel for MembraneModel {
         let params = self.params(p)?;
         let run =
             simulate(&params, &self.geometry, &self.loading).map_err(|e| membrane_failure(&e))?;
-        let scale = params.c1 * self.h0 * self.r0;
+        let scale = params.g10 * self.h0 * self.r0;
         Ok(run.force().into_iter().map(|f| f * scale).collect())
     }
 }

@@ -3,13 +3,13 @@
 
 #![allow(clippy::unwrap_used)]
 
-use nlvid_fem::afm::{AfmParams, AfmSetup, Cantilever, Engagement, MeshSpec};
+use nlvid_fem::afm::{AfmSetup, Cantilever, Engagement, MeshSpec};
 use nlvid_fem::{FemError, NonConvergence};
-use nlvid_forward::{ForwardSettings, ForwardSpec, fem_failure, from_study};
+use nlvid_forward::{ForwardSettings, ForwardSpec, HertzProny, fem_failure, from_study};
 use nlvid_membrane::{ControlKind, Geometry, Loading, PipkinRogersParams, simulate};
+use nlvid_model::{FailureKind, ForwardModel};
 use nlvid_protocol::{Quantity, programs};
 use nlvid_study::Study;
-use nlvid_surrogate::{FailureKind, ForwardModel, HertzProny};
 
 fn study(text: &str) -> Study {
     Study::parse("s.toml", text).unwrap()
@@ -30,7 +30,7 @@ fn hertz_prony_from_study_equals_the_directly_built_model() {
     let mut s = study(HERTZ);
     let model = from_study(&mut s).unwrap();
     s.finish().unwrap();
-    let direct = HertzProny::new(2.5e-6, 2e-6, 0.5, 5.0, 40);
+    let direct = HertzProny::new(2.5e-6, 2e-6, 0.5, 5.0, 40).unwrap();
     let p = [1200.0, 0.3, 0.25, 0.08, 6.0];
     assert_eq!(model.run(&p).unwrap(), direct.run(&p).unwrap());
     assert_eq!(model.time_grid(), direct.time_grid());
@@ -75,19 +75,26 @@ fn membrane_adapter_equals_a_dimensionless_simulation_scaled_by_hand() {
     s.finish().unwrap();
     assert_eq!(
         model.parameter_names(),
-        ["C1", "gamma0", "g1", "g2", "tau1", "tau2"]
+        [
+            "G10",
+            "gamma0",
+            "g1_long_term",
+            "g2_long_term",
+            "tau1",
+            "tau2"
+        ]
     );
-    let (c1, gamma0, g1, g2, tau1, tau2) = (3000.0, 0.1, 0.3, 0.3, 0.5, 0.25);
-    let f = model.run(&[c1, gamma0, g1, g2, tau1, tau2]).unwrap();
+    let (g10, gamma0, g1, g2, tau1, tau2) = (3000.0, 0.1, 0.3, 0.3, 0.5, 0.25);
+    let f = model.run(&[g10, gamma0, g1, g2, tau1, tau2]).unwrap();
     let t = model.time_grid().to_vec();
     // 12 points on [0, 1.5] s; the ramp end (0.5 s) is not on it and is added.
     assert_eq!(t.len(), 13);
     assert!(t.iter().any(|&x| (x - 0.5).abs() < 1e-12));
 
-    // Independent path: eq. 2.47 units (C1 = 1, τ1 = 1), D/r0 = 0.5 reached
-    // at t0 = 0.5 s / τ1 = 1, hold to t0 = 3; F = F̄ C1 h0 r0.
+    // Independent path: eq. 2.47 units (G10 = 1, τ1 = 1), D/r0 = 0.5 reached
+    // at t0 = 0.5 s / τ1 = 1, hold to t0 = 3; F = F̄ G10 h0 r0.
     let p = PipkinRogersParams {
-        c1: 1.0,
+        g10: 1.0,
         gamma0,
         g1,
         g2,
@@ -108,7 +115,7 @@ fn membrane_adapter_equals_a_dimensionless_simulation_scaled_by_hand() {
         &loading,
     )
     .unwrap();
-    let scale = c1 * 40e-6 * 1.5e-3;
+    let scale = g10 * 40e-6 * 1.5e-3;
     let peak = f.iter().copied().fold(0.0, f64::max);
     assert!(peak > 0.0);
     for (a, b) in f.iter().zip(run.force()) {
@@ -172,7 +179,8 @@ fn afm_setup_by_hand() -> AfmSetup {
         elements_per_side: 6,
         bias: 4.0,
     };
-    s.bulk_ratio = 1000.0;
+    // bulk_ratio: not in the study, so the fem default (κ/G0 = 200) of
+    // thesis_setup1 — the one `nlvid simulate` and `nlvid build` both use.
     s.output_times = (0..12).map(|i| 1.1 * i as f64 / 11.0).collect();
     s.ramp_step_fraction = 0.1;
     s.hold_step_max = 0.5;
@@ -207,13 +215,15 @@ fn afm_fe_setup_from_study_matches_the_setup_written_by_hand() {
             got.height,
             got.diameter,
             got.probe_radius,
-            got.hold_step_max
+            got.hold_step_max,
+            got.bulk_ratio
         ),
         (
             want.height,
             want.diameter,
             want.probe_radius,
-            want.hold_step_max
+            want.hold_step_max,
+            200.0
         )
     );
 }
@@ -223,17 +233,13 @@ fn afm_fe_run_equals_a_direct_fem_call() {
     let model = from_study(&mut study(AFM)).unwrap();
     let (g0, g1, g2, tau1, tau2) = (1000.0, 0.3, 0.2, 0.1, 5.0);
     let f = model.run(&[g0, g1, g2, tau1, tau2]).unwrap();
-    let direct = nlvid_fem::afm::run(
-        &AfmParams {
-            g0,
-            g1,
-            tau1,
-            g2,
-            tau2,
-        },
-        &afm_setup_by_hand(),
+    let shear = nlvid_model::Relaxation::new(
+        "G0",
+        g0,
+        nlvid_model::Prony::new("G", &[(g1, tau1), (g2, tau2)]).unwrap(),
     )
     .unwrap();
+    let direct = nlvid_fem::afm::run(&shear, &afm_setup_by_hand()).unwrap();
     assert_eq!(f.len(), 12);
     let peak = direct.peak_force;
     assert!(peak > 0.2e-9, "peak {peak}");
@@ -310,40 +316,4 @@ fn bad_studies_name_file_line_and_key() {
         "control = \"force\"\ntarget = \"1 mN\"\nrate = \"1 mN/s\"",
     ));
     assert!(e.contains("protocol.control"), "{e}");
-}
-
-/// The small afm-fe example study built end to end through the surrogate
-/// build (4 FE runs, coarse mesh, short protocol). Heavy: run with
-/// `cargo test --release -p nlvid-forward -- --ignored`.
-#[test]
-#[ignore = "runs 4 finite-element simulations (seconds each)"]
-fn afm_fe_example_builds_end_to_end() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples/metamodel/afm-fe.toml");
-    let mut st = Study::load(&path).unwrap();
-    let model = from_study(&mut st).unwrap();
-    let design = vec![
-        vec![600.0, 0.55, 0.28, 0.45, 13.8],
-        vec![375.0, 0.63, 0.03, 0.024, 8.8],
-        vec![2170.0, 0.064, 0.16, 0.086, 19.1],
-        vec![268.0, 0.32, 0.45, 0.014, 2.35],
-    ];
-    let dir = std::env::temp_dir().join(format!("nlvid-forward-afm-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let s = nlvid_surrogate::build(
-        model.as_ref(),
-        &design,
-        &dir,
-        &nlvid_surrogate::BuildOptions::default(),
-    )
-    .unwrap();
-    assert_eq!((s.ran, s.failed), (4, 0));
-    let mm = nlvid_surrogate::load(&dir, &nlvid_surrogate::Admissibility::default()).unwrap();
-    for (y, (_, _, _, secs)) in mm.y.iter().zip(&mm.status) {
-        let peak = y.iter().copied().fold(0.0, f64::max);
-        // Above the 0.48 nN engagement force, relaxed at the end of the hold.
-        assert!(peak > 0.48e-9 && y[y.len() - 1] < peak, "peak {peak}");
-        eprintln!("afm-fe run: {secs:.2} s, peak {peak:.3e} N");
-    }
-    let _ = std::fs::remove_dir_all(&dir);
 }

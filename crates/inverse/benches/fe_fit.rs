@@ -25,10 +25,11 @@ use std::time::Instant;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nlvid_inverse::{
-    BasisExperiment, BasisMisfit, BasisModel, Coordinates, Domain, FitResult, KrigingSurrogate,
+    BasisExperiment, BasisMisfit, BasisModel, Coordinates, FitResult, KrigingSurrogate,
     LeeRadokHertz, Model, MultiStart, Objective, Precomputed, ReducedModel, Result, SurrogateCurve,
-    SurrogateMisfit, design_domain, gram, ramp_hold_grid, ramp_hold_indentation, read_meta,
+    SurrogateMisfit, gram, ramp_hold_grid, ramp_hold_indentation, read_meta,
 };
+use nlvid_model::Domain;
 use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
@@ -205,14 +206,8 @@ fn real_file(c: &mut Criterion) {
     let meta = read_meta(&export.join("train/meta.json")).expect("meta.json");
     let kriging: KrigingModel =
         serde_json::from_slice(&std::fs::read(&model).expect("read model")).expect("model JSON");
-    let sur = KrigingSurrogate::new(
-        kriging,
-        Domain::prony2_table_5_3(0.01).expect("domain"),
-        &meta.parameter_names,
-        meta.time_s,
-        Coordinates::Physical,
-    )
-    .expect("surrogate");
+    let sur = KrigingSurrogate::new(kriging, meta.domain, meta.time_s, Coordinates::Physical)
+        .expect("surrogate");
     let y = std::fs::read_to_string(export.join("check/Y.csv")).expect("check/Y.csv");
     let clean: Vec<f64> = y
         .lines()
@@ -226,14 +221,14 @@ fn real_file(c: &mut Criterion) {
 }
 
 fn synthetic(c: &mut Criterion) {
-    let domain = Domain::prony2_table_5_3(0.01).expect("domain");
+    let domain = Domain::table_5_3(0.01).expect("domain");
     let t = ramp_hold_grid(0.2, 199, 52.0, 4895, 1e-3).expect("grid");
     let delta = ramp_hold_indentation(&t, 10e-6, 2e-6);
     let real = LeeRadokHertz::new(domain.clone(), t, &delta, 2.5e-6, 0.5).expect("model");
     for n in [234, 900] {
         let t0 = Instant::now();
         let design = sample(
-            &design_domain(&domain),
+            &domain,
             &SampleSettings {
                 n,
                 seed: 7,
@@ -248,17 +243,15 @@ fn synthetic(c: &mut Criterion) {
         let xm = Mat::from_fn(n, 5, |i, k| design[i][k]);
         let ym = Mat::from_fn(n, ys[0].len(), |i, j| ys[i][j]);
         let mut s = KrigingSettings::new(Regression::Poly1, Correlation::Gauss, 5);
-        // Domain order G0, g1, tau1, g2, tau2; θ of the FE meta-model.
-        s.theta = ThetaSearch::Fixed(vec![0.072, 0.039, 0.108, 0.046, 0.093]);
+        // Domain order G0, g1, g2, tau1, tau2; θ of the FE meta-model.
+        s.theta = ThetaSearch::Fixed(vec![0.072, 0.039, 0.046, 0.108, 0.093]);
         s.pca_energy = Some(0.999999);
         s.output_scale = Some(OutputScale::Linear { input: 0 });
-        s.log_inputs = vec![true, false, true, false, true];
+        s.log_inputs = vec![true, false, false, true, true];
         let k = KrigingModel::fit(xm.as_ref(), ym.as_ref(), &s).expect("kriging");
-        let names: Vec<String> = domain.params().iter().map(|p| p.name.clone()).collect();
         let sur = KrigingSurrogate::new(
             k,
             domain.clone(),
-            &names,
             Model::times(&real).to_vec(),
             Coordinates::Physical,
         )
@@ -268,7 +261,7 @@ fn synthetic(c: &mut Criterion) {
             Model::times(&real).len(),
             t0.elapsed().as_secs_f64()
         );
-        let clean = real.response(&[650.0, 0.45, 0.08, 0.35, 9.0]).expect("y");
+        let clean = real.response(&[650.0, 0.45, 0.35, 0.08, 9.0]).expect("y");
         let name = format!("synthetic_N{n}_m{}", Model::times(&real).len());
         bench_surrogate(c, &name, &sur, &noisy(&clean));
     }

@@ -9,20 +9,21 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nlvid_inverse::{
-    BasisExperiment, BasisMisfit, Coordinates, Domain, KrigingSurrogate, LeeRadokHertz, Model,
-    MultiStart, design_domain, gram, ramp_hold_grid, ramp_hold_indentation,
+    BasisExperiment, BasisMisfit, Coordinates, KrigingSurrogate, LeeRadokHertz, Model, MultiStart,
+    gram, ramp_hold_grid, ramp_hold_indentation,
 };
+use nlvid_model::Domain;
 use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{Correlation, KrigingModel, KrigingSettings, Regression};
 
 fn setup() -> (KrigingSurrogate, Vec<f64>) {
-    let domain = Domain::prony2_table_5_3(0.01).expect("domain");
+    let domain = Domain::table_5_3(0.01).expect("domain");
     let t = ramp_hold_grid(0.2, 60, 52.0, 200, 1e-3).expect("grid");
     let delta = ramp_hold_indentation(&t, 10e-6, 2e-6);
     let real = LeeRadokHertz::new(domain.clone(), t, &delta, 2.5e-6, 0.5).expect("model");
     let design = sample(
-        &design_domain(&domain),
+        &domain,
         &SampleSettings {
             n: 300,
             seed: 20261122,
@@ -39,10 +40,9 @@ fn setup() -> (KrigingSurrogate, Vec<f64>) {
     let ym = Mat::from_fn(ys.len(), ys[0].len(), |i, j| ys[i][j]);
     let settings = KrigingSettings::new(Regression::Poly1, Correlation::Gauss, 5);
     let k = KrigingModel::fit(xm.as_ref(), ym.as_ref(), &settings).expect("kriging");
-    let names: Vec<String> = domain.params().iter().map(|p| p.name.clone()).collect();
-    let sur = KrigingSurrogate::new(k, domain, &names, real.times().to_vec(), Coordinates::Unit)
+    let sur = KrigingSurrogate::new(k, domain, real.times().to_vec(), Coordinates::Unit)
         .expect("adapter");
-    let clean = real.response(&[650.0, 0.45, 0.08, 0.35, 9.0]).expect("y");
+    let clean = real.response(&[650.0, 0.45, 0.35, 0.08, 9.0]).expect("y");
     let peak = clean.iter().copied().fold(0.0, f64::max);
     let data = clean
         .iter()

@@ -6,9 +6,10 @@
 use std::time::Instant;
 
 use nlvid_inverse::{
-    Domain, Experiment, LeeRadokHertz, Misfit, Model, feasible_starts, ramp_hold_grid,
+    Experiment, LeeRadokHertz, Misfit, Model, feasible_starts, ramp_hold_grid,
     ramp_hold_indentation,
 };
+use nlvid_model::Domain;
 
 /// f(u, ∇f) or c(u, ∇c) in scaled coordinates.
 type ScaledFn<'a> = Box<dyn Fn(&[f64], Option<&mut [f64]>) -> f64 + 'a>;
@@ -118,12 +119,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Domain::new(
             (0..n)
                 .map(|i| {
-                    nlvid_inverse::Parameter::new(
+                    nlvid_model::Parameter::new(
                         &format!("u{i}"),
                         "",
                         0.0,
                         1.0,
-                        nlvid_inverse::Scale::Linear,
+                        nlvid_model::Scale::Linear,
                     )
                 })
                 .collect(),
@@ -131,8 +132,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
 
     // 1. Weighted quadratic, optimum on u0 + u2 = 1 (KKT closed form).
-    let cq = [1.0, 4.0, 0.5, 2.0, 8.0];
-    let pq = [0.8, 0.3, 0.7, 0.6, 0.45];
+    let cq = [1.0, 4.0, 2.0, 0.5, 8.0];
+    let pq = [0.8, 0.3, 0.6, 0.7, 0.45];
     let lambda = 2.0 * (pq[0] + pq[2] - 1.0) / (1.0 / cq[0] + 1.0 / cq[2]);
     let mut uq = pq.to_vec();
     uq[0] -= lambda / (2.0 * cq[0]);
@@ -184,11 +185,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
 
     // 3. Noise-free Lee–Radok recovery (misfit 0 at the truth).
-    let domain = Domain::prony2_table_5_3(0.01)?;
+    let domain = Domain::table_5_3(0.01)?;
     let t = ramp_hold_grid(0.2, 199, 52.0, 4895, 1e-3)?;
     let delta = ramp_hold_indentation(&t, 10e-6, 2e-6);
     let model = LeeRadokHertz::new(domain.clone(), t, &delta, 2.5e-6, 0.5)?;
-    let x_true = [650.0, 0.45, 0.08, 0.35, 9.0];
+    let x_true = [650.0, 0.45, 0.35, 0.08, 9.0];
     let data = model.response(&x_true)?;
     let misfit = Misfit::new(vec![Experiment::new("RH", model, data, None)?])?;
     let fl = |u: &[f64], g: Option<&mut [f64]>| {

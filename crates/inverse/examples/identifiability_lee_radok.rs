@@ -5,24 +5,25 @@
 //! Run: `cargo run -p nlvid-inverse --release --example identifiability_lee_radok`
 
 use nlvid_inverse::{
-    Domain, Experiment, LeeRadokHertz, Misfit, Model, MultiStart, SensitivityScaling,
-    identifiability, ramp_hold_grid, ramp_hold_indentation,
+    Experiment, LeeRadokHertz, Misfit, Model, MultiStart, SensitivityScaling, identifiability,
+    ramp_hold_grid, ramp_hold_indentation,
 };
+use nlvid_model::Domain;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let domain = Domain::prony2_table_5_3(0.01)?;
+    let domain = Domain::table_5_3(0.01)?;
     let t = ramp_hold_grid(0.2, 199, 52.0, 4895, 1e-3)?;
     let delta = ramp_hold_indentation(&t, 10e-6, 2e-6);
     let cases = [
-        ("slow tau1", [1000.0, 0.4, 0.5, 0.3, 10.0]),
+        ("slow tau1", [1000.0, 0.4, 0.3, 0.5, 10.0]),
         (
             "fast tau1 (0.012 s << 0.2 s ramp)",
-            [1000.0, 0.4, 0.012, 0.3, 10.0],
+            [1000.0, 0.4, 0.3, 0.012, 10.0],
         ),
-        ("small g2", [1000.0, 0.4, 0.5, 0.02, 10.0]),
-        ("g1 + g2 = 0.98", [1000.0, 0.6, 0.5, 0.38, 10.0]),
+        ("small g2", [1000.0, 0.4, 0.02, 0.5, 10.0]),
+        ("g1 + g2 = 0.98", [1000.0, 0.6, 0.38, 0.5, 10.0]),
     ];
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     println!(

@@ -12,14 +12,10 @@ pub enum InverseError {
     #[error("invalid setting: {0}")]
     InvalidSetting(String),
 
-    /// A parameter vector has the wrong length.
-    #[error("expected {expected} parameters, got {got}")]
-    ParameterCount {
-        /// Number of parameters of the domain.
-        expected: usize,
-        /// Number given.
-        got: usize,
-    },
+    /// A parameter vector, domain or Prony series outside the shared
+    /// vocabulary's rules (wrong length, invalid bounds, g∞ ≤ 0, …).
+    #[error(transparent)]
+    Vocabulary(#[from] nlvid_model::ModelError),
 
     /// Two curves that must share a time grid do not.
     #[error("curve length mismatch in {what}: expected {expected} points, got {got}")]

@@ -5,9 +5,10 @@
 //! What it models:
 //! - [`Model`]: any forward model (Kriging surrogate, membrane or FE run,
 //!   or the analytic [`LeeRadokHertz`]) maps parameters in a bounded
-//!   [`Domain`] (named, unit-carrying, log-scaled where they span decades,
-//!   linear constraints such as g1 + g2 ≤ 1 − ε) to a curve on a fixed time
-//!   grid, with an analytic or finite-difference Jacobian;
+//!   `nlvid_model::Domain` (named, unit-carrying, log-scaled where they span
+//!   decades, linear constraints such as g1 + g2 ≤ 1 − ε, one parameter
+//!   order) to a curve on a fixed time grid, with an analytic or
+//!   finite-difference Jacobian;
 //! - [`Misfit`]: the range-normalised RMSE of eq. 5.3, with optional
 //!   per-segment weights, summed over experiments fitted with one
 //!   parameter set, and its gradient; [`BasisMisfit`] computes the same
@@ -19,14 +20,17 @@
 //! - [`MultiStart`]: seeded feasible Latin-hypercube starts, SLSQP local
 //!   runs, clustering into distinct optima, alternatives within a misfit
 //!   tolerance, bound flags; [`verify`] re-scores the optimum with another
-//!   (real) model, [`rerun`] with any `nlvid_surrogate::ForwardModel`
-//!   (parameters matched by name, response interpolated onto the data grid);
+//!   (real) model, [`rerun`] with any `nlvid_model::ForwardModel` (same
+//!   parameters in the same order, response interpolated onto the data
+//!   grid);
 //! - [`identifiability`]: scaled sensitivities, their singular values and
 //!   Gauss–Newton confidence intervals;
 //! - [`KrigingSurrogate`]: a `nlvid-surrogate` Kriging model as a [`Model`]
-//!   and [`BasisModel`]; [`ForwardFromModel`] runs any [`Model`] through
-//!   `nlvid_surrogate::build`;
-//! - [`PronyShear`]: G(t) of eq. 5.1 and E(t) = 3G(t);
+//!   and [`BasisModel`], on the domain its `meta.json` stores
+//!   ([`load_kriging_surrogate`]); [`ForwardFromModel`] runs any [`Model`]
+//!   through `nlvid_surrogate::build`;
+//! - [`relaxation`], [`FitResult::relaxation`]: G(t) of eq. 5.1 as the
+//!   shared `nlvid_model::Relaxation` (E(t) = 3G(t));
 //! - [`read_afm_csv`] / [`read_compression_csv`]: measured curves in, with
 //!   protocol checks and resampling onto a model grid.
 //!
@@ -35,20 +39,21 @@
 //! docs/theory/inverse.md for measured times.
 //!
 //! ```
-//! use nlvid_inverse::{Domain, Experiment, LeeRadokHertz, Misfit, Model, MultiStart,
-//!                     PronyShear, ramp_hold_grid, ramp_hold_indentation};
+//! use nlvid_inverse::{Experiment, LeeRadokHertz, Misfit, Model, MultiStart,
+//!                     ramp_hold_grid, ramp_hold_indentation};
+//! use nlvid_model::Domain;
 //! # fn main() -> nlvid_inverse::Result<()> {
-//! let domain = Domain::prony2_table_5_3(0.01)?;
+//! let domain = Domain::table_5_3(0.01)?; // G0, g1, g2, tau1, tau2
 //! let t = ramp_hold_grid(0.2, 40, 52.0, 120, 1e-3)?;
 //! let delta = ramp_hold_indentation(&t, 10e-6, 2e-6);
 //! let model = LeeRadokHertz::new(domain.clone(), t, &delta, 2.5e-6, 0.5)?;
-//! let x_true = [900.0, 0.5, 0.05, 0.3, 12.0];
+//! let x_true = [900.0, 0.5, 0.3, 0.05, 12.0];
 //! let data = model.response(&x_true)?;
 //! let misfit = Misfit::new(vec![Experiment::new("RH", model, data, None)?])?;
 //! let fit = MultiStart::new().with_starts(4)?.with_seed(1).fit(&misfit)?;
 //! assert!(fit.best.misfit < 1e-4);
-//! let g = PronyShear::from_parameters(&domain, &fit.best.x)?;
-//! assert!((g.shear(0.0) / 900.0 - 1.0).abs() < 1e-2);
+//! let g = fit.relaxation()?;
+//! assert!((g.value(0.0) / 900.0 - 1.0).abs() < 1e-2);
 //! # Ok(())
 //! # }
 //! ```
@@ -56,7 +61,6 @@
 #![warn(missing_docs)]
 
 mod basis;
-mod domain;
 mod error;
 mod hertz;
 mod identifiability;
@@ -73,23 +77,22 @@ mod surrogate;
 mod surrogate_file;
 
 pub use basis::{AsModel, BasisExperiment, BasisMisfit, BasisModel, gram};
-pub use domain::{BoundHit, BoundSide, Domain, LinearConstraint, Parameter, Scale};
 pub use error::{InverseError, Result};
 pub use hertz::{LeeRadokHertz, ramp_hold_grid, ramp_hold_indentation};
 pub use identifiability::{Identifiability, SensitivityScaling, Z95, identifiability};
 pub use measured::{
-    AfmColumns, Calibration, CompressionColumns, Dimension, MeasuredCurve, ProtocolTolerance,
-    read_afm_csv, read_compression_csv,
+    AfmColumns, Calibration, CompressionColumns, MeasuredCurve, ProtocolTolerance, read_afm_csv,
+    read_compression_csv,
 };
 pub use misfit::{Experiment, Misfit, Objective, Segment, range_normalised_rmse, segment_weights};
 pub use model::{FD_STEP_UNIT, Model, check_finite, check_jacobian, check_len, fd_jacobian};
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
 pub use plot::{FigureCurve, FitFigure};
-pub use prony::{ModulusPoint, ParameterTable, PronyShear, PronyTerm};
+pub use prony::{ParameterTable, relaxation};
 pub use reduced::{Projection, ReducedExperiment, ReducedMisfit, ReducedModel, projection};
 pub use rerun::{Rerun, rerun};
-pub use starts::{feasible_starts, latin_hypercube};
-pub use surrogate::{Coordinates, ForwardFromModel, KrigingSurrogate, design_domain};
+pub use starts::feasible_starts;
+pub use surrogate::{Coordinates, ForwardFromModel, KrigingSurrogate};
 pub use surrogate_file::{
     Precomputed, SurrogateCurve, SurrogateFit, SurrogateFitter, SurrogateMeta, SurrogateMisfit,
     load_kriging_surrogate, read_meta,

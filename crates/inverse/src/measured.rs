@@ -4,8 +4,10 @@
 //!
 //! Headers carry units: `name [unit]`, `name (unit)` or nlvid's own output
 //! form `name_unit` (e.g. `time_s`), e.g. `time [s]`, `height (um)`,
-//! `vDeflection [V]`. Columns are chosen by `name` (case-sensitive,
-//! surrounding spaces ignored).
+//! `vDeflection [V]`; units are read by the study's unit table
+//! (`nlvid_study::parse_unit`, one table for every input of nlvid).
+//! Columns are chosen by `name` (case-sensitive, surrounding spaces
+//! ignored).
 //!
 //! AFM (§5.2.2): the deflection column may be in volts (× deflection
 //! sensitivity → metres), in metres, or already a force; then F = k·d and
@@ -14,76 +16,44 @@
 
 use std::path::{Path, PathBuf};
 
+use nlvid_study::{Dimension, parse_unit};
 use serde::Serialize;
 
 use crate::error::{InverseError, Result};
 
-/// Physical dimension of a column.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub enum Dimension {
-    /// s.
-    Time,
-    /// m.
-    Length,
-    /// N.
-    Force,
-    /// V.
-    Voltage,
-    /// m².
-    Area,
+/// The SI factor of `unit` and the first of `dims` it belongs to, by the
+/// study's unit table (`nlvid_study::parse_unit`: any SI prefix, `um`/`µm`,
+/// `m^2`, `nm/V`, …); `m2`-style areas (a trailing exponent without `^`)
+/// are read as `m^2`.
+fn unit_factor(unit: &str, dims: &[Dimension]) -> Option<(f64, Dimension)> {
+    let unit = unit.trim();
+    let parsed = parse_unit(unit).ok().or_else(|| {
+        let base = unit.strip_suffix(['2', '3'])?;
+        let exp = &unit[base.len()..];
+        (!base.is_empty() && !base.contains('^'))
+            .then(|| parse_unit(&format!("{base}^{exp}")).ok())
+            .flatten()
+    })?;
+    dims.contains(&parsed.1).then_some(parsed)
 }
 
-/// SI factor of a unit string for a dimension; None if the unit does not
-/// belong to it.
-fn unit_factor(unit: &str, dim: Dimension) -> Option<f64> {
-    let u = unit.trim().replace(['µ', 'μ'], "u");
-    let f = match dim {
-        Dimension::Time => match u.as_str() {
-            "s" => 1.0,
-            "ms" => 1e-3,
-            "us" => 1e-6,
-            "min" => 60.0,
-            _ => return None,
-        },
-        Dimension::Length => match u.as_str() {
-            "m" => 1.0,
-            "mm" => 1e-3,
-            "um" => 1e-6,
-            "nm" => 1e-9,
-            _ => return None,
-        },
-        Dimension::Force => match u.as_str() {
-            "N" => 1.0,
-            "mN" => 1e-3,
-            "uN" => 1e-6,
-            "nN" => 1e-9,
-            "pN" => 1e-12,
-            _ => return None,
-        },
-        Dimension::Voltage => match u.as_str() {
-            "V" => 1.0,
-            "mV" => 1e-3,
-            _ => return None,
-        },
-        Dimension::Area => match u.as_str() {
-            "m^2" | "m2" => 1.0,
-            "mm^2" | "mm2" => 1e-6,
-            "um^2" | "um2" => 1e-12,
-            _ => return None,
-        },
-    };
-    Some(f)
+/// The dimensions as a reader would name them, for messages.
+fn dims_text(dims: &[Dimension]) -> String {
+    dims.iter()
+        .map(|d| format!("{d}"))
+        .collect::<Vec<_>>()
+        .join(" or ")
 }
 
 /// Splits `name [unit]` / `name (unit)` into (name, Some(unit)).
 fn split_header(h: &str) -> (String, Option<String>) {
     let h = h.trim();
     for (open, close) in [('[', ']'), ('(', ')')] {
-        if h.ends_with(close) {
-            if let Some(i) = h.rfind(open) {
-                let unit = h[i + 1..h.len() - 1].trim().to_string();
-                return (h[..i].trim().to_string(), Some(unit));
-            }
+        if h.ends_with(close)
+            && let Some(i) = h.rfind(open)
+        {
+            let unit = h[i + 1..h.len() - 1].trim().to_string();
+            return (h[..i].trim().to_string(), Some(unit));
         }
     }
     (h.to_string(), None)
@@ -152,10 +122,7 @@ impl Table {
                 && h.0
                     .strip_prefix(name)
                     .and_then(|r| r.strip_prefix('_'))
-                    .is_some_and(|u| {
-                        let u = u.replace("_per_", "/");
-                        dims.iter().any(|&d| unit_factor(&u, d).is_some())
-                    })
+                    .is_some_and(|u| unit_factor(&u.replace("_per_", "/"), dims).is_some())
         };
         let i = self
             .headers
@@ -172,22 +139,25 @@ impl Table {
         let from_suffix = self.headers[i]
             .0
             .strip_prefix(name)
-            .and_then(|r| r.strip_prefix('_'));
-        let unit = self.headers[i]
-            .1
-            .as_deref()
-            .or(from_suffix)
-            .ok_or_else(|| {
-                self.err(
-                    1,
-                    name,
-                    format!("header has no unit; write it as '{name} [unit]' (expected {dims:?})"),
-                )
-            })?;
-        let (factor, dim) = dims
-            .iter()
-            .find_map(|&d| unit_factor(unit, d).map(|f| (f, d)))
-            .ok_or_else(|| self.err(1, name, format!("unit '{unit}' is not a unit of {dims:?}")))?;
+            .and_then(|r| r.strip_prefix('_'))
+            .map(|u| u.replace("_per_", "/"));
+        let unit = self.headers[i].1.clone().or(from_suffix).ok_or_else(|| {
+            self.err(
+                1,
+                name,
+                format!(
+                    "header has no unit; write it as '{name} [unit]' (expected a {})",
+                    dims_text(dims)
+                ),
+            )
+        })?;
+        let (factor, dim) = unit_factor(&unit, dims).ok_or_else(|| {
+            self.err(
+                1,
+                name,
+                format!("unit '{unit}' is not a unit of a {}", dims_text(dims)),
+            )
+        })?;
         let mut values = Vec::with_capacity(self.rows.len());
         for (line, rec) in &self.rows {
             let cell = rec
@@ -289,16 +259,16 @@ pub fn read_afm_csv(path: &Path, cols: &AfmColumns, cal: &Calibration) -> Result
         )));
     }
     let table = Table::read(path)?;
-    let (time, _) = table.column(&cols.time, &[Dimension::Time])?;
+    let (time, _) = table.column(&cols.time, &[Dimension::TIME])?;
     table.check_time(&cols.time, &time)?;
-    let (z, _) = table.column(&cols.piezo, &[Dimension::Length])?;
+    let (z, _) = table.column(&cols.piezo, &[Dimension::LENGTH])?;
     let (raw, dim) = table.column(
         &cols.deflection,
-        &[Dimension::Voltage, Dimension::Length, Dimension::Force],
+        &[Dimension::VOLTAGE, Dimension::LENGTH, Dimension::FORCE],
     )?;
     let k = cal.spring_constant;
     let d: Vec<f64> = match dim {
-        Dimension::Voltage => {
+        Dimension::VOLTAGE => {
             let s = cal
                 .deflection_sensitivity
                 .filter(|s| *s > 0.0 && s.is_finite())
@@ -312,7 +282,7 @@ pub fn read_afm_csv(path: &Path, cols: &AfmColumns, cal: &Calibration) -> Result
                 })?;
             raw.iter().map(|v| v * s).collect()
         }
-        Dimension::Length => raw,
+        Dimension::LENGTH => raw,
         _ => raw.iter().map(|f| f / k).collect(),
     };
     Ok(MeasuredCurve {
@@ -332,12 +302,12 @@ pub fn read_afm_csv(path: &Path, cols: &AfmColumns, cal: &Calibration) -> Result
 /// As [`read_afm_csv`].
 pub fn read_compression_csv(path: &Path, cols: &CompressionColumns) -> Result<MeasuredCurve> {
     let table = Table::read(path)?;
-    let (time, _) = table.column(&cols.time, &[Dimension::Time])?;
+    let (time, _) = table.column(&cols.time, &[Dimension::TIME])?;
     table.check_time(&cols.time, &time)?;
-    let (displacement, _) = table.column(&cols.displacement, &[Dimension::Length])?;
-    let (force, _) = table.column(&cols.force, &[Dimension::Force])?;
+    let (displacement, _) = table.column(&cols.displacement, &[Dimension::LENGTH])?;
+    let (force, _) = table.column(&cols.force, &[Dimension::FORCE])?;
     let contact_area = match &cols.contact_area {
-        Some(name) => Some(table.column(name, &[Dimension::Area])?.0),
+        Some(name) => Some(table.column(name, &[Dimension::AREA])?.0),
         None => None,
     };
     Ok(MeasuredCurve {

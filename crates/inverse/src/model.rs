@@ -6,8 +6,8 @@
 //! never knows which one it calls (argmin's problem-trait shape).
 
 use nalgebra::DMatrix;
+use nlvid_model::Domain;
 
-use crate::domain::Domain;
 use crate::error::{InverseError, Result};
 
 /// Step in scaled coordinates u ∈ [0, 1] of the default central differences.
@@ -91,7 +91,7 @@ impl<M: Model + ?Sized> Model for Box<M> {
 /// becomes one-sided.
 ///
 /// # Errors
-/// Any error of [`Model::response`]; [`InverseError::ParameterCount`].
+/// Any error of [`Model::response`]; [`InverseError::Vocabulary`] (wrong length).
 pub fn fd_jacobian<M: Model + ?Sized>(model: &M, x: &[f64]) -> Result<DMatrix<f64>> {
     let domain = model.domain();
     domain.check_len(x)?;

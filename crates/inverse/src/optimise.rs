@@ -15,14 +15,15 @@
 use std::cell::{Cell, RefCell};
 use std::fmt;
 
+use nlvid_model::{BoundHit, BoundSide, Domain};
 use serde::Serialize;
 
-use crate::domain::{BoundHit, BoundSide, Domain};
 use crate::error::{InverseError, Result};
 use crate::misfit::{Misfit, Objective};
 use crate::model::Model;
-use crate::prony::{ModulusPoint, ParameterTable, PronyShear};
+use crate::prony::{ParameterTable, relaxation};
 use crate::starts::feasible_starts;
+use nlvid_model::{ModulusPoint, Relaxation};
 
 /// Settings of [`MultiStart`]; build with [`MultiStart::new`] and `with_*`.
 #[derive(Debug, Clone, PartialEq)]
@@ -380,13 +381,21 @@ impl FitResult {
         ParameterTable::new(&self.domain, &self.best.x)
     }
 
-    /// G(t) (eq. 5.1) and E(t) = 3G(t) of the best parameters on `times`.
+    /// G(t) of eq. 5.1 at the best parameters (`G0` the shear modulus).
     ///
     /// # Errors
     /// [`InverseError::InvalidSetting`] if the domain is not a Prony family
-    /// (no G0/C1, g_k, tau_k).
+    /// (no `G0`, or a `g_k` without `tau_k`).
+    pub fn relaxation(&self) -> Result<Relaxation> {
+        relaxation(&self.domain, &self.best.x)
+    }
+
+    /// G(t) (eq. 5.1) and E(t) = 3G(t) of the best parameters on `times`.
+    ///
+    /// # Errors
+    /// As [`FitResult::relaxation`].
     pub fn modulus(&self, times: &[f64]) -> Result<Vec<ModulusPoint>> {
-        Ok(PronyShear::from_parameters(&self.domain, &self.best.x)?.curve(times))
+        Ok(self.relaxation()?.curve(times))
     }
 }
 

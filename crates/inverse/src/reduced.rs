@@ -21,8 +21,8 @@
 use std::sync::Arc;
 
 use nalgebra::{DMatrix, DVector};
+use nlvid_model::Domain;
 
-use crate::domain::Domain;
 use crate::error::{InverseError, Result};
 use crate::misfit::{Objective, check_shared_parameters};
 use crate::model::{check_jacobian, check_len};

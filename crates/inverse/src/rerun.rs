@@ -4,18 +4,16 @@
 //! Lee–Radok model, the membrane solver, the FE AFM model — is run once at
 //! the optimum and scored against the data with eq. 5.3.
 //!
-//! The forward model speaks its own parameter order (e.g. `hertz-prony`:
-//! G0, g1, g2, tau1, tau2) and its own time grid; the fit speaks the
-//! domain's order (Table 5.3: G0, g1, tau1, g2, tau2) and the surrogate's
-//! grid. [`rerun`] matches parameters by name and interpolates the response
-//! linearly onto the data grid (exact when the grids are equal, as they are
-//! when the surrogate was built from the same model).
+//! The forward model and the fit share the one parameter order of
+//! `nlvid_model` (the model's parameters are the domain's, in order: a
+//! meta-model is built on the domain of its forward model); the model has
+//! its own time grid. [`rerun`] interpolates the response linearly onto the
+//! data grid (exact when the grids are equal, as they are when the
+//! surrogate was built from the same model).
 
+use nlvid_model::{Domain, ForwardModel};
 use serde::Serialize;
 
-use nlvid_surrogate::ForwardModel;
-
-use crate::domain::Domain;
 use crate::error::{InverseError, Result};
 use crate::misfit::range_normalised_rmse;
 
@@ -33,9 +31,9 @@ pub struct Rerun {
 /// misfit against `data` (weights as in the fit).
 ///
 /// # Errors
-/// [`InverseError::InvalidSetting`] when a parameter of the model is not in
-/// the domain (names must match) or `grid` reaches outside the model's time
-/// grid; [`InverseError::Model`] when the run fails (its message kept);
+/// [`InverseError::InvalidSetting`] when the model's parameters are not the
+/// domain's (same names, same order) or `grid` reaches outside the model's
+/// time grid; [`InverseError::Model`] when the run fails (its message kept);
 /// [`InverseError::LengthMismatch`] / [`InverseError::NonFinite`] for an
 /// unusable response; as [`range_normalised_rmse`].
 pub fn rerun(
@@ -47,8 +45,10 @@ pub fn rerun(
     weights: Option<&[f64]>,
 ) -> Result<Rerun> {
     domain.check_len(x)?;
-    let params = to_model_order(model, domain, x)?;
-    let y = model.run(&params).map_err(|e| InverseError::Model {
+    domain
+        .check_names(&model.parameter_names())
+        .map_err(|e| InverseError::InvalidSetting(format!("the real model: {e}")))?;
+    let y = model.run(x).map_err(|e| InverseError::Model {
         x: x.to_vec(),
         message: format!("real model re-run: {e}"),
     })?;
@@ -58,28 +58,6 @@ pub fn rerun(
     let response = interpolate_onto(times, &y, grid)?;
     let misfit = range_normalised_rmse(&response, data, weights)?;
     Ok(Rerun { response, misfit })
-}
-
-/// `x` (domain order) rearranged into the model's parameter order.
-fn to_model_order(model: &dyn ForwardModel, domain: &Domain, x: &[f64]) -> Result<Vec<f64>> {
-    let names = model.parameter_names();
-    if names.len() != domain.len() {
-        return Err(InverseError::InvalidSetting(format!(
-            "the real model has parameters {names:?}, the fit domain {:?}",
-            domain.params().iter().map(|p| &p.name).collect::<Vec<_>>()
-        )));
-    }
-    names
-        .iter()
-        .map(|n| {
-            domain.index_of(n).map(|i| x[i]).ok_or_else(|| {
-                InverseError::InvalidSetting(format!(
-                    "the real model's parameter `{n}` is not in the fit domain {:?}",
-                    domain.params().iter().map(|p| &p.name).collect::<Vec<_>>()
-                ))
-            })
-        })
-        .collect()
 }
 
 /// Linear interpolation of (ts, ys) at every t of `grid`; `grid` must lie
@@ -117,18 +95,16 @@ fn interpolate_onto(ts: &[f64], ys: &[f64], grid: &[f64]) -> Result<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::domain::{Parameter, Scale};
-    use nlvid_surrogate::RunFailure;
+    use nlvid_model::{FailureKind, Parameter, RunFailure, Scale};
 
-    /// y(t) = a + b t on its own grid, parameters named (b, a): the reverse
-    /// of the domain's order.
+    /// y(t) = a + b t on its own grid, parameters (a, b).
     struct Line {
         times: Vec<f64>,
     }
 
     impl ForwardModel for Line {
         fn parameter_names(&self) -> Vec<String> {
-            vec!["b".into(), "a".into()]
+            vec!["a".into(), "b".into()]
         }
         fn parameter_units(&self) -> Vec<String> {
             vec!["1".into(), "1".into()]
@@ -140,14 +116,14 @@ mod tests {
             "line".into()
         }
         fn run(&self, p: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
-            if p[0] < 0.0 {
+            if p[1] < 0.0 {
                 return Err(RunFailure {
-                    kind: nlvid_surrogate::FailureKind::NotConverged,
+                    kind: FailureKind::NotConverged,
                     time: Some(0.5),
                     message: "negative slope".into(),
                 });
             }
-            Ok(self.times.iter().map(|t| p[1] + p[0] * t).collect())
+            Ok(self.times.iter().map(|t| p[0] + p[1] * t).collect())
         }
     }
 
@@ -160,7 +136,7 @@ mod tests {
     }
 
     #[test]
-    fn parameters_are_matched_by_name_and_the_response_interpolated_onto_the_data_grid() {
+    fn the_response_is_interpolated_onto_the_data_grid() {
         // Coarse model grid, finer data grid: a line is interpolated exactly.
         let model = Line {
             times: vec![0.0, 1.0, 2.5, 4.0],
@@ -198,17 +174,24 @@ mod tests {
         .unwrap_err();
         assert!(e.to_string().contains("needs t = 2 s"), "{e}");
 
-        let other = Domain::new(vec![
-            Parameter::new("a", "1", -10.0, 10.0, Scale::Linear),
-            Parameter::new("c", "1", -10.0, 10.0, Scale::Linear),
-        ])
-        .unwrap();
-        let e = rerun(&model, &other, &[0.0, 1.0], &[0.0, 1.0], &[0.0, 1.0], None).unwrap_err();
-        assert!(
-            e.to_string()
-                .contains("parameter `b` is not in the fit domain"),
-            "{e}"
-        );
+        // Another parameter, or the same ones in another order: refused,
+        // never permuted.
+        for names in [["a", "c"], ["b", "a"]] {
+            let other = Domain::new(
+                names
+                    .iter()
+                    .map(|n| Parameter::new(n, "1", -10.0, 10.0, Scale::Linear))
+                    .collect(),
+            )
+            .unwrap();
+            let e = rerun(&model, &other, &[0.0, 1.0], &[0.0, 1.0], &[0.0, 1.0], None)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains("the real model: parameter domain: parameters [a, b] do not match"),
+                "{e}"
+            );
+        }
 
         let e = rerun(
             &model,

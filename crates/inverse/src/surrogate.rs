@@ -4,21 +4,22 @@
 //! - [`KrigingSurrogate`]: a fitted [`KrigingModel`] on a time grid, seen as
 //!   a [`Model`] (the surrogate's own predictor and analytic gradient) and
 //!   as a [`BasisModel`] (ŷ = μ + Bᵀφ(x) for the O(N²) eq. 5.3 misfit of
-//!   [`crate::BasisMisfit`]). The surrogate's inputs may be in another
-//!   order than the [`Domain`] (matched by name) and either physical
-//!   values or the domain's scaled coordinates u ∈ [0, 1] ([`Coordinates`]).
+//!   [`crate::BasisMisfit`]). The surrogate's inputs are the [`Domain`]'s
+//!   parameters in the domain's order (the one order of `nlvid_model`), as
+//!   physical values or the domain's scaled coordinates u ∈ [0, 1]
+//!   ([`Coordinates`]).
 //! - [`ForwardFromModel`]: any [`Model`] (e.g. the analytic
 //!   [`crate::LeeRadokHertz`]) as a surrogate-build [`ForwardModel`], so
-//!   `nlvid_surrogate::build` can run it over a design;
-//!   [`design_domain`] gives the matching design box.
+//!   `nlvid_surrogate::build` can run it over a design drawn in the same
+//!   [`Domain`].
 
 use std::sync::OnceLock;
 
 use nalgebra::{DMatrix, DVector};
-use nlvid_surrogate::{ForwardModel, KrigingModel, RunFailure, SurrogateError, doe};
+use nlvid_model::{Domain, FailureKind, ForwardModel, RunFailure, Scale};
+use nlvid_surrogate::{KrigingModel, SurrogateError};
 
 use crate::basis::BasisModel;
-use crate::domain::{Domain, Scale};
 use crate::error::{InverseError, Result};
 use crate::model::{Model, check_len};
 use crate::reduced::ReducedModel;
@@ -38,8 +39,6 @@ pub struct KrigingSurrogate {
     kriging: KrigingModel,
     domain: Domain,
     times: Vec<f64>,
-    /// Surrogate input k is domain parameter `perm[k]`.
-    perm: Vec<usize>,
     coordinates: Coordinates,
     b: DMatrix<f64>,
     mu: Vec<f64>,
@@ -56,44 +55,27 @@ fn model_err(x: &[f64], e: &SurrogateError) -> InverseError {
 }
 
 impl KrigingSurrogate {
-    /// Wraps a fitted model whose inputs are the parameters `input_names`
-    /// (in the surrogate's order, each a parameter of `domain`) and whose
-    /// outputs are the response at `times` (s).
+    /// Wraps a fitted model whose inputs are the parameters of `domain`, in
+    /// its order, and whose outputs are the response at `times` (s).
     ///
     /// Cost: O(N · q · m) once, to fold the output scaling into B.
     ///
     /// # Errors
-    /// [`InverseError::InvalidSetting`] when the names do not match the
-    /// domain one to one, or the input/output counts do not match.
+    /// [`InverseError::InvalidSetting`] when the input or output counts do
+    /// not match.
     pub fn new(
         kriging: KrigingModel,
         domain: Domain,
-        input_names: &[String],
         times: Vec<f64>,
         coordinates: Coordinates,
     ) -> Result<Self> {
-        if kriging.dim != domain.len() || input_names.len() != domain.len() {
+        if kriging.dim != domain.len() {
             return Err(InverseError::InvalidSetting(format!(
-                "the surrogate has {} inputs ({} names given), the parameter domain {}",
+                "the surrogate has {} inputs, the parameter domain {} ({})",
                 kriging.dim,
-                input_names.len(),
-                domain.len()
+                domain.len(),
+                domain.names().join(", ")
             )));
-        }
-        let mut perm = Vec::with_capacity(input_names.len());
-        for name in input_names {
-            let i = domain.index_of(name).ok_or_else(|| {
-                InverseError::InvalidSetting(format!(
-                    "surrogate input '{name}' is not a parameter of the domain ({:?})",
-                    domain.params().iter().map(|p| &p.name).collect::<Vec<_>>()
-                ))
-            })?;
-            if perm.contains(&i) {
-                return Err(InverseError::InvalidSetting(format!(
-                    "surrogate input '{name}' appears twice"
-                )));
-            }
-            perm.push(i);
         }
         if kriging.n_outputs != times.len() {
             return Err(InverseError::InvalidSetting(format!(
@@ -108,7 +90,6 @@ impl KrigingSurrogate {
             kriging,
             domain,
             times,
-            perm,
             coordinates,
             b,
             mu,
@@ -146,6 +127,11 @@ impl KrigingSurrogate {
         }
     }
 
+    /// The parameter domain (the surrogate's inputs, in order).
+    pub fn domain(&self) -> &Domain {
+        &self.domain
+    }
+
     /// The wrapped Kriging model.
     pub fn kriging(&self) -> &KrigingModel {
         &self.kriging
@@ -158,14 +144,13 @@ impl KrigingSurrogate {
         self.kriging.pca.is_some() && self.kriging.n_output_coordinates() < self.kriging.n_outputs
     }
 
-    /// Surrogate inputs at physical x (domain order) and d(input_k)/d(x_perm[k]).
+    /// Surrogate inputs at physical x and d(input_i)/d(x_i).
     fn inputs(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
         self.domain.check_len(x)?;
         let params = self.domain.params();
         let mut xs = Vec::with_capacity(x.len());
         let mut ds = Vec::with_capacity(x.len());
-        for &i in &self.perm {
-            let p = &params[i];
+        for (i, p) in params.iter().enumerate() {
             match self.coordinates {
                 Coordinates::Physical => {
                     xs.push(x[i]);
@@ -204,8 +189,8 @@ impl BasisModel for KrigingSurrogate {
         let (nb, d) = (phi.len(), xs.len());
         let mut dphi = DMatrix::zeros(nb, d);
         for a in 0..nb {
-            for (k, &i) in self.perm.iter().enumerate() {
-                dphi[(a, i)] = dphi_s[a * d + k] * ds[k];
+            for i in 0..d {
+                dphi[(a, i)] = dphi_s[a * d + i] * ds[i];
             }
         }
         Ok((DVector::from_vec(phi), dphi))
@@ -248,8 +233,8 @@ impl ReducedModel for KrigingSurrogate {
         let (r, d) = (c.len(), xs.len());
         let mut dc = DMatrix::zeros(r, d);
         for l in 0..r {
-            for (k, &i) in self.perm.iter().enumerate() {
-                dc[(l, i)] = dc_s[l * d + k] * ds[k];
+            for i in 0..d {
+                dc[(l, i)] = dc_s[l * d + i] * ds[i];
             }
         }
         Ok((DVector::from_vec(c), dc))
@@ -289,8 +274,8 @@ impl Model for KrigingSurrogate {
         let (m, d) = (pp.y.len(), xs.len());
         let mut jac = DMatrix::zeros(m, d);
         for j in 0..m {
-            for (k, &i) in self.perm.iter().enumerate() {
-                jac[(j, i)] = pp.dy[j * d + k] * ds[k];
+            for i in 0..d {
+                jac[(j, i)] = pp.dy[j * d + i] * ds[i];
             }
         }
         Ok((pp.y, jac))
@@ -298,7 +283,8 @@ impl Model for KrigingSurrogate {
 }
 
 /// A [`Model`] run as a surrogate-build [`ForwardModel`]: parameters in the
-/// domain's order and units, response on the model's grid.
+/// domain's order and units, response on the model's grid; a failed run is
+/// [`FailureKind::Other`] with the model's message.
 #[derive(Debug, Clone)]
 pub struct ForwardFromModel<M> {
     /// The model.
@@ -331,40 +317,9 @@ impl<M: Model + Sync> ForwardModel for ForwardFromModel<M> {
         self.identity.clone()
     }
     fn run(&self, params: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
-        let fail = |e: InverseError| RunFailure {
-            kind: nlvid_surrogate::FailureKind::Other,
-            time: None,
-            message: e.to_string(),
-        };
+        let fail = |e: InverseError| RunFailure::new(FailureKind::Other, e.to_string());
         let y = self.model.response(params).map_err(fail)?;
         check_len("model response", self.model.times().len(), y.len()).map_err(fail)?;
         Ok(y)
-    }
-}
-
-/// The design box of `nlvid sample`/`nlvid build` matching a fit domain:
-/// same parameter order, log axes where the domain is log-scaled, the same
-/// linear constraints.
-pub fn design_domain(domain: &Domain) -> doe::Domain {
-    doe::Domain {
-        axes: domain
-            .params()
-            .iter()
-            .map(|p| doe::Axis {
-                name: p.name.clone(),
-                unit: p.unit.clone(),
-                lower: p.lower,
-                upper: p.upper,
-                log: p.scale == Scale::Log,
-            })
-            .collect(),
-        constraints: domain
-            .constraints()
-            .iter()
-            .map(|c| doe::LinearConstraint {
-                coeffs: c.coefficients.clone(),
-                bound: c.rhs,
-            })
-            .collect(),
     }
 }

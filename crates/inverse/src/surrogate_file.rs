@@ -4,7 +4,8 @@
 //! The files: the model file of `nlvid surrogate fit` (a serialised
 //! [`KrigingModel`]) and the `meta.json` sidecar of `nlvid build --export`
 //! (`parameter_names` in the surrogate's input order, `time_s` the output
-//! grid). [`SurrogateMisfit`] is the eq. 5.3 objective on such surrogates,
+//! grid, `domain` the parameter domain the design was drawn in — the fit's
+//! domain, read back rather than rebuilt). [`SurrogateMisfit`] is the eq. 5.3 objective on such surrogates,
 //! each through its fast form ([`Precomputed`]: the reduced PCA form of
 //! [`crate::ReducedMisfit`] for PCA-reduced surrogates, the Gram form of
 //! [`crate::BasisMisfit`] otherwise); `nlvid fit` uses it. [`SurrogateFitter`]
@@ -15,10 +16,10 @@ use std::path::Path;
 use std::sync::Arc;
 
 use nalgebra::DMatrix;
+use nlvid_model::Domain;
 use nlvid_surrogate::KrigingModel;
 
 use crate::basis::{BasisExperiment, BasisModel, gram};
-use crate::domain::Domain;
 use crate::error::{InverseError, Result};
 use crate::misfit::{Objective, check_shared_parameters};
 use crate::model::Model;
@@ -34,6 +35,9 @@ pub struct SurrogateMeta {
     pub parameter_names: Vec<String>,
     /// Time grid of the outputs, s.
     pub time_s: Vec<f64>,
+    /// The parameter domain of the design (its names are
+    /// `parameter_names`, in order).
+    pub domain: Domain,
 }
 
 fn io(path: &Path, message: impl std::fmt::Display) -> InverseError {
@@ -43,10 +47,13 @@ fn io(path: &Path, message: impl std::fmt::Display) -> InverseError {
     }
 }
 
-/// Reads a `meta.json` sidecar (keys `parameter_names`, `time_s`).
+/// Reads a `meta.json` sidecar (keys `parameter_names`, `time_s`,
+/// `domain`).
 ///
 /// # Errors
-/// [`InverseError::Io`] naming the file and the missing or malformed key.
+/// [`InverseError::Io`] naming the file and the missing or malformed key;
+/// a file without `domain` (written before the domain was stored) says how
+/// to re-export it.
 pub fn read_meta(path: &Path) -> Result<SurrogateMeta> {
     let text = std::fs::read_to_string(path).map_err(|e| io(path, format!("cannot read: {e}")))?;
     let v: serde_json::Value =
@@ -61,22 +68,42 @@ pub fn read_meta(path: &Path) -> Result<SurrogateMeta> {
             "key `time_s`: the time grid must be non-empty and strictly increasing",
         ));
     }
+    let domain = match v.get("domain") {
+        None | Some(serde_json::Value::Null) => {
+            return Err(io(
+                path,
+                "key `domain` missing: this meta-model was exported before meta.json stored its \
+                 parameter domain. Re-export it with `nlvid build <build-study.toml> --store \
+                 <store> --export <dir>` (finished runs are reused, nothing is re-run), or \
+                 `nlvid build --design X.csv --domain domain.toml ... --export <dir>`",
+            ));
+        }
+        Some(d) => serde_json::from_value::<Domain>(d.clone()).map_err(|e| {
+            io(
+                path,
+                format!("key `domain` (parameters with bounds and scales, constraints): {e}"),
+            )
+        })?,
+    };
+    domain
+        .check_names(&parameter_names)
+        .map_err(|e| io(path, format!("keys `domain` and `parameter_names`: {e}")))?;
     Ok(SurrogateMeta {
         parameter_names,
         time_s,
+        domain,
     })
 }
 
 /// Reads a model file of `nlvid surrogate fit` and its `meta.json` and
-/// wraps them as a [`KrigingSurrogate`] on `domain`.
+/// wraps them as a [`KrigingSurrogate`] on the domain `meta.json` stores.
 ///
 /// # Errors
-/// Unreadable or malformed files (naming them); names or sizes that do not
-/// match the domain ([`KrigingSurrogate::new`]).
+/// Unreadable or malformed files (naming them); sizes that do not match
+/// the domain ([`KrigingSurrogate::new`]).
 pub fn load_kriging_surrogate(
     model: &Path,
     meta: &Path,
-    domain: Domain,
     coordinates: Coordinates,
 ) -> Result<KrigingSurrogate> {
     let m = read_meta(meta)?;
@@ -87,10 +114,10 @@ pub fn load_kriging_surrogate(
             format!("not a model file of `nlvid surrogate fit`: {e}"),
         )
     })?;
-    KrigingSurrogate::new(kriging, domain, &m.parameter_names, m.time_s, coordinates).map_err(|e| {
+    KrigingSurrogate::new(kriging, m.domain, m.time_s, coordinates).map_err(|e| {
         io(
             model,
-            format!("does not match {} and the domain: {e}", meta.display()),
+            format!("does not match {} and its domain: {e}", meta.display()),
         )
     })
 }
@@ -316,6 +343,11 @@ mod tests {
         d
     }
 
+    /// The Table 5.3 domain as `nlvid build --export` stores it.
+    fn domain_json() -> String {
+        serde_json::to_string(&Domain::table_5_3(0.01).unwrap()).unwrap()
+    }
+
     #[test]
     fn meta_errors_name_the_file_and_the_key() {
         let d = tmp("meta");
@@ -326,10 +358,35 @@ mod tests {
         std::fs::write(&p, r#"{"parameter_names": ["G0"], "time_s": [1.0, 0.5]}"#).unwrap();
         let e = read_meta(&p).unwrap_err().to_string();
         assert!(e.contains("strictly increasing"), "{e}");
-        std::fs::write(&p, r#"{"parameter_names": ["G0"], "time_s": [0.5, 1.0]}"#).unwrap();
+        let names = r#""parameter_names": ["G0","g1","g2","tau1","tau2"]"#;
+        std::fs::write(&p, format!(r#"{{{names}, "time_s": [0.5, 1.0]}}"#)).unwrap();
+        let e = read_meta(&p).unwrap_err().to_string();
+        assert!(
+            e.contains("meta.json") && e.contains("`domain` missing") && e.contains("--export"),
+            "{e}"
+        );
+        let swapped = r#""parameter_names": ["G0","g1","tau1","g2","tau2"]"#;
+        let text = format!(
+            r#"{{{swapped}, "time_s": [0.5, 1.0], "domain": {}}}"#,
+            domain_json()
+        );
+        std::fs::write(&p, text).unwrap();
+        let e = read_meta(&p).unwrap_err().to_string();
+        assert!(e.contains("do not match the domain"), "{e}");
+        let broken = domain_json().replace("4000.0", "-1.0");
+        let text = format!(r#"{{{names}, "time_s": [0.5, 1.0], "domain": {broken}}}"#);
+        std::fs::write(&p, text).unwrap();
+        let e = read_meta(&p).unwrap_err().to_string();
+        assert!(e.contains("key `domain`") && e.contains("G0"), "{e}");
+        let text = format!(
+            r#"{{{names}, "time_s": [0.5, 1.0], "domain": {}}}"#,
+            domain_json()
+        );
+        std::fs::write(&p, text).unwrap();
         let m = read_meta(&p).unwrap();
-        assert_eq!(m.parameter_names, vec!["G0".to_string()]);
+        assert_eq!(m.parameter_names, nlvid_model::names::PRONY2);
         assert_eq!(m.time_s, vec![0.5, 1.0]);
+        assert_eq!(m.domain, Domain::table_5_3(0.01).unwrap());
     }
 
     #[test]
@@ -338,19 +395,17 @@ mod tests {
         let meta = d.join("meta.json");
         std::fs::write(
             &meta,
-            r#"{"parameter_names": ["G0","g1","g2","tau1","tau2"], "time_s": [1.0]}"#,
+            format!(
+                r#"{{"parameter_names": ["G0","g1","g2","tau1","tau2"], "time_s": [1.0], "domain": {}}}"#,
+                domain_json()
+            ),
         )
         .unwrap();
         let model = d.join("model.json");
         std::fs::write(&model, "{}").unwrap();
-        let e = load_kriging_surrogate(
-            &model,
-            &meta,
-            Domain::prony2_table_5_3(0.01).unwrap(),
-            Coordinates::Physical,
-        )
-        .unwrap_err()
-        .to_string();
+        let e = load_kriging_surrogate(&model, &meta, Coordinates::Physical)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("model.json") && e.contains("nlvid surrogate fit"),
             "{e}"

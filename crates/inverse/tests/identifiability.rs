@@ -1,9 +1,7 @@
 //! Identifiability analysis against independent references.
 
-use nlvid_inverse::{
-    Domain, Experiment, Misfit, Model, Parameter, Result, Scale, SensitivityScaling, Z95,
-    identifiability,
-};
+use nlvid_inverse::{Experiment, Misfit, Model, Result, SensitivityScaling, Z95, identifiability};
+use nlvid_model::{Domain, Parameter, Scale};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

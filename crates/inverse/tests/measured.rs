@@ -262,12 +262,13 @@ fn resampling_is_linear_and_refuses_grids_beyond_the_data() {
 
 #[test]
 fn a_measured_curve_becomes_an_experiment_on_the_model_grid() {
-    use nlvid_inverse::{Domain, Experiment, LeeRadokHertz, Model};
-    let domain = Domain::prony2_table_5_3(0.01).expect("domain");
+    use nlvid_inverse::{Experiment, LeeRadokHertz, Model};
+    use nlvid_model::Domain;
+    let domain = Domain::table_5_3(0.01).expect("domain");
     let grid: Vec<f64> = (0..=20).map(|i| i as f64 * 0.1).collect();
     let delta: Vec<f64> = grid.iter().map(|t| (10e-6 * t).min(2e-6)).collect();
     let model = LeeRadokHertz::new(domain, grid, &delta, 2.5e-6, 0.5).expect("model");
-    let x = [1000.0, 0.3, 0.1, 0.3, 5.0];
+    let x = [1000.0, 0.3, 0.3, 0.1, 5.0];
     let clean = model.response(&x).expect("y");
     // the measured file samples twice as densely, starting at t = 3 s
     let mut s = String::from("time [s],height [um],vDeflection [nN]\n");

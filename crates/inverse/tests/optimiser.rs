@@ -1,9 +1,7 @@
 //! Multistart optimiser on analytic problems with known optima.
 
-use nlvid_inverse::{
-    BoundSide, Domain, Experiment, InverseError, Misfit, Model, MultiStart, Parameter, Result,
-    Scale, verify,
-};
+use nlvid_inverse::{Experiment, InverseError, Misfit, Model, MultiStart, Result, verify};
+use nlvid_model::{BoundSide, Domain, Parameter, Scale};
 
 /// y_j = x0 φ0(t_j) + x1 φ1(t_j): least squares with a closed-form answer.
 struct Linear2 {
@@ -41,13 +39,13 @@ impl Model for Linear2 {
         &self.times
     }
     fn response(&self, x: &[f64]) -> Result<Vec<f64>> {
-        if let Some(limit) = self.fail_above {
-            if x[0] > limit {
-                return Err(InverseError::Model {
-                    x: x.to_vec(),
-                    message: "synthetic failure".into(),
-                });
-            }
+        if let Some(limit) = self.fail_above
+            && x[0] > limit
+        {
+            return Err(InverseError::Model {
+                x: x.to_vec(),
+                message: "synthetic failure".into(),
+            });
         }
         Ok(self
             .times

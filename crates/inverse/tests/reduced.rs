@@ -7,11 +7,11 @@
 //! multistart fit on it must reach the same optimum as on the direct misfit.
 
 use nlvid_inverse::{
-    BasisModel, Coordinates, Domain, Experiment, KrigingSurrogate, LeeRadokHertz, Misfit, Model,
+    BasisModel, Coordinates, Experiment, KrigingSurrogate, LeeRadokHertz, Misfit, Model,
     MultiStart, Objective, Precomputed, ReducedExperiment, ReducedMisfit, SurrogateCurve,
-    SurrogateMisfit, design_domain, feasible_starts, gram, projection, ramp_hold_grid,
-    ramp_hold_indentation,
+    SurrogateMisfit, feasible_starts, gram, projection, ramp_hold_grid, ramp_hold_indentation,
 };
+use nlvid_model::Domain;
 use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
@@ -21,17 +21,17 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 /// Kriging surrogate of the Lee–Radok ramp-hold model over Table 5.3 (60
-/// sites), inputs G0, g1, g2, tau1, tau2 (not the domain's order), outputs
+/// sites), inputs G0, g1, g2, tau1, tau2 (the domain's order), outputs
 /// ∝ G0, ln inputs for G0, τ1, τ2, PCA 0.99999 — the settings of the FE
 /// meta-model (`nlvid surrogate fit --proportional-to G0 --log-inputs
 /// G0,tau1,tau2 --pca …`).
 fn surrogate() -> KrigingSurrogate {
-    let domain = Domain::prony2_table_5_3(0.01).expect("domain");
+    let domain = Domain::table_5_3(0.01).expect("domain");
     let t = ramp_hold_grid(0.2, 20, 52.0, 60, 1e-2).expect("grid");
     let delta = ramp_hold_indentation(&t, 10e-6, 2e-6);
     let real = LeeRadokHertz::new(domain.clone(), t, &delta, 2.5e-6, 0.5).expect("model");
     let design = sample(
-        &design_domain(&domain),
+        &domain,
         &SampleSettings {
             n: 60,
             seed: 5,
@@ -39,15 +39,7 @@ fn surrogate() -> KrigingSurrogate {
         },
     )
     .expect("design");
-    let order = [0usize, 1, 3, 2, 4];
-    let names: Vec<String> = order
-        .iter()
-        .map(|&i| domain.params()[i].name.clone())
-        .collect();
-    let xs: Vec<Vec<f64>> = design
-        .iter()
-        .map(|x| order.iter().map(|&i| x[i]).collect())
-        .collect();
+    let xs = &design;
     let ys: Vec<Vec<f64>> = design
         .iter()
         .map(|x| real.response(x).expect("run"))
@@ -63,7 +55,6 @@ fn surrogate() -> KrigingSurrogate {
     let sur = KrigingSurrogate::new(
         k,
         domain,
-        &names,
         Model::times(&real).to_vec(),
         Coordinates::Physical,
     )
@@ -88,7 +79,7 @@ fn noisy(sur: &KrigingSurrogate, x: &[f64], level: f64, seed: u64) -> Vec<f64> {
         .collect()
 }
 
-const X_TRUE: [f64; 5] = [900.0, 0.5, 0.05, 0.3, 12.0];
+const X_TRUE: [f64; 5] = [900.0, 0.5, 0.3, 0.05, 12.0];
 
 #[test]
 fn reduced_misfit_equals_eq_5_3_of_the_predicted_curve() {
@@ -96,7 +87,7 @@ fn reduced_misfit_equals_eq_5_3_of_the_predicted_curve() {
     let m = Model::times(&sur).len();
     let w: Vec<f64> = (0..m).map(|j| if j < 20 { 4.0 } else { 1.0 }).collect();
     let d1 = noisy(&sur, &X_TRUE, 0.02, 1);
-    let d2 = noisy(&sur, &[150.0, 0.2, 1.2, 0.6, 3.0], 0.02, 2);
+    let d2 = noisy(&sur, &[150.0, 0.2, 0.6, 1.2, 3.0], 0.02, 2);
     let p_none = projection(&sur, None).expect("projection");
     let p_w = projection(&sur, Some(&w)).expect("projection");
     let reduced = ReducedMisfit::new(vec![
@@ -158,7 +149,7 @@ fn gram_form_misfit(sur: &KrigingSurrogate, data: &[f64], x: &[f64]) -> f64 {
 fn reduced_misfit_keeps_its_digits_at_a_near_perfect_fit_where_the_gram_form_loses_them() {
     let sur = surrogate();
     // Soft cell (far from the mean curve, where the Gram form cancels worst).
-    let x = [90.0, 0.3, 0.6, 0.1, 30.0];
+    let x = [90.0, 0.3, 0.1, 0.6, 30.0];
     let p = projection(&sur, None).expect("projection");
     for level in [0.0, 1e-9, 1e-6, 1e-3] {
         let data = noisy(&sur, &x, level, 3);
@@ -336,14 +327,8 @@ fn real_fe_meta_model_reduced_form_is_exact_and_its_basis_is_checked() {
         "FE meta-model: m = {m}, q = {q}; max |VᵀV − I| = {off_v:.2e}; largest normalised off-diagonal of ΦᵀΦ (Φ = diag(σ)V) = {off_phi:.3}"
     );
     assert!(off_v < 1e-10, "PCA basis not orthonormal: {off_v}");
-    let sur = KrigingSurrogate::new(
-        k,
-        Domain::prony2_table_5_3(0.01).expect("domain"),
-        &meta.parameter_names,
-        meta.time_s,
-        Coordinates::Physical,
-    )
-    .expect("surrogate");
+    let sur = KrigingSurrogate::new(k, meta.domain, meta.time_s, Coordinates::Physical)
+        .expect("surrogate");
     let y = std::fs::read_to_string(export.join("check/Y.csv")).expect("Y.csv");
     let clean: Vec<f64> = y
         .lines()

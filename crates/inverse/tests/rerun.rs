@@ -1,20 +1,21 @@
-//! `rerun` with a real `ForwardModel` whose parameter order and time grid
-//! differ from the fit's: the surrogate-build `HertzProny` (quadrature of
-//! the Lee–Radok integral, order G0, g1, g2, tau1, tau2, grid (0, 10] s)
-//! against this crate's `LeeRadokHertz` (exact recursion for a
-//! piecewise-linear δ^{3/2}, Table 5.3 order G0, g1, tau1, g2, tau2) — two
-//! independent implementations of the same physics.
+//! `rerun` with a real `ForwardModel` whose time grid differs from the
+//! fit's: `nlvid_forward::HertzProny` (the Lee–Radok kernel in its exact
+//! ramp-hold form, grid (0, 10] s) against this crate's `LeeRadokHertz`
+//! (the kernel's recursion for a piecewise-linear δ^{3/2} on a 1-ms grid) —
+//! two evaluations of the same physics, both in the order G0, g1, g2, tau1,
+//! tau2.
 
-use nlvid_inverse::{Domain, ForwardFromModel, LeeRadokHertz, Model, range_normalised_rmse, rerun};
-use nlvid_surrogate::{ForwardModel, HertzProny};
+use nlvid_forward::HertzProny;
+use nlvid_inverse::{ForwardFromModel, LeeRadokHertz, Model, range_normalised_rmse, rerun};
+use nlvid_model::{Domain, ForwardModel};
 
 #[test]
-fn rerun_of_hertz_prony_matches_lee_radok_with_parameters_matched_by_name() {
-    let domain = Domain::prony2_table_5_3(0.01).unwrap();
-    // Table 5.3 order: G0, g1, tau1, g2, tau2.
+fn rerun_of_hertz_prony_matches_lee_radok_on_the_data_grid() {
+    let domain = Domain::table_5_3(0.01).unwrap();
+    // G0, g1, g2, tau1, tau2.
     let x = [1200.0, 0.35, 0.3, 0.3, 6.0];
     let (radius, rate, ramp, end) = (5e-6, 1e-6, 1.0, 10.0);
-    let hp = HertzProny::new(radius, rate, ramp, end, 100);
+    let hp = HertzProny::new(radius, rate, ramp, end, 100).unwrap();
 
     // Lee–Radok on a fine grid from rest (dt = 1 ms).
     let fine: Vec<f64> = (0..=10_000).map(|i| i as f64 * 1e-3).collect();

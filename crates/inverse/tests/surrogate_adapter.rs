@@ -4,10 +4,10 @@
 //! predictor; the fast misfit must equal eq. 5.3 on the predicted curve.
 
 use nlvid_inverse::{
-    AsModel, BasisExperiment, BasisMisfit, Coordinates, Domain, Experiment, KrigingSurrogate,
-    LeeRadokHertz, Misfit, Model, Objective, design_domain, gram, ramp_hold_grid,
-    ramp_hold_indentation,
+    AsModel, BasisExperiment, BasisMisfit, Coordinates, Experiment, KrigingSurrogate,
+    LeeRadokHertz, Misfit, Model, Objective, gram, ramp_hold_grid, ramp_hold_indentation,
 };
+use nlvid_model::Domain;
 use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{Correlation, KrigingModel, KrigingSettings, Regression, ThetaSearch};
@@ -18,13 +18,13 @@ fn real_model(domain: &Domain) -> LeeRadokHertz {
     LeeRadokHertz::new(domain.clone(), t, &delta, 2.5e-6, 0.5).expect("model")
 }
 
-/// Surrogate over `domain` whose inputs are in the order G0, g1, g2, tau1,
-/// tau2 (not the domain's order), in the given coordinates.
+/// Surrogate over `domain` (inputs G0, g1, g2, tau1, tau2, the domain's
+/// order), in the given coordinates.
 fn surrogate(coords: Coordinates, pca: Option<f64>) -> (KrigingSurrogate, LeeRadokHertz) {
-    let domain = Domain::prony2_table_5_3(0.01).expect("domain");
+    let domain = Domain::table_5_3(0.01).expect("domain");
     let real = real_model(&domain);
     let design = sample(
-        &design_domain(&domain),
+        &domain,
         &SampleSettings {
             n: 40,
             seed: 3,
@@ -32,20 +32,11 @@ fn surrogate(coords: Coordinates, pca: Option<f64>) -> (KrigingSurrogate, LeeRad
         },
     )
     .expect("design");
-    let order = [0usize, 1, 3, 2, 4]; // surrogate input k = domain parameter order[k]
-    let names: Vec<String> = order
-        .iter()
-        .map(|&i| domain.params()[i].name.clone())
-        .collect();
     let input = |x: &[f64]| -> Vec<f64> {
-        let u = domain.to_unit(x);
-        order
-            .iter()
-            .map(|&i| match coords {
-                Coordinates::Physical => x[i],
-                Coordinates::Unit => u[i],
-            })
-            .collect()
+        match coords {
+            Coordinates::Physical => x.to_vec(),
+            Coordinates::Unit => domain.to_unit(x),
+        }
     };
     let xs: Vec<Vec<f64>> = design.iter().map(|x| input(x)).collect();
     let ys: Vec<Vec<f64>> = design
@@ -58,15 +49,14 @@ fn surrogate(coords: Coordinates, pca: Option<f64>) -> (KrigingSurrogate, LeeRad
     s.theta = ThetaSearch::Fixed(vec![0.5; 5]);
     s.pca_energy = pca;
     let k = KrigingModel::fit(xm.as_ref(), ym.as_ref(), &s).expect("kriging");
-    let sur =
-        KrigingSurrogate::new(k, domain, &names, real.times().to_vec(), coords).expect("adapter");
+    let sur = KrigingSurrogate::new(k, domain, real.times().to_vec(), coords).expect("adapter");
     (sur, real)
 }
 
 const POINTS: [[f64; 5]; 3] = [
-    [900.0, 0.5, 0.05, 0.3, 12.0],
-    [150.0, 0.2, 1.2, 0.6, 3.0],
-    [3000.0, 0.05, 0.02, 0.05, 35.0],
+    [900.0, 0.5, 0.3, 0.05, 12.0],
+    [150.0, 0.2, 0.6, 1.2, 3.0],
+    [3000.0, 0.05, 0.05, 0.02, 35.0],
 ];
 
 #[test]
@@ -131,7 +121,7 @@ fn surrogate_gradient_matches_central_differences_of_the_predictor() {
 #[test]
 fn fast_misfit_equals_eq_5_3_on_the_predicted_curve() {
     let (sur, real) = surrogate(Coordinates::Unit, None);
-    let data = real.response(&[1100.0, 0.4, 0.1, 0.35, 9.0]).expect("data");
+    let data = real.response(&[1100.0, 0.4, 0.35, 0.1, 9.0]).expect("data");
     let g = gram(&sur, None).expect("gram");
     let fast = BasisMisfit::new(vec![
         BasisExperiment::new("RH", &sur, g, &data, None).expect("e"),
@@ -157,22 +147,24 @@ fn fast_misfit_equals_eq_5_3_on_the_predicted_curve() {
 }
 
 #[test]
-fn mismatched_names_or_grid_are_rejected() {
+fn mismatched_parameter_count_or_grid_are_rejected() {
     let (sur, real) = surrogate(Coordinates::Physical, None);
     let k = sur.kriging().clone();
-    let domain = Domain::prony2_table_5_3(0.01).expect("domain");
-    let bad = ["G0", "g1", "g2", "tau1", "tauX"].map(String::from);
+    let four = Domain::new(Domain::table_5_3(0.01).expect("domain").params()[..4].to_vec())
+        .expect("domain");
     let err = KrigingSurrogate::new(
         k.clone(),
-        domain.clone(),
-        &bad,
+        four,
         real.times().to_vec(),
         Coordinates::Physical,
     )
-    .expect_err("unknown name");
-    assert!(err.to_string().contains("tauX"), "{err}");
-    let names = ["G0", "g1", "g2", "tau1", "tau2"].map(String::from);
-    let err = KrigingSurrogate::new(k, domain, &names, vec![0.0, 1.0], Coordinates::Physical)
-        .expect_err("grid");
+    .expect_err("4 parameters for 5 inputs");
+    assert!(
+        err.to_string().contains("5 inputs") && err.to_string().contains("tau1"),
+        "{err}"
+    );
+    let domain = Domain::table_5_3(0.01).expect("domain");
+    let err =
+        KrigingSurrogate::new(k, domain, vec![0.0, 1.0], Coordinates::Physical).expect_err("grid");
     assert!(err.to_string().contains("time grid"), "{err}");
 }

@@ -14,10 +14,10 @@
 use std::path::PathBuf;
 
 use nlvid_inverse::{
-    BasisExperiment, BasisMisfit, Coordinates, Domain, ForwardFromModel, KrigingSurrogate,
-    LeeRadokHertz, Model, MultiStart, PronyShear, design_domain, gram, ramp_hold_grid,
-    ramp_hold_indentation, range_normalised_rmse,
+    BasisExperiment, BasisMisfit, Coordinates, ForwardFromModel, KrigingSurrogate, LeeRadokHertz,
+    Model, MultiStart, gram, ramp_hold_grid, ramp_hold_indentation, range_normalised_rmse,
 };
+use nlvid_model::Domain;
 use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
@@ -41,7 +41,9 @@ fn normal(rng: &mut ChaCha8Rng) -> f64 {
 }
 
 /// Random parameters inside Table 5.3 with g1 + g2 <= 0.99, drawn
-/// independently of the design and of the optimiser's starts.
+/// independently of the design and of the optimiser's starts, in the order
+/// G0, g1, g2, tau1, tau2 (random numbers consumed as before the order was
+/// unified: g1, g2, then G0, tau1, tau2 — the same ten cases).
 fn draw(rng: &mut ChaCha8Rng) -> [f64; 5] {
     let log_uniform = |rng: &mut ChaCha8Rng, lo: f64, hi: f64| {
         (lo.ln() + rng.random::<f64>() * (hi.ln() - lo.ln())).exp()
@@ -50,13 +52,10 @@ fn draw(rng: &mut ChaCha8Rng) -> [f64; 5] {
         let g1 = 0.01 + 0.99 * rng.random::<f64>();
         let g2 = 0.01 + 0.99 * rng.random::<f64>();
         if g1 + g2 <= 0.99 {
-            return [
-                log_uniform(rng, 80.0, 4000.0),
-                g1,
-                log_uniform(rng, 0.01, 2.0),
-                g2,
-                log_uniform(rng, 2.0, 40.0),
-            ];
+            let g0 = log_uniform(rng, 80.0, 4000.0);
+            let tau1 = log_uniform(rng, 0.01, 2.0);
+            let tau2 = log_uniform(rng, 2.0, 40.0);
+            return [g0, g1, g2, tau1, tau2];
         }
     }
 }
@@ -83,7 +82,7 @@ fn build_surrogate(
         std::env::temp_dir().join(format!("nlvid-fit-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let design = sample(
-        &design_domain(domain),
+        domain,
         &SampleSettings {
             n: n_sites,
             seed: 20261122,
@@ -118,17 +117,14 @@ fn build_surrogate(
         });
     }
     let k = KrigingModel::fit(xm.as_ref(), ym.as_ref(), &settings).expect("kriging");
-    let sur = KrigingSurrogate::new(
-        k,
-        domain.clone(),
-        &mm.meta.parameter_names,
-        mm.meta.time.clone(),
-        Coordinates::Unit,
-    )
-    .expect("adapter");
+    domain
+        .check_names(&mm.meta.parameter_names)
+        .expect("the store's parameters are the domain's");
+    let sur = KrigingSurrogate::new(k, domain.clone(), mm.meta.time.clone(), Coordinates::Unit)
+        .expect("adapter");
     // Checking error (eq. 4.4) on 40 independent points.
     let check = sample(
-        &design_domain(domain),
+        domain,
         &SampleSettings {
             n: 40,
             seed: 77,
@@ -148,7 +144,7 @@ fn build_surrogate(
 }
 
 fn recovery(name: &str, n_sites: usize, n_ramp: usize, n_hold: usize, g0_scale: bool) -> Outcome {
-    let domain = Domain::prony2_table_5_3(0.01).expect("domain");
+    let domain = Domain::table_5_3(0.01).expect("domain");
     let real = real_model(&domain, n_ramp, n_hold);
     let (sur, max_checking_error) = build_surrogate(name, &domain, &real, n_sites, g0_scale);
     let g = gram(&sur, None).expect("gram");
@@ -187,11 +183,11 @@ fn recovery(name: &str, n_sites: usize, n_ramp: usize, n_hold: usize, g0_scale: 
         let at_truth = nlvid_inverse::Objective::value(&misfit, &x_true).expect("truth");
         let real_misfit =
             range_normalised_rmse(&real.response(x).expect("rerun"), &data, None).expect("e");
-        let g_true = PronyShear::from_parameters(&domain, &x_true).expect("g");
-        let g_fit = PronyShear::from_parameters(&domain, x).expect("g");
+        let g_true = nlvid_inverse::relaxation(&domain, &x_true).expect("g");
+        let g_fit = nlvid_inverse::relaxation(&domain, x).expect("g");
         let e_g0 = (x[0] / x_true[0] - 1.0).abs();
-        let e_sum = ((x[1] + x[3]) - (x_true[1] + x_true[3])).abs();
-        let e_g52 = (g_fit.shear(52.0) / g_true.shear(52.0) - 1.0).abs();
+        let e_sum = ((x[1] + x[2]) - (x_true[1] + x_true[2])).abs();
+        let e_g52 = (g_fit.value(52.0) / g_true.value(52.0) - 1.0).abs();
         let ok = e_g0 <= 0.05 && e_sum <= 0.03 && e_g52 <= 0.05;
         let agrees = (fit.best.misfit - real_misfit).abs() <= max_checking_error;
         out.passed += usize::from(ok);
@@ -228,7 +224,8 @@ fn small_surrogate_built_by_nlvid_build_fits_noisy_ramp_hold_curves() {
     // surrogate misfit of the true parameters) in every case, and the
     // re-run misfit must agree with the surrogate one within the checking
     // error; the recovery count of a 120-run surrogate is only reported
-    // (measured: 1/10, max checking error 17 %), the 9/10 claim is
+    // (measured: 2/10, max checking error 22.5 %; 1/10 and 17.5 % before the
+    // parameter order was unified, which reorders the design's columns), the 9/10 claim is
     // checked at full size (ignored test below).
     assert_eq!(o.reached, 10, "{report}");
     assert_eq!(o.agree, 10, "{report}");

@@ -13,16 +13,10 @@ pub enum MaterialError {
         /// What the admissible range is.
         reason: &'static str,
     },
-    /// A term of a Prony series is inadmissible.
-    #[error("Prony series `{series}`, term {index} (1-based): {reason}")]
-    PronyTerm {
-        /// Which series (e.g. `G1`, `G2`, `G`).
-        series: &'static str,
-        /// 1-based index of the offending term.
-        index: usize,
-        /// What is wrong and what to change.
-        reason: String,
-    },
+    /// A relaxation modulus or Prony series is inadmissible (the shared
+    /// vocabulary's check, naming the series and term).
+    #[error(transparent)]
+    Model(#[from] nlvid_model::ModelError),
     /// The deformation cannot be evaluated (e.g. det F ≤ 0, a stretch ≤ 0).
     #[error("inadmissible deformation: {0}")]
     Deformation(String),

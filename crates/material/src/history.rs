@@ -68,7 +68,7 @@ impl HistoryRule {
 #[inline]
 pub(crate) fn advance(
     rule: HistoryRule,
-    prony: &crate::Prony,
+    prony: &nlvid_model::Prony,
     dt: f64,
     (h_n, a_n): (&[crate::Mat3], &crate::Mat3),
     a_new: &crate::Mat3,

@@ -81,6 +81,29 @@ impl MooneyRivlin {
         Self::new(c1, alpha * c1, bulk)
     }
 
+    /// From the small-strain shear modulus `G0 = 2 (C1 + C2)` and
+    /// `α = C2/C1`: `C1 = G0 / (2 (1 + α))`, `C2 = α C1` (eq. 4.1; the
+    /// convention of `docs/theory/model.md`). `α = 0` is the neo-Hookean
+    /// cell of eq. 5.1, `C1 = G0/2`.
+    ///
+    /// # Errors
+    /// As [`MooneyRivlin::with_ratio`], naming `G0` when it is not > 0.
+    pub fn from_shear_modulus(g0: f64, alpha: f64, bulk: f64) -> Result<Self> {
+        if !(g0.is_finite() && g0 > 0.0) {
+            return Err(MaterialError::Parameter {
+                name: "G0",
+                value: g0,
+                reason: "the shear modulus G0 = 2(C1 + C2) must be finite and > 0 (Pa)",
+            });
+        }
+        Self::with_ratio(g0 / (2.0 * (1.0 + alpha)), alpha, bulk)
+    }
+
+    /// Small-strain shear modulus `2 (C1 + C2)` in Pa (the `G0` of eq. 5.1).
+    pub fn shear_modulus(&self) -> f64 {
+        2.0 * (self.c1 + self.c2)
+    }
+
     /// `C1` in Pa.
     pub fn c1(&self) -> f64 {
         self.c1

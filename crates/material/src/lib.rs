@@ -18,12 +18,16 @@
 //!   `G1`, `G2` (App. D.3–D.4); [`PipkinRogers::qlv`] is the QLV case and
 //!   [`PipkinRogers::from_eq_2_56`] ch. II's parametrisation;
 //! - [`PronyViscoelastic`], the ABAQUS hereditary integral of §4.3 (capsules:
-//!   [`PronyViscoelastic::capsule`], cells: [`PronyViscoelastic::cell`], eq. 5.1).
+//!   [`PronyViscoelastic::capsule`], cells: [`PronyViscoelastic::cell`] from
+//!   the shear relaxation modulus of eq. 5.1).
 //!
 //! Each implements [`Material3`], [`MembraneMaterial`] and [`Incompressible`]
-//! (the extra stress used by the [`homogeneous`] drivers). [`Prony`] holds
-//! Prony *weights* (eq. 4.2); ch. II's long-term *fractions* (eq. 2.56) live
-//! only in [`ThreeParameterSolid`] and [`Eq256`]. Study sections are read by
+//! (the extra stress used by the [`homogeneous`] drivers). Relaxation moduli
+//! are the project's one Prony type, [`nlvid_model::Relaxation`] with
+//! [`nlvid_model::Prony`] *weights* (eq. 4.2); ch. II's long-term *fractions*
+//! (eq. 2.56) live only in [`ThreeParameterSolid`] and [`Eq256`]. Names
+//! follow `docs/theory/model.md`: `G0` is a shear modulus, `C1`, `C2` the
+//! constants of eq. 4.1 (`G0 = 2(C1 + C2)`), ch. II's G1(0) is `G10`. Study sections are read by
 //! [`MaterialSpec`] and [`LoadingSpec`]. The choices made where the thesis is
 //! ambiguous are in `docs/theory/material.md`.
 //!
@@ -36,9 +40,13 @@
 //! thesis's O(steps) trapezoidal sum (eq. 2.48) is kept in [`reference`].
 //!
 //! ```
-//! use nlvid_material::{Mat3, Material3, MooneyRivlin, Prony, PronyViscoelastic};
-//! // The cell model of eq. 5.1: C1 = 500 Pa, (g1, τ1) = (0.4, 0.5 s), (g2, τ2) = (0.3, 10 s).
-//! let cell = PronyViscoelastic::cell(500.0, 0.4, 0.5, 0.3, 10.0, 5.0e5)?;
+//! use nlvid_material::{Mat3, Material3, PronyViscoelastic};
+//! use nlvid_model::{Relaxation, names};
+//! // The cell model of eq. 5.1: G0 = 1 kPa (so C1 = 500 Pa), g1 = 0.4, g2 = 0.3,
+//! // τ1 = 0.5 s, τ2 = 10 s.
+//! let g = Relaxation::from_named(&names::PRONY2, &[1000.0, 0.4, 0.3, 0.5, 10.0])?;
+//! let cell = PronyViscoelastic::cell(&g, 5.0e5)?;
+//! assert_eq!(cell.elastic().c1(), 500.0);
 //! let mut state = Material3::initial_state(&cell);
 //! let mut trial = state.clone();
 //! let f = Mat3::new(1.2, 0.0, 0.0, 0.0, 0.913, 0.0, 0.0, 0.0, 0.913);
@@ -48,13 +56,13 @@
 //! // Relaxed to g∞ = 1 − 0.4 − 0.3 of the instantaneous deviatoric stress.
 //! let dev = |s: &Mat3| s[(0, 0)] - s[(1, 1)];
 //! assert!((dev(&r1.cauchy) / dev(&r0.cauchy) - 0.3).abs() < 1e-3);
-//! # let _ = MooneyRivlin::new(1.0, 0.0, 0.0)?; let _ = Prony::elastic();
-//! # Ok::<(), nlvid_material::MaterialError>(())
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 #![warn(missing_docs)]
 
 mod cube_root;
+mod curve;
 mod error;
 mod history;
 pub mod homogeneous;
@@ -69,6 +77,7 @@ pub mod reference;
 mod spec;
 
 pub use cube_root::cube_root;
+pub use curve::samples_curve;
 pub use error::{MaterialError, Result};
 pub use history::HistoryRule;
 pub use hyperelastic::MooneyRivlin;
@@ -78,6 +87,6 @@ pub use point::{
     AXISYMMETRIC_COMPONENTS, AxisymmetricResponse, Mat3, Material3, MembraneMaterial,
     MembraneResponse, PointResponse3, Tangent3,
 };
-pub use prony::{Prony, PronyTerm, Relaxation, ThreeParameterSolid};
+pub use prony::ThreeParameterSolid;
 pub use prony_visco::{PronyViscoelastic, PronyViscoelasticState};
 pub use spec::{LoadingSpec, MaterialSpec, read_table};

@@ -4,8 +4,11 @@
 //!
 //! Convention: the coefficients carry the factor 2 of eq. 2.55, so
 //! `G1(0) = C1` and `G2(0) = C2` of the instantaneous Mooney–Rivlin response
-//! (eq. 2.4 with γ0 = G2(0)/G1(0)). App. D's eq. D.2 drops the 2: its `G10`
-//! is twice ours ([`PipkinRogers::from_umat_d2`] converts).
+//! in eq. 4.1's convention (`W = C1(I1 − 3) + C2(I2 − 3)`, small-strain
+//! shear modulus `2 (G1(0) + G2(0))`), with γ0 = G2(0)/G1(0). Ch. II's
+//! `G1(0)` is the study key and parameter name `G10` (`docs/theory/model.md`);
+//! App. D's UMAT eq. D.2 drops the 2: its `G10` is twice ours
+//! ([`PipkinRogers::from_umat_d2`] converts).
 //!
 //! By Cayley–Hamilton, `R[C, t] = G1(t) A1(C) + G2(t) A2(C)` with
 //! `A1 = 2(I − Φ I3 C⁻¹)` and `A2 = 2(I1 I − C − 2Φ I3 C⁻¹)`, so the
@@ -20,7 +23,9 @@ use crate::history::advance;
 use crate::hyperelastic::{add_volumetric, check_bulk};
 use crate::kernel::{IsoStress, Kin, XC, XCI, XH, XI};
 use crate::model::{Kernel, impl_point_traits};
-use crate::{HistoryRule, Mat3, MaterialError, MooneyRivlin, Prony, Relaxation, Result};
+use nlvid_model::{Prony, Relaxation};
+
+use crate::{HistoryRule, Mat3, MaterialError, MooneyRivlin, Result};
 
 /// Pipkin–Rogers material, eqs. 2.1–2.2, 2.53–2.55, D.3–D.4.
 #[derive(Debug, Clone, PartialEq)]
@@ -65,8 +70,9 @@ impl Clone for PipkinRogersState {
 /// exponential per relaxation function, long-term *fractions* `g_α`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Eq256 {
-    /// `C1 = G1(0)` in Pa.
-    pub c1: f64,
+    /// `G10 = G1(0)` in Pa (the thesis's "C1 = G1(0)" of §2.5; the
+    /// Mooney–Rivlin C1 of eq. 4.1 at t = 0⁺).
+    pub g10: f64,
     /// Instantaneous Mooney–Rivlin ratio `γ0 = G2(0)/G1(0)`.
     pub gamma0: f64,
     /// Long-term fraction `g_1 = G1(∞)/G1(0)` in (0, 1].
@@ -106,7 +112,7 @@ impl PipkinRogers {
             return Err(MaterialError::Parameter {
                 name: "G10",
                 value: g1.g0(),
-                reason: "G1(0) = C1 must be > 0 (Pa)",
+                reason: "G1(0) must be > 0 (Pa)",
             });
         }
         Ok(Self {
@@ -134,7 +140,7 @@ impl PipkinRogers {
         Self::new(g, g2, a, bulk)
     }
 
-    /// From ch. II's parameters (eq. 2.56): `G10 = C1`, `G20 = γ0 C1`,
+    /// From ch. II's parameters (eq. 2.56): `G1(0) = G10`, `G2(0) = γ0 G10`,
     /// `τ2 = τ1 / c`.
     ///
     /// # Errors
@@ -155,13 +161,13 @@ impl PipkinRogers {
             });
         }
         let g1 = crate::ThreeParameterSolid {
-            g0: p.c1,
+            g0: p.g10,
             long_term_fraction: p.g1_fraction,
             tau: p.tau1,
         }
         .to_relaxation("G1")?;
         let g2 = crate::ThreeParameterSolid {
-            g0: p.gamma0 * p.c1,
+            g0: p.gamma0 * p.g10,
             long_term_fraction: p.g2_fraction,
             tau: p.tau1 / p.c,
         }

@@ -1,7 +1,11 @@
 //! Finite-strain Prony viscoelasticity of the ABAQUS form (§4.3, eqs.
 //! 4.1–4.3; ABAQUS Theory Manual §4.8.2), with a Mooney–Rivlin (capsules,
 //! 6 parameters C1, α = C2/C1, g1, τ1, g2, τ2) or neo-Hookean (cells,
-//! 5 parameters of eq. 5.1) elastic part.
+//! 5 parameters G0, g1, g2, τ1, τ2 of eq. 5.1) elastic part.
+//!
+//! Moduli follow `docs/theory/model.md`: `C1`, `C2` are the constants of
+//! eq. 4.1 and the shear relaxation modulus is `G(t) = 2 (C1 + C2) g(t)`,
+//! so a cell of shear modulus `G0` has `C1 = G0/2`.
 //!
 //! The deviatoric hereditary integral
 //! `τᴰ(t) = τ0ᴰ(t) + dev{F̄(t) [∫_0^t Ġ(s)/G0 F̄⁻¹(t−s) τ0ᴰ(t−s) F̄⁻ᵀ(t−s) ds] F̄ᵀ(t)}`
@@ -14,7 +18,9 @@ use crate::history::advance;
 use crate::hyperelastic::add_volumetric;
 use crate::kernel::{IsoStress, Kin, XCI, XH};
 use crate::model::{Kernel, impl_point_traits};
-use crate::{HistoryRule, Mat3, MooneyRivlin, Prony};
+use nlvid_model::{Prony, Relaxation};
+
+use crate::{HistoryRule, Mat3, MooneyRivlin};
 
 /// ABAQUS-form finite-strain viscoelasticity, eqs. 4.1–4.3 / 5.1.
 #[derive(Debug, Clone, PartialEq)]
@@ -61,15 +67,18 @@ impl PronyViscoelastic {
         }
     }
 
-    /// The 5-parameter cell model of eq. 5.1: neo-Hookean `C1` (the thesis's
-    /// `G0`), two Prony terms `(g1, τ1)`, `(g2, τ2)` with `g1 + g2 < 1`.
+    /// The 5-parameter cell model of eq. 5.1 from its shear relaxation
+    /// modulus `G(t) = G0 [g∞ + Σ g_k e^{−t/τ_k}]`: a neo-Hookean elastic
+    /// part with `C1 = G0/2` (eq. 4.1, [`MooneyRivlin::from_shear_modulus`])
+    /// relaxed by `shear`'s Prony series, and the volumetric penalty
+    /// `K = bulk`.
     ///
     /// # Errors
-    /// [`crate::MaterialError`] naming the parameter or Prony term.
-    pub fn cell(c1: f64, g1: f64, tau1: f64, g2: f64, tau2: f64, bulk: f64) -> crate::Result<Self> {
+    /// [`crate::MaterialError`] naming the parameter (`G0 = 0`, `K < 0`).
+    pub fn cell(shear: &Relaxation, bulk: f64) -> crate::Result<Self> {
         Ok(Self::new(
-            MooneyRivlin::neo_hookean(c1, bulk)?,
-            Prony::new("G", &[(g1, tau1), (g2, tau2)])?,
+            MooneyRivlin::from_shear_modulus(shear.g0(), 0.0, bulk)?,
+            shear.prony().clone(),
         ))
     }
 
@@ -119,18 +128,18 @@ impl PronyViscoelastic {
         )
     }
 
-    /// `G(t)` of eq. 5.1 as the thesis reports it: `G0 [g∞ + Σ g_k e^{−t/τ_k}]`
-    /// with `G0` ≡ the neo-Hookean/Mooney–Rivlin `C1` (§5.4.1, Table 5.3).
-    /// The small-strain shear modulus is `2 (C1 + C2) g(t)`.
-    pub fn relaxation_eq_5_1(&self, t: f64) -> f64 {
-        self.elastic.c1() * self.prony.value(t)
-    }
-
-    /// Small-strain shear relaxation modulus `μ(t) = 2 (C1 + C2) g(t)` in Pa
-    /// (the reading of eq. 5.1's `G0` as a shear modulus, `G0 = 2 C1` for
-    /// neo-Hookean; see docs/theory/material.md, choice 8).
-    pub fn shear_relaxation_modulus(&self, t: f64) -> f64 {
-        2.0 * (self.elastic.c1() + self.elastic.c2()) * self.prony.value(t)
+    /// The small-strain shear relaxation modulus of eq. 5.1,
+    /// `G(t) = 2 (C1 + C2) g(t)` (so `G0 = 2 (C1 + C2)`, `docs/theory/model.md`).
+    /// [`PronyViscoelastic::cell`] of this modulus is the same material.
+    ///
+    /// # Errors
+    /// Never for a valid model (C1 > 0, C2 ≥ 0); typed for uniformity.
+    pub fn shear_relaxation(&self) -> crate::Result<Relaxation> {
+        Ok(Relaxation::new(
+            nlvid_model::names::G0,
+            self.elastic.shear_modulus(),
+            self.prony.clone(),
+        )?)
     }
 }
 
@@ -193,7 +202,9 @@ mod tests {
 
     #[test]
     fn clone_from_copies_the_state_into_the_existing_allocation() {
-        let m = PronyViscoelastic::cell(500.0, 0.3, 0.5, 0.3, 10.0, 1e5).expect("valid");
+        let g = Relaxation::from_named(&nlvid_model::names::PRONY2, &[1000.0, 0.3, 0.3, 0.5, 10.0])
+            .expect("valid");
+        let m = PronyViscoelastic::cell(&g, 1e5).expect("valid");
         let s0 = Material3::initial_state(&m);
         let mut s1 = s0.clone();
         let f = Mat3::new(1.1, 0.1, 0.0, 0.0, 0.95, 0.0, 0.0, 0.0, 0.97);

@@ -6,10 +6,10 @@ use std::path::Path;
 
 use nlvid_study::{Bounds, Dimension, FromSection, Section, StudyError, parse_unit};
 
+use nlvid_model::{Prony, Relaxation, names};
+
 use crate::homogeneous::{History, Mode, Sample, drive};
-use crate::{
-    Eq256, MaterialError, MooneyRivlin, PipkinRogers, Prony, PronyViscoelastic, Relaxation,
-};
+use crate::{Eq256, MaterialError, MooneyRivlin, PipkinRogers, PronyViscoelastic};
 
 /// A material model read from `[material]`.
 #[derive(Debug, Clone, PartialEq)]
@@ -37,8 +37,13 @@ fn at(s: &Section, key: &str, e: MaterialError) -> StudyError {
     s.invalid(key, e.to_string())
 }
 
+/// Why ch. II's moduli are not called `C1`/`G0` (for renamed-key errors).
+const CH2_MODULUS: &str = "ch. II's instantaneous modulus G1(0) is `G10`; `C1` names the \
+                           Mooney–Rivlin constant of eq. 4.1 and `G0` the shear modulus \
+                           (docs/theory/model.md)";
+
 /// `g = [...]`, `tau = [...]` of a Prony table (weights, eq. 4.2).
-fn read_prony(s: &mut Section, series: &'static str) -> Result<Prony, StudyError> {
+fn read_prony(s: &mut Section, series: &str) -> Result<Prony, StudyError> {
     let g = s.req_f64s("g", Bounds::open(0.0, 1.0))?;
     let tau = s.req_quantities("tau", Dimension::TIME, Bounds::positive())?;
     if g.len() != tau.len() {
@@ -52,36 +57,66 @@ fn read_prony(s: &mut Section, series: &'static str) -> Result<Prony, StudyError
         ));
     }
     let terms: Vec<(f64, f64)> = g.into_iter().zip(tau).collect();
-    Prony::new(series, &terms).map_err(|e| at(s, "g", e))
+    Prony::new(series, &terms).map_err(|e| at(s, "g", e.into()))
 }
 
-/// A relaxation table `{ G0 = "…Pa", g = [...], tau = [...] }`.
-fn read_relaxation(
-    parent: &mut Section,
-    key: &str,
-    series: &'static str,
-) -> Result<Relaxation, StudyError> {
-    let mut s = parent.subsection(key)?;
-    let g0 = s.req_quantity("G0", Dimension::PRESSURE, Bounds::non_negative())?;
-    let prony = read_prony(&mut s, series)?;
-    let r = Relaxation::new(series, g0, prony).map_err(|e| at(&s, "G0", e))?;
+/// A ch. II relaxation table `[material.<table>]` with the instantaneous
+/// value under `key` (`G10` or `G20`), `g = [...]`, `tau = [...]`.
+fn read_relaxation(parent: &mut Section, table: &str, key: &str) -> Result<Relaxation, StudyError> {
+    let mut s = parent.subsection(table)?;
+    s.renamed(names::G0, key, CH2_MODULUS)?;
+    let g0 = s.req_quantity(key, Dimension::PRESSURE, Bounds::non_negative())?;
+    let prony = read_prony(&mut s, table)?;
+    let r = Relaxation::new(key, g0, prony).map_err(|e| at(&s, key, e.into()))?;
     s.finish()?;
     Ok(r)
 }
 
+/// The elastic part of eq. 4.1: either the shear modulus `G0` (with `alpha`
+/// for Mooney–Rivlin; `C1 = G0 / (2(1 + α))`) or `C1` (with `C2` or
+/// `alpha`) — one quantity per key, never both.
 fn read_elastic(s: &mut Section, neo: bool, bulk: f64) -> Result<MooneyRivlin, StudyError> {
-    let c1 = s.req_quantity("C1", Dimension::PRESSURE, Bounds::positive())?;
-    if neo {
-        return MooneyRivlin::neo_hookean(c1, bulk).map_err(|e| at(s, "C1", e));
+    if s.has(names::G0) && s.has(names::C1) {
+        return Err(s.invalid(
+            names::G0,
+            "give either the shear modulus `G0` or the Mooney–Rivlin constant `C1` of eq. 4.1 \
+             (G0 = 2(C1 + C2)), not both",
+        ));
     }
-    if s.has("alpha") && s.has("C2") {
+    if !s.has(names::G0) && !s.has(names::C1) {
+        return Err(s.invalid(
+            names::G0,
+            "missing: give the shear modulus `G0` (Pa) or the Mooney–Rivlin constant `C1` \
+             of eq. 4.1 (G0 = 2(C1 + C2))",
+        ));
+    }
+    if neo && (s.has("alpha") || s.has(names::C2)) {
+        let key = if s.has("alpha") { "alpha" } else { names::C2 };
+        return Err(s.invalid(
+            key,
+            "a neo-Hookean material has C2 = 0; use model = \"mooney-rivlin\"",
+        ));
+    }
+    if s.has("alpha") && s.has(names::C2) {
         return Err(s.invalid("alpha", "give either `C2` or `alpha` (= C2/C1), not both"));
     }
+    if s.has(names::G0) {
+        if s.has(names::C2) {
+            return Err(s.invalid(
+                names::C2,
+                "with the shear modulus `G0` give `alpha` (= C2/C1), or give `C1` and `C2`",
+            ));
+        }
+        let g0 = s.req_quantity(names::G0, Dimension::PRESSURE, Bounds::positive())?;
+        let alpha = s.f64_or("alpha", Bounds::non_negative(), 0.0)?;
+        return MooneyRivlin::from_shear_modulus(g0, alpha, bulk).map_err(|e| at(s, names::G0, e));
+    }
+    let c1 = s.req_quantity(names::C1, Dimension::PRESSURE, Bounds::positive())?;
     let c2 = match s.opt_f64("alpha", Bounds::non_negative())? {
         Some(alpha) => alpha * c1,
-        None => s.quantity_or("C2", Dimension::PRESSURE, Bounds::non_negative(), 0.0)?,
+        None => s.quantity_or(names::C2, Dimension::PRESSURE, Bounds::non_negative(), 0.0)?,
     };
-    MooneyRivlin::new(c1, c2, bulk).map_err(|e| at(s, "C1", e))
+    MooneyRivlin::new(c1, c2, bulk).map_err(|e| at(s, names::C1, e))
 }
 
 impl FromSection for MaterialSpec {
@@ -115,30 +150,36 @@ impl FromSection for MaterialSpec {
                 MaterialSpec::PronyViscoelastic(PronyViscoelastic::new(el, prony))
             }
             Model::Qlv => {
+                s.renamed(
+                    "G",
+                    "G1",
+                    "QLV takes G1(t) with `G10`, and G2 = beta G1 (eq. 2.16)",
+                )?;
                 let a = s.f64_or("a", Bounds::non_negative(), 0.0)?;
                 let beta = s.req_f64("beta", Bounds::non_negative())?;
-                let g = read_relaxation(s, "G", "G")?;
+                let g = read_relaxation(s, "G1", names::G10)?;
                 MaterialSpec::PipkinRogers(
-                    PipkinRogers::qlv(g, beta, a, bulk).map_err(|e| at(s, "G", e))?,
+                    PipkinRogers::qlv(g, beta, a, bulk).map_err(|e| at(s, "G1", e))?,
                 )
             }
             Model::PipkinRogers => {
+                s.renamed(names::C1, names::G10, CH2_MODULUS)?;
                 let a = s.f64_or("a", Bounds::non_negative(), 0.0)?;
                 let m = if s.has("G1") || s.has("G2") {
-                    let g1 = read_relaxation(s, "G1", "G1")?;
-                    let g2 = read_relaxation(s, "G2", "G2")?;
+                    let g1 = read_relaxation(s, "G1", names::G10)?;
+                    let g2 = read_relaxation(s, "G2", "G20")?;
                     PipkinRogers::new(g1, g2, a, bulk).map_err(|e| at(s, "G1", e))?
                 } else {
                     let p = Eq256 {
-                        c1: s.req_quantity("C1", Dimension::PRESSURE, Bounds::positive())?,
-                        gamma0: s.req_f64("gamma0", Bounds::non_negative())?,
+                        g10: s.req_quantity(names::G10, Dimension::PRESSURE, Bounds::positive())?,
+                        gamma0: s.req_f64(names::GAMMA0, Bounds::non_negative())?,
                         g1_fraction: s.req_f64("g1_long_term", Bounds::open_closed(0.0, 1.0))?,
                         g2_fraction: s.req_f64("g2_long_term", Bounds::open_closed(0.0, 1.0))?,
                         tau1: s.req_quantity("tau1", Dimension::TIME, Bounds::positive())?,
                         c: s.req_f64("c", Bounds::positive())?,
                         a,
                     };
-                    PipkinRogers::from_eq_2_56(&p, bulk).map_err(|e| at(s, "C1", e))?
+                    PipkinRogers::from_eq_2_56(&p, bulk).map_err(|e| at(s, names::G10, e))?
                 };
                 MaterialSpec::PipkinRogers(m)
             }
@@ -159,19 +200,27 @@ impl MaterialSpec {
         }
     }
 
-    /// Model name and parameters in SI, `(name, value, SI unit)`, for reports.
+    /// Model name and parameters in SI, `(name, value, SI unit)`, for
+    /// reports. Every name is one quantity (`docs/theory/model.md`): the
+    /// elastic and Prony models list the shear modulus `G0 = 2(C1 + C2)`
+    /// and the constants `C1`, `C2` of eq. 4.1; Pipkin–Rogers lists ch. II's
+    /// `G10 = G1(0)`, `G20 = G2(0)` and their Prony terms.
     pub fn parameters(&self) -> (&'static str, Vec<(String, f64, &'static str)>) {
         let mut out = Vec::new();
         let prony = |out: &mut Vec<(String, f64, &'static str)>, pre: &str, p: &Prony| {
             for (k, t) in p.terms().iter().enumerate() {
-                out.push((format!("{pre}g{}", k + 1), t.weight, ""));
-                out.push((format!("{pre}tau{}", k + 1), t.tau, "s"));
+                out.push((format!("{pre}{}", names::weight(k + 1)), t.weight, ""));
+                out.push((format!("{pre}{}", names::time(k + 1)), t.tau, "s"));
             }
+        };
+        let elastic = |out: &mut Vec<(String, f64, &'static str)>, m: &MooneyRivlin| {
+            out.push((names::G0.into(), m.shear_modulus(), "Pa"));
+            out.push((names::C1.into(), m.c1(), "Pa"));
+            out.push((names::C2.into(), m.c2(), "Pa"));
         };
         match self {
             MaterialSpec::Elastic(m) => {
-                out.push(("C1".into(), m.c1(), "Pa"));
-                out.push(("C2".into(), m.c2(), "Pa"));
+                elastic(&mut out, m);
                 let name = if m.c2() == 0.0 {
                     "neo-hookean"
                 } else {
@@ -180,8 +229,7 @@ impl MaterialSpec {
                 (name, out)
             }
             MaterialSpec::PronyViscoelastic(m) => {
-                out.push(("C1".into(), m.elastic().c1(), "Pa"));
-                out.push(("C2".into(), m.elastic().c2(), "Pa"));
+                elastic(&mut out, m.elastic());
                 prony(&mut out, "", m.prony());
                 let name = if m.elastic().c2() == 0.0 {
                     "neo-hookean-prony"
@@ -191,9 +239,9 @@ impl MaterialSpec {
                 (name, out)
             }
             MaterialSpec::PipkinRogers(m) => {
-                out.push(("G1_0".into(), m.g1().g0(), "Pa"));
+                out.push((names::G10.into(), m.g1().g0(), "Pa"));
                 prony(&mut out, "G1_", m.g1().prony());
-                out.push(("G2_0".into(), m.g2().g0(), "Pa"));
+                out.push(("G20".into(), m.g2().g0(), "Pa"));
                 prony(&mut out, "G2_", m.g2().prony());
                 out.push(("a".into(), m.a(), ""));
                 ("pipkin-rogers", out)

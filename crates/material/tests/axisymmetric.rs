@@ -4,9 +4,10 @@
 //! first Piola stress.
 
 use nlvid_material::{
-    AXISYMMETRIC_COMPONENTS, HistoryRule, Mat3, Material3, MooneyRivlin, PipkinRogers, Prony,
-    PronyViscoelastic, Relaxation,
+    AXISYMMETRIC_COMPONENTS, HistoryRule, Mat3, Material3, MooneyRivlin, PipkinRogers,
+    PronyViscoelastic,
 };
+use nlvid_model::{Prony, Relaxation};
 
 fn models() -> (MooneyRivlin, Vec<PronyViscoelastic>, Vec<PipkinRogers>) {
     let mr = MooneyRivlin::new(1000.0, 200.0, 3.0e4).expect("ok");
@@ -15,7 +16,14 @@ fn models() -> (MooneyRivlin, Vec<PronyViscoelastic>, Vec<PipkinRogers>) {
             .with_rule(rule)
     });
     // The AFM cell model as the fem crate builds it (C1 = G0/2, κ = 200 G0).
-    let cell = PronyViscoelastic::cell(500.0, 0.3, 0.5, 0.3, 10.0, 2.0e5).expect("ok");
+    // The AFM cell model: G0 = 1 kPa, so C1 = 500 Pa and κ = 400 C1.
+    let shear = Relaxation::new(
+        "G0",
+        1000.0,
+        Prony::new("G", &[(0.3, 0.5), (0.3, 10.0)]).expect("ok"),
+    )
+    .expect("ok");
+    let cell = PronyViscoelastic::cell(&shear, 2.0e5).expect("ok");
     let g1 = Relaxation::new(
         "G1",
         1000.0,

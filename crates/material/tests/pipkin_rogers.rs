@@ -3,9 +3,8 @@
 //! with its own Prony functions and Gauss–Legendre rule).
 
 use nlvid_material::homogeneous::{History, Mode, Sample, drive};
-use nlvid_material::{
-    Eq256, HistoryRule, Incompressible, Mat3, MooneyRivlin, PipkinRogers, Prony, Relaxation,
-};
+use nlvid_material::{Eq256, HistoryRule, Incompressible, Mat3, MooneyRivlin, PipkinRogers};
+use nlvid_model::{Prony, Relaxation};
 
 // ---------------------------------------------------------------- reference
 
@@ -321,7 +320,7 @@ fn two_step_history_gives_the_pipkin_rogers_superposition_exactly() {
 
 fn eq256() -> Eq256 {
     Eq256 {
-        c1: 1000.0,
+        g10: 1000.0,
         gamma0: 0.1,
         g1_fraction: 0.3,
         g2_fraction: 0.6,
@@ -336,8 +335,8 @@ fn instantaneous_and_long_time_responses_are_mooney_rivlin_with_gamma0_and_gamma
     let p = eq256();
     let m = PipkinRogers::from_eq_2_56(&p, 0.0).expect("ok");
     let gamma_inf = p.g2_fraction / p.g1_fraction * p.gamma0; // eq. 2.57
-    let c1_inf = p.g1_fraction * p.c1;
-    let mr0 = MooneyRivlin::new(p.c1, p.gamma0 * p.c1, 0.0).expect("ok");
+    let c1_inf = p.g1_fraction * p.g10;
+    let mr0 = MooneyRivlin::new(p.g10, p.gamma0 * p.g10, 0.0).expect("ok");
     let mr_inf = MooneyRivlin::new(c1_inf, gamma_inf * c1_inf, 0.0).expect("ok");
     let t_end = 60.0 * p.tau1 / p.c; // e^{-60}: relaxation complete to rounding
     for mode in [Mode::Uniaxial, Mode::Equibiaxial, Mode::SimpleShear] {
@@ -380,7 +379,7 @@ fn instantaneous_and_long_time_responses_are_mooney_rivlin_with_gamma0_and_gamma
         1.0,
     )
     .expect("ok");
-    let s0 = mr_uniaxial(p.c1, p.gamma0 * p.c1, 2.0);
+    let s0 = mr_uniaxial(p.g10, p.gamma0 * p.g10, 2.0);
     let sinf = mr_uniaxial(c1_inf, gamma_inf * c1_inf, 2.0);
     assert!((out[1].principal[0] - s0).abs() < 1e-12 * s0);
     assert!((out.last().expect("sample").principal[0] - sinf).abs() < 1e-12 * sinf);
@@ -390,7 +389,7 @@ fn instantaneous_and_long_time_responses_are_mooney_rivlin_with_gamma0_and_gamma
 fn simple_shear_at_zero_plus_gives_mooney_rivlin_viscometric_functions() {
     let p = eq256();
     let m = PipkinRogers::from_eq_2_56(&p, 0.0).expect("ok");
-    let (c1, c2) = (p.c1, p.gamma0 * p.c1);
+    let (c1, c2) = (p.g10, p.gamma0 * p.g10);
     for &g in &[0.2, 1.0, 2.5] {
         let out = drive(
             &m,
@@ -420,7 +419,7 @@ fn eq_2_55_and_umat_d2_conventions_differ_by_exactly_two() {
     let prony1 = ours.g1().prony().clone();
     let prony2 = ours.g2().prony().clone();
     let umat =
-        PipkinRogers::from_umat_d2(2.0 * p.c1, p.gamma0, prony1, prony2, p.a, 0.0).expect("ok");
+        PipkinRogers::from_umat_d2(2.0 * p.g10, p.gamma0, prony1, prony2, p.a, 0.0).expect("ok");
     let c = Mat3::new(2.0, 0.3, 0.1, 0.3, 0.9, -0.2, 0.1, -0.2, 0.7);
     let i1 = c.trace();
     let i2 = 0.5 * (i1 * i1 - (c * c).trace());

@@ -31,7 +31,7 @@ fn expect_err(r: Result<impl std::fmt::Debug, String>, needles: &[&str]) {
 #[test]
 fn pipkin_rogers_eq_2_56_section_reads_in_si() {
     let m = material(
-        "[material]\nmodel = \"pipkin-rogers\"\nC1 = \"2 kPa\"\ngamma0 = 0.1\ng1_long_term = 0.3\n\
+        "[material]\nmodel = \"pipkin-rogers\"\nG10 = \"2 kPa\"\ngamma0 = 0.1\ng1_long_term = 0.3\n\
          g2_long_term = \"60 %\"\ntau1 = \"500 ms\"\nc = 0.5\na = 0.2\n",
     )
     .expect("valid");
@@ -57,7 +57,7 @@ fn prony_tables_and_elastic_models_read_in_si() {
     assert!((pv.elastic().c2() - 882.0).abs() < 1e-9);
     assert!((pv.prony().long_term_weight() - 0.65).abs() < 1e-12);
     let m = material(
-        "[material]\nmodel = \"qlv\"\nbeta = 0.2\n[material.G]\nG0 = \"1 kPa\"\ng = [0.5]\ntau = [\"1 s\"]\n",
+        "[material]\nmodel = \"qlv\"\nbeta = 0.2\n[material.G1]\nG10 = \"1 kPa\"\ng = [0.5]\ntau = [\"1 s\"]\n",
     )
     .expect("valid");
     let MaterialSpec::PipkinRogers(q) = m else {
@@ -96,7 +96,7 @@ fn bad_material_sections_name_file_line_and_key() {
     );
     expect_err(
         material("[material]\nmodel = \"neo-hookean\"\nC1 = \"1 kPa\"\nC2 = \"1 Pa\"\n"),
-        &["m.toml:4", "material.C2", "unknown key"],
+        &["m.toml:4", "material.C2", "C2 = 0"],
     );
     expect_err(
         material(
@@ -121,10 +121,74 @@ fn bad_material_sections_name_file_line_and_key() {
     );
     expect_err(
         material(
-            "[material]\nmodel = \"pipkin-rogers\"\nC1 = \"1 kPa\"\ngamma0 = 0.1\ng1_long_term = 1.5\n\
+            "[material]\nmodel = \"pipkin-rogers\"\nG10 = \"1 kPa\"\ngamma0 = 0.1\ng1_long_term = 1.5\n\
              g2_long_term = 0.5\ntau1 = \"1 s\"\nc = 1\n",
         ),
         &["m.toml:5", "material.g1_long_term"],
+    );
+}
+
+/// One key, one quantity (docs/theory/model.md): `G0` is the shear modulus,
+/// `C1` the constant of eq. 4.1, so `G0 = 2 kPa` and `C1 = 1 kPa` are the
+/// same neo-Hookean material; ch. II's G1(0) is `G10`, and the old keys
+/// whose meaning changed are refused with the new key named.
+#[test]
+fn a_modulus_key_names_one_quantity_and_old_keys_name_their_replacement() {
+    let prony = "[material.prony]\ng = [0.4, 0.3]\ntau = [\"0.5 s\", \"10 s\"]\n";
+    let by_g0 = material(&format!(
+        "[material]\nmodel = \"neo-hookean-prony\"\nG0 = \"2 kPa\"\n{prony}"
+    ))
+    .expect("valid");
+    let by_c1 = material(&format!(
+        "[material]\nmodel = \"neo-hookean-prony\"\nC1 = \"1 kPa\"\n{prony}"
+    ))
+    .expect("valid");
+    assert_eq!(by_g0, by_c1, "G0 = 2 C1 for a neo-Hookean cell");
+    let MaterialSpec::PronyViscoelastic(pv) = &by_g0 else {
+        panic!("wrong model")
+    };
+    assert_eq!(pv.elastic().c1(), 1000.0);
+    let g = pv.shear_relaxation().expect("valid");
+    assert_eq!(g.g0(), 2000.0);
+    let (_, params) = by_g0.parameters();
+    let value = |n: &str| params.iter().find(|p| p.0 == n).map(|p| p.1);
+    assert_eq!((value("G0"), value("C1")), (Some(2000.0), Some(1000.0)));
+
+    // Mooney–Rivlin from G0 and alpha: C1 = G0 / (2 (1 + alpha)).
+    let m = material("[material]\nmodel = \"mooney-rivlin\"\nG0 = \"3 kPa\"\nalpha = 0.5\n")
+        .expect("valid");
+    let MaterialSpec::Elastic(mr) = m else {
+        panic!("wrong model")
+    };
+    assert_eq!((mr.c1(), mr.c2()), (1000.0, 500.0));
+
+    expect_err(
+        material("[material]\nmodel = \"neo-hookean\"\nG0 = \"2 kPa\"\nC1 = \"1 kPa\"\n"),
+        &["m.toml:3", "material.G0", "not both"],
+    );
+    expect_err(
+        material("[material]\nmodel = \"neo-hookean\"\n"),
+        &["material.G0", "missing", "C1"],
+    );
+    expect_err(
+        material(
+            "[material]\nmodel = \"pipkin-rogers\"\nC1 = \"1 kPa\"\ngamma0 = 0.1\ng1_long_term = 0.5\n\
+             g2_long_term = 0.5\ntau1 = \"1 s\"\nc = 1\n",
+        ),
+        &["m.toml:3", "material.C1", "write `G10`"],
+    );
+    expect_err(
+        material(
+            "[material]\nmodel = \"pipkin-rogers\"\n[material.G1]\nG0 = \"1 kPa\"\ng = [0.5]\n\
+             tau = [\"1 s\"]\n[material.G2]\nG20 = \"1 kPa\"\ng = [0.5]\ntau = [\"1 s\"]\n",
+        ),
+        &["m.toml:4", "material.G1.G0", "write `G10`"],
+    );
+    expect_err(
+        material(
+            "[material]\nmodel = \"qlv\"\nbeta = 0.2\n[material.G]\nG0 = \"1 kPa\"\ng = [0.5]\ntau = [\"1 s\"]\n",
+        ),
+        &["material.G", "write `G1`"],
     );
 }
 

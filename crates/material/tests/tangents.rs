@@ -5,9 +5,9 @@
 mod common;
 
 use nlvid_material::{
-    HistoryRule, Mat3, Material3, MembraneMaterial, MooneyRivlin, PipkinRogers, Prony,
-    PronyViscoelastic, Relaxation,
+    HistoryRule, Mat3, Material3, MembraneMaterial, MooneyRivlin, PipkinRogers, PronyViscoelastic,
 };
+use nlvid_model::{Prony, Relaxation};
 
 fn pipkin_rogers(rule: HistoryRule) -> PipkinRogers {
     let g1 = Relaxation::new(

@@ -16,7 +16,7 @@ pub enum MembraneError {
     /// A principal tension became non-positive: the membrane wrinkles and the
     /// tension-only membrane theory of §2.3 has no solution.
     #[error(
-        "wrinkling at t = {time:.6}: principal tension {which} = {tension:.4e} (C1·h0 units) \
+        "wrinkling at t = {time:.6}: principal tension {which} = {tension:.4e} (G10·h0 units) \
          at ψ = {psi:.4} rad ({deg:.2}°) with {control}; {advice}",
         deg = psi.to_degrees()
     )]
@@ -27,7 +27,7 @@ pub enum MembraneError {
         psi: f64,
         /// `"T1"` (meridional) or `"T2"` (circumferential).
         which: &'static str,
-        /// The tension found (dimensionless T/(C1 h0)).
+        /// The tension found (dimensionless T/(G10 h0)).
         tension: f64,
         /// The control target of the failed step.
         control: String,

@@ -16,7 +16,7 @@
 //! membrane (eqs. 2.53–2.56, a thin adapter over
 //! [`nlvid_material::PipkinRogers`]); [`thesis`] regenerates the data of
 //! Figs. 2.3–2.14 and Table 2.1 and [`plot`] draws them as SVG. Everything is dimensionless (eq. 2.47):
-//! F̄ = F/(C1 h0 r0), p̄ = p r0/(C1 h0), t0 = t/τ1.
+//! F̄ = F/(G10 h0 r0), p̄ = p r0/(G10 h0), t0 = t/τ1.
 //!
 //! Cost: one shot is O(nodes) material updates (×2 for blended histories);
 //! a time step takes 3–8 shots; the Fig. 2.6 relaxation run (101 steps,
@@ -51,7 +51,9 @@ pub mod plot;
 mod shooting;
 mod simulate;
 mod solver;
+mod tables;
 pub mod thesis;
+pub use tables::{table2_1_csv, table2_1_text};
 
 pub use error::{MembraneError, Result};
 pub use models::{

@@ -2,7 +2,7 @@
 //! (eqs. 2.53–2.56, trapezoidal hereditary sums of eq. 2.48) as a thin
 //! adapter over [`nlvid_material::PipkinRogers`] (plane stress with
 //! λ3 = 1/(λ1 λ2)), so the viscoelastic law lives in one place and this module
-//! only holds the ch. II parametrisation (C1, γ0, g1, g2, c, τ1, a) and its
+//! only holds the ch. II parametrisation (G10, γ0, g1, g2, c, τ1, a) and its
 //! validation; and the closed-form incompressible Mooney–Rivlin membrane
 //! (eq. 2.4) used by the elastic sweeps.
 //!
@@ -26,7 +26,8 @@ fn check_stretches(l: [f64; 2]) -> std::result::Result<(), MaterialError> {
 }
 
 /// Incompressible Mooney–Rivlin membrane, W = C1 (I1 − 3) + C2 (I2 − 3):
-/// σα = 2 (λα² − λ3²)(C1 + C2 λβ²), λ3 = 1/(λ1 λ2) (eq. 2.4 with σ3 = 0).
+/// σα = 2 (λα² − λ3²)(C1 + C2 λβ²), λ3 = 1/(λ1 λ2) (eq. 4.1 with σ3 = 0;
+/// `C1`, `C2` in eq. 4.1's convention, docs/theory/model.md).
 ///
 /// Kept in closed form (not delegated to `nlvid_material::MooneyRivlin`)
 /// because the elastic sweeps call it millions of times and the 3D kernel
@@ -95,21 +96,27 @@ impl MembraneMaterial for MooneyRivlinMembrane {
 }
 
 /// Parameters of the ch. II Pipkin–Rogers membrane (eqs. 2.53–2.56) in the
-/// thesis's form: G1(t) = C1 [g1 + (1 − g1) e^{−t/τ1}],
-/// G2(t) = γ0 C1 [g2 + (1 − g2) e^{−c t/τ1}] (c = τ1/τ2), Φ = e^{−a (I1 − 3)}.
+/// thesis's form: G1(t) = G10 [g1 + (1 − g1) e^{−t/τ1}],
+/// G2(t) = γ0 G10 [g2 + (1 − g2) e^{−c t/τ1}] (c = τ1/τ2), Φ = e^{−a (I1 − 3)}.
+/// `G10` = G1(0) is what §2.5 calls "C1 = G1(0)"; with eq. 2.55's factor 2
+/// it is the eq. 4.1 constant C1 of the instantaneous Mooney–Rivlin
+/// response (docs/theory/membrane.md).
 ///
 /// `g1`, `g2` are the long-term *fractions* Gα∞/Gα0 of eq. 2.56 (not Prony
-/// weights). With C1 = 1 and τ1 = 1 everything is in the dimensionless units
-/// of eq. 2.47 (σ̄ = σ/C1, t0 = t/τ1).
+/// weights). With G10 = 1 and τ1 = 1 everything is in the dimensionless units
+/// of eq. 2.47 (σ̄ = σ/G10, t0 = t/τ1).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct PipkinRogersParams {
-    /// C1 = G1(0) (stress units; 1 for dimensionless runs).
-    pub c1: f64,
+    /// G10 = G1(0) (stress units; 1 for dimensionless runs).
+    #[serde(rename = "G10")]
+    pub g10: f64,
     /// γ0 = G2(0)/G1(0), the instantaneous Mooney–Rivlin parameter.
     pub gamma0: f64,
-    /// g1 = G1(∞)/G1(0).
+    /// g1 = G1(∞)/G1(0), a long-term fraction (`g1_long_term` in studies).
+    #[serde(rename = "g1_long_term")]
     pub g1: f64,
-    /// g2 = G2(∞)/G2(0).
+    /// g2 = G2(∞)/G2(0), a long-term fraction (`g2_long_term` in studies).
+    #[serde(rename = "g2_long_term")]
     pub g2: f64,
     /// c = τ1/τ2.
     pub c: f64,
@@ -120,10 +127,10 @@ pub struct PipkinRogersParams {
 }
 
 impl Default for PipkinRogersParams {
-    /// QLV case of Fig. 2.6: g1 = g2 = 0.2, c = 1, γ0 = 0.1, C1 = τ1 = 1, a = 0.
+    /// QLV case of Fig. 2.6: g1 = g2 = 0.2, c = 1, γ0 = 0.1, G10 = τ1 = 1, a = 0.
     fn default() -> Self {
         Self {
-            c1: 1.0,
+            g10: 1.0,
             gamma0: 0.1,
             g1: 0.2,
             g2: 0.2,
@@ -136,7 +143,7 @@ impl Default for PipkinRogersParams {
 
 impl PipkinRogersParams {
     /// The dimensionless setting of the ch. II figures (Figs. 2.6–2.14:
-    /// C1 = τ1 = 1, γ0 = 0.1, a = 0) with the given g1, g2 and c = τ1/τ2.
+    /// G10 = τ1 = 1, γ0 = 0.1, a = 0) with the given g1, g2 and c = τ1/τ2.
     pub fn chapter2(g1: f64, g2: f64, c: f64) -> Self {
         Self {
             g1,
@@ -162,8 +169,8 @@ impl PipkinRogersParams {
             reason: reason.into(),
         };
         let pos = |v: f64| v > 0.0 && v.is_finite();
-        if !pos(self.c1) {
-            return Err(bad("c1", self.c1, "C1 = G1(0) must be positive"));
+        if !pos(self.g10) {
+            return Err(bad("G10", self.g10, "G10 = G1(0) must be positive"));
         }
         if !(self.gamma0 >= 0.0 && self.gamma0.is_finite()) {
             return Err(bad("gamma0", self.gamma0, "γ0 must be ≥ 0"));
@@ -184,7 +191,7 @@ impl PipkinRogersParams {
         }
         let inner = nlvid_material::PipkinRogers::from_eq_2_56(
             &nlvid_material::Eq256 {
-                c1: self.c1,
+                g10: self.g10,
                 gamma0: self.gamma0,
                 g1_fraction: self.g1,
                 g2_fraction: self.g2,
@@ -202,7 +209,7 @@ impl PipkinRogersParams {
 
 /// The ch. II Pipkin–Rogers membrane point update (see [`PipkinRogersParams`]):
 /// [`nlvid_material::PipkinRogers`] built by `from_eq_2_56` (factor 2 of
-/// eq. 2.55 kept, G1(0) = C1) with the trapezoidal rule of eq. 2.48
+/// eq. 2.55 kept, G1(0) = G10) with the trapezoidal rule of eq. 2.48
 /// ([`nlvid_material::HistoryRule::Trapezoid`]), evaluated in plane stress.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PipkinRogersMembrane {
@@ -323,7 +330,7 @@ mod tests {
             let p = PipkinRogersParams {
                 a,
                 gamma0: 0.15,
-                c1: 2.0,
+                g10: 2.0,
                 ..Default::default()
             };
             let m = p.check().unwrap();

@@ -44,7 +44,7 @@ mod tests {
             id: "t".into(),
             title: "A & B".into(),
             x_label: "D/r0".into(),
-            y_label: "F/(C1 h0 r0)".into(),
+            y_label: "F/(G10 h0 r0)".into(),
             series: vec![
                 Series::line("model", vec![0.0, 0.5, 1.0], vec![0.0, 1.0, 4.0]),
                 Series::points("edge", vec![0.5], vec![1.0]),
@@ -55,7 +55,7 @@ mod tests {
         assert!(s.starts_with("<svg"));
         for text in [
             "D/r0",
-            "F/(C1 h0 r0)",
+            "F/(G10 h0 r0)",
             "model",
             "edge",
             "thesis value",

@@ -2,7 +2,7 @@
 //! first-order system of §2.3.2 integrated by RK4 on the fixed grid of
 //! material nodes ψj = j π/(2N), the step containing ψc split at ψc.
 //!
-//! State y = (T1, λ2, θ, η, V) with T = σ λ3 (dimensionless T/(C1 h0),
+//! State y = (T1, λ2, θ, η, V) with T = σ λ3 (dimensionless T/(G10 h0),
 //! eq. 2.27), θ the angle of the normal to the axis (eq. 2.29, w = λ1 cos θ),
 //! η the accumulated height drop ∫ λ1 sin θ dψ (eq. 2.43) and V the
 //! accumulated volume 2π ∫ ρ² λ1 sin θ dψ (eq. 2.46):
@@ -43,13 +43,13 @@ pub struct NodeValue {
     pub lambda1: f64,
     /// Circumferential stretch λ2.
     pub lambda2: f64,
-    /// Meridional Cauchy stress σ1/C1.
+    /// Meridional Cauchy stress σ1/G10.
     pub sigma1: f64,
-    /// Circumferential Cauchy stress σ2/C1.
+    /// Circumferential Cauchy stress σ2/G10.
     pub sigma2: f64,
-    /// Meridional tension T1/(C1 h0).
+    /// Meridional tension T1/(G10 h0).
     pub t1: f64,
-    /// Circumferential tension T2/(C1 h0).
+    /// Circumferential tension T2/(G10 h0).
     pub t2: f64,
     /// Angle θ of the normal with the axis (rad).
     pub theta: f64,

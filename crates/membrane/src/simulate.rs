@@ -15,7 +15,7 @@ use crate::{
 pub enum ControlKind {
     /// Plate displacement D/r0 (eq. 2.43).
     Displacement,
-    /// Contact force F/(C1 h0 r0) (eq. 2.44).
+    /// Contact force F/(G10 h0 r0) (eq. 2.44).
     Force,
 }
 
@@ -25,7 +25,7 @@ pub enum ControlKind {
 pub struct Loading {
     /// Displacement or force control.
     pub control: ControlKind,
-    /// D/r0 or F/(C1 h0 r0) as a function of time.
+    /// D/r0 or F/(G10 h0 r0) as a function of time.
     pub program: Program,
     /// Strictly increasing solve times; the first is the instantaneous response.
     pub times: Vec<f64>,
@@ -100,9 +100,9 @@ pub struct StepRecord {
     pub displacement: f64,
     /// Half-height H1/r0.
     pub h1: f64,
-    /// Contact force F/(C1 h0 r0).
+    /// Contact force F/(G10 h0 r0).
     pub force: f64,
-    /// Pressure p r0/(C1 h0).
+    /// Pressure p r0/(G10 h0).
     pub pressure: f64,
     /// Contact angle ψc (rad).
     pub psi_c: f64,
@@ -112,7 +112,7 @@ pub struct StepRecord {
     pub contact_radius: f64,
     /// Equatorial radius ρ(π/2)/r0.
     pub equator_radius: f64,
-    /// Smallest principal tension over the nodes, min(T1, T2)/(C1 h0).
+    /// Smallest principal tension over the nodes, min(T1, T2)/(G10 h0).
     pub min_tension: f64,
 }
 
@@ -151,7 +151,7 @@ impl MembraneRun {
     pub fn times(&self) -> Vec<f64> {
         self.history.iter().map(|r| r.time).collect()
     }
-    /// F(t)/(C1 h0 r0) on the time grid.
+    /// F(t)/(G10 h0 r0) on the time grid.
     pub fn force(&self) -> Vec<f64> {
         self.history.iter().map(|r| r.force).collect()
     }
@@ -159,7 +159,7 @@ impl MembraneRun {
 
 /// Forward model with the ch. II Pipkin–Rogers membrane: `params` (eqs.
 /// 2.53–2.56), `geometry` (r_s, nodes), `loading` → F(t) etc. Uses the
-/// params' C1 as the stress scale, so results are dimensionless (eq. 2.47).
+/// params' G10 as the stress scale, so results are dimensionless (eq. 2.47).
 ///
 /// # Errors
 /// [`MembraneError::Input`] for bad parameters; the solver's errors
@@ -170,10 +170,10 @@ pub fn simulate(
     loading: &Loading,
 ) -> Result<MembraneRun> {
     let m = params.check()?;
-    simulate_with(m, params.c1, geometry, loading)
+    simulate_with(m, params.g10, geometry, loading)
 }
 
-/// [`simulate`] for any membrane material; `stress_scale` is C1 of eq. 2.47.
+/// [`simulate`] for any membrane material; `stress_scale` is G10 of eq. 2.47.
 ///
 /// # Errors
 /// As [`simulate`].

@@ -62,7 +62,7 @@ impl Geometry {
 pub enum Control {
     /// Plate displacement D/r0 = r_s − H1/r0 (eq. 2.43); D ≤ 0 means no contact.
     Displacement(f64),
-    /// Contact force F/(C1 h0 r0) (eq. 2.44); F ≤ 0 means no contact.
+    /// Contact force F/(G10 h0 r0) (eq. 2.44); F ≤ 0 means no contact.
     Force(f64),
     /// Contact angle ψc (rad, reference configuration): the well-conditioned
     /// parameter for elastic sweeps through first contact.
@@ -84,7 +84,7 @@ impl std::fmt::Display for Control {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Control::Displacement(d) => write!(f, "D/r0 = {d:.6}"),
-            Control::Force(v) => write!(f, "F/(C1 h0 r0) = {v:.6}"),
+            Control::Force(v) => write!(f, "F/(G10 h0 r0) = {v:.6}"),
             Control::ContactAngle(v) => write!(f, "ψc = {v:.6} rad"),
         }
     }
@@ -100,9 +100,9 @@ pub struct Solution {
     pub displacement: f64,
     /// Half-height H1/r0.
     pub h1: f64,
-    /// Contact force F/(C1 h0 r0) = π a² p (eq. 2.44).
+    /// Contact force F/(G10 h0 r0) = π a² p (eq. 2.44).
     pub force: f64,
-    /// Pressure p r0/(C1 h0).
+    /// Pressure p r0/(G10 h0).
     pub pressure: f64,
     /// Contact angle ψc (rad, reference configuration).
     pub psi_c: f64,
@@ -112,7 +112,7 @@ pub struct Solution {
     pub contact_radius: f64,
     /// Equatorial radius ρ(π/2)/r0.
     pub equator_radius: f64,
-    /// Meridional tension at the equator T1/(C1 h0).
+    /// Meridional tension at the equator T1/(G10 h0).
     pub t1_equator: f64,
     /// Enclosed volume V/r0³.
     pub volume: f64,
@@ -229,7 +229,7 @@ fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
 
 impl<M: MembraneMaterial> MembraneSolver<M> {
     /// A solver for `material` whose stresses are divided by `stress_scale`
-    /// (C1 of eq. 2.47; 1 for a dimensionless material). Solves the free
+    /// (G10 of eq. 2.47; 1 for a dimensionless material). Solves the free
     /// inflation to r_s at once (the membrane is inflated instantaneously at
     /// t = 0; nothing is committed until the first [`Self::advance`]).
     ///
@@ -243,7 +243,7 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
             return Err(MembraneError::Input {
                 name: "stress_scale",
                 value: stress_scale,
-                reason: "C1 must be positive".into(),
+                reason: "the stress scale G10 must be positive".into(),
             });
         }
         let s0 = material.initial_state();
@@ -490,10 +490,12 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
 
     fn guess_for(&self, control: Control) -> [f64; 3] {
         let mut x = self.x;
-        if let Some(p) = self.predicted {
-            if p[1] > 0.0 && x[1] > 0.0 && control.touches() {
-                x = p;
-            }
+        if let Some(p) = self.predicted
+            && p[1] > 0.0
+            && x[1] > 0.0
+            && control.touches()
+        {
+            x = p;
         }
         if let Control::ContactAngle(v) = control {
             x[1] = v;
@@ -553,10 +555,10 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                 iterations,
                 last_shot,
             } => {
-                if let Some((psi, which, value)) = last_shot.as_ref().and_then(tension) {
-                    if norm(&residual) > 1e-4 {
-                        return wrinkle(psi, which, value);
-                    }
+                if let Some((psi, which, value)) = last_shot.as_ref().and_then(tension)
+                    && norm(&residual) > 1e-4
+                {
+                    return wrinkle(psi, which, value);
                 }
                 let k = (0..3)
                     .max_by(|&a, &b| residual[a].abs().total_cmp(&residual[b].abs()))
@@ -595,20 +597,21 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         control: Control,
     ) -> Result<([f64; 3], usize, Control)> {
         self.detached = None;
-        if let Control::Displacement(d) = control {
-            if d > 0.0 && self.x[1] <= 0.0 {
-                // Not in contact: does the free membrane (relaxing at this dt) reach the plate?
-                if let Some(x) = self.detached_solution(dt, d) {
-                    return Ok((x, 0, Control::Displacement(0.0)));
-                }
+        if let Control::Displacement(d) = control
+            && d > 0.0
+            && self.x[1] <= 0.0
+        {
+            // Not in contact: does the free membrane (relaxing at this dt) reach the plate?
+            if let Some(x) = self.detached_solution(dt, d) {
+                return Ok((x, 0, Control::Displacement(0.0)));
             }
         }
         match self.solve_in_contact(time, dt, control) {
             Ok(v) => {
-                if let Control::Displacement(d) = control {
-                    if d <= 0.0 {
-                        self.detached = Some(d);
-                    }
+                if let Control::Displacement(d) = control
+                    && d <= 0.0
+                {
+                    self.detached = Some(d);
                 }
                 Ok(v)
             }
@@ -867,10 +870,10 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
                     let mut sh =
                         Shooter::new(&self.material, &self.states, self.uniform, dt, self.scale)
                             .compression(self.allow_compression_in_contact);
-                    if let Ok(end) = sh.shoot(cur[0], cur[1], cur[2], None) {
-                        if stop(&cur, &end) {
-                            return Ok((prev, cur));
-                        }
+                    if let Ok(end) = sh.shoot(cur[0], cur[1], cur[2], None)
+                        && stop(&cur, &end)
+                    {
+                        return Ok((prev, cur));
                     }
                 }
                 Err(e) => {

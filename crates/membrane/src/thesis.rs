@@ -1,7 +1,7 @@
 //! The data behind Figs. 2.3–2.14 and Table 2.1 of the thesis (§2.5.1),
 //! regenerated with this crate's solver, for side-by-side comparison.
 //!
-//! Every case uses r_s = 1.03, C1 = τ1 = 1 (dimensionless, eq. 2.47) and the
+//! Every case uses r_s = 1.03, G10 = τ1 = 1 (dimensionless, eq. 2.47) and the
 //! default [`Geometry`]. Where the thesis is ambiguous the choice is stated
 //! in the series label and in `docs/theory/membrane.md`.
 
@@ -97,7 +97,8 @@ pub struct SlopeRow {
     /// [`SECANT_WINDOW`].
     pub secant: f64,
     /// `secant / 2 / thesis`: the secant in the App. D force scale
-    /// F/(G10 h0 r0) with G10 = 2 C1 (eq. D.2 drops the 2 of eq. 2.55), over
+    /// F/(G10_umat h0 r0) with App. D's UMAT modulus G10_umat = 2 G10 (eq. D.2
+    /// drops the 2 of eq. 2.55), over
     /// the thesis value. The NLE rows give 1.00; see docs/theory/membrane.md.
     pub ratio: Option<f64>,
 }
@@ -172,7 +173,7 @@ fn load_unload(
     });
     // A step that fails (e.g. wrinkling late in a slow unloading) ends the
     // curve there; the failure is returned as a note.
-    let mut solver = MembraneSolver::new(params.check()?, Geometry::default(), params.c1)?;
+    let mut solver = MembraneSolver::new(params.check()?, Geometry::default(), params.g10)?;
     let mut history = Vec::new();
     let mut note = None;
     for &t in &l.times {
@@ -245,7 +246,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         "fig2_4",
         "Fig. 2.4: NLE force vs displacement",
         "D/r0",
-        "F/(C1 h0 r0)",
+        "F/(G10 h0 r0)",
         series,
     ));
 
@@ -275,7 +276,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         "fig2_5",
         "Fig. 2.5: NLE vs QLV at constant rates",
         "D/r0",
-        "F/(C1 h0 r0)",
+        "F/(G10 h0 r0)",
         series,
     ));
 
@@ -299,7 +300,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         "fig2_6",
         "Fig. 2.6: force relaxation",
         "t/τ1",
-        "F/(C1 h0 r0)",
+        "F/(G10 h0 r0)",
         series,
     ));
 
@@ -334,14 +335,14 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         "fig2_7",
         "Fig. 2.7: relaxation, g1 = g2 = 0.2, varying c",
         "t/τ1",
-        "F/(C1 h0 r0)",
+        "F/(G10 h0 r0)",
         force(&runs_c),
     ));
     figs.push(fig(
         "fig2_8",
         "Fig. 2.8: relaxation, c = 1, varying g2",
         "t/τ1",
-        "F/(C1 h0 r0)",
+        "F/(G10 h0 r0)",
         force(&runs_g),
     ));
     let mut psic: Vec<Series> = runs_c
@@ -414,12 +415,12 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         "fig2_12",
         "Fig. 2.12: stretches and stresses at t = 10, g1 = 0.2, g2 = 0.3, c = 1",
         "ψ (rad)",
-        "λ, σ/C1",
+        "λ, σ/G10",
         vec![
             Series::line("λ1", psi.clone(), col(|v| v.lambda1)),
             Series::line("λ2", psi.clone(), col(|v| v.lambda2)),
-            Series::line("σ1/C1", psi.clone(), col(|v| v.sigma1)),
-            Series::line("σ2/C1", psi.clone(), col(|v| v.sigma2)),
+            Series::line("σ1/G10", psi.clone(), col(|v| v.sigma1)),
+            Series::line("σ2/G10", psi.clone(), col(|v| v.sigma2)),
             Series::points(
                 "ψc",
                 vec![last.psi_c],
@@ -516,7 +517,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
                 if d_max < 0.5 { "2.13" } else { "2.14" }
             ),
             "D/r0",
-            "F/(C1 h0 r0)",
+            "F/(G10 h0 r0)",
             series,
         ));
     }

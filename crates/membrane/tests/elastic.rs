@@ -76,7 +76,7 @@ fn squeezed_membrane_is_in_vertical_equilibrium_at_every_cut() {
     }
 }
 
-/// Strain energy of the whole membrane (both halves) per C1 h0 r0²:
+/// Strain energy of the whole membrane (both halves) per G10 h0 r0²:
 /// 2 · 2π ∫ W sin ψ dψ, W = (I1 − 3) + γ (I2 − 3), composite Simpson.
 fn energy(sol: &Solution, gamma: f64) -> f64 {
     let w: Vec<f64> = sol

@@ -1,6 +1,6 @@
 //! Table 2.1: initial unloading slopes. The NLE rows are checked against the
 //! thesis under the convention found in session 2 (docs/theory/membrane.md):
-//! force in the App. D scale (F/(G10 h0 r0), G10 = 2 C1, i.e. our F̄/2) and
+//! force in the App. D scale (F/(G10_umat h0 r0), G10_umat = 2 G10, i.e. our F̄/2) and
 //! the secant over the first ΔD/r0 = 0.01 of unloading. The viscoelastic
 //! rows do not follow any convention (printed by the ignored run below).
 #![allow(clippy::unwrap_used)]

@@ -69,7 +69,7 @@ fn crown_stress_during_unloading_matches_an_independent_eq_2_48_sum() {
     let g = grid(0.28, 1.0, 14, 0.0);
     let (sols, err) = run(&p, &g, false);
     assert!(err.is_none(), "{err:?}");
-    // G1(t) = g1 + (1 − g1) e^{−t}, G2(t) = γ0 [g2 + (1 − g2) e^{−c t}] (eq. 2.56, C1 = τ1 = 1).
+    // G1(t) = g1 + (1 − g1) e^{−t}, G2(t) = γ0 [g2 + (1 − g2) e^{−c t}] (eq. 2.56, G10 = τ1 = 1).
     let dg1 = |u: f64| -(1.0 - p.g1) * (-u).exp();
     let dg2 = |u: f64| -p.gamma0 * (1.0 - p.g2) * p.c * (-p.c * u).exp();
     let hist: Vec<(f64, [f64; 3], [f64; 3])> = sols

@@ -151,15 +151,15 @@ pub fn parse_table<R: std::io::Read>(
             Ok(v * headers[i].to_si)
         };
         let (t, v) = (cell(ti)?, cell(vi)?);
-        if let Some(&(previous, _)) = rows.last() {
-            if t <= previous {
-                return Err(ProtocolError::NonMonotonicTime {
-                    file: file.clone(),
-                    line,
-                    time: t,
-                    previous,
-                });
-            }
+        if let Some(&(previous, _)) = rows.last()
+            && t <= previous
+        {
+            return Err(ProtocolError::NonMonotonicTime {
+                file: file.clone(),
+                line,
+                time: t,
+                previous,
+            });
         }
         rows.push((t, v));
     }

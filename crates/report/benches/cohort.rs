@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use criterion::{Criterion, criterion_group, criterion_main};
 use nlvid_report::cohort::{self, RunOptions};
 use nlvid_report::demo::{DemoSpec, write_demo_data};
-use nlvid_report::settings::{CohortSettings, ForwardModel};
+use nlvid_report::settings::{CohortSettings, FitModel};
 
 fn copy_dir(from: &Path, to: &Path) -> std::io::Result<()> {
     std::fs::create_dir_all(to)?;
@@ -62,7 +62,7 @@ fn bench(c: &mut Criterion) {
         eprintln!("bench study unreadable");
         return;
     };
-    assert_eq!(settings.model, ForwardModel::Surrogate);
+    assert_eq!(settings.model, FitModel::Surrogate);
     assert_eq!(cells.len(), 100);
     let out: PathBuf = root.join("out");
     let mut g = c.benchmark_group("cohort");

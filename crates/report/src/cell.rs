@@ -1,5 +1,6 @@
 //! One cell: read its AFM curve, fit the five Prony parameters (G0, g1,
-//! τ1, g2, τ2; eq. 5.1, Table 5.3 domain) with the misfit of eq. 5.3 on the
+//! g2, τ1, τ2; eq. 5.1: the domain stored with the meta-model, or Table 5.3
+//! for the analytic model) with the misfit of eq. 5.3 on the
 //! study's forward model ([`CellModel`]: a pre-built Kriging meta-model or
 //! the analytic Lee–Radok model), fit the Hertz baseline (eq. 1.1) to the
 //! loading ramp, read the cell's geometry (App. B.2) when the manifest gives
@@ -12,15 +13,15 @@
 use std::path::Path;
 
 use nlvid_inverse::{
-    AfmColumns, BoundSide, Calibration, Coordinates, Domain, Experiment, FitResult, LeeRadokHertz,
-    MeasuredCurve, Misfit, Model, MultiStart, SurrogateFitter, load_kriging_surrogate,
-    ramp_hold_grid,
+    AfmColumns, Calibration, Coordinates, Experiment, FitResult, LeeRadokHertz, MeasuredCurve,
+    Misfit, Model, MultiStart, SurrogateFitter, load_kriging_surrogate, ramp_hold_grid,
 };
+use nlvid_model::{BoundSide, Domain};
 use serde::{Deserialize, Serialize};
 
-use crate::cohort::{CellInput, Geometry};
 use crate::error::Result;
-use crate::settings::{CohortSettings, ForwardModel};
+use crate::input::{CellInput, Geometry};
+use crate::settings::{CohortSettings, FitModel};
 
 /// Outcome class of a cell.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -51,7 +52,8 @@ impl CellStatus {
 pub struct ParamValue {
     /// Name (`G0`, `g1`, `tau1`, …).
     pub name: String,
-    /// SI unit (`Pa`, `s`, or empty).
+    /// SI unit (`Pa`, `s`, `1` for dimensionless; empty in results
+    /// written before the domain carried units).
     pub unit: String,
     /// Value in SI.
     pub value: f64,
@@ -150,12 +152,14 @@ impl CellResult {
     }
 }
 
-/// The parameter domain used for every cell (Table 5.3).
+/// The parameter domain of the analytic Lee–Radok model (Table 5.3 with
+/// g1 + g2 ≤ 1 − `fit.constraint_epsilon`); a meta-model brings its own
+/// (stored in its `meta.json`, [`CellModel::load`]).
 ///
 /// # Errors
 /// An ε outside [0, 0.98).
-pub fn domain(settings: &CohortSettings) -> nlvid_inverse::Result<Domain> {
-    Domain::prony2_table_5_3(settings.constraint_epsilon)
+pub fn domain(settings: &CohortSettings) -> Result<Domain> {
+    Ok(Domain::table_5_3(settings.constraint_epsilon)?)
 }
 
 /// The forward model every cell is fitted with, prepared once per cohort
@@ -165,7 +169,8 @@ pub fn domain(settings: &CohortSettings) -> nlvid_inverse::Result<Domain> {
 pub enum CellModel {
     /// Analytic Lee–Radok: built per cell from its measured indentation.
     LeeRadok(Domain),
-    /// A pre-built Kriging meta-model on the nominal protocol.
+    /// A pre-built Kriging meta-model on the nominal protocol, on the
+    /// domain its `meta.json` stores.
     Surrogate(Box<SurrogateFitter>),
 }
 
@@ -175,14 +180,13 @@ impl CellModel {
     /// # Errors
     /// Bad ε; unreadable or mismatched meta-model files (naming them).
     pub fn load(settings: &CohortSettings) -> Result<Self> {
-        let d = domain(settings)?;
         match (&settings.model, &settings.surrogate) {
-            (ForwardModel::LeeRadok, _) => Ok(Self::LeeRadok(d)),
-            (ForwardModel::Surrogate, Some(f)) => {
-                let s = load_kriging_surrogate(&f.model, &f.meta, d, Coordinates::Physical)?;
+            (FitModel::LeeRadok, _) => Ok(Self::LeeRadok(domain(settings)?)),
+            (FitModel::Surrogate, Some(f)) => {
+                let s = load_kriging_surrogate(&f.model, &f.meta, Coordinates::Physical)?;
                 Ok(Self::Surrogate(Box::new(SurrogateFitter::new(s, None)?)))
             }
-            (ForwardModel::Surrogate, None) => Err(crate::ReportError::InvalidSetting(
+            (FitModel::Surrogate, None) => Err(crate::ReportError::InvalidSetting(
                 "fit.model = \"surrogate\" needs fit.surrogate and fit.meta".into(),
             )),
         }
@@ -251,7 +255,7 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
     if t_last - t_first < needed * (1.0 - 1e-9) {
         return fail(format!(
             "the curve covers {:.4} s but the fitted window needs {needed} s \
-             (protocol.hold_end / the model's time grid)",
+             (fit.hold_end / the model's time grid)",
             t_last - t_first,
         ));
     }
@@ -436,8 +440,8 @@ mod tests {
         let study = dir.join("study.toml");
         std::fs::write(
             &study,
-            "[probe]\nradius = \"2.5 um\"\npoisson = 0.5\n[afm]\nspring_constant = \"0.1 N/m\"\n\
-             [protocol]\nramp = \"1 s\"\nhold_end = \"3 s\"\n",
+            "[probe]\nradius = \"2.5 um\"\npoisson = 0.5\n[fit]\nramp = \"1 s\"\n\
+             hold_end = \"3 s\"\n[fit.calibration]\nspring_constant = \"0.1 N/m\"\n",
         )
         .unwrap();
         CohortSettings::load(&study).unwrap()

@@ -20,217 +20,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::cell::{CellModel, CellResult, CellStatus, fit_cell};
 use crate::error::{ReportError, Result};
+use crate::input::sorted_entries;
+pub use crate::input::{CellInput, Geometry, discover};
 use crate::settings::CohortSettings;
-
-/// One cell to fit.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CellInput {
-    /// Group name.
-    pub group: String,
-    /// File as named in the input (relative to the folder or manifest).
-    pub file: String,
-    /// Path to read.
-    pub path: PathBuf,
-    /// Geometry measurements from the manifest (App. B.2), if any.
-    #[serde(default)]
-    pub geometry: Geometry,
-}
-
-/// A cell's geometry measurements as given in a manifest (App. B.2).
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-pub struct Geometry {
-    /// JPK approach curves on the cell and on the nearby glass (same
-    /// z-stepper position): columns `height_cell_curve`, `height_glass_curve`.
-    pub height_curves: Option<(PathBuf, PathBuf)>,
-    /// Two distances on an optical image, m: columns `d1_um`, `d2_um`
-    /// (or `d1_m`, `d2_m`).
-    pub image_distances: Option<(f64, f64)>,
-}
-
-/// The cells of a cohort input: a folder whose sub-folders are the groups
-/// (each `*.csv` in them a cell), or a manifest CSV with columns `group`
-/// and `file` (relative to the manifest's directory) and optionally the
-/// geometry columns of [`Geometry`]. Sorted by group, file.
-///
-/// # Errors
-/// Unreadable folder or manifest, a manifest row without group or file
-/// (naming the line), a missing data file, duplicate cells, no cells.
-pub fn discover(input: &Path) -> Result<Vec<CellInput>> {
-    let mut cells = if input.is_dir() {
-        from_folder(input)?
-    } else {
-        from_manifest(input)?
-    };
-    cells.sort_by(|a, b| (&a.group, &a.file).cmp(&(&b.group, &b.file)));
-    if let Some(w) = cells
-        .windows(2)
-        .find(|w| w[0].group == w[1].group && w[0].file == w[1].file)
-    {
-        return Err(ReportError::Data {
-            path: input.to_path_buf(),
-            line: 0,
-            message: format!(
-                "cell `{}` of group `{}` is listed twice",
-                w[0].file, w[0].group
-            ),
-        });
-    }
-    if cells.is_empty() {
-        return Err(ReportError::Data {
-            path: input.to_path_buf(),
-            line: 0,
-            message: "no cells: expected group sub-folders with *.csv files, or a manifest \
-                      with columns group,file"
-                .into(),
-        });
-    }
-    Ok(cells)
-}
-
-fn sorted_entries(dir: &Path) -> Result<Vec<PathBuf>> {
-    let mut v: Vec<PathBuf> = fs::read_dir(dir)
-        .map_err(|e| ReportError::io(dir, e))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .collect();
-    v.sort();
-    Ok(v)
-}
-
-fn from_folder(dir: &Path) -> Result<Vec<CellInput>> {
-    let mut cells = Vec::new();
-    for sub in sorted_entries(dir)? {
-        if !sub.is_dir() {
-            continue;
-        }
-        let group = sub
-            .file_name()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        for f in sorted_entries(&sub)? {
-            if f.is_file() && f.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")) {
-                let name = f
-                    .file_name()
-                    .map(|s| s.to_string_lossy().into_owned())
-                    .unwrap_or_default();
-                cells.push(CellInput {
-                    group: group.clone(),
-                    file: format!("{group}/{name}"),
-                    path: f,
-                    geometry: Geometry::default(),
-                });
-            }
-        }
-    }
-    Ok(cells)
-}
-
-fn from_manifest(path: &Path) -> Result<Vec<CellInput>> {
-    let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let mut rdr = csv::ReaderBuilder::new()
-        .trim(csv::Trim::All)
-        .comment(Some(b'#'))
-        .from_path(path)
-        .map_err(|e| ReportError::io(path, e))?;
-    let headers = rdr.headers().map_err(|e| ReportError::io(path, e))?.clone();
-    let col = |name: &str| {
-        headers
-            .iter()
-            .position(|h| h == name)
-            .ok_or_else(|| ReportError::Data {
-                path: path.to_path_buf(),
-                line: 1,
-                message: format!("manifest has no column `{name}` (needs group,file)"),
-            })
-    };
-    let (gi, fi) = (col("group")?, col("file")?);
-    let find = |name: &str| headers.iter().position(|h| h == name);
-    let curves = (find("height_cell_curve"), find("height_glass_curve"));
-    let (dist, dist_scale) = match (find("d1_um"), find("d2_um"), find("d1_m"), find("d2_m")) {
-        (Some(a), Some(b), _, _) => (Some((a, b, "d1_um", "d2_um")), 1e-6),
-        (_, _, Some(a), Some(b)) => (Some((a, b, "d1_m", "d2_m")), 1.0),
-        _ => (None, 1.0),
-    };
-    if curves.0.is_some() != curves.1.is_some() {
-        return Err(ReportError::Data {
-            path: path.to_path_buf(),
-            line: 1,
-            message: "cell height needs both columns height_cell_curve and height_glass_curve"
-                .into(),
-        });
-    }
-    let mut cells = Vec::new();
-    for rec in rdr.records() {
-        let rec = rec.map_err(|e| ReportError::io(path, e))?;
-        let line = rec.position().map_or(0, |p| p.line());
-        let get = |i: usize, what: &str| match rec.get(i) {
-            Some(s) if !s.is_empty() => Ok(s.to_string()),
-            _ => Err(ReportError::Data {
-                path: path.to_path_buf(),
-                line,
-                message: format!("empty `{what}`"),
-            }),
-        };
-        let (group, file) = (get(gi, "group")?, get(fi, "file")?);
-        let p = base.join(&file);
-        if !p.is_file() {
-            return Err(ReportError::Data {
-                path: path.to_path_buf(),
-                line,
-                message: format!("column `file`: no such file {}", p.display()),
-            });
-        }
-        let mut geometry = Geometry::default();
-        if let (Some(ci), Some(gi)) = curves {
-            let (c, g) = (rec.get(ci).unwrap_or(""), rec.get(gi).unwrap_or(""));
-            if !c.is_empty() || !g.is_empty() {
-                let cp = base.join(get(ci, "height_cell_curve")?);
-                let gp = base.join(get(gi, "height_glass_curve")?);
-                for (p, name) in [(&cp, "height_cell_curve"), (&gp, "height_glass_curve")] {
-                    if !p.is_file() {
-                        return Err(ReportError::Data {
-                            path: path.to_path_buf(),
-                            line,
-                            message: format!("column `{name}`: no such file {}", p.display()),
-                        });
-                    }
-                }
-                geometry.height_curves = Some((cp, gp));
-            }
-        }
-        if let Some((a, b, na, nb)) = dist {
-            let num = |i: usize, name: &str| -> Result<Option<f64>> {
-                match rec.get(i).unwrap_or("") {
-                    "" => Ok(None),
-                    v => v.parse::<f64>().map(Some).map_err(|_| ReportError::Data {
-                        path: path.to_path_buf(),
-                        line,
-                        message: format!("column `{name}`: `{v}` is not a number"),
-                    }),
-                }
-            };
-            match (num(a, na)?, num(b, nb)?) {
-                (Some(x), Some(y)) => {
-                    geometry.image_distances = Some((x * dist_scale, y * dist_scale))
-                }
-                (None, None) => {}
-                _ => {
-                    return Err(ReportError::Data {
-                        path: path.to_path_buf(),
-                        line,
-                        message: format!("give both `{na}` and `{nb}` or neither"),
-                    });
-                }
-            }
-        }
-        cells.push(CellInput {
-            group,
-            file,
-            path: p,
-            geometry,
-        });
-    }
-    Ok(cells)
-}
 
 /// Path of the per-cell result file of `cell` under `out_dir`.
 pub fn cell_result_path(out_dir: &Path, cell: &CellInput) -> PathBuf {
@@ -296,6 +88,61 @@ pub struct CohortOutcome {
     pub pending: usize,
     /// `results.csv`, when every cell is done.
     pub results_csv: Option<PathBuf>,
+    /// What was written as `cohort.json` (settings, inputs, study).
+    pub record: CohortRecord,
+}
+
+impl CohortOutcome {
+    fn count(&self, s: CellStatus) -> usize {
+        self.cells.iter().filter(|c| c.status == s).count()
+    }
+
+    fn listed(&self) -> impl Iterator<Item = &CellResult> {
+        self.cells.iter().filter(|c| c.status != CellStatus::Ok)
+    }
+
+    /// The `--json` summary of the run written into `out`.
+    pub fn to_json(&self, out: &Path) -> serde_json::Value {
+        let s = &self.record.settings;
+        serde_json::json!({
+            "study_sha256": s.study_hash,
+            "forward_model": s.model.describe(),
+            "out": out,
+            "cells": self.cells.len(),
+            "fitted": self.fitted,
+            "reused": self.reused,
+            "ok": self.count(CellStatus::Ok),
+            "suspicious": self.count(CellStatus::Suspicious),
+            "failed": self.count(CellStatus::Failed),
+            "listed": self.listed().map(|c| serde_json::json!({
+                "group": c.group, "file": c.file, "status": c.status.as_str(), "reason": c.reason,
+            })).collect::<Vec<_>>(),
+            "results_csv": self.results_csv,
+        })
+    }
+
+    /// What the run did, for people: counts, cells not ok with the reason.
+    pub fn text(&self) -> String {
+        use std::fmt::Write as _;
+        let mut t = format!(
+            "forward model: {}\n{} cells: {} fitted now, {} reused from an earlier run; \
+             {} ok, {} suspicious, {} failed\n",
+            self.record.settings.model.describe(),
+            self.cells.len(),
+            self.fitted,
+            self.reused,
+            self.count(CellStatus::Ok),
+            self.count(CellStatus::Suspicious),
+            self.count(CellStatus::Failed)
+        );
+        for c in self.listed() {
+            let _ = writeln!(t, "  {} {}: {}", c.status.as_str(), c.file, c.reason);
+        }
+        if let Some(r) = &self.results_csv {
+            let _ = writeln!(t, "wrote {}", r.display());
+        }
+        t
+    }
 }
 
 /// The run record written as `cohort.json`.
@@ -349,10 +196,10 @@ pub fn run_cohort(
                 }
                 return Ok(Some((r, false)));
             }
-            if let Some(max) = opts.max_new_fits {
-                if started.fetch_add(1, Ordering::SeqCst) >= max {
-                    return Ok(None);
-                }
+            if let Some(max) = opts.max_new_fits
+                && started.fetch_add(1, Ordering::SeqCst) >= max
+            {
+                return Ok(None);
             }
             let r = fit_cell(settings, &model, c);
             let bytes = serde_json::to_vec(&r).map_err(|e| ReportError::io(&path, e))?;
@@ -369,6 +216,7 @@ pub fn run_cohort(
         reused: 0,
         pending: 0,
         results_csv: None,
+        record,
     };
     for d in done {
         match d? {
@@ -391,9 +239,10 @@ pub fn run_cohort(
     Ok(out)
 }
 
-/// Column name with its unit suffix, as docs/cli/compare.md reads it.
+/// Column name with its unit suffix, as docs/cli/compare.md reads it
+/// (none for a dimensionless parameter, unit `1`).
 fn column(name: &str, unit: &str) -> String {
-    if unit.is_empty() {
+    if unit.is_empty() || unit == "1" {
         name.to_string()
     } else {
         format!("{name}_{}", unit.replace('/', "_per_"))
@@ -491,6 +340,68 @@ pub fn results_csv(cells: &[CellResult]) -> Result<String> {
     String::from_utf8(bytes).map_err(|e| ReportError::io("results.csv", e))
 }
 
+/// The results table of `cells` in memory, as [`nlvid_stats::read_results`]
+/// would read it back from [`results_csv`] (same rows, same order, lines
+/// numbered as in that file): cells with status `ok` are used, the others
+/// listed as excluded with their status and reason.
+///
+/// # Errors
+/// A fitted cell without `G0` or with inadmissible Prony parameters.
+pub fn results_table(cells: &[CellResult]) -> Result<nlvid_stats::ResultsTable> {
+    use nlvid_model::{Prony, Relaxation, names};
+    use nlvid_stats::{CellRow, Excluded, ResultsTable};
+    let mut sorted: Vec<&CellResult> = cells.iter().collect();
+    sorted.sort_by(|a, b| (&a.group, &a.file).cmp(&(&b.group, &b.file)));
+    let terms = parameter_names(cells).map_or(0, |names| {
+        (1..)
+            .take_while(|k| names.iter().any(|(n, _)| *n == format!("tau{k}")))
+            .count()
+    });
+    let mut table = ResultsTable {
+        cells: Vec::new(),
+        excluded: Vec::new(),
+        terms,
+    };
+    for (i, c) in sorted.into_iter().enumerate() {
+        let line = i as u64 + 2;
+        if c.status != CellStatus::Ok {
+            table.excluded.push(Excluded {
+                cell: c.cell.clone(),
+                group: c.group.clone(),
+                line,
+                reason: if c.reason.is_empty() {
+                    c.status.as_str().to_string()
+                } else {
+                    format!("{}: {}", c.status.as_str(), c.reason)
+                },
+            });
+            continue;
+        }
+        let missing = |name: &str| {
+            ReportError::InvalidSetting(format!(
+                "cell {} of group {}: no fitted `{name}`",
+                c.cell, c.group
+            ))
+        };
+        let g0 = c.parameter("G0").ok_or_else(|| missing("G0"))?;
+        let mut prony_terms = Vec::with_capacity(terms);
+        for k in 1..=terms {
+            let (g, tau) = (format!("g{k}"), format!("tau{k}"));
+            prony_terms.push((
+                c.parameter(&g).ok_or_else(|| missing(&g))?,
+                c.parameter(&tau).ok_or_else(|| missing(&tau))?,
+            ));
+        }
+        table.cells.push(CellRow {
+            cell: c.cell.clone(),
+            group: c.group.clone(),
+            line,
+            relaxation: Relaxation::new(names::G0, g0, Prony::new("G", &prony_terms)?)?,
+        });
+    }
+    Ok(table)
+}
+
 /// Reads every per-cell result of a cohort output directory, sorted by
 /// group, file.
 ///
@@ -541,4 +452,88 @@ pub fn read_record(out_dir: &Path) -> Result<CohortRecord> {
         line: e.line() as u64,
         message: e.to_string(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cell::ParamValue;
+
+    fn cell(group: &str, file: &str, status: CellStatus, p: [f64; 5]) -> CellResult {
+        let names = [
+            ("G0", "Pa"),
+            ("g1", ""),
+            ("g2", ""),
+            ("tau1", "s"),
+            ("tau2", "s"),
+        ];
+        CellResult {
+            group: group.into(),
+            file: file.into(),
+            cell: file.trim_end_matches(".csv").into(),
+            study_hash: "h".into(),
+            status,
+            reason: if status == CellStatus::Ok {
+                String::new()
+            } else {
+                "misfit 0.2 above fit.suspicious_misfit = 0.05".into()
+            },
+            flags: Vec::new(),
+            parameters: names
+                .iter()
+                .zip(p)
+                .map(|((n, u), value)| ParamValue {
+                    name: n.to_string(),
+                    unit: u.to_string(),
+                    value,
+                })
+                .collect(),
+            misfit: Some(0.01),
+            alternatives: 0,
+            peak_force: Some(1e-9),
+            relaxation: Some(0.4),
+            times: Vec::new(),
+            data: Vec::new(),
+            fit: Vec::new(),
+            hertz: None,
+            cell_height: None,
+            base_diameter: None,
+        }
+    }
+
+    /// The in-memory table is what `nlvid compare` reads back from
+    /// results.csv: same cells, values bit for bit, same lines, same
+    /// exclusions (the CSV reader is the second method).
+    #[test]
+    fn the_in_memory_results_table_equals_the_csv_read_back() {
+        let cells = vec![
+            cell(
+                "b",
+                "b/2.csv",
+                CellStatus::Ok,
+                [1234.5, 0.31, 0.2, 0.37, 7.1],
+            ),
+            cell(
+                "a",
+                "a/1.csv",
+                CellStatus::Ok,
+                [1.0 / 3.0 * 1e3, 0.1, 0.45, 0.02, 3.0],
+            ),
+            cell(
+                "a",
+                "a/2.csv",
+                CellStatus::Suspicious,
+                [900.0, 0.2, 0.2, 0.1, 9.0],
+            ),
+            cell("b", "b/1.csv", CellStatus::Ok, [2e3, 0.25, 0.25, 1.1, 39.0]),
+        ];
+        let csv = results_csv(&cells).expect("csv");
+        let read = nlvid_stats::parse_results(csv.as_bytes(), Path::new("results.csv"))
+            .expect("read back");
+        let memory = results_table(&cells).expect("memory");
+        assert_eq!(memory, read);
+        assert_eq!(memory.cells.len(), 3);
+        assert_eq!(memory.excluded.len(), 1);
+        assert_eq!(memory.terms, 2);
+    }
 }

@@ -1,14 +1,15 @@
 //! The bundled example's data generator: two groups of cells whose AFM
 //! ramp-hold curves are made by the study's forward model from known group
-//! distributions of (G0, g1, τ1, g2, τ2) inside the Table 5.3 domain, with
+//! distributions of (G0, g1, g2, τ1, τ2) inside the Table 5.3 domain, with
 //! measurement noise. Same study, spec and seed → byte-identical files.
 //!
 //! The meta-model's study (`examples/demo/metamodel.toml`) names the
 //! forward model in its `[forward]` section; the same section drives
 //! `nlvid build`, so the meta-model the cohort fits on and the curves it
 //! fits are made by one model (see `examples/demo/regenerate.sh`). Today only `hertz-prony`
-//! (analytic Lee–Radok ramp-hold) can write curves: its indentation history
-//! δ(t) is known in closed form, which the piezo column Z = δ + F/k needs.
+//! (analytic Lee–Radok ramp-hold, `nlvid_forward::HertzProny`) can write
+//! curves: its indentation history δ(t) is known in closed form, which the
+//! piezo column Z = δ + F/k needs.
 //!
 //! Files written next to the study: `data/<group>/<cell>.csv` (`time [s]`,
 //! `piezo [um]`, `deflection [nm]`; `fast_rate` Hz until `fast_until`,
@@ -18,10 +19,9 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use nlvid_forward::{ForwardSettings, ForwardSpec};
-use nlvid_inverse::Domain;
+use nlvid_forward::{ForwardSettings, ForwardSpec, HertzGrid, HertzPronySpec};
+use nlvid_model::{Domain, ForwardModel};
 use nlvid_study::Study;
-use nlvid_surrogate::{ForwardModel, HertzProny};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -39,10 +39,10 @@ pub struct GroupSpec {
     pub g0: (f64, f64),
     /// g1: mean and sd.
     pub g1: (f64, f64),
-    /// τ1: median (s) and sd of ln τ1.
-    pub tau1: (f64, f64),
     /// g2: mean and sd.
     pub g2: (f64, f64),
+    /// τ1: median (s) and sd of ln τ1.
+    pub tau1: (f64, f64),
     /// τ2: median (s) and sd of ln τ2.
     pub tau2: (f64, f64),
 }
@@ -79,16 +79,16 @@ impl Default for DemoSpec {
                     name: "A-stiff".into(),
                     g0: (2000.0, 0.2),
                     g1: (0.30, 0.04),
-                    tau1: (0.6, 0.3),
                     g2: (0.25, 0.04),
+                    tau1: (0.6, 0.3),
                     tau2: (10.0, 0.2),
                 },
                 GroupSpec {
                     name: "B-soft".into(),
                     g0: (900.0, 0.2),
                     g1: (0.40, 0.04),
-                    tau1: (0.6, 0.3),
                     g2: (0.35, 0.04),
+                    tau1: (0.6, 0.3),
                     tau2: (10.0, 0.2),
                 },
             ],
@@ -109,7 +109,7 @@ pub struct TrueCell {
     pub group: String,
     /// Cell name (file stem).
     pub cell: String,
-    /// (G0, g1, τ1, g2, τ2), SI (Table 5.3 order).
+    /// (G0, g1, g2, τ1, τ2), SI (`nlvid_model::names::PRONY2`).
     pub x: [f64; 5],
 }
 
@@ -134,15 +134,17 @@ fn normal(rng: &mut ChaCha8Rng) -> f64 {
 }
 
 /// Draws a cell of `g` inside the Table 5.3 domain (redraws otherwise).
+/// The normal deviates are drawn in the order G0, g1, τ1, g2, τ2 (that of
+/// the committed demo data) and returned in the parameter order G0, g1, g2,
+/// τ1, τ2.
 fn draw(g: &GroupSpec, domain: &Domain, rng: &mut ChaCha8Rng) -> Result<[f64; 5]> {
     for _ in 0..1000 {
-        let x = [
-            g.g0.0 * (g.g0.1 * normal(rng)).exp(),
-            g.g1.0 + g.g1.1 * normal(rng),
-            g.tau1.0 * (g.tau1.1 * normal(rng)).exp(),
-            g.g2.0 + g.g2.1 * normal(rng),
-            g.tau2.0 * (g.tau2.1 * normal(rng)).exp(),
-        ];
+        let g0 = g.g0.0 * (g.g0.1 * normal(rng)).exp();
+        let g1 = g.g1.0 + g.g1.1 * normal(rng);
+        let tau1 = g.tau1.0 * (g.tau1.1 * normal(rng)).exp();
+        let g2 = g.g2.0 + g.g2.1 * normal(rng);
+        let tau2 = g.tau2.0 * (g.tau2.1 * normal(rng)).exp();
+        let x = [g0, g1, g2, tau1, tau2];
         // Stay 2 % (scaled) inside the bounds: a truth on a bound is a
         // different test.
         let u = domain.to_unit(&x);
@@ -156,69 +158,29 @@ fn draw(g: &GroupSpec, domain: &Domain, rng: &mut ChaCha8Rng) -> Result<[f64; 5]
     )))
 }
 
-/// The `hertz-prony` settings of a study's `[forward]` section (the keys
-/// `nlvid build` reads: `probe_radius`, `rate`, `ramp`, `hold`, `points`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HertzPronyForward {
-    /// Probe radius R, m.
-    pub probe_radius: f64,
-    /// Indentation rate on the ramp, m/s.
-    pub rate: f64,
-    /// Ramp duration, s.
-    pub ramp: f64,
-    /// Hold duration, s.
-    pub hold: f64,
-    /// Output points of the meta-model's grid.
-    pub points: usize,
-}
-
-impl HertzPronyForward {
-    /// Reads `[forward]` of the study at `path` with `nlvid_forward` (the
-    /// reader `nlvid build` uses).
-    ///
-    /// # Errors
-    /// A missing section or key (naming file, line, key), or a model other
-    /// than `hertz-prony`.
-    pub fn load(path: &Path) -> Result<Self> {
-        let mut study = Study::load(path)?;
-        let fwd = ForwardSettings::from_study(&mut study)
-            .map_err(|e| ReportError::InvalidSetting(e.to_string()))?;
-        match fwd.spec {
-            ForwardSpec::HertzProny(h) => Ok(Self {
-                probe_radius: h.probe_radius,
-                rate: h.rate,
-                ramp: h.ramp,
-                hold: h.hold,
-                points: h.points,
-            }),
-            other => Err(ReportError::InvalidSetting(format!(
-                "{}: [forward] {}: the demo data generator writes curves for `hertz-prony` \
-                 only (it needs the indentation history δ(t) for the piezo column; an AFM FE \
-                 generator is for later)",
-                path.display(),
-                match other {
-                    ForwardSpec::AfmFe(_) => "afm-fe",
-                    ForwardSpec::Membrane(_) => "membrane",
-                    ForwardSpec::HertzProny(_) => "hertz-prony",
-                }
-            ))),
-        }
-    }
-
-    /// The forward model on `points` equally spaced times in (0, ramp + hold].
-    pub fn model(&self, points: usize) -> HertzProny {
-        HertzProny::new(
-            self.probe_radius,
-            self.rate,
-            self.ramp,
-            self.ramp + self.hold,
-            points,
-        )
-    }
-
-    /// Indentation δ(t) of the nominal ramp-hold, m.
-    pub fn indentation(&self, t: f64) -> f64 {
-        self.rate * t.clamp(0.0, self.ramp)
+/// The `hertz-prony` settings of the `[forward]` section of the study at
+/// `path`, read by `nlvid_forward` (the reader `nlvid build` uses).
+///
+/// # Errors
+/// A missing section or key (naming file, line, key), or a model other
+/// than `hertz-prony`.
+fn load_forward(path: &Path) -> Result<HertzPronySpec> {
+    let mut study = Study::load(path)?;
+    let fwd = ForwardSettings::from_study(&mut study)
+        .map_err(|e| ReportError::InvalidSetting(e.to_string()))?;
+    match fwd.spec {
+        ForwardSpec::HertzProny(h) => Ok(h),
+        other => Err(ReportError::InvalidSetting(format!(
+            "{}: [forward] {}: the demo data generator writes curves for `hertz-prony` \
+             only (it needs the indentation history δ(t) for the piezo column; an AFM FE \
+             generator is for later)",
+            path.display(),
+            match other {
+                ForwardSpec::AfmFe(_) => "afm-fe",
+                ForwardSpec::Membrane(_) => "membrane",
+                ForwardSpec::HertzProny(_) => "hertz-prony",
+            }
+        ))),
     }
 }
 
@@ -252,7 +214,7 @@ fn sampling(spec: &DemoSpec, t_end: f64) -> Result<(usize, Vec<usize>)> {
 /// group distribution outside the domain, an unwritable directory.
 pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<DemoFiles> {
     let settings = CohortSettings::load(study)?;
-    let fwd = HertzPronyForward::load(forward)?;
+    let fwd = load_forward(forward)?;
     if (settings.radius / fwd.probe_radius - 1.0).abs() > 1e-12 {
         return Err(ReportError::InvalidSetting(format!(
             "{}: probe.radius = {} m but {} has forward.probe_radius = {} m",
@@ -263,7 +225,7 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
         )));
     }
     let dir = study.parent().map(Path::to_path_buf).unwrap_or_default();
-    let domain = Domain::prony2_table_5_3(settings.constraint_epsilon)?;
+    let domain = Domain::table_5_3(settings.constraint_epsilon)?;
     let t_end = fwd.ramp + fwd.hold;
     if (settings.ramp - fwd.ramp).abs() > 1e-9 * fwd.ramp
         || settings.hold_end > t_end * (1.0 + 1e-12)
@@ -278,31 +240,28 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
         )));
     }
     let (fine, keep) = sampling(spec, t_end)?;
-    let model = fwd.model(fine);
-    // Model parameter k is domain parameter perm[k].
-    let perm = model
-        .parameter_names()
-        .iter()
-        .map(|n| {
-            domain.index_of(n).ok_or_else(|| {
-                ReportError::InvalidSetting(format!(
-                    "forward model parameter `{n}` is not in the Table 5.3 domain"
-                ))
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
+    // The forward model on `fine` equally spaced times in (0, ramp + hold].
+    let model = HertzPronySpec {
+        points: fine,
+        grid: HertzGrid::Uniform,
+        ..fwd.clone()
+    }
+    .build()
+    .map_err(|e| ReportError::InvalidSetting(format!("forward model: {e}")))?;
+    domain
+        .check_names(&model.parameter_names())
+        .map_err(|e| ReportError::InvalidSetting(format!("forward model: {e}")))?;
     let times: Vec<f64> = model.time_grid().to_vec();
     let k = settings.spring_constant;
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let data = dir.join("data");
     let mut cells = Vec::new();
-    let mut truth = String::from("group,cell,G0_Pa,g1,tau1_s,g2,tau2_s,G_end_Pa,relaxation_end\n");
+    let mut truth = String::from("group,cell,G0_Pa,g1,g2,tau1_s,tau2_s,G_end_Pa,relaxation_end\n");
     for g in &spec.groups {
         for i in 0..spec.cells_per_group {
             let x = draw(g, &domain, &mut rng)?;
-            let p: Vec<f64> = perm.iter().map(|&j| x[j]).collect();
             let f = model
-                .run(&p)
+                .run(&x)
                 .map_err(|e| ReportError::InvalidSetting(format!("forward model: {e}")))?;
             let peak = f.iter().fold(0.0f64, |a, &b| a.max(b));
             let mut csv = format!(
@@ -324,8 +283,8 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
                 csv.as_bytes(),
             )?;
             let end = settings.hold_end;
-            let ginf = 1.0 - x[1] - x[3];
-            let g_end = x[0] * (ginf + x[1] * (-end / x[2]).exp() + x[3] * (-end / x[4]).exp());
+            // G(t) of eq. 5.1 through the one Prony type, by parameter name.
+            let g_end = nlvid_inverse::relaxation(&domain, &x)?.value(end);
             let _ = writeln!(
                 truth,
                 "{},{cell},{},{},{},{},{},{},{}",
@@ -353,6 +312,98 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
         truth: truth_path,
         cells,
     })
+}
+
+/// The bundled example: `given`, else `examples/demo` in the current
+/// directory, else `built` (the source tree the binary was built from).
+///
+/// # Errors
+/// None of them holds a `study.toml`.
+pub fn demo_dir(given: Option<PathBuf>, built: &Path) -> Result<PathBuf> {
+    if let Some(d) = given {
+        return Ok(d);
+    }
+    let here = PathBuf::from("examples/demo");
+    if here.join("study.toml").is_file() {
+        return Ok(here);
+    }
+    if built.join("study.toml").is_file() {
+        // Print `/…/examples/demo`, not `/…/crates/cli/../../examples/demo`.
+        return Ok(std::fs::canonicalize(built).unwrap_or_else(|_| built.to_path_buf()));
+    }
+    Err(ReportError::InvalidSetting(format!(
+        "no bundled example: neither ./examples/demo nor {} has a study.toml; give --demo DIR",
+        built.display()
+    )))
+}
+
+/// Runs the bundled example in `demo` end to end into `out`: `nlvid cohort`
+/// (into `out/cohort`, `on_cell` after each cell), `nlvid compare` on the
+/// cells in memory, `nlvid report`; each step and its outcome are handed to
+/// `say` as text. Returns the report's files.
+///
+/// # Errors
+/// A bad bundled study, unwritable outputs, or `say` failing.
+pub fn run_demo(
+    demo: &Path,
+    out: &Path,
+    on_cell: Option<&(dyn Fn(&crate::cell::CellResult) + Sync)>,
+    say: &mut dyn FnMut(&str) -> std::io::Result<()>,
+) -> Result<crate::report::ReportFiles> {
+    let io = ReportError::Output;
+    let (study, data) = (demo.join("study.toml"), demo.join("data"));
+    let settings = CohortSettings::load(&study)?;
+    let cells = crate::cohort::discover(&data)?;
+    let mut text = format!(
+        "1. bundled study {}: {} cells made by the forward model from known parameters \
+         (truth: {})\n",
+        study.display(),
+        cells.len(),
+        demo.join("ground_truth.csv").display()
+    );
+    if let Some(f) = &settings.surrogate {
+        let _ = writeln!(
+            text,
+            "   fitted on the pre-built meta-model {} of `{}`",
+            f.model.display(),
+            f.forward
+        );
+    }
+    let cohort_dir = out.join("cohort");
+    let _ = writeln!(
+        text,
+        "2. nlvid cohort {} {} --out {}",
+        study.display(),
+        data.display(),
+        cohort_dir.display()
+    );
+    say(&text).map_err(io)?;
+    let opts = crate::cohort::RunOptions {
+        max_new_fits: None,
+        on_cell,
+    };
+    let run = crate::cohort::run_cohort(&settings, &study, &data, &cells, &cohort_dir, &opts)?;
+    // The results table and the report use the cells in memory.
+    let table = crate::cohort::results_table(&run.cells)?;
+    let results = cohort_dir.join("results.csv");
+    say(&format!(
+        "{}3. nlvid compare {}\n",
+        run.text(),
+        results.display()
+    ))
+    .map_err(io)?;
+    let times: Vec<f64> = (0..53)
+        .map(|i| settings.hold_end * i as f64 / 52.0)
+        .collect();
+    let cmp = crate::compare::compare(&results, table, None, &times, "matlab", &cohort_dir)?;
+    say(&format!(
+        "{}4. nlvid report {}\n",
+        cmp.text(),
+        cohort_dir.display()
+    ))
+    .map_err(io)?;
+    let opts = crate::report::ReportOptions::default();
+    crate::report::write_report_of(&cohort_dir, &run.record, &run.cells, &opts)
 }
 
 #[cfg(test)]

@@ -26,6 +26,9 @@ pub enum ReportError {
     /// The study file.
     #[error(transparent)]
     Study(#[from] nlvid_study::StudyError),
+    /// A value outside the shared vocabulary (parameter domain, Prony series).
+    #[error(transparent)]
+    Model(#[from] nlvid_model::ModelError),
     /// The inverse analysis (model, misfit, optimiser).
     #[error(transparent)]
     Inverse(#[from] nlvid_inverse::InverseError),
@@ -40,6 +43,10 @@ pub enum ReportError {
         /// Backend message.
         message: String,
     },
+    /// Writing a report to the caller's output (stdout) failed, e.g. a
+    /// closed pipe; the I/O error is the source.
+    #[error("cannot write the output")]
+    Output(#[source] std::io::Error),
     /// An invalid setting passed in code (not from a file).
     #[error("{0}")]
     InvalidSetting(String),

@@ -2,8 +2,10 @@
 //! §5.4.2, Figs. 5.3–5.8 and 5.14–5.19, App. A).
 //!
 //! What it models:
-//! - [`settings`]: what a cohort reads from the study file (probe,
-//!   cantilever, fitted ramp-hold window, fit settings);
+//! - [`settings`]: the study's `[fit]` section, one reader for `nlvid fit`
+//!   and `nlvid cohort`, and what a cohort reads besides it;
+//! - [`fit`]: one parameter set fitted to one or several curves on
+//!   surrogates, re-checked with the real model (`nlvid fit`);
 //! - [`cell`]: one cell — its AFM curve read (F = k d, δ = Z − d), the five
 //!   Prony parameters of eq. 5.1 fitted with the misfit of eq. 5.3 in the
 //!   Table 5.3 domain on a pre-built Kriging meta-model (or the analytic
@@ -49,9 +51,12 @@
 
 pub mod cell;
 pub mod cohort;
+pub mod compare;
 pub mod demo;
 mod error;
 mod figures;
+pub mod fit;
+mod input;
 pub mod report;
 pub mod settings;
 

@@ -12,13 +12,12 @@ use std::fmt::Write as _;
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use nlvid_stats::{
-    Method, Prony, ResultsTable, compare_over_time, effect, group_curves, mean_sd, rank_sum,
-    read_results, relaxation_amounts,
-};
+use nlvid_stats::{Method, compare_groups, mean_sd};
 
 use crate::cell::{CellResult, CellStatus};
-use crate::cohort::{parameter_names, read_cells, read_record, write_atomic};
+use crate::cohort::{
+    CohortRecord, parameter_names, read_cells, read_record, results_table, write_atomic,
+};
 use crate::error::{ReportError, Result};
 use crate::figures::{Band, FitPanel, Line, band_chart, fits_chart, pvalue_chart};
 
@@ -181,6 +180,21 @@ figure{margin:1.5em 0}figcaption{font-size:.9em;color:#444;max-width:720px}\
 pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFiles> {
     let record = read_record(cohort_dir)?;
     let cells = read_cells(cohort_dir)?;
+    write_report_of(cohort_dir, &record, &cells, opts)
+}
+
+/// Writes the report of a cohort whose record and cell results are already
+/// in memory (as [`crate::cohort::run_cohort`] returns them), sorted by
+/// group then file.
+///
+/// # Errors
+/// As [`write_report`].
+pub fn write_report_of(
+    cohort_dir: &Path,
+    record: &CohortRecord,
+    cells: &[CellResult],
+    opts: &ReportOptions,
+) -> Result<ReportFiles> {
     let results_path = cohort_dir.join("results.csv");
     if !results_path.is_file() {
         return Err(ReportError::io(
@@ -188,7 +202,7 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
             "missing: the cohort run is not finished; run `nlvid cohort` again to complete it",
         ));
     }
-    let table: ResultsTable = read_results(&results_path)?;
+    let table = results_table(cells)?;
     let s = &record.settings;
     let out_dir = opts
         .out
@@ -282,17 +296,21 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
         });
     }
 
-    // Group G(t) (Figs. 5.14–5.19).
-    let usable: Vec<String> = table
+    // Group G(t) (Figs. 5.14–5.19): groups with at least two fitted cells.
+    let mut usable_table = table;
+    let usable: Vec<String> = usable_table
         .groups()
         .into_iter()
-        .filter(|g| table.group(g).len() >= 2)
+        .filter(|g| usable_table.group(g).len() >= 2)
         .collect();
+    usable_table.cells.retain(|c| usable.contains(&c.group));
+    let pair = (usable.len() >= 2).then(|| (usable[0].as_str(), usable[1].as_str()));
+    let cmp = compare_groups(&usable_table, pair, &times, opts.method)?;
     let mut g_bands = Vec::new();
     let mut n_bands = Vec::new();
-    for g in &usable {
-        let gc = group_curves(g, &table.group(g), &times)?;
-        let label = format!("{g} (n = {})", gc.n);
+    for gs in &cmp.groups {
+        let gc = &gs.curves;
+        let label = format!("{} (n = {})", gc.name, gc.n);
         g_bands.push(Band {
             name: label.clone(),
             x: times.clone(),
@@ -329,11 +347,9 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
         });
     }
     let mut tests_rows = Vec::new();
-    if usable.len() >= 2 {
-        let (a, b) = (&usable[0], &usable[1]);
-        let (ca, cb): (Vec<Prony>, Vec<Prony>) = (table.group(a), table.group(b));
-        let cmp = compare_over_time(&ca, &cb, &times, opts.method)?;
-        let x: Vec<f64> = cmp.iter().map(|r| r.t).collect();
+    if let Some(p) = &cmp.pair {
+        let (a, b) = (&p.a, &p.b);
+        let x: Vec<f64> = p.over_time.iter().map(|r| r.t).collect();
         figures.push(Figure {
             id: "fig-pvalues".into(),
             file: "pvalues.svg".into(),
@@ -349,55 +365,36 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
                     Line {
                         name: "p on G(t)".into(),
                         x: x.clone(),
-                        y: cmp.iter().map(|r| r.shear.p).collect(),
+                        y: p.over_time.iter().map(|r| r.shear.p).collect(),
                     },
                     Line {
                         name: "p on G(t)/G(0)".into(),
                         x,
-                        y: cmp.iter().map(|r| r.normalised.p).collect(),
+                        y: p.over_time.iter().map(|r| r.normalised.p).collect(),
                     },
                 ],
             )?,
         });
-        let g = |cells: &[Prony], t: f64| cells.iter().map(|p| p.shear(t)).collect::<Vec<_>>();
-        type Quantity<'a> = (String, Vec<f64>, Vec<f64>, f64, &'a str);
-        let quantities: [Quantity; 3] = [
-            ("G(0)".into(), g(&ca, 0.0), g(&cb, 0.0), 1.0, "Pa"),
-            (
-                format!("G({t_end} s)"),
-                g(&ca, t_end),
-                g(&cb, t_end),
-                1.0,
-                "Pa",
-            ),
-            (
-                format!("relaxation 1 − G({t_end} s)/G(0)"),
-                relaxation_amounts(&ca, t_end),
-                relaxation_amounts(&cb, t_end),
-                100.0,
-                "%",
-            ),
-        ];
-        for (what, va, vb, scale, unit) in quantities {
-            let ma = mean_sd(a, &va)?;
-            let mb = mean_sd(b, &vb)?;
-            let t = rank_sum(&va, &vb, opts.method)?;
-            let ef = effect(&va, &vb)?;
+        for k in &p.contrasts {
+            let (scale, unit) = if k.unit.is_empty() {
+                (100.0, "%")
+            } else {
+                (1.0, k.unit)
+            };
+            let ms = |m: &nlvid_stats::MeanSd| {
+                format!(
+                    "{} ± {} {unit}",
+                    sig(scale * m.mean, 4),
+                    sig(scale * m.sd, 3)
+                )
+            };
             tests_rows.push(vec![
-                what,
-                format!(
-                    "{} ± {} {unit}",
-                    sig(scale * ma.mean, 4),
-                    sig(scale * ma.sd, 3)
-                ),
-                format!(
-                    "{} ± {} {unit}",
-                    sig(scale * mb.mean, 4),
-                    sig(scale * mb.sd, 3)
-                ),
-                sig(t.p, 4),
-                t.used.to_string(),
-                format!("{:+.3}", ef.rank_biserial),
+                k.quantity.clone(),
+                ms(&k.a),
+                ms(&k.b),
+                sig(k.test.p, 4),
+                k.test.used.to_string(),
+                format!("{:+.3}", k.effect.rank_biserial),
             ]);
         }
     }
@@ -497,7 +494,7 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
 
     h.push_str("<h2 id=\"tables\">Per-cell results</h2>\n");
     let mut head = vec!["group".to_string(), "cell".into()];
-    let pnames = parameter_names(&cells).unwrap_or_default();
+    let pnames = parameter_names(cells).unwrap_or_default();
     for (n, u) in &pnames {
         head.push(if u.is_empty() {
             n.clone()
@@ -531,7 +528,7 @@ pub fn write_report(cohort_dir: &Path, opts: &ReportOptions) -> Result<ReportFil
     h.push_str("</tr></thead>\n<tbody>\n");
     let opt =
         |v: Option<f64>, scale: f64, d: usize| v.map_or_else(String::new, |x| sig(x * scale, d));
-    for c in &cells {
+    for c in cells {
         let class = match c.status {
             CellStatus::Ok => "",
             CellStatus::Suspicious => " class=\"warn\"",

@@ -1,43 +1,494 @@
-//! What `nlvid cohort` reads from the study file: probe, cantilever and
-//! CSV columns, the ramp-hold window that is fitted, and the fit settings.
+//! The study's `[fit]` section — one reader for `nlvid fit` and
+//! `nlvid cohort` ([`FitSettings`]) — and what a cohort reads besides it
+//! ([`CohortSettings`]: title and `[probe]`). Format: docs/cli/fit.md.
 //!
 //! ```toml
 //! title = "demo"
-//! seed = 7
-//! [probe]
-//! radius = "2.5 um"            # sphere radius R (5 um diameter in §5.2.2)
+//! [probe]                      # cohort: Lee–Radok model and Hertz baseline
+//! radius = "2.5 um"
 //! poisson = 0.5
-//! [afm]
-//! spring_constant = "0.12 N/m" # k, F = k d (§5.2.2)
-//! deflection_sensitivity = "50 nm/V"  # only if the deflection is in volts
-//! time_column = "time"         # defaults shown
-//! piezo_column = "piezo"
-//! deflection_column = "deflection"
-//! [protocol]
-//! ramp = "0.2 s"               # end of the loading ramp
-//! hold_end = "52 s"            # end of the hold = end of the fitted window
-//! # (or `ramp`, `hold_end` in [fit]: then [protocol] is the forward model's,
-//! # nlvid-protocol format, and the cohort does not read it)
 //! [fit]
-//! model = "surrogate"          # or "lee-radok" (analytic, no surrogate)
+//! model = "surrogate"          # default: "surrogate" when `surrogate` is given, else "lee-radok"
 //! surrogate = "metamodel/model.json"  # model file of `nlvid surrogate fit`
 //! meta = "metamodel/meta.json"        # sidecar of `nlvid build --export`
-//! check = "metamodel/check.json"      # optional: `nlvid --json surrogate check` output
+//! check = "metamodel/model.check.json" # default: <surrogate>.check.json if present
+//! constraint_epsilon = 0.01    # g1 + g2 <= 1 - eps (Table 5.3; model = "lee-radok" only:
+//!                              # a meta-model brings the domain stored in its meta.json)
+//! inputs = "physical"          # or "unit": coordinates the surrogate was fitted on
+//! data = "afm"                 # or "compression"
 //! starts = 8
-//! ramp_points = 40
-//! hold_points = 120
-//! first_hold_step = "1 ms"
-//! constraint_epsilon = 0.01    # g1 + g2 <= 1 - eps (Table 5.3)
-//! suspicious_misfit = 0.05     # eq. 5.3 misfit above which a cell is `suspicious`
+//! seed = 1
+//! ramp = "1 s"                 # cohort: end of the loading ramp (Hertz baseline)
+//! hold_end = "52 s"            # cohort: end of the fitted window
+//! suspicious_misfit = 0.05     # cohort: eq. 5.3 misfit above which a cell is `suspicious`
+//! [fit.columns]                # defaults shown (AFM)
+//! time = "time"
+//! piezo = "piezo"
+//! deflection = "deflection"
+//! [fit.calibration]
+//! spring_constant = "0.12 N/m" # k, F = k d (§5.2.2)
+//! deflection_sensitivity = "50 nm/V"  # only if the deflection is in volts
 //! ```
+//!
+//! `nlvid fit` also reads `[fit.protocol]`, `[[fit.segment]]`,
+//! `[fit.real_model]`, `[[fit.experiment]]` and `modulus_times`; a cohort
+//! also `ramp_points`, `hold_points`, `first_hold_step` (Lee–Radok grid).
+//! Keys of the former second schema are errors naming the key to use.
 
 use std::path::{Path, PathBuf};
 
+use nlvid_inverse::{
+    AfmColumns, Calibration, CompressionColumns, Coordinates, ProtocolTolerance, Segment,
+};
 use nlvid_study::{Bounds, Dimension, FromSection, Section, Study, StudyError};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use crate::error::{ReportError, Result};
+
+/// The model every curve is fitted with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum FitModel {
+    /// Small-strain Lee–Radok linear-viscoelastic Hertz contact, rigid
+    /// sphere, run with each cell's measured indentation.
+    LeeRadok,
+    /// A pre-built Kriging meta-model of a forward model (thesis §4.4.1,
+    /// §5.4.1): `nlvid surrogate fit` model file + `meta.json`.
+    Surrogate,
+}
+
+impl FitModel {
+    /// One-line description shown in outputs and the report.
+    pub fn describe(&self) -> &'static str {
+        match self {
+            FitModel::LeeRadok => {
+                "small-strain Lee–Radok (linear-viscoelastic Hertz, rigid sphere), \
+                 run with each cell's measured indentation; no surrogate"
+            }
+            FitModel::Surrogate => {
+                "Kriging meta-model (nlvid surrogate fit) of the forward model named in \
+                 the study, on the nominal ramp-hold protocol"
+            }
+        }
+    }
+}
+
+/// What kind of measured data the files hold.
+#[derive(Debug, Clone, PartialEq)]
+pub enum DataColumns {
+    /// AFM: time, piezo Z, deflection (V, m or N) with a calibration.
+    Afm(AfmColumns, Calibration),
+    /// Plate compression: time, displacement, force, optional contact area.
+    Compression(CompressionColumns),
+}
+
+/// Expected controlled displacement: ramp at `rate` to `amplitude`, then
+/// hold to the end of the surrogate's time grid.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Protocol {
+    /// Ramp rate (m/s).
+    pub rate: f64,
+    /// Ramp amplitude (m).
+    pub amplitude: f64,
+    /// Tolerances of the protocol check.
+    pub tolerance: ProtocolTolerance,
+}
+
+/// The real forward model that re-checks the optimum.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RealModelSpec {
+    /// Analytic Lee–Radok Hertz, run with each curve's measured indentation.
+    LeeRadok {
+        /// Probe radius (m).
+        radius: f64,
+        /// Poisson's ratio.
+        poisson: f64,
+    },
+    /// The model of a study's `[forward]` section (`nlvid_forward`),
+    /// run on its own grid and interpolated onto the surrogate's.
+    Forward {
+        /// The study file holding `[forward]` (default: the fit study).
+        study: PathBuf,
+    },
+}
+
+/// One experiment: which surrogate predicts it, under which protocol.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExperimentSettings {
+    /// Label (default: the data file's stem).
+    pub label: Option<String>,
+    /// Model file of `nlvid surrogate fit` (`None` with `model = "lee-radok"`).
+    pub surrogate: Option<PathBuf>,
+    /// `meta.json` of `nlvid build --export` (names, time grid).
+    pub meta: Option<PathBuf>,
+    /// Summary of `nlvid surrogate check` (its `max` is the checking
+    /// error); `None`: `<model>.check.json` if it exists.
+    pub check: Option<PathBuf>,
+    /// Expected loading, checked against each data file.
+    pub protocol: Option<Protocol>,
+    /// Eq. 5.3 weights per time segment.
+    pub segments: Vec<Segment>,
+    /// Real model for the re-check.
+    pub real: Option<RealModelSpec>,
+}
+
+impl ExperimentSettings {
+    /// Where the checking summary is: `check`, else `<surrogate>.check.json`
+    /// (where `nlvid surrogate check` saves it) when that file exists.
+    pub fn check_file(&self) -> Option<PathBuf> {
+        self.check.clone().or_else(|| {
+            self.surrogate
+                .as_deref()
+                .map(nlvid_surrogate::check::summary_path)
+                .filter(|p| p.is_file())
+        })
+    }
+}
+
+/// Everything `[fit]` says.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FitSettings {
+    /// The study file.
+    pub study: PathBuf,
+    /// Surrogate or analytic Lee–Radok.
+    pub model: FitModel,
+    /// ε of g1 + g2 ≤ 1 − ε of the Table 5.3 domain of the analytic
+    /// Lee–Radok model; a meta-model brings the domain stored in its
+    /// `meta.json` instead.
+    pub constraint_epsilon: f64,
+    /// Coordinates the surrogates were fitted on.
+    pub inputs: Coordinates,
+    /// Columns and calibration of the data files.
+    pub columns: DataColumns,
+    /// Multistart starts.
+    pub starts: usize,
+    /// Multistart seed (the same for every curve).
+    pub seed: u64,
+    /// Times of the printed G(t), E(t).
+    pub modulus_times: Vec<f64>,
+    /// End of the loading ramp and of the hold, s (the fitted window of a
+    /// cohort), when given.
+    pub window: Option<(f64, f64)>,
+    /// Lee–Radok model grid: uniform intervals on the ramp.
+    pub ramp_points: usize,
+    /// Lee–Radok model grid: log-spaced points on the hold.
+    pub hold_points: usize,
+    /// Lee–Radok model grid: first step of the hold, s.
+    pub first_hold_step: f64,
+    /// Misfit (eq. 5.3) above which a cohort cell is marked suspicious.
+    pub suspicious_misfit: f64,
+    /// Experiments; `repeat` says whether the single one applies to every file.
+    pub experiments: Vec<ExperimentSettings>,
+    /// True when the experiment settings sit directly in `[fit]`.
+    pub repeat: bool,
+}
+
+/// Keys of the former second `[fit]` schema, with the key to use instead.
+const RENAMED: [(&str, &str); 3] = [
+    (
+        "checking",
+        "`check` (the summary of `nlvid surrogate check`)",
+    ),
+    ("epsilon", "`constraint_epsilon`"),
+    (
+        "checking_error",
+        "`check = \"model.check.json\"` (the output of `nlvid --json surrogate check`)",
+    ),
+];
+
+fn renamed(s: &Section) -> std::result::Result<(), StudyError> {
+    // The parameter domain is the one each meta-model was designed on.
+    for key in ["domain", "epsilon"] {
+        if s.has(key) {
+            return Err(s.invalid(
+                key,
+                "the parameter domain (bounds, g1 + g2 <= 1 - epsilon) is now read from the \
+                 meta-model's meta.json, written by `nlvid build --export` from the build \
+                 study's [design] section: remove `domain` and `epsilon` from [fit] (the \
+                 analytic model = \"lee-radok\" takes `constraint_epsilon`)",
+            ));
+        }
+    }
+    for (old, new) in RENAMED {
+        if s.has(old) {
+            return Err(s.invalid(old, format!("this key is now {new}")));
+        }
+    }
+    Ok(())
+}
+
+impl FitSettings {
+    /// Reads `[fit]` of the study at `path` (other sections belong to other
+    /// commands and are not checked here).
+    ///
+    /// # Errors
+    /// Any missing, unknown or invalid key, with the file, line and key.
+    pub fn load(path: &Path) -> Result<Self> {
+        let mut study = Study::load(path)?;
+        Self::from_study(&mut study, path)
+    }
+
+    /// Reads `[fit]` of a parsed study (the study is not finished).
+    ///
+    /// # Errors
+    /// As [`FitSettings::load`].
+    pub fn from_study(study: &mut Study, path: &Path) -> Result<Self> {
+        let mut s = study.section("fit")?;
+        let settings = Self::from_section(&mut s, path)?;
+        s.finish()?;
+        Ok(settings)
+    }
+
+    fn from_section(s: &mut Section, path: &Path) -> Result<Self> {
+        renamed(s)?;
+        let model = s.enum_or(
+            "model",
+            &[
+                ("lee-radok", FitModel::LeeRadok),
+                ("surrogate", FitModel::Surrogate),
+            ],
+            if s.has("surrogate") || s.has("experiment") {
+                FitModel::Surrogate
+            } else {
+                FitModel::LeeRadok
+            },
+        )?;
+        let inputs = s.enum_or(
+            "inputs",
+            &[
+                ("physical", Coordinates::Physical),
+                ("unit", Coordinates::Unit),
+            ],
+            Coordinates::Physical,
+        )?;
+        let constraint_epsilon =
+            s.f64_or("constraint_epsilon", Bounds::closed_open(0.0, 0.98), 0.01)?;
+        let columns = read_columns(s)?;
+        let window = match (s.has("ramp"), s.has("hold_end")) {
+            (false, false) => None,
+            _ => {
+                let ramp = s.req_quantity("ramp", Dimension::TIME, Bounds::positive())?;
+                let hold_end = s.req_quantity("hold_end", Dimension::TIME, Bounds::positive())?;
+                if hold_end <= ramp {
+                    return Err(s.invalid("hold_end", "must be later than `ramp`").into());
+                }
+                Some((ramp, hold_end))
+            }
+        };
+        let settings = Self {
+            study: path.to_path_buf(),
+            model,
+            constraint_epsilon,
+            inputs,
+            columns,
+            starts: s
+                .opt_usize("starts", Bounds::closed(1.0, 1000.0))?
+                .unwrap_or(8),
+            seed: s.opt_u64("seed")?.unwrap_or(1),
+            modulus_times: s
+                .opt_quantities("modulus_times", Dimension::TIME, Bounds::non_negative())?
+                .unwrap_or_else(|| vec![0.0, 0.1, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 52.0]),
+            window,
+            ramp_points: s
+                .opt_usize("ramp_points", Bounds::closed(1.0, 10000.0))?
+                .unwrap_or(40),
+            hold_points: s
+                .opt_usize("hold_points", Bounds::closed(2.0, 100000.0))?
+                .unwrap_or(120),
+            first_hold_step: s.quantity_or(
+                "first_hold_step",
+                Dimension::TIME,
+                Bounds::positive(),
+                1e-3,
+            )?,
+            suspicious_misfit: s.f64_or("suspicious_misfit", Bounds::positive(), 0.05)?,
+            experiments: Vec::new(),
+            repeat: true,
+        };
+        let tables = s.tables("experiment")?;
+        let (experiments, repeat) = if tables.is_empty() {
+            (vec![read_experiment(s, model, path)?], true)
+        } else {
+            let mut out = Vec::with_capacity(tables.len());
+            for mut t in tables {
+                renamed(&t)?;
+                out.push(read_experiment(&mut t, model, path)?);
+                t.finish()?;
+            }
+            (out, false)
+        };
+        Ok(Self {
+            experiments,
+            repeat,
+            ..settings
+        })
+    }
+}
+
+fn read_columns(s: &mut Section) -> Result<DataColumns> {
+    #[derive(Clone, Copy)]
+    enum Kind {
+        Afm,
+        Compression,
+    }
+    let kind = s.enum_or(
+        "data",
+        &[("afm", Kind::Afm), ("compression", Kind::Compression)],
+        Kind::Afm,
+    )?;
+    let mut cols = s.opt_subsection("columns")?;
+    let mut name = |key: &str, default: &str| -> std::result::Result<String, StudyError> {
+        match cols.as_mut() {
+            Some(c) => Ok(c.opt_str(key)?.unwrap_or_else(|| default.to_string())),
+            None => Ok(default.to_string()),
+        }
+    };
+    let time = name("time", "time")?;
+    let out = match kind {
+        Kind::Afm => {
+            let names = AfmColumns {
+                time,
+                piezo: name("piezo", "piezo")?,
+                deflection: name("deflection", "deflection")?,
+            };
+            let mut c = s.subsection("calibration")?;
+            let cal = Calibration {
+                spring_constant: c.req_quantity(
+                    "spring_constant",
+                    Dimension::STIFFNESS,
+                    Bounds::positive(),
+                )?,
+                deflection_sensitivity: c.opt_quantity(
+                    "deflection_sensitivity",
+                    Dimension::LENGTH_PER_VOLTAGE,
+                    Bounds::positive(),
+                )?,
+            };
+            c.finish()?;
+            DataColumns::Afm(names, cal)
+        }
+        Kind::Compression => {
+            let Some(c) = cols.as_mut() else {
+                return Err(s
+                    .invalid(
+                        "columns",
+                        "data = \"compression\" needs [fit.columns] with displacement and force",
+                    )
+                    .into());
+            };
+            DataColumns::Compression(CompressionColumns {
+                time,
+                displacement: c.req_str("displacement")?,
+                force: c.req_str("force")?,
+                contact_area: c.opt_str("contact_area")?,
+            })
+        }
+    };
+    if let Some(c) = cols {
+        c.finish()?;
+    }
+    Ok(out)
+}
+
+/// One experiment's keys, from `[fit]` itself or a `[[fit.experiment]]`.
+fn read_experiment(s: &mut Section, model: FitModel, study: &Path) -> Result<ExperimentSettings> {
+    let label = s.opt_str("label")?;
+    let (surrogate, meta, check) = match model {
+        FitModel::Surrogate => {
+            let check = match s.opt_path("check")? {
+                Some(p) if !p.is_file() => {
+                    return Err(s
+                        .invalid("check", format!("no such file: {}", p.display()))
+                        .into());
+                }
+                other => other,
+            };
+            (
+                Some(s.req_input_file("surrogate")?),
+                Some(s.req_input_file("meta")?),
+                check,
+            )
+        }
+        FitModel::LeeRadok => {
+            for key in ["surrogate", "meta", "check"] {
+                if s.has(key) {
+                    return Err(s.invalid(key, "only with model = \"surrogate\"").into());
+                }
+            }
+            (None, None, None)
+        }
+    };
+    let protocol = match s.opt_subsection("protocol")? {
+        None => None,
+        Some(mut p) => {
+            let v = Protocol {
+                rate: p.req_quantity("rate", Dimension::VELOCITY, Bounds::positive())?,
+                amplitude: p.req_quantity("amplitude", Dimension::LENGTH, Bounds::positive())?,
+                tolerance: ProtocolTolerance {
+                    duration: p.f64_or("duration_tolerance", Bounds::closed(0.0, 1.0), 0.02)?,
+                    displacement: p.f64_or(
+                        "displacement_tolerance",
+                        Bounds::closed(0.0, 1.0),
+                        0.05,
+                    )?,
+                },
+            };
+            p.finish()?;
+            Some(v)
+        }
+    };
+    let mut segments = Vec::new();
+    for mut t in s.tables("segment")? {
+        let seg = Segment {
+            start: t.req_quantity("start", Dimension::TIME, Bounds::non_negative())?,
+            end: t.req_quantity("end", Dimension::TIME, Bounds::non_negative())?,
+            weight: t.req_f64("weight", Bounds::non_negative())?,
+        };
+        if seg.end <= seg.start {
+            return Err(t
+                .invalid("end", "a segment must end after it starts")
+                .into());
+        }
+        t.finish()?;
+        segments.push(seg);
+    }
+    let real = match s.opt_subsection("real_model")? {
+        None => None,
+        Some(mut r) => {
+            let spec = match r.req_str("model")?.as_str() {
+                "lee-radok" => RealModelSpec::LeeRadok {
+                    radius: r.req_quantity("radius", Dimension::LENGTH, Bounds::positive())?,
+                    poisson: r.f64_or("poisson", Bounds::closed(0.0, 0.5), 0.5)?,
+                },
+                "forward" => RealModelSpec::Forward {
+                    study: r.opt_path("study")?.unwrap_or_else(|| study.to_path_buf()),
+                },
+                other => {
+                    return Err(r
+                        .invalid(
+                            "model",
+                            format!(
+                                "unknown real model `{other}` (available: lee-radok; forward = \
+                                 the [forward] section of `study`, default this file)"
+                            ),
+                        )
+                        .into());
+                }
+            };
+            r.finish()?;
+            Some(spec)
+        }
+    };
+    Ok(ExperimentSettings {
+        label,
+        surrogate,
+        meta,
+        check,
+        protocol,
+        segments,
+        real,
+    })
+}
 
 /// The `model` key of a `meta.json` (the forward model's identity), if any.
 fn forward_of_meta(meta: &Path) -> Result<String> {
@@ -51,33 +502,6 @@ fn forward_of_meta(meta: &Path) -> Result<String> {
         .and_then(|m| m.as_str())
         .unwrap_or("(meta.json names no model)")
         .to_string())
-}
-
-/// The forward model used to fit each cell.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum ForwardModel {
-    /// Small-strain Lee–Radok linear-viscoelastic Hertz contact, rigid
-    /// sphere, run with each cell's measured indentation.
-    LeeRadok,
-    /// A pre-built Kriging meta-model of a forward model (thesis §4.4.1,
-    /// §5.4.1): `nlvid surrogate fit` model file + `meta.json`.
-    Surrogate,
-}
-
-impl ForwardModel {
-    /// One-line description shown in outputs and the report.
-    pub fn describe(&self) -> &'static str {
-        match self {
-            ForwardModel::LeeRadok => {
-                "small-strain Lee–Radok (linear-viscoelastic Hertz, rigid sphere), \
-                 run with each cell's measured indentation; no surrogate"
-            }
-            ForwardModel::Surrogate => {
-                "Kriging meta-model (nlvid surrogate fit) of the forward model named in \
-                 the study, on the nominal ramp-hold protocol"
-            }
-        }
-    }
 }
 
 /// The files of a pre-built meta-model (paths resolved against the study's
@@ -95,7 +519,8 @@ pub struct SurrogateFiles {
     pub forward: String,
 }
 
-/// Cohort settings, all in SI.
+/// Cohort settings, all in SI: the study's title, `[probe]` and `[fit]`
+/// ([`FitSettings`]) as one serialisable record (written to `cohort.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CohortSettings {
     /// Study title.
@@ -125,8 +550,8 @@ pub struct CohortSettings {
     /// End of the hold (end of the fitted window), s.
     pub hold_end: f64,
     /// Forward model.
-    pub model: ForwardModel,
-    /// The meta-model's files (when `model` is [`ForwardModel::Surrogate`]).
+    pub model: FitModel,
+    /// The meta-model's files (when `model` is [`FitModel::Surrogate`]).
     pub surrogate: Option<SurrogateFiles>,
     /// Multistart starts per cell.
     pub starts: usize,
@@ -136,7 +561,9 @@ pub struct CohortSettings {
     pub hold_points: usize,
     /// First step of the hold grid, s.
     pub first_hold_step: f64,
-    /// ε of g1 + g2 ≤ 1 − ε.
+    /// ε of g1 + g2 ≤ 1 − ε of the Table 5.3 domain of the analytic
+    /// Lee–Radok model; a meta-model fit uses the domain stored in its
+    /// `meta.json` instead.
     pub constraint_epsilon: f64,
     /// Misfit (eq. 5.3) above which a cell is marked suspicious.
     pub suspicious_misfit: f64,
@@ -156,124 +583,17 @@ impl FromSection for Probe {
     }
 }
 
-struct Afm {
-    k: f64,
-    sensitivity: Option<f64>,
-    time: String,
-    piezo: String,
-    deflection: String,
-}
-
-impl FromSection for Afm {
-    fn from_section(s: &mut Section) -> std::result::Result<Self, StudyError> {
-        Ok(Self {
-            k: s.req_quantity("spring_constant", Dimension::STIFFNESS, Bounds::positive())?,
-            sensitivity: s.opt_quantity(
-                "deflection_sensitivity",
-                Dimension::LENGTH_PER_VOLTAGE,
-                Bounds::positive(),
-            )?,
-            time: s.opt_str("time_column")?.unwrap_or_else(|| "time".into()),
-            piezo: s.opt_str("piezo_column")?.unwrap_or_else(|| "piezo".into()),
-            deflection: s
-                .opt_str("deflection_column")?
-                .unwrap_or_else(|| "deflection".into()),
-        })
-    }
-}
-
-#[derive(Clone, Copy)]
-struct Window {
-    ramp: f64,
-    hold_end: f64,
-}
-
-impl FromSection for Window {
-    fn from_section(s: &mut Section) -> std::result::Result<Self, StudyError> {
-        let ramp = s.req_quantity("ramp", Dimension::TIME, Bounds::positive())?;
-        let hold_end = s.req_quantity("hold_end", Dimension::TIME, Bounds::positive())?;
-        if hold_end <= ramp {
-            return Err(s.invalid("hold_end", "must be later than `ramp`"));
-        }
-        Ok(Self { ramp, hold_end })
-    }
-}
-
-/// The fitted window from `[fit]` (`ramp`, `hold_end`) when given there:
-/// then `[protocol]` belongs to the forward model (nlvid-protocol format).
-fn fit_window(s: &mut Section) -> std::result::Result<Option<Window>, StudyError> {
-    match (s.has("ramp"), s.has("hold_end")) {
-        (false, false) => Ok(None),
-        _ => Window::from_section(s).map(Some),
-    }
-}
-
-struct Fit {
-    window: Option<Window>,
-    model: ForwardModel,
-    surrogate: Option<(PathBuf, PathBuf, Option<PathBuf>)>,
-    starts: usize,
-    ramp_points: usize,
-    hold_points: usize,
-    first_hold_step: f64,
-    eps: f64,
-    suspicious: f64,
-}
-
-impl FromSection for Fit {
-    fn from_section(s: &mut Section) -> std::result::Result<Self, StudyError> {
-        let model = s.enum_or(
-            "model",
-            &[
-                ("lee-radok", ForwardModel::LeeRadok),
-                ("surrogate", ForwardModel::Surrogate),
-            ],
-            ForwardModel::LeeRadok,
-        )?;
-        let surrogate = match model {
-            ForwardModel::Surrogate => Some((
-                s.req_input_file("surrogate")?,
-                s.req_input_file("meta")?,
-                match s.opt_path("check")? {
-                    Some(p) if !p.is_file() => {
-                        return Err(s.invalid("check", format!("no such file: {}", p.display())));
-                    }
-                    other => other,
-                },
-            )),
-            ForwardModel::LeeRadok => {
-                for key in ["surrogate", "meta", "check"] {
-                    if s.has(key) {
-                        return Err(s.invalid(key, "only with model = \"surrogate\""));
-                    }
-                }
-                None
-            }
-        };
-        Ok(Self {
-            window: fit_window(s)?,
-            model,
-            surrogate,
-            starts: s
-                .opt_usize("starts", Bounds::closed(1.0, 1000.0))?
-                .unwrap_or(8),
-            ramp_points: s
-                .opt_usize("ramp_points", Bounds::closed(1.0, 10000.0))?
-                .unwrap_or(40),
-            hold_points: s
-                .opt_usize("hold_points", Bounds::closed(2.0, 100000.0))?
-                .unwrap_or(120),
-            first_hold_step: s.quantity_or(
-                "first_hold_step",
-                Dimension::TIME,
-                Bounds::positive(),
-                1e-3,
-            )?,
-            eps: s.f64_or("constraint_epsilon", Bounds::closed_open(0.0, 0.98), 0.01)?,
-            suspicious: s.f64_or("suspicious_misfit", Bounds::positive(), 0.05)?,
-        })
-    }
-}
+/// Sections of the other pipeline stages in a shared study file: the
+/// cohort leaves them to their commands.
+const OTHER_STAGES: [&str; 7] = [
+    "forward",
+    "protocol",
+    "design",
+    "build",
+    "parameters",
+    "material",
+    "loading",
+];
 
 impl CohortSettings {
     /// Reads the settings from a study file; unknown sections or keys are
@@ -282,60 +602,89 @@ impl CohortSettings {
     /// # Errors
     /// [`crate::ReportError::Study`].
     pub fn load(path: &Path) -> Result<Self> {
-        Self::from_study(Study::load(path)?)
+        Self::from_study(Study::load(path)?, path)
     }
 
-    /// Reads the settings from a parsed study, which is then checked for
-    /// unknown sections.
+    /// Reads the settings from a parsed study (its file is `path`), which
+    /// is then checked for unknown sections.
     ///
     /// # Errors
     /// [`crate::ReportError::Study`].
-    pub fn from_study(mut study: Study) -> Result<Self> {
+    pub fn from_study(mut study: Study, path: &Path) -> Result<Self> {
+        let name = study.name().to_string();
         let title = study
             .root()
             .opt_str("title")?
-            .unwrap_or_else(|| study.name().to_string());
-        let seed = study.root().opt_u64("seed")?.unwrap_or(0);
+            .unwrap_or_else(|| name.clone());
+        if study.root().has("seed") {
+            return Err(study
+                .root()
+                .invalid("seed", "this key is now `seed` in [fit]")
+                .into());
+        }
+        if study.has("afm") {
+            return Err(study
+                .root()
+                .invalid(
+                    "afm",
+                    "[afm] is now [fit.calibration] (spring_constant, deflection_sensitivity) and \
+                 [fit.columns] (time, piezo, deflection)",
+                )
+                .into());
+        }
+        if let Some(p) = study.opt_section("protocol")? {
+            for key in ["ramp", "hold_end"] {
+                if p.has(key) {
+                    return Err(p
+                        .invalid(key, format!("this key is now `{key}` in [fit]"))
+                        .into());
+                }
+            }
+        }
         let probe: Probe = study.read("probe")?;
-        let afm: Afm = study.read("afm")?;
-        // Sections of the meta-model build (`nlvid sample/build`): not the
-        // cohort's business, but part of the same study file.
-        for other in ["forward", "design", "build"] {
+        let fit = FitSettings::from_study(&mut study, path)?;
+        for other in OTHER_STAGES {
             study.root().skip(other);
         }
-        let fit: Fit = study.opt_read("fit")?.unwrap_or(Fit {
-            window: None,
-            model: ForwardModel::LeeRadok,
-            surrogate: None,
-            starts: 8,
-            ramp_points: 40,
-            hold_points: 120,
-            first_hold_step: 1e-3,
-            eps: 0.01,
-            suspicious: 0.05,
-        });
-        let window = match fit.window {
-            Some(w) => {
-                study.root().skip("protocol");
-                w
-            }
-            None => study.read("protocol")?,
+        let fail = |what: String| ReportError::InvalidSetting(format!("{name}: {what}"));
+        let Some((ramp, hold_end)) = fit.window else {
+            return Err(fail(
+                "[fit]: a cohort needs `ramp` (end of the loading ramp) and `hold_end` (end of \
+                 the fitted window)"
+                    .into(),
+            ));
         };
-        if window.ramp + fit.first_hold_step >= window.hold_end {
-            return Err(crate::ReportError::InvalidSetting(format!(
-                "{}: fit.first_hold_step ({} s) does not fit between protocol.ramp and protocol.hold_end",
-                study.name(),
+        let DataColumns::Afm(cols, cal) = &fit.columns else {
+            return Err(fail(
+                "[fit]: a cohort fits AFM curves (data = \"afm\")".into(),
+            ));
+        };
+        let [exp] = fit.experiments.as_slice() else {
+            return Err(fail(
+                "[fit]: a cohort fits each cell as one experiment; [[fit.experiment]] tables \
+                 are for `nlvid fit`"
+                    .into(),
+            ));
+        };
+        if exp.real.is_some() || !exp.segments.is_empty() || exp.protocol.is_some() {
+            return Err(fail(
+                "[fit]: real_model, segment and protocol are read by `nlvid fit` only".into(),
+            ));
+        }
+        if ramp + fit.first_hold_step >= hold_end {
+            return Err(fail(format!(
+                "fit.first_hold_step ({} s) does not fit between fit.ramp and fit.hold_end",
                 fit.first_hold_step
             )));
         }
-        let surrogate = match fit.surrogate {
-            Some((model, meta, check)) => Some(SurrogateFiles {
-                forward: forward_of_meta(&meta)?,
-                model,
-                meta,
-                check,
+        let surrogate = match (&exp.surrogate, &exp.meta) {
+            (Some(model), Some(meta)) => Some(SurrogateFiles {
+                forward: forward_of_meta(meta)?,
+                model: model.clone(),
+                meta: meta.clone(),
+                check: exp.check_file(),
             }),
-            None => None,
+            _ => None,
         };
         // A rebuilt meta-model must not reuse cells fitted on the old one.
         let study_hash = match &surrogate {
@@ -354,24 +703,24 @@ impl CohortSettings {
         Ok(Self {
             title,
             study_hash,
-            seed,
+            seed: fit.seed,
             radius: probe.radius,
             poisson: probe.poisson,
-            spring_constant: afm.k,
-            deflection_sensitivity: afm.sensitivity,
-            time_column: afm.time,
-            piezo_column: afm.piezo,
-            deflection_column: afm.deflection,
-            ramp: window.ramp,
-            hold_end: window.hold_end,
+            spring_constant: cal.spring_constant,
+            deflection_sensitivity: cal.deflection_sensitivity,
+            time_column: cols.time.clone(),
+            piezo_column: cols.piezo.clone(),
+            deflection_column: cols.deflection.clone(),
+            ramp,
+            hold_end,
             model: fit.model,
             surrogate,
             starts: fit.starts,
             ramp_points: fit.ramp_points,
             hold_points: fit.hold_points,
             first_hold_step: fit.first_hold_step,
-            constraint_epsilon: fit.eps,
-            suspicious_misfit: fit.suspicious,
+            constraint_epsilon: fit.constraint_epsilon,
+            suspicious_misfit: fit.suspicious_misfit,
         })
     }
 }

@@ -6,12 +6,13 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+use nlvid_model::Relaxation;
 use nlvid_report::cell::CellStatus;
 use nlvid_report::cohort::{self, RunOptions};
 use nlvid_report::demo::{DemoSpec, write_demo_data};
 use nlvid_report::report::{ReportOptions, write_report};
 use nlvid_report::settings::CohortSettings;
-use nlvid_stats::{Method, Prony, rank_sum, read_results, relaxation_amounts};
+use nlvid_stats::{Method, rank_sum, read_results, relaxation_amounts};
 
 fn repo_demo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo")
@@ -112,10 +113,10 @@ fn demo_recovers_its_group_ordering_with_p_below_0_05() {
         "{}",
         table.excluded[0].reason
     );
-    let a: Vec<Prony> = table.group("A-stiff");
-    let b: Vec<Prony> = table.group("B-soft");
+    let a: Vec<Relaxation> = table.group("A-stiff");
+    let b: Vec<Relaxation> = table.group("B-soft");
     let t_end = 52.0;
-    let g = |c: &[Prony], t: f64| c.iter().map(|p| p.shear(t)).collect::<Vec<_>>();
+    let g = |c: &[Relaxation], t: f64| c.iter().map(|p| p.value(t)).collect::<Vec<_>>();
     let m = Method::MATLAB_RANKSUM;
     // Known ordering (DemoSpec::default): A stiffer at 0 and 52 s, relaxes less.
     let tests = [
@@ -162,9 +163,11 @@ fn recovered_moduli_match_the_ground_truth_per_cell() {
             .find(|c| c.cell == t.cell)
             .expect("every true cell has a result");
         assert_eq!(c.status, CellStatus::Ok, "{}: {}", c.cell, c.reason);
-        let x: Vec<f64> = c.parameters.iter().map(|p| p.value).collect();
+        // Parameters by name; the truth in the order G0, g1, g2, tau1, tau2.
+        let p = |n: &str| c.parameter(n).expect("fitted parameter");
+        let x = [p("G0"), p("g1"), p("g2"), p("tau1"), p("tau2")];
         let shear = |x: &[f64], s: f64| {
-            x[0] * (1.0 - x[1] - x[3] + x[1] * (-s / x[2]).exp() + x[3] * (-s / x[4]).exp())
+            x[0] * (1.0 - x[1] - x[2] + x[1] * (-s / x[3]).exp() + x[2] * (-s / x[4]).exp())
         };
         // 1 % force noise, fitted on the meta-model (checking error: median
         // 0.3 %, max 7.6 %, metamodel/check.json): G(t) within 5 % at 1, 10
@@ -183,6 +186,44 @@ fn recovered_moduli_match_the_ground_truth_per_cell() {
     }
 }
 
+/// One meaning of G0 from the fit to the comparison: the cohort's fitted
+/// parameters (named `G0`, `g1`, …) and the results table `nlvid compare`
+/// reads back give the same `nlvid_model::Relaxation` (shortest round-trip
+/// numbers: bit for bit), and that G(t) is eq. 5.1 by hand with G0 as the
+/// shear modulus (no factor 2 between the stages).
+#[test]
+fn the_fit_and_the_results_table_give_one_g_of_t() {
+    let f = fixture();
+    let cells = cohort::read_cells(&f.out).expect("cells");
+    let table = read_results(&f.out.join("results.csv")).expect("results");
+    let mut checked = 0;
+    for c in cells.iter().filter(|c| c.status == CellStatus::Ok) {
+        let names: Vec<&str> = c.parameters.iter().map(|p| p.name.as_str()).collect();
+        let x: Vec<f64> = c.parameters.iter().map(|p| p.value).collect();
+        let fitted = Relaxation::from_named(&names, &x).expect("a Prony cell");
+        let row = table
+            .cells
+            .iter()
+            .find(|r| r.cell == c.cell)
+            .expect("every fitted cell is in results.csv");
+        assert_eq!(row.relaxation, fitted, "{}", c.cell);
+        let at = |n: &str| x[names.iter().position(|m| *m == n).expect("named")];
+        for t in [0.0, 1.0, 52.0] {
+            let by_hand = at("G0")
+                * (1.0 - at("g1") - at("g2")
+                    + at("g1") * (-t / at("tau1")).exp()
+                    + at("g2") * (-t / at("tau2")).exp());
+            assert!(
+                (row.relaxation.value(t) / by_hand - 1.0).abs() < 1e-12,
+                "{} G({t})",
+                c.cell
+            );
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 16);
+}
+
 /// The Hertz baseline of a viscoelastic cell: on the ramp the Lee–Radok
 /// force lies between the elastic forces of G(t) and G(0), so the fitted
 /// E (ν = 0.5) must lie between 3·G(t_ramp) and 3·G(0) of the true
@@ -196,7 +237,7 @@ fn hertz_baseline_lies_between_the_true_instantaneous_and_ramp_end_moduli() {
         let h = c.hertz.as_ref().expect("Hertz baseline fitted");
         let x = t.x;
         let g = |s: f64| {
-            x[0] * (1.0 - x[1] - x[3] + x[1] * (-s / x[2]).exp() + x[3] * (-s / x[4]).exp())
+            x[0] * (1.0 - x[1] - x[2] + x[1] * (-s / x[3]).exp() + x[2] * (-s / x[4]).exp())
         };
         let (lo, hi) = (3.0 * g(1.0), 3.0 * g(0.0));
         assert!(

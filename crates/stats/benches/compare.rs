@@ -4,9 +4,10 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use nlvid_stats::{Method, Prony, PronyTerm, compare_over_time, group_curves, rank_sum};
+use nlvid_model::{Prony, Relaxation};
+use nlvid_stats::{Method, compare_over_time, group_curves, rank_sum};
 
-fn cells(n: usize, g0: f64, g2: f64, seed: u64) -> Vec<Prony> {
+fn cells(n: usize, g0: f64, g2: f64, seed: u64) -> Vec<Relaxation> {
     let mut s = seed;
     let mut u = || {
         s = s
@@ -16,20 +17,13 @@ fn cells(n: usize, g0: f64, g2: f64, seed: u64) -> Vec<Prony> {
     };
     (0..n)
         .map(|_| {
-            Prony::new(
-                g0 * (0.5 + u()),
-                vec![
-                    PronyTerm {
-                        g: 0.2 + 0.1 * u(),
-                        tau: 0.3 + 0.7 * u(),
-                    },
-                    PronyTerm {
-                        g: g2 + 0.1 * u(),
-                        tau: 5.0 + 15.0 * u(),
-                    },
-                ],
-            )
-            .unwrap_or_else(|e| panic!("{e}"))
+            // Draw order as before: G0, g1, tau1, g2, tau2.
+            let g0 = g0 * (0.5 + u());
+            let t1 = (0.2 + 0.1 * u(), 0.3 + 0.7 * u());
+            let t2 = (g2 + 0.1 * u(), 5.0 + 15.0 * u());
+            Prony::new("G", &[t1, t2])
+                .and_then(|p| Relaxation::new("G0", g0, p))
+                .unwrap_or_else(|e| panic!("{e}"))
         })
         .collect()
 }
@@ -49,8 +43,8 @@ fn bench(c: &mut Criterion) {
     c.bench_function("group_curves 23 cells x 5095 times", |bn| {
         bn.iter(|| group_curves("A", black_box(&a), &times))
     });
-    let x: Vec<f64> = a.iter().map(|p| p.shear(52.0)).collect();
-    let y: Vec<f64> = b.iter().map(|p| p.shear(52.0)).collect();
+    let x: Vec<f64> = a.iter().map(|p| p.value(52.0)).collect();
+    let y: Vec<f64> = b.iter().map(|p| p.value(52.0)).collect();
     c.bench_function("rank_sum exact 23+23", |bn| {
         bn.iter(|| rank_sum(black_box(&x), black_box(&y), Method::Exact))
     });

@@ -38,9 +38,6 @@ pub enum StatsError {
         /// Estimated operation count.
         ops: f64,
     },
-    /// A Prony parameter set is inadmissible (eq. 5.1).
-    #[error("Prony parameters: {0}")]
-    Prony(String),
     /// The results table cannot be opened or read.
     #[error("{}: cannot read: {source}", file.display())]
     Io {
@@ -61,6 +58,9 @@ pub enum StatsError {
         /// What is wrong.
         message: String,
     },
+    /// A group comparison cannot be made as asked (grid, groups).
+    #[error("group comparison: {0}")]
+    Comparison(String),
     /// Writing an output failed.
     #[error("cannot write output: {0}")]
     Write(String),

@@ -9,9 +9,9 @@
 //! At t = 0 every G(t)/G(0) is 1: all tied, p = 1 by construction.
 
 use crate::effect::{Effect, effect};
-use crate::prony::Prony;
 use crate::ranksum::{Method, RankSum, rank_sum};
 use crate::{Result, StatsError};
+use nlvid_model::Relaxation;
 
 /// Mean and sample standard deviation (n − 1).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -64,21 +64,21 @@ pub struct GroupCurves {
 ///
 /// # Errors
 /// Fewer than two cells.
-pub fn group_curves(name: &str, cells: &[Prony], times: &[f64]) -> Result<GroupCurves> {
+pub fn group_curves(name: &str, cells: &[Relaxation], times: &[f64]) -> Result<GroupCurves> {
     let what = format!("group `{name}`");
     let mut shear = Vec::with_capacity(times.len());
     let mut normalised = Vec::with_capacity(times.len());
     let mut young = Vec::with_capacity(times.len());
     for &t in times {
-        let g: Vec<f64> = cells.iter().map(|c| c.shear(t)).collect();
-        let gn: Vec<f64> = cells.iter().map(|c| c.normalised(t)).collect();
+        let g: Vec<f64> = cells.iter().map(|c| c.value(t)).collect();
+        let gn: Vec<f64> = cells.iter().map(|c| c.prony().value(t)).collect();
         let e: Vec<f64> = cells.iter().map(|c| c.young(t)).collect();
         shear.push(mean_sd(&what, &g)?);
         normalised.push(mean_sd(&what, &gn)?);
         young.push(mean_sd(&what, &e)?);
     }
     if times.is_empty() {
-        mean_sd(&what, &cells.iter().map(Prony::g0).collect::<Vec<_>>())?;
+        mean_sd(&what, &cells.iter().map(Relaxation::g0).collect::<Vec<_>>())?;
     }
     Ok(GroupCurves {
         name: name.to_string(),
@@ -108,18 +108,18 @@ pub struct TimeComparison {
 /// # Errors
 /// An empty group, or the exact method on groups too large to enumerate.
 pub fn compare_over_time(
-    a: &[Prony],
-    b: &[Prony],
+    a: &[Relaxation],
+    b: &[Relaxation],
     times: &[f64],
     method: Method,
 ) -> Result<Vec<TimeComparison>> {
     times
         .iter()
         .map(|&t| {
-            let ga: Vec<f64> = a.iter().map(|c| c.shear(t)).collect();
-            let gb: Vec<f64> = b.iter().map(|c| c.shear(t)).collect();
-            let na: Vec<f64> = a.iter().map(|c| c.normalised(t)).collect();
-            let nb: Vec<f64> = b.iter().map(|c| c.normalised(t)).collect();
+            let ga: Vec<f64> = a.iter().map(|c| c.value(t)).collect();
+            let gb: Vec<f64> = b.iter().map(|c| c.value(t)).collect();
+            let na: Vec<f64> = a.iter().map(|c| c.prony().value(t)).collect();
+            let nb: Vec<f64> = b.iter().map(|c| c.prony().value(t)).collect();
             Ok(TimeComparison {
                 t,
                 shear: rank_sum(&ga, &gb, method)?,
@@ -131,6 +131,6 @@ pub fn compare_over_time(
 }
 
 /// Relaxation amounts 1 − G(t)/G(0) of each cell at `t`.
-pub fn relaxation_amounts(cells: &[Prony], t: f64) -> Vec<f64> {
-    cells.iter().map(|c| c.relaxation(t)).collect()
+pub fn relaxation_amounts(cells: &[Relaxation], t: f64) -> Vec<f64> {
+    cells.iter().map(|c| 1.0 - c.prony().value(t)).collect()
 }

@@ -13,10 +13,10 @@
 //! O(cells × times).
 //!
 //! ```
-//! use nlvid_stats::{Method, Prony, PronyTerm, compare_over_time, group_curves};
-//! let cell = |g0: f64, g1: f64| {
-//!     Prony::new(g0, vec![PronyTerm { g: g1, tau: 0.5 }, PronyTerm { g: 0.3, tau: 10.0 }])
-//! };
+//! use nlvid_model::{Relaxation, names};
+//! use nlvid_stats::{Method, compare_over_time, group_curves};
+//! // G(t) of eq. 5.1 with (G0, g1, g2, τ1, τ2) = (g0, g1, 0.3, 0.5 s, 10 s).
+//! let cell = |g0: f64, g1: f64| Relaxation::from_named(&names::PRONY2, &[g0, g1, 0.3, 0.5, 10.0]);
 //! let a = vec![cell(3e3, 0.3)?, cell(2.5e3, 0.35)?, cell(3.2e3, 0.3)?];
 //! let b = vec![cell(1.9e3, 0.5)?, cell(1.5e3, 0.55)?, cell(2.0e3, 0.45)?];
 //! let times = [0.0, 52.0];
@@ -25,20 +25,21 @@
 //! let cmp = compare_over_time(&a, &b, &times, Method::MATLAB_RANKSUM)?;
 //! // 3 + 3 cells, complete separation: exact p = 2/C(6,3) = 0.1.
 //! assert!((cmp[0].shear.p - 0.1).abs() < 1e-15);
-//! # Ok::<(), nlvid_stats::StatsError>(())
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 #![warn(missing_docs)]
 
+mod comparison;
 mod effect;
 mod error;
 mod groups;
 mod normal;
-mod prony;
 mod rank;
 mod ranksum;
 mod results;
 
+pub use comparison::{Comparison, Contrast, GroupSummary, PairComparison, compare_groups};
 pub use effect::{Effect, cliffs_delta, effect, hodges_lehmann, rank_biserial};
 pub use error::{Result, StatsError};
 pub use groups::{
@@ -46,7 +47,6 @@ pub use groups::{
     relaxation_amounts,
 };
 pub use normal::normal_sf;
-pub use prony::{Prony, PronyTerm};
 pub use rank::midranks;
 pub use ranksum::{Method, Policy, RankSum, Used, rank_sum};
 pub use results::{

@@ -4,7 +4,9 @@
 //! Input columns (header row, any order, other columns ignored):
 //! - `group` (required): group name;
 //! - `cell` or `file` (optional): cell identifier (default: `line N`);
-//! - `G0_<unit>` (required), a pressure unit (Pa, kPa, MPa): G(0);
+//! - `G0_<unit>` (required), a pressure unit (Pa, kPa, MPa): the shear
+//!   modulus G(0) of eq. 5.1 (a `C1` column is refused: it is eq. 4.1's
+//!   constant, G0 = 2(C1 + C2); `docs/theory/model.md`);
 //! - `g1`, `tau1_<unit>`, `g2`, `tau2_<unit>`, … : Prony weights (no unit)
 //!   and times (any time unit: s, ms, min), numbered from 1 without gaps;
 //! - `status` (optional): empty or `ok` uses the row; any other value
@@ -17,8 +19,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use crate::groups::{GroupCurves, TimeComparison};
-use crate::prony::{Prony, PronyTerm};
 use crate::{Result, StatsError};
+use nlvid_model::{Prony, Relaxation, names};
 
 /// A cell used in the comparison.
 #[derive(Debug, Clone, PartialEq)]
@@ -29,8 +31,9 @@ pub struct CellRow {
     pub group: String,
     /// 1-based line in the file.
     pub line: u64,
-    /// Its relaxation modulus.
-    pub prony: Prony,
+    /// Its shear relaxation modulus G(t) of eq. 5.1 (the shared
+    /// `nlvid_model::Relaxation`, `G0` the shear modulus).
+    pub relaxation: Relaxation,
 }
 
 /// A row excluded by its `status`.
@@ -70,11 +73,11 @@ impl ResultsTable {
     }
 
     /// The relaxation moduli of one group's cells.
-    pub fn group(&self, name: &str) -> Vec<Prony> {
+    pub fn group(&self, name: &str) -> Vec<Relaxation> {
         self.cells
             .iter()
             .filter(|c| c.group == name)
-            .map(|c| c.prony.clone())
+            .map(|c| c.relaxation.clone())
             .collect()
     }
 }
@@ -82,13 +85,13 @@ impl ResultsTable {
 fn split_header(raw: &str) -> (String, String) {
     let raw = raw.trim();
     for (o, c) in [('[', ']'), ('(', ')')] {
-        if let Some(inner) = raw.strip_suffix(c) {
-            if let Some(open) = inner.rfind(o) {
-                return (
-                    inner[..open].trim().to_string(),
-                    inner[open + 1..].trim().to_string(),
-                );
-            }
+        if let Some(inner) = raw.strip_suffix(c)
+            && let Some(open) = inner.rfind(o)
+        {
+            return (
+                inner[..open].trim().to_string(),
+                inner[open + 1..].trim().to_string(),
+            );
         }
     }
     match raw.rsplit_once('_') {
@@ -184,7 +187,17 @@ pub fn parse_results<R: std::io::Read>(reader: R, source: &Path) -> Result<Resul
     let status_col = one("status", named("status"), false)?;
     let reason_col = one("reason", named("reason"), false)?;
 
-    let g0_col = one("G0_<unit>", find(&|n, _| n == "G0"), true)?.unwrap_or(0);
+    let g0_cols = find(&|n, _| n == names::G0);
+    if g0_cols.is_empty() && !find(&|n, _| n == names::C1).is_empty() {
+        return Err(err(
+            1,
+            Some(names::C1),
+            "G(t) of eq. 5.1 needs the shear modulus column `G0_<unit>`; `C1` is the \
+             Mooney–Rivlin constant of eq. 4.1 (G0 = 2(C1 + C2), docs/theory/model.md)"
+                .into(),
+        ));
+    }
+    let g0_col = one("G0_<unit>", g0_cols, true)?.unwrap_or(0);
     let (_, g0_unit) = split_header(&raw[g0_col]);
     let g0_scale = modulus_unit(&g0_unit).ok_or_else(|| {
         err(
@@ -277,19 +290,25 @@ pub fn parse_results<R: std::io::Read>(reader: R, source: &Path) -> Result<Resul
             Ok(v * scale)
         };
         let g0 = num(g0_col, g0_scale)?;
+        if !(g0 > 0.0) {
+            return Err(err(
+                line,
+                Some(&raw[g0_col]),
+                format!("G0 = {g0} Pa must be > 0 (the shear modulus G(0) of eq. 5.1)"),
+            ));
+        }
         let mut terms = Vec::with_capacity(term_cols.len());
         for &(gi, ti, scale) in &term_cols {
-            terms.push(PronyTerm {
-                g: num(gi, 1.0)?,
-                tau: num(ti, scale)?,
-            });
+            terms.push((num(gi, 1.0)?, num(ti, scale)?));
         }
-        let prony = Prony::new(g0, terms).map_err(|e| err(line, None, e.to_string()))?;
+        let relaxation = Prony::new("G", &terms)
+            .and_then(|p| Relaxation::new(names::G0, g0, p))
+            .map_err(|e| err(line, None, format!("Prony parameters: {e}")))?;
         cells.push(CellRow {
             cell,
             group,
             line,
-            prony,
+            relaxation,
         });
     }
     Ok(ResultsTable {

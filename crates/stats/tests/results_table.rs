@@ -28,9 +28,9 @@ fn results_are_converted_to_si_and_exclusions_are_kept() {
     assert_eq!(t.cells.len(), 4);
     let c1 = &t.cells[0];
     assert_eq!((c1.cell.as_str(), c1.line), ("c1", 2));
-    assert_eq!(c1.prony.g0(), 2900.0);
-    assert_eq!(c1.prony.terms()[0].tau, 0.5);
-    assert_eq!(c1.prony.terms()[1].tau, 10.0);
+    assert_eq!(c1.relaxation.g0(), 2900.0);
+    assert_eq!(c1.relaxation.prony().terms()[0].tau, 0.5);
+    assert_eq!(c1.relaxation.prony().terms()[1].tau, 10.0);
     assert_eq!(t.excluded.len(), 1);
     assert_eq!(t.excluded[0].cell, "c3");
     assert_eq!(t.excluded[0].line, 4);
@@ -42,7 +42,7 @@ fn results_are_converted_to_si_and_exclusions_are_kept() {
 fn bracketed_units_and_missing_cell_column_work() {
     let t = parse("group,G0 [Pa],g1,tau1 (min)\nA,100,0.5,2\nA,200,0.5,1\n").unwrap();
     assert_eq!(t.cells[1].cell, "line 3");
-    assert_eq!(t.cells[0].prony.terms()[0].tau, 120.0);
+    assert_eq!(t.cells[0].relaxation.prony().terms()[0].tau, 120.0);
 }
 
 #[test]
@@ -89,6 +89,41 @@ fn errors_name_file_line_and_column() {
     );
     let e = parse("group,G0_kPa\n,1\n").unwrap_err().to_string();
     assert!(e.contains("empty group"), "{e}");
+    let e = parse("group,G0_kPa,g1,tau1_s\nA,0,0.3,1\n")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("line 2") && e.contains("must be > 0"), "{e}");
+}
+
+/// The factor-2 class of error: a table whose modulus column is `C1`
+/// (eq. 4.1's constant) is not read as G0, and a `G0` column gives the
+/// G(t) of `nlvid_model::Relaxation` with that G0, bit for bit.
+#[test]
+fn the_modulus_column_is_the_shear_modulus_g0_and_c1_is_refused() {
+    let e = parse("group,C1_kPa,g1,tau1_s\nA,1.45,0.3,0.5\n")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("`C1`") && e.contains("G0 = 2(C1 + C2)"), "{e}");
+    let t = parse("group,G0_kPa,g1,tau1_s,g2,tau2_s\nA,2.9,0.3,0.5,0.2,10\nA,1.9,0.4,1,0.1,20\n")
+        .unwrap();
+    let cells = t.group("A");
+    let want = nlvid_model::Relaxation::from_named(
+        &nlvid_model::names::PRONY2,
+        &[2900.0, 0.3, 0.2, 0.5, 10.0],
+    )
+    .unwrap();
+    assert_eq!(cells[0], want);
+    let times = [0.0, 0.7, 52.0];
+    let g = group_curves("A", &cells, &times).unwrap();
+    for (i, &t) in times.iter().enumerate() {
+        let by_hand = (2900.0 * (0.5 + 0.3 * (-t / 0.5f64).exp() + 0.2 * (-t / 10.0f64).exp())
+            + 1900.0 * (0.5 + 0.4 * (-t / 1.0f64).exp() + 0.1 * (-t / 20.0f64).exp()))
+            / 2.0;
+        assert!(
+            (g.shear[i].mean - by_hand).abs() < 1e-9 * by_hand,
+            "t = {t}"
+        );
+    }
 }
 
 #[test]

@@ -51,5 +51,5 @@ pub use atomic::write_atomic;
 pub use bounds::Bounds;
 pub use error::{ErrorKind, Location, Result, StudyError};
 pub use section::{FromSection, Section};
-pub use study::{Leaf, LeafValue, Study, StudyHash};
+pub use study::{Leaf, LeafValue, Lint, Study, StudyHash};
 pub use units::{Dimension, Quantity, UnitError, fmt_number, parse_unit};

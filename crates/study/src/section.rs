@@ -121,6 +121,22 @@ impl Section {
         self.err(at, key, ErrorKind::Invalid(message.into()))
     }
 
+    /// Refuses a key whose meaning moved to another key (an old study file):
+    /// if `old` is present, an error at it that names `new` and says why
+    /// (`reason`), so no file silently keeps a reading that changed.
+    ///
+    /// # Errors
+    /// [`ErrorKind::Invalid`] at `old` when it is present.
+    pub fn renamed(&self, old: &str, new: &str, reason: &str) -> Result<()> {
+        if self.has(old) {
+            return Err(self.invalid(
+                old,
+                format!("`{old}` is no longer read here; write `{new}` instead ({reason})"),
+            ));
+        }
+        Ok(())
+    }
+
     /// Marks `key` as read without interpreting it (e.g. a key a stage
     /// deliberately ignores). Returns whether it was present.
     pub fn skip(&mut self, key: &str) -> bool {

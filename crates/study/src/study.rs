@@ -10,7 +10,7 @@ use crate::error::{Result, StudyError};
 use crate::section::{FromSection, Section};
 use crate::source::Source;
 use crate::tree::{self, Entry, Value};
-use crate::units::{Dimension, Quantity};
+use crate::units::{Dimension, Quantity, UnitError};
 
 /// A parsed study file. Stages take their sections with [`Study::section`]
 /// or [`Study::read`]; [`Study::finish`] then reports unknown top-level keys.
@@ -138,6 +138,84 @@ impl Study {
     pub fn leaves(&self) -> Vec<Leaf> {
         let mut out = Vec::new();
         walk(self.root.source(), "", self.root.entries(), &mut out);
+        out
+    }
+}
+
+/// What [`Study::lint`] finds in the values of a study, schema aside.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Lint {
+    /// Non-finite numbers (`nan`, `inf`, `"inf s"`), as `file:line:col: key …`.
+    pub errors: Vec<String>,
+    /// Strings that look like quantities but cannot be read (unknown unit,
+    /// bad exponent, syntax), as `file:line:col: key …`.
+    pub warnings: Vec<String>,
+}
+
+impl Study {
+    /// Checks every leaf value without knowing any stage's schema: bare
+    /// non-finite numbers and non-finite quantities are errors, strings
+    /// that look like quantities but cannot be read are warnings.
+    pub fn lint(&self) -> Lint {
+        let mut out = Lint::default();
+        for leaf in self.leaves() {
+            let at = format!(
+                "{}:{}:{}: key `{}`",
+                self.name(),
+                leaf.line,
+                leaf.column,
+                leaf.key
+            );
+            match &leaf.value {
+                LeafValue::Number(x) if !x.is_finite() => {
+                    out.errors
+                        .push(format!("{at}: `{x}` is not a finite number"));
+                }
+                LeafValue::Text(t) => match Quantity::parse(t) {
+                    Err(UnitError::NotFinite) => {
+                        out.errors
+                            .push(format!("{at}: `{t}` is not a finite number"));
+                    }
+                    Err(
+                        e @ (UnitError::UnknownUnit(_)
+                        | UnitError::BadExponent(_)
+                        | UnitError::Syntax(..)),
+                    ) => out.warnings.push(format!(
+                        "{at}: `{t}` looks like a quantity but cannot be read: {e}"
+                    )),
+                    _ => {}
+                },
+                _ => {}
+            }
+        }
+        out
+    }
+}
+
+impl Study {
+    /// Every value as the program reads it, for people: a header with the
+    /// file and its hash, then `line  key  value (SI)  as written`, one
+    /// leaf per row.
+    pub fn values_table(&self) -> String {
+        use std::fmt::Write as _;
+        let leaves = self.leaves();
+        let mut out = format!("{}  sha256 {}\n", self.name(), self.hash());
+        let kw = leaves.iter().map(|l| l.key.len()).max().unwrap_or(3).max(3);
+        let _ = writeln!(
+            out,
+            "{:>4}  {:kw$}  {:20}  as written",
+            "line", "key", "value (SI)"
+        );
+        for l in &leaves {
+            let (si, written) = match &l.value {
+                LeafValue::Quantity { text, si } => (si.to_string(), text.clone()),
+                LeafValue::Number(x) => (crate::units::fmt_number(*x), String::new()),
+                LeafValue::Integer(i) => (i.to_string(), String::new()),
+                LeafValue::Bool(b) => (b.to_string(), String::new()),
+                LeafValue::Text(t) | LeafValue::Datetime(t) => (t.clone(), String::new()),
+            };
+            let _ = writeln!(out, "{:>4}  {:kw$}  {:20}  {written}", l.line, l.key, si);
+        }
         out
     }
 }

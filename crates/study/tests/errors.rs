@@ -283,3 +283,17 @@ fn ranges_need_two_ordered_values_of_the_right_dimension() {
         "bad.toml:5:11: key `bounds.g[1]`: `2 s` is a time (s), expected a dimensionless number"
     );
 }
+
+#[test]
+fn a_renamed_key_names_its_replacement_and_its_line() {
+    let s = section("[m]\nx = 1\nold = \"2 Pa\"\n", "m");
+    let e = msg(s
+        .renamed("old", "new", "it meant half of `new`")
+        .map(|_| ()));
+    assert!(e.contains("bad.toml:3"), "{e}");
+    assert!(
+        e.contains("m.old") && e.contains("write `new`") && e.contains("half of"),
+        "{e}"
+    );
+    assert!(s.renamed("absent", "new", "").is_ok());
+}

@@ -9,11 +9,12 @@
 //! Set NLVID_BENCH_N / NLVID_BENCH_M to change the prediction model size.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use nlvid_surrogate::doe::{Domain, SampleSettings, sample};
+use nlvid_forward::HertzProny;
+use nlvid_model::{Domain, ForwardModel};
+use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{
-    Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, OptimiserSettings,
-    Regression, ThetaSearch,
+    Correlation, KrigingModel, KrigingSettings, OptimiserSettings, Regression, ThetaSearch,
 };
 
 fn data(n: usize, m: usize) -> (Mat<f64>, Mat<f64>) {
@@ -27,10 +28,10 @@ fn data(n: usize, m: usize) -> (Mat<f64>, Mat<f64>) {
         },
     )
     .expect("design");
-    let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, m);
+    let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, m).expect("valid settings");
     let ys: Vec<Vec<f64>> = design.iter().map(|x| model.run(x).expect("run")).collect();
     let x = Mat::from_fn(n, 5, |i, k| {
-        if domain.axes[k].log {
+        if domain.params()[k].is_log() {
             design[i][k].ln()
         } else {
             design[i][k]

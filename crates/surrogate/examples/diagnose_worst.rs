@@ -18,18 +18,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .and_then(|a| a.parse().ok())
         .unwrap_or(300);
     let (domain, train, check, yt, yc) = cell_problem(n)?;
-    let unit = |x: &Vec<f64>| -> Vec<f64> {
-        x.iter()
-            .zip(&domain.axes)
-            .map(|(v, a)| {
-                if a.log {
-                    (v.ln() - a.lower.ln()) / (a.upper.ln() - a.lower.ln())
-                } else {
-                    (v - a.lower) / (a.upper - a.lower)
-                }
-            })
-            .collect()
-    };
+    let unit = |x: &Vec<f64>| -> Vec<f64> { domain.to_unit(x) };
     let tr = |x: &Vec<f64>| kriging_inputs(&domain, x);
     let xm = Mat::from_fn(n, 5, |i, k| tr(&train[i])[k]);
     let ym = Mat::from_fn(n, 200, |i, j| yt[i][j]);

@@ -45,23 +45,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Correlation::Gauss
     };
     let mut s = KrigingSettings::new(Regression::Poly1, corr, 5);
-    if wide {
-        if let ThetaSearch::Optimise {
+    if wide
+        && let ThetaSearch::Optimise {
             lower,
             upper,
             settings,
             ..
         } = &mut s.theta
-        {
-            for k in 0..5 {
-                lower[k] = 1e-6;
-                upper[k] = 1e3;
-            }
-            *settings = OptimiserSettings {
-                starts: 6,
-                ..Default::default()
-            };
+    {
+        for k in 0..5 {
+            lower[k] = 1e-6;
+            upper[k] = 1e3;
         }
+        *settings = OptimiserSettings {
+            starts: 6,
+            ..Default::default()
+        };
     }
     let t0 = std::time::Instant::now();
     let post = |v: f64, x: &Vec<f64>| {

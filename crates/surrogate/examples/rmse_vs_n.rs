@@ -4,11 +4,10 @@
 //!
 //! `cargo run --release -p nlvid-surrogate --example rmse_vs_n [-- N1 N2 …]`
 
+use nlvid_model::ForwardModel;
 use nlvid_surrogate::check::summarise;
 use nlvid_surrogate::faer::Mat;
-use nlvid_surrogate::{
-    Correlation, ForwardModel, KrigingModel, KrigingSettings, OutputScale, Regression,
-};
+use nlvid_surrogate::{Correlation, KrigingModel, KrigingSettings, OutputScale, Regression};
 
 mod common;
 use common::{cell_model, cell_problem, kriging_inputs};

@@ -7,11 +7,11 @@
 
 use std::time::Instant;
 
-use nlvid_surrogate::doe::{Domain, SampleSettings, sample};
+use nlvid_forward::HertzProny;
+use nlvid_model::{Domain, ForwardModel};
+use nlvid_surrogate::doe::{SampleSettings, sample};
 use nlvid_surrogate::faer::Mat;
-use nlvid_surrogate::{
-    Correlation, ForwardModel, HertzProny, KrigingModel, KrigingSettings, Regression, ThetaSearch,
-};
+use nlvid_surrogate::{Correlation, KrigingModel, KrigingSettings, Regression, ThetaSearch};
 use rayon::prelude::*;
 
 mod common;
@@ -50,7 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             optimise_iterations: 5,
         },
     )?;
-    let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, m);
+    let model = HertzProny::new(5e-6, 1e-6, 1.0, 10.0, m).expect("valid settings");
     let ys: Vec<Vec<f64>> = design
         .par_iter()
         .map(|x| model.run(x))

@@ -8,11 +8,11 @@ use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
+use nlvid_model::{Domain, FailureKind, ForwardModel, RunFailure};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SurrogateError, io_err};
-use crate::forward::{FailureKind, ForwardModel, RunFailure};
 use crate::store::{RunOutcome, RunRecord, RunStore, StoreMeta, write_atomic};
 
 /// Slice `index`/`count` of a build: run indices i with i mod count = index
@@ -319,9 +319,28 @@ pub fn write_npy(path: &Path, rows: &[Vec<f64>], ncols: usize) -> Result<()> {
 /// Export a filtered meta-model to `dir`: `X.csv`, `Y.csv`, `X.npy`,
 /// `Y.npy`, `t.npy`, `status.csv` (index, status, reason), `timing.csv`
 /// (index, status, wall seconds) and `meta.json` (names, units, time,
-/// study hash, filter counts). Everything but `timing.csv` is a
-/// deterministic function of the store's results.
-pub fn export(mm: &MetaModel, dir: &Path) -> Result<()> {
+/// study hash, filter counts, and the parameter `domain` the design was
+/// drawn in, which `nlvid fit` and `nlvid cohort` read back). Everything
+/// but `timing.csv` is a deterministic function of the store's results.
+///
+/// # Errors
+/// A `domain` whose parameters are not the store's (names, order), a run
+/// outside it; I/O.
+pub fn export(mm: &MetaModel, dir: &Path, domain: Option<&Domain>) -> Result<()> {
+    if let Some(d) = domain {
+        d.check_names(&mm.meta.parameter_names)
+            .map_err(|e| SurrogateError::InvalidInput(format!("export domain: {e}")))?;
+        if let Some((i, _)) = mm
+            .index
+            .iter()
+            .zip(&mm.x)
+            .find(|(_, x)| !d.contains(x, 1e-9))
+        {
+            return Err(SurrogateError::InvalidInput(format!(
+                "export domain: design point {i} lies outside it"
+            )));
+        }
+    }
     std::fs::create_dir_all(dir).map_err(io_err(dir))?;
     let csv_err = |p: &Path| {
         let p = p.to_path_buf();
@@ -389,6 +408,7 @@ pub fn export(mm: &MetaModel, dir: &Path) -> Result<()> {
         "time_s": mm.meta.time,
         "study_hash": mm.meta.study_hash,
         "model": mm.meta.model,
+        "domain": domain,
         "counts": mm.counts,
         "files": {"X": "X.npy / X.csv (rows: kept runs)", "Y": "Y.npy / Y.csv", "t": "t.npy", "status": "status.csv", "timing": "timing.csv (wall seconds per run; the only file that differs between identical builds)"},
     });

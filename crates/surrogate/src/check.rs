@@ -89,6 +89,105 @@ pub fn summarise(references: &[Vec<f64>], predictions: &[Vec<f64>]) -> Result<Ch
     })
 }
 
+/// Time from a `F(t=1.0e0 s) [N]` header as written by `nlvid build --export`.
+fn header_time(h: &str) -> Option<f64> {
+    let a = h.find("t=")? + 2;
+    let rest = &h[a..];
+    let b = rest.find(' ')?;
+    rest[..b].parse().ok()
+}
+
+/// Writes `worst_case<i>.svg`, `median_case<i>.svg` and `best_case<i>.svg`
+/// into `dir`: the checking cases of `summary` with the largest, median and
+/// smallest RMSE, reference against prediction, on the times of the
+/// outputs' headers (`F(t=… s) [N]`; the column index where a header has
+/// none).
+///
+/// # Errors
+/// The directory or a file cannot be written.
+pub fn plot_cases(
+    dir: &Path,
+    header: &[String],
+    references: &[Vec<f64>],
+    predictions: &[Vec<f64>],
+    summary: &CheckSummary,
+) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(crate::error::io_err(dir))?;
+    let t: Vec<f64> = header
+        .iter()
+        .enumerate()
+        .map(|(j, h)| header_time(h).unwrap_or(j as f64))
+        .collect();
+    let best = summary
+        .rmse
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(b.1))
+        .map_or(0, |(i, _)| i);
+    for (label, i) in [
+        ("worst", summary.worst),
+        ("median", summary.median_case),
+        ("best", best),
+    ] {
+        let title = format!(
+            "checking case {i} ({label}): RMSE = {:.3} %",
+            100.0 * summary.rmse[i]
+        );
+        let path = dir.join(format!("{label}_case{i}.svg"));
+        plot_svg(&path, &title, &t, &references[i], &predictions[i])?;
+    }
+    Ok(())
+}
+
+/// Checks `model` on the checking runs `x` → `y` (eq. 4.4 per case), saves
+/// the summary as JSON to `summary` (default [`summary_path`] of
+/// `model_path`) and, with `plots`, the worst, median and best cases there
+/// ([`plot_cases`]). Returns the summary and where it was saved.
+///
+/// # Errors
+/// Tables of different lengths, a prediction failure, unwritable files
+/// (naming the path and how to choose another).
+pub fn check_and_save(
+    model: &crate::KrigingModel,
+    model_path: &Path,
+    x: &crate::Table,
+    y: &crate::Table,
+    plots: Option<&Path>,
+    summary: Option<&Path>,
+) -> Result<(CheckSummary, std::path::PathBuf)> {
+    if x.rows.len() != y.rows.len() {
+        return Err(SurrogateError::InvalidInput(format!(
+            "{} checking inputs but {} checking outputs",
+            x.rows.len(),
+            y.rows.len()
+        )));
+    }
+    let pred = model.predict_many(x.mat().as_ref())?;
+    let preds: Vec<Vec<f64>> = (0..pred.nrows())
+        .map(|i| (0..pred.ncols()).map(|j| pred[(i, j)]).collect())
+        .collect();
+    let s = summarise(&y.rows, &preds)?;
+    if let Some(dir) = plots {
+        plot_cases(dir, &y.header, &y.rows, &preds, &s)?;
+    }
+    let saved = summary.map_or_else(|| summary_path(model_path), Path::to_path_buf);
+    let text = serde_json::to_string(&s)
+        .map_err(|e| SurrogateError::InvalidInput(format!("serialising the summary: {e}")))?;
+    nlvid_study::write_atomic(&saved, format!("{text}\n").as_bytes()).map_err(|e| {
+        SurrogateError::InvalidInput(format!(
+            "cannot save the checking summary to {}: {e} (choose another place with --summary)",
+            saved.display()
+        ))
+    })?;
+    Ok((s, saved))
+}
+
+/// `model.json` → `model.check.json`: where `nlvid surrogate check` saves
+/// its summary and fits look for the model's checking error.
+pub fn summary_path(model: &Path) -> std::path::PathBuf {
+    model.with_extension("check.json")
+}
+
 /// Write an SVG plot of reference (solid) and surrogate (dashed) curves.
 pub fn plot_svg(
     path: &Path,

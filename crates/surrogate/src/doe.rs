@@ -1,170 +1,27 @@
-//! Design of experiments: Latin hypercubes in a bounded box with linear or
-//! logarithmic axes, an optimised (ESE, φ_p) variant, linear constraints
-//! such as g1 + g2 < 1 (thesis Tables 4.1, 5.3, A.2), and separate,
-//! non-overlapping training and checking sets (thesis §4.4.1 steps 1–2).
+//! Design of experiments: Latin hypercubes in a parameter [`Domain`]
+//! (bounded box with linear or logarithmic axes, linear constraints such as
+//! g1 + g2 < 1; thesis Tables 4.1, 5.3, A.2), an optimised (ESE, φ_p)
+//! variant, and separate, non-overlapping training and checking sets
+//! (thesis §4.4.1 steps 1–2). [`latin_hypercube_unit`] is the pipeline's one
+//! Latin hypercube (the fitter's start points use it too).
 //!
-//! All designs are built in the unit cube and mapped to the box; every
-//! random choice comes from a seeded ChaCha8 generator.
+//! All designs are built in the unit cube and mapped to the box
+//! ([`Domain::from_unit`]); every random choice comes from a seeded ChaCha8
+//! generator.
 
+use nlvid_model::Domain;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SurrogateError};
 
-/// One parameter axis of the design box.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Axis {
-    /// Parameter name (e.g. `tau1`).
-    pub name: String,
-    /// Unit of the bounds (SI, informative).
-    #[serde(default)]
-    pub unit: String,
-    /// Lower bound.
-    pub lower: f64,
-    /// Upper bound.
-    pub upper: f64,
-    /// Sample ln(x) uniformly (for parameters spanning decades).
-    #[serde(default)]
-    pub log: bool,
-}
-
-/// Linear constraint `Σ_k coeffs[k]·x_k ≤ bound` on the parameters
-/// (original, not log, units).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct LinearConstraint {
-    /// One coefficient per axis.
-    pub coeffs: Vec<f64>,
-    /// Right-hand side.
-    pub bound: f64,
-}
-
-/// The parameter domain: a box with optional linear constraints.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Domain {
-    /// Axes, in parameter order.
-    pub axes: Vec<Axis>,
-    /// Constraints (all must hold).
-    #[serde(default)]
-    pub constraints: Vec<LinearConstraint>,
-}
-
 /// A design: rows of parameter values (original units).
 pub type Design = Vec<Vec<f64>>;
 
-impl Domain {
-    /// The 5-parameter cell domain of the accuracy and timing studies
-    /// (docs/theory/surrogate.md): G0 ∈ [100, 5000] Pa (log), g1, g2 ∈
-    /// [0, 0.9], τ1 ∈ [0.01, 1] s (log), τ2 ∈ [1, 100] s (log), with
-    /// g1 + g2 ≤ 0.99; parameter order as [`crate::PRONY2_NAMES`].
-    pub fn cell_study() -> Self {
-        let bounds = [
-            (100.0, 5000.0, true),
-            (0.0, 0.9, false),
-            (0.0, 0.9, false),
-            (0.01, 1.0, true),
-            (1.0, 100.0, true),
-        ];
-        let axes = crate::PRONY2_NAMES
-            .iter()
-            .zip(crate::PRONY2_UNITS)
-            .zip(bounds)
-            .map(|((name, unit), (lower, upper, log))| Axis {
-                name: (*name).into(),
-                unit: unit.into(),
-                lower,
-                upper,
-                log,
-            })
-            .collect();
-        Self {
-            axes,
-            constraints: vec![LinearConstraint {
-                coeffs: vec![0.0, 1.0, 1.0, 0.0, 0.0],
-                bound: 0.99,
-            }],
-        }
-    }
-
-    /// Check bounds and constraint shapes.
-    ///
-    /// # Errors
-    /// Names the axis or constraint at fault.
-    pub fn validate(&self) -> Result<()> {
-        if self.axes.is_empty() {
-            return Err(SurrogateError::InvalidSettings("domain has no axes".into()));
-        }
-        for a in &self.axes {
-            if !(a.lower.is_finite() && a.upper.is_finite() && a.lower < a.upper) {
-                return Err(SurrogateError::InvalidSettings(format!(
-                    "axis {}: need finite lower < upper (got {} … {})",
-                    a.name, a.lower, a.upper
-                )));
-            }
-            if a.log && a.lower <= 0.0 {
-                return Err(SurrogateError::InvalidSettings(format!(
-                    "axis {}: a logarithmic axis needs lower > 0 (got {})",
-                    a.name, a.lower
-                )));
-            }
-        }
-        for (i, c) in self.constraints.iter().enumerate() {
-            if c.coeffs.len() != self.axes.len() {
-                return Err(SurrogateError::InvalidSettings(format!(
-                    "constraint {i} has {} coefficients for {} axes",
-                    c.coeffs.len(),
-                    self.axes.len()
-                )));
-            }
-        }
-        Ok(())
-    }
-
-    /// Dimension.
-    pub fn dim(&self) -> usize {
-        self.axes.len()
-    }
-
-    /// Unit-cube point → parameters.
-    pub fn map(&self, u: &[f64]) -> Vec<f64> {
-        self.axes
-            .iter()
-            .zip(u)
-            .map(|(a, &t)| {
-                if a.log {
-                    (a.lower.ln() + t * (a.upper.ln() - a.lower.ln())).exp()
-                } else {
-                    a.lower + t * (a.upper - a.lower)
-                }
-            })
-            .collect()
-    }
-
-    /// Parameters → unit cube.
-    pub fn unmap(&self, x: &[f64]) -> Vec<f64> {
-        self.axes
-            .iter()
-            .zip(x)
-            .map(|(a, &v)| {
-                if a.log {
-                    (v.ln() - a.lower.ln()) / (a.upper.ln() - a.lower.ln())
-                } else {
-                    (v - a.lower) / (a.upper - a.lower)
-                }
-            })
-            .collect()
-    }
-
-    /// Whether parameters satisfy every constraint.
-    pub fn feasible(&self, x: &[f64]) -> bool {
-        self.constraints
-            .iter()
-            .all(|c| c.coeffs.iter().zip(x).map(|(a, b)| a * b).sum::<f64>() <= c.bound)
-    }
-}
-
 /// Random Latin hypercube of n points in [0,1]^d: each axis split into n
-/// strata, each stratum hit once, jittered within it.
+/// strata, each stratum hit once, jittered uniformly within it (per axis: a
+/// Fisher–Yates permutation, then one uniform jitter per point).
 pub fn latin_hypercube_unit(n: usize, d: usize, rng: &mut ChaCha8Rng) -> Vec<Vec<f64>> {
     let mut pts = vec![vec![0.0; d]; n];
     for k in 0..d {
@@ -370,25 +227,29 @@ pub fn min_distance(pts: &[Vec<f64>]) -> f64 {
 /// space-filling inside the region instead of merely rejected.
 ///
 /// # Errors
-/// Invalid domain, n = 0, or a feasible region too small to find
-/// (< 1e-4 of the box).
+/// n = 0, or a feasible region too small to find (< 1e-4 of the box).
 pub fn sample(domain: &Domain, s: &SampleSettings) -> Result<Design> {
     Ok(sample_unit(domain, s)?
         .iter()
-        .map(|u| domain.map(u))
+        .map(|u| domain.from_unit(u))
         .collect())
 }
 
+/// Whether the point u of the unit cube maps to a point satisfying every
+/// constraint of the domain.
+fn feasible(domain: &Domain, u: &[f64]) -> bool {
+    domain.feasible(&domain.from_unit(u), 0.0)
+}
+
 fn sample_unit(domain: &Domain, s: &SampleSettings) -> Result<Vec<Vec<f64>>> {
-    domain.validate()?;
     if s.n == 0 {
         return Err(SurrogateError::InvalidSettings(
             "number of design points must be > 0".into(),
         ));
     }
-    let d = domain.dim();
+    let d = domain.len();
     let mut rng = ChaCha8Rng::seed_from_u64(s.seed);
-    if domain.constraints.is_empty() {
+    if domain.constraints().is_empty() {
         let mut pts = latin_hypercube_unit(s.n, d, &mut rng);
         ese_optimise(&mut pts, s.optimise_iterations, &mut rng);
         return Ok(pts);
@@ -397,7 +258,7 @@ fn sample_unit(domain: &Domain, s: &SampleSettings) -> Result<Vec<Vec<f64>>> {
     let hits = (0..trials)
         .filter(|_| {
             let u: Vec<f64> = (0..d).map(|_| rng.random::<f64>()).collect();
-            domain.feasible(&domain.map(&u))
+            feasible(domain, &u)
         })
         .count();
     if hits < 2 {
@@ -410,10 +271,7 @@ fn sample_unit(domain: &Domain, s: &SampleSettings) -> Result<Vec<Vec<f64>>> {
     for _ in 0..20 {
         let mut pts = latin_hypercube_unit(big, d, &mut rng);
         ese_optimise(&mut pts, s.optimise_iterations.min(10), &mut rng);
-        let mut feas: Vec<Vec<f64>> = pts
-            .into_iter()
-            .filter(|u| domain.feasible(&domain.map(u)))
-            .collect();
+        let mut feas: Vec<Vec<f64>> = pts.into_iter().filter(|u| feasible(domain, u)).collect();
         if feas.len() >= s.n {
             prune_to(&mut feas, s.n);
             return Ok(feas);
@@ -484,7 +342,7 @@ pub fn training_and_checking(
         },
     )?;
     let mut rng = ChaCha8Rng::seed_from_u64(check_seed.wrapping_add(1));
-    let d = domain.dim();
+    let d = domain.len();
     for c in check.iter_mut() {
         let mut tries = 0;
         while train.iter().any(|t| dist2(t, c) < min_gap * min_gap) {
@@ -495,14 +353,14 @@ pub fn training_and_checking(
                 ));
             }
             let u: Vec<f64> = (0..d).map(|_| rng.random::<f64>()).collect();
-            if domain.feasible(&domain.map(&u)) {
+            if feasible(domain, &u) {
                 *c = u;
             }
         }
     }
     Ok((
-        train.iter().map(|u| domain.map(u)).collect(),
-        check.iter().map(|u| domain.map(u)).collect(),
+        train.iter().map(|u| domain.from_unit(u)).collect(),
+        check.iter().map(|u| domain.from_unit(u)).collect(),
     ))
 }
 
@@ -549,7 +407,7 @@ impl DesignSettings {
         names: &[String],
         units: &[String],
     ) -> nlvid_study::Result<Self> {
-        use nlvid_study::{Bounds, Dimension};
+        use nlvid_study::Bounds;
         let n_train = s.req_usize("n_train", Bounds::closed(2.0, 1e7))?;
         let n_check = s
             .opt_usize("n_check", Bounds::closed(0.0, 1e7))?
@@ -561,64 +419,8 @@ impl DesignSettings {
             return Err(s.invalid("ese_iterations", "given with ese = false"));
         }
         let ese_iterations = if ese { iters.unwrap_or(30) } else { 0 };
-        let mut ps = s.subsection("parameters")?;
-        let mut axes = Vec::with_capacity(names.len());
-        for (name, unit) in names.iter().zip(units) {
-            let dim = if unit == "1" {
-                Dimension::NONE
-            } else {
-                nlvid_study::parse_unit(unit)
-                    .map_err(|e| ps.invalid(name, format!("model unit `{unit}`: {e}")))?
-                    .1
-            };
-            if !ps.has(name) {
-                return Err(ps.invalid(
-                    name,
-                    format!(
-                        "missing parameter `{name}` (the model's parameters: {}); \
-                         write {name} = {{ range = [lower, upper] }}",
-                        names.join(", ")
-                    ),
-                ));
-            }
-            let mut p = ps.subsection(name)?;
-            let (lower, upper) = p.req_range("range", dim, Bounds::ANY)?;
-            let log = p.opt_bool("log")?.unwrap_or(false);
-            if log && lower <= 0.0 {
-                return Err(p.invalid("log", "a logarithmic axis needs a positive lower bound"));
-            }
-            p.finish()?;
-            axes.push(Axis {
-                name: name.clone(),
-                unit: unit.clone(),
-                lower,
-                upper,
-                log,
-            });
-        }
-        ps.finish()?;
-        let mut constraints = Vec::new();
-        for mut c in s.tables("constraint")? {
-            let mut co = c.subsection("coefficients")?;
-            let mut coeffs = vec![0.0; names.len()];
-            for key in co.keys().iter().map(|k| k.to_string()).collect::<Vec<_>>() {
-                match names.iter().position(|n| *n == key) {
-                    Some(i) => coeffs[i] = co.req_f64(&key, Bounds::ANY)?,
-                    None => {
-                        return Err(co.invalid(
-                            &key,
-                            format!("not a parameter of the model ({})", names.join(", ")),
-                        ));
-                    }
-                }
-            }
-            co.finish()?;
-            let bound = c.req_f64("at_most", Bounds::ANY)?;
-            c.finish()?;
-            constraints.push(LinearConstraint { coeffs, bound });
-        }
         Ok(Self {
-            domain: Domain { axes, constraints },
+            domain: Domain::from_section(s, names, units)?,
             n_train,
             n_check,
             seed,
@@ -648,41 +450,30 @@ impl DesignSettings {
 mod tests {
     use super::*;
 
+    use nlvid_model::{LinearConstraint, Parameter, Scale};
+
+    /// Axes a ∈ [a.0, a.1], tau ∈ [1e-2, 1e2] s (log if `log`), g ∈ [0, 1].
+    fn box3_from(a: (f64, f64), log: bool, constraints: Vec<LinearConstraint>) -> Domain {
+        let tau_scale = if log { Scale::Log } else { Scale::Linear };
+        Domain::new(vec![
+            Parameter::new("a", "1", a.0, a.1, Scale::Linear),
+            Parameter::new("tau", "s", 1e-2, 1e2, tau_scale),
+            Parameter::new("g", "1", 0.0, 1.0, Scale::Linear),
+        ])
+        .and_then(|d| d.with_constraints(constraints))
+        .expect("valid test domain")
+    }
+
     fn box3(log: bool) -> Domain {
-        Domain {
-            axes: vec![
-                Axis {
-                    name: "a".into(),
-                    unit: String::new(),
-                    lower: 1.0,
-                    upper: 2.0,
-                    log: false,
-                },
-                Axis {
-                    name: "tau".into(),
-                    unit: "s".into(),
-                    lower: 1e-2,
-                    upper: 1e2,
-                    log,
-                },
-                Axis {
-                    name: "g".into(),
-                    unit: String::new(),
-                    lower: 0.0,
-                    upper: 1.0,
-                    log: false,
-                },
-            ],
-            constraints: vec![],
-        }
+        box3_from((1.0, 2.0), log, vec![])
     }
 
     fn assert_latin(domain: &Domain, design: &Design) {
         let n = design.len();
-        for k in 0..domain.dim() {
+        for k in 0..domain.len() {
             let mut seen = vec![false; n];
             for x in design {
-                let u = domain.unmap(x)[k];
+                let u = domain.to_unit(x)[k];
                 let s = ((u * n as f64).floor() as usize).min(n - 1);
                 assert!(!seen[s], "axis {k}: stratum {s} hit twice");
                 seen[s] = true;
@@ -760,14 +551,16 @@ mod tests {
 
     #[test]
     fn constrained_design_is_feasible_and_more_space_filling_than_rejection() {
-        let mut d = box3(false);
-        d.axes[0].lower = 0.0;
-        d.axes[0].upper = 1.0;
-        // g1 + g2 ≤ 1 on axes 0 and 2.
-        d.constraints.push(LinearConstraint {
-            coeffs: vec![1.0, 0.0, 1.0],
-            bound: 1.0,
-        });
+        // a ∈ [0, 1]; g1 + g2 ≤ 1 on axes 0 and 2.
+        let d = box3_from(
+            (0.0, 1.0),
+            false,
+            vec![LinearConstraint {
+                coefficients: vec![1.0, 0.0, 1.0],
+                rhs: 1.0,
+                label: "a + g <= 1".into(),
+            }],
+        );
         let n = 60;
         let design = sample(
             &d,
@@ -785,11 +578,11 @@ mod tests {
         let mut rej = Vec::new();
         while rej.len() < n {
             let u: Vec<f64> = (0..3).map(|_| rng.random::<f64>()).collect();
-            if d.feasible(&d.map(&u)) {
+            if feasible(&d, &u) {
                 rej.push(u);
             }
         }
-        let ours: Vec<Vec<f64>> = design.iter().map(|x| d.unmap(x)).collect();
+        let ours: Vec<Vec<f64>> = design.iter().map(|x| d.to_unit(x)).collect();
         assert!(
             min_distance(&ours) > 1.5 * min_distance(&rej),
             "{} vs {}",
@@ -807,26 +600,10 @@ mod tests {
         let (t, c) = training_and_checking(&d, 50, 20, 9, 5, 1e-3).unwrap();
         assert_eq!((t.len(), c.len()), (50, 20));
         for x in &c {
-            let ux = d.unmap(x);
+            let ux = d.to_unit(x);
             for y in &t {
-                assert!(dist2(&ux, &d.unmap(y)).sqrt() >= 1e-3);
+                assert!(dist2(&ux, &d.to_unit(y)).sqrt() >= 1e-3);
             }
         }
-    }
-
-    #[test]
-    fn bad_domains_are_rejected_with_the_axis_name() {
-        let mut d = box3(true);
-        d.axes[1].lower = 0.0;
-        let e = sample(
-            &d,
-            &SampleSettings {
-                n: 5,
-                seed: 1,
-                optimise_iterations: 0,
-            },
-        )
-        .unwrap_err();
-        assert!(e.to_string().contains("tau"), "{e}");
     }
 }

@@ -396,12 +396,12 @@ impl KrigingModel {
                 }
             }
         }
-        if let Some(e) = settings.pca_energy {
-            if !(e > 0.0 && e <= 1.0) {
-                return Err(SurrogateError::InvalidSettings(format!(
-                    "PCA energy fraction {e} must be in (0, 1]"
-                )));
-            }
+        if let Some(e) = settings.pca_energy
+            && !(e > 0.0 && e <= 1.0)
+        {
+            return Err(SurrogateError::InvalidSettings(format!(
+                "PCA energy fraction {e} must be in (0, 1]"
+            )));
         }
 
         let yscaled;

@@ -11,12 +11,15 @@
 //!   outputs, ln outputs and exact output scaling y = s(x)·u(x)
 //!   ([`OutputScale`], e.g. F ∝ G0).
 //! * [`doe`]: Latin hypercubes (log axes, ESE optimisation, linear
-//!   constraints), separate training and checking sets.
-//! * [`ForwardModel`]: the contract of the membrane and FE models;
-//!   [`build`] runs it over a design in parallel into a crash-safe
+//!   constraints) in an `nlvid_model::Domain`, separate training and
+//!   checking sets.
+//! * [`build`] runs an `nlvid_model::ForwardModel` (membrane, FE, analytic
+//!   models of `nlvid-forward`) over a design in parallel into a crash-safe
 //!   [`RunStore`] (atomic file per run, resumable, shardable, [`merge`]),
 //!   [`load`] applies the admissibility filters, [`export`] writes
-//!   `.npy`/CSV for numpy/pandas.
+//!   `.npy`/CSV for numpy/pandas and a `meta.json` that stores the domain.
+//! * [`slurm`]: a build as a Slurm job array (one shard per task) plus a
+//!   merge job that waits for it; resumable, requeued when killed.
 //! * [`check`]: range-normalised RMSE (thesis eq. 4.4) on a checking set.
 //!
 //! ```
@@ -42,12 +45,16 @@ pub mod check;
 mod correlation;
 pub mod doe;
 mod error;
-mod forward;
 mod kriging;
 mod likelihood;
 pub mod optimise;
+mod options;
 mod regression;
+pub mod slurm;
 mod store;
+mod study;
+mod table;
+mod trend;
 
 pub use boxmin::{SearchResult, boxmin};
 pub use build::{
@@ -57,11 +64,14 @@ pub use build::{
 pub use correlation::Correlation;
 pub use error::{Result, SurrogateError};
 pub use faer;
-pub use forward::{FailureKind, ForwardModel, HertzProny, PRONY2_NAMES, PRONY2_UNITS, RunFailure};
 pub use kriging::{
     FitReport, KrigingModel, KrigingSettings, OutputScale, Pca, PointPrediction, ThetaSearch,
     likelihood_psi,
 };
 pub use optimise::OptimiserSettings;
+pub use options::FitOptions;
 pub use regression::Regression;
 pub use store::{RunOutcome, RunRecord, RunStore, StoreMeta, merge};
+pub use study::{BuildSettings, build_report, export_report, read_domain, set_dir, shard_sets};
+pub use table::{NamedModel, Predictions, Table, read_table, write_table};
+pub use trend::{Trend, TrendTerm};

@@ -179,13 +179,12 @@ fn bfgs(
                 .collect();
             let step: Vec<f64> = (0..p).map(|i| un[i] - u[i]).collect();
             *nv += 1;
-            if let Some((fn_, _)) = obj(&exp(&un), false)? {
-                if fn_ <= f + 1e-4 * dot(&g, &step) {
-                    if let Some((fn_, gn)) = obj(&exp(&un), true)? {
-                        accepted = Some((un, fn_, gn, step));
-                        break;
-                    }
-                }
+            if let Some((fn_, _)) = obj(&exp(&un), false)?
+                && fn_ <= f + 1e-4 * dot(&g, &step)
+                && let Some((fn_, gn)) = obj(&exp(&un), true)?
+            {
+                accepted = Some((un, fn_, gn, step));
+                break;
             }
             alpha *= 0.5;
         }

@@ -13,10 +13,10 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
+use nlvid_model::RunFailure;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SurrogateError, io_err};
-use crate::forward::RunFailure;
 
 /// What every run of a build shares.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -6,11 +6,10 @@
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use nlvid_surrogate::doe::{Axis, Domain, LinearConstraint, SampleSettings, sample};
-use nlvid_surrogate::{
-    Admissibility, BuildOptions, FailureKind, ForwardModel, HertzProny, RunFailure, RunStore,
-    Shard, build, export, load, merge,
-};
+use nlvid_forward::HertzProny;
+use nlvid_model::{Domain, FailureKind, ForwardModel, Parameter, RunFailure, Scale};
+use nlvid_surrogate::doe::{SampleSettings, sample};
+use nlvid_surrogate::{Admissibility, BuildOptions, RunStore, Shard, build, export, load, merge};
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("nlvid-surrogate-{}-{name}", std::process::id()));
@@ -18,31 +17,15 @@ fn tmp(name: &str) -> PathBuf {
     d
 }
 
+/// The cell-study domain (`Domain::cell_study`) with g1 + g2 ≤ 0.95.
 fn cell_domain() -> Domain {
-    let ax = |name: &str, unit: &str, lower: f64, upper: f64, log: bool| Axis {
-        name: name.into(),
-        unit: unit.into(),
-        lower,
-        upper,
-        log,
-    };
-    Domain {
-        axes: vec![
-            ax("G0", "Pa", 100.0, 5000.0, true),
-            ax("g1", "1", 0.0, 0.9, false),
-            ax("g2", "1", 0.0, 0.9, false),
-            ax("tau1", "s", 0.01, 1.0, true),
-            ax("tau2", "s", 1.0, 100.0, true),
-        ],
-        constraints: vec![LinearConstraint {
-            coeffs: vec![0.0, 1.0, 1.0, 0.0, 0.0],
-            bound: 0.95,
-        }],
-    }
+    Domain::new(Domain::cell_study().params().to_vec())
+        .and_then(|d| d.with_sum_constraint(&["g1", "g2"], 0.95))
+        .unwrap()
 }
 
 fn model() -> HertzProny {
-    HertzProny::new(5e-6, 1e-6, 1.0, 10.0, 40)
+    HertzProny::new(5e-6, 1e-6, 1.0, 10.0, 40).unwrap()
 }
 
 fn records(dir: &std::path::Path) -> Vec<(usize, Vec<f64>, String)> {
@@ -275,7 +258,19 @@ fn failures_and_filters_are_counted_and_exported() {
     assert!(below > 0 && rep > 0, "{c:?}");
     assert_eq!(c.kept + c.failed + c.below_peak + c.non_repulsive, 40);
     let out = dir.join("export");
-    export(&mm, &out).unwrap();
+    export(&mm, &out, Some(&cell_domain())).unwrap();
+    // meta.json stores the domain; it reads back equal (and checked).
+    let meta: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("meta.json")).unwrap()).unwrap();
+    let back: Domain = serde_json::from_value(meta["domain"].clone()).unwrap();
+    assert_eq!(back, cell_domain());
+    // A domain of other parameters, or one the runs lie outside, is refused.
+    let other = Domain::new(vec![Parameter::new("E", "Pa", 1.0, 2.0, Scale::Linear)]).unwrap();
+    let e = export(&mm, &out, Some(&other)).unwrap_err().to_string();
+    assert!(e.contains("do not match the domain"), "{e}");
+    let narrow = Domain::table_5_3(0.01).unwrap();
+    let e = export(&mm, &out, Some(&narrow)).unwrap_err().to_string();
+    assert!(e.contains("lies outside it"), "{e}");
     let y = std::fs::read(out.join("Y.npy")).unwrap();
     assert_eq!(&y[..6], b"\x93NUMPY");
     let hl = u16::from_le_bytes([y[8], y[9]]) as usize;

@@ -5,9 +5,10 @@
 
 #![allow(clippy::unwrap_used)]
 
+use nlvid_model::Domain;
 use nlvid_study::Study;
 use nlvid_surrogate::Admissibility;
-use nlvid_surrogate::doe::{Axis, DesignSettings, Domain, LinearConstraint, training_and_checking};
+use nlvid_surrogate::doe::{DesignSettings, training_and_checking};
 
 fn names() -> Vec<String> {
     ["G0", "g1", "g2", "tau1", "tau2"]
@@ -47,34 +48,18 @@ fn read(text: &str) -> Result<DesignSettings, String> {
 #[test]
 fn design_section_gives_the_hand_built_domain_and_its_designs() {
     let d = read(DESIGN).unwrap();
-    let ax = |name: &str, unit: &str, lower: f64, upper: f64, log: bool| Axis {
-        name: name.into(),
-        unit: unit.into(),
-        lower,
-        upper,
-        log,
-    };
-    let want = Domain {
-        axes: vec![
-            ax("G0", "Pa", 80.0, 4000.0, true),
-            ax("g1", "1", 0.01, 1.0, false),
-            ax("g2", "1", 0.01, 1.0, false),
-            ax("tau1", "s", 0.01, 2.0, true),
-            ax("tau2", "s", 2.0, 40.0, true),
-        ],
-        constraints: vec![LinearConstraint {
-            coeffs: vec![0.0, 1.0, 1.0, 0.0, 0.0],
-            bound: 0.99,
-        }],
-    };
+    // The Table 5.3 domain built by hand (nlvid_model).
+    let want = Domain::table_5_3(0.01).unwrap();
     // Unit conversion may differ from the literal in the last bit.
-    assert_eq!(d.domain.axes.len(), 5);
-    for (a, b) in d.domain.axes.iter().zip(&want.axes) {
-        assert_eq!((&a.name, &a.unit, a.log), (&b.name, &b.unit, b.log));
+    assert_eq!(d.domain.len(), 5);
+    for (a, b) in d.domain.params().iter().zip(want.params()) {
+        assert_eq!((&a.name, &a.unit, a.scale), (&b.name, &b.unit, b.scale));
         assert!((a.lower - b.lower).abs() <= 1e-15 * b.lower.abs());
         assert!((a.upper - b.upper).abs() <= 1e-15 * b.upper.abs());
     }
-    assert_eq!(d.domain.constraints, want.constraints);
+    assert_eq!(d.domain.constraints().len(), 1);
+    let (c, w) = (&d.domain.constraints()[0], &want.constraints()[0]);
+    assert_eq!((&c.coefficients, c.rhs), (&w.coefficients, w.rhs));
     assert_eq!(
         (d.n_train, d.n_check, d.seed, d.ese_iterations),
         (24, 9, 5, 5)
@@ -175,4 +160,35 @@ fn build_section_filters_in_si() {
         e.contains("b.toml:2") && e.contains("build.min_peak_force"),
         "{e}"
     );
+}
+
+/// The bundled demo meta-model (`examples/demo/metamodel/`) was built from
+/// `examples/demo/metamodel.toml` before the parameter domain moved to
+/// `nlvid_model`: its training design — hence the study hash of its run
+/// store, which a resumed build compares — is reproduced bit for bit, and
+/// the domain stored in its `meta.json` is the one of its `[design]`.
+#[test]
+fn the_bundled_demo_design_reproduces_its_study_hash_and_domain() {
+    let demo = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo");
+    let mut study = Study::load(demo.join("metamodel.toml")).unwrap();
+    let model = nlvid_forward::from_study(&mut study).unwrap();
+    let mut ds = study.section("design").unwrap();
+    let d =
+        DesignSettings::from_section(&mut ds, &model.parameter_names(), &model.parameter_units())
+            .unwrap();
+    ds.finish().unwrap();
+    let (train, _) = d.designs().unwrap();
+    let meta = nlvid_surrogate::StoreMeta::new(
+        model.parameter_names(),
+        model.parameter_units(),
+        model.time_grid().to_vec(),
+        train,
+        model.identity(),
+    );
+    let committed: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(demo.join("metamodel/meta.json")).unwrap())
+            .unwrap();
+    assert_eq!(meta.study_hash, committed["study_hash"].as_str().unwrap());
+    let stored: Domain = serde_json::from_value(committed["domain"].clone()).unwrap();
+    assert_eq!(stored, d.domain);
 }

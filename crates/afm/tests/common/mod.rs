@@ -84,3 +84,41 @@ pub fn rel(a: f64, b: f64) -> f64 {
 pub fn mean(x: &[f64]) -> f64 {
     x.iter().sum::<f64>() / x.len() as f64
 }
+
+/// Path of a file in tests/data.
+pub fn data(name: &str) -> String {
+    format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Force map, 2×2 curves extracted from a 10×10 grid (format 2.0, segment settings in
+/// the shared header).
+pub const MAP: &str = "fmt-jpk-fd_map2x2_extracted.jpk-force-map";
+/// QI map, 4 curves.
+pub const QI_DATA: &str = "fmt-jpk-fd_2020.02.07-16.29.05.036.jpk-qi-data";
+/// One QI curve, with computed (raster) time channels.
+pub const QI_SERIES: &str = "fmt-jpk-fd_qi-data-2021.04.13.jpk-qi-series";
+/// A curve extracted from a map: the curve header stands in for the file header.
+pub const EXTRACTED: &str = "fmt-jpk-fd_flipsign_2015.05.22-15.31.49.352.jpk-force";
+/// Creep compliance: extend, constant-force pause, retract.
+pub const CREEP: &str = "fmt-jpk-cc_pr14-brain-2021.06.30.jpk-force";
+/// The 15 ramp-hold curves of Battistella et al. 2022, fig. 5d, as published (a ZIP of
+/// `.jpk-force` files).
+pub const FIG5D: &str = "10.1002_btm2.10294_fig5d-cell1.zip";
+
+/// The curves of the fig. 5d archive: (file name, bytes), in name order.
+pub fn fig5d() -> Vec<(String, Vec<u8>)> {
+    let bytes = std::fs::read(data(FIG5D)).expect("fig5d archive");
+    let mut e: Vec<_> = entries(&bytes)
+        .into_iter()
+        .filter(|(n, _)| n.ends_with(".jpk-force"))
+        .collect();
+    e.sort();
+    e
+}
+
+/// A standard normal deviate (Box–Muller) from `rng`.
+pub fn gauss(rng: &mut impl rand::RngExt) -> f64 {
+    let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
+    let u2: f64 = rng.random::<f64>();
+    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+}

@@ -6,7 +6,9 @@
 //!   `[protocol]`), training and checking designs from `[design]`, store,
 //!   export and admissibility filters from `[build]`; the training set goes
 //!   to `<store>/train`, the checking set to `<store>/check`.
-//! * flags only (as before): `--design X.csv --model hertz-prony --store DIR`.
+//! * flags only (as before): `--design X.csv --model hertz-prony --store DIR`
+//!   (`--domain FILE`: the domain the design was sampled in, stored in the
+//!   export's `meta.json` for `nlvid fit`).
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -14,13 +16,14 @@ use std::process::ExitCode;
 use anyhow::{Context, bail};
 use clap::Args;
 use nlvid_forward::{ForwardSettings, HertzPronySpec};
+use nlvid_model::{Domain, ForwardModel};
 use nlvid_study::Study;
-use nlvid_surrogate::doe::DesignSettings;
 use nlvid_surrogate::{
-    Admissibility, BuildOptions, ForwardModel, Shard, build, export, load, merge,
+    Admissibility, BuildOptions, BuildSettings, Shard, build_report, export_report, merge,
+    read_domain, read_table, set_dir, shard_sets,
 };
 
-use super::surrogate::read_table;
+use crate::output::print_text;
 
 /// Arguments of `build`.
 #[derive(Debug, Args)]
@@ -31,6 +34,11 @@ pub struct BuildArgs {
     /// Design CSV (from `nlvid sample`); flag-only use.
     #[arg(long, conflicts_with = "study")]
     pub design: Option<PathBuf>,
+    /// Domain file the design was sampled in (as for `nlvid sample
+    /// --domain`); flag-only use. The export's `meta.json` stores it, and
+    /// `nlvid fit` needs it there.
+    #[arg(long, conflicts_with = "study")]
+    pub domain: Option<PathBuf>,
     /// Forward model for flag-only use: `hertz-prony` (analytic LV Hertz
     /// ramp-hold, R = 5 µm, 1 µm/s for 1 s, then hold to 10 s; parameters
     /// G0, g1, g2, tau1, tau2). Study files choose any model in `[forward]`.
@@ -83,85 +91,44 @@ pub struct MergeArgs {
     pub reject_non_repulsive: bool,
 }
 
-/// A study file read for a meta-model build.
+/// A study read for a meta-model build: the forward model of `[forward]`
+/// and the `[design]` and `[build]` sections (library calls only).
 pub struct BuildStudy {
     /// The forward model.
     pub model: Box<dyn ForwardModel>,
-    /// `[design]`.
-    pub design: DesignSettings,
-    /// `[build] store`.
-    pub store: Option<PathBuf>,
-    /// `[build] export`.
-    pub export: Option<PathBuf>,
-    /// `[build]` filters.
-    pub filters: Admissibility,
+    /// `[design]` and `[build]`.
+    pub settings: BuildSettings,
 }
 
-/// Reads `[forward]` (+ `[protocol]`), `[design]` and `[build]`; unknown
-/// sections or keys are errors naming file and line.
+/// Reads `[forward]` (+ `[protocol]`), `[design]` and `[build]`; sections
+/// of other stages are left alone, unknown ones are errors.
 ///
 /// # Errors
-/// Any study error.
+/// Any study error (file, line, key).
 pub fn read_study(path: &Path) -> anyhow::Result<BuildStudy> {
     let mut study = Study::load(path)?;
-    let _ = study.root().opt_str("title")?;
     let model = ForwardSettings::from_study(&mut study)?.build()?;
-    let mut ds = study.section("design")?;
-    let design =
-        DesignSettings::from_section(&mut ds, &model.parameter_names(), &model.parameter_units())?;
-    ds.finish()?;
-    let (store, export, filters) = match study.opt_section("build")? {
-        Some(mut b) => {
-            let store = b.opt_path("store")?;
-            let export = b.opt_path("export")?;
-            let filters = Admissibility::from_section(&mut b, model.contact_index())?;
-            b.finish()?;
-            (store, export, filters)
-        }
-        None => (
-            None,
-            None,
-            Admissibility {
-                contact_index: model.contact_index(),
-                ..Default::default()
-            },
-        ),
-    };
-    study.finish()?;
-    Ok(BuildStudy {
-        model,
-        design,
-        store,
-        export,
-        filters,
-    })
+    let (names, units) = (model.parameter_names(), model.parameter_units());
+    let settings = BuildSettings::from_study(study, &names, &units, model.contact_index())?;
+    Ok(BuildStudy { model, settings })
 }
 
-fn do_export(store: &Path, dir: &Path, filt: &Admissibility) -> anyhow::Result<()> {
-    let mm = load(store, filt)?;
-    export(&mm, dir)?;
-    let c = &mm.counts;
-    println!(
-        "exported {} of {} runs to {} (failed {}, missing {}, below peak force {}, non-repulsive {})",
-        c.kept,
-        c.design,
-        dir.display(),
-        c.failed,
-        c.missing,
-        c.below_peak,
-        c.non_repulsive
-    );
-    Ok(())
-}
-
-fn report_failures(store: &Path) -> anyhow::Result<()> {
-    let mm = load(store, &Admissibility::default())?;
-    for (i, status, reason, secs) in &mm.status {
-        if status == "failed" {
-            eprintln!("run {i} failed after {secs:.3} s: {reason}");
-        }
+/// The admissibility filters of the flags.
+fn filters(min_peak_force: Option<f64>, reject_non_repulsive: bool) -> Admissibility {
+    Admissibility {
+        min_peak_force,
+        reject_non_repulsive,
+        contact_index: 0,
     }
-    Ok(())
+}
+
+fn do_export(
+    store: &Path,
+    dir: &Path,
+    filters: &Admissibility,
+    domain: Option<&Domain>,
+) -> anyhow::Result<()> {
+    print_text(&export_report(store, dir, filters, domain)?)
 }
 
 fn run_set(
@@ -172,28 +139,12 @@ fn run_set(
     shard: Option<Shard>,
     quiet: bool,
 ) -> anyhow::Result<()> {
-    let hide = std::env::var_os("NLVID_NO_PROGRESS").is_some() || std::env::var_os("CI").is_some();
     let opts = BuildOptions {
         shard,
-        progress: !quiet && !hide,
+        progress: !quiet && crate::progress::progress_enabled(),
         cancel: None,
     };
-    let t0 = std::time::Instant::now();
-    let s = build(model, design, store, &opts)?;
-    let secs = t0.elapsed().as_secs_f64();
-    let per_run = if s.ran > 0 {
-        format!(", {:.3} s per run", secs / s.ran as f64)
-    } else {
-        String::new()
-    };
-    println!(
-        "{name}: {} runs in shard: {} already done, {} run now ({} failed) in {secs:.2} s{per_run}",
-        s.in_shard, s.skipped, s.ran, s.failed
-    );
-    if s.failed > 0 {
-        report_failures(store)?;
-    }
-    Ok(())
+    print_text(&build_report(name, model, design, store, &opts)?)
 }
 
 impl BuildArgs {
@@ -202,14 +153,19 @@ impl BuildArgs {
         let shard = self.shard.as_deref().map(Shard::parse).transpose()?;
         if let Some(path) = &self.study {
             let st = read_study(path)?;
-            let Some(store) = self.store.clone().or(st.store.clone()) else {
+            let Some(store) = self.store.clone().or(st.settings.store.clone()) else {
                 bail!(
                     "{}: no store directory: give --store DIR or `store = \"DIR\"` in [build]",
                     path.display()
                 );
             };
-            let export_dir = self.export.clone().or(st.export.clone());
-            let (train, check) = st.design.designs()?;
+            // The tasks of an array would all write `[build] export` at
+            // once: a shard exports only when asked with --export.
+            let export_dir = match shard {
+                Some(_) => self.export.clone(),
+                None => self.export.clone().or(st.settings.export.clone()),
+            };
+            let (train, check) = st.settings.design.designs()?;
             let mut sets = vec![("train", train)];
             if !check.is_empty() {
                 sets.push(("check", check));
@@ -226,7 +182,13 @@ impl BuildArgs {
             }
             if let Some(dir) = &export_dir {
                 for (name, _) in &sets {
-                    do_export(&store.join(name), &dir.join(name), &st.filters)?;
+                    let domain = Some(&st.settings.design.domain);
+                    do_export(
+                        &store.join(name),
+                        &dir.join(name),
+                        &st.settings.filters,
+                        domain,
+                    )?;
                 }
             }
             return Ok(ExitCode::SUCCESS);
@@ -235,7 +197,7 @@ impl BuildArgs {
             bail!("give a study file, or --design X.csv and --store DIR");
         };
         let model = match self.model.as_str() {
-            "hertz-prony" => HertzPronySpec::flag_defaults(self.points).build(),
+            "hertz-prony" => HertzPronySpec::flag_defaults(self.points).build()?,
             other => bail!(
                 "--model {other}: unknown forward model for flag-only use (available: hertz-prony; \
                  afm-fe and membrane are set up in a study file's [forward] section)"
@@ -249,14 +211,15 @@ impl BuildArgs {
                 design.header.len()
             );
         }
+        let names = model.parameter_names();
+        let domain = (self.domain.as_deref())
+            .map(|p| read_domain(p, &names, &design.rows))
+            .transpose()
+            .with_context(|| format!("--domain for --design {}", design_path.display()))?;
         run_set("design", &model, &design.rows, store, shard, self.quiet)?;
         if let Some(dir) = &self.export {
-            let filt = Admissibility {
-                min_peak_force: self.min_peak_force,
-                reject_non_repulsive: self.reject_non_repulsive,
-                contact_index: 0,
-            };
-            do_export(store, dir, &filt)?;
+            let filters = filters(self.min_peak_force, self.reject_non_repulsive);
+            do_export(store, dir, &filters, domain.as_ref())?;
         }
         Ok(ExitCode::SUCCESS)
     }
@@ -265,52 +228,27 @@ impl BuildArgs {
 impl MergeArgs {
     /// Run.
     pub fn run(self) -> anyhow::Result<ExitCode> {
-        let filt = match &self.study {
+        let (filt, domain) = match &self.study {
             Some(p) => {
-                read_study(p)
-                    .with_context(|| format!("--study {}", p.display()))?
-                    .filters
+                let st = read_study(p).with_context(|| format!("--study {}", p.display()))?;
+                (st.settings.filters, Some(st.settings.design.domain))
             }
-            None => Admissibility {
-                min_peak_force: self.min_peak_force,
-                reject_non_repulsive: self.reject_non_repulsive,
-                contact_index: 0,
-            },
+            None => (
+                filters(self.min_peak_force, self.reject_non_repulsive),
+                None,
+            ),
         };
-        // A study build's shards hold `train/` (and `check/`) stores.
-        let sets: Vec<Option<&str>> = if self.shards.iter().all(|d| d.join("meta.json").is_file()) {
-            vec![None]
-        } else if self
-            .shards
-            .iter()
-            .all(|d| d.join("train/meta.json").is_file())
-        {
-            let mut v = vec![Some("train")];
-            if self
-                .shards
-                .iter()
-                .all(|d| d.join("check/meta.json").is_file())
-            {
-                v.push(Some("check"));
-            }
-            v
-        } else {
-            bail!(
-                "each shard directory must be a store (meta.json) or hold train/ (and check/) stores"
-            );
-        };
-        for set in sets {
-            let sub = |d: &Path| set.map_or_else(|| d.to_path_buf(), |s| d.join(s));
-            let dirs: Vec<PathBuf> = self.shards.iter().map(|d| sub(d)).collect();
-            let out = sub(&self.out);
+        for set in shard_sets(&self.shards)? {
+            let dirs: Vec<PathBuf> = self.shards.iter().map(|d| set_dir(d, set)).collect();
+            let out = set_dir(&self.out, set);
             let n = merge(&dirs, &out)?;
-            println!(
+            say!(
                 "merged {} shards into {} ({n} runs copied)",
                 dirs.len(),
                 out.display()
-            );
+            )?;
             if let Some(dir) = &self.export {
-                do_export(&out, &sub(dir), &filt)?;
+                do_export(&out, &set_dir(dir, set), &filt, domain.as_ref())?;
             }
         }
         Ok(ExitCode::SUCCESS)

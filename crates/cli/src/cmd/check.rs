@@ -9,12 +9,11 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::Context as _;
-use nlvid_study::{LeafValue, Quantity, Section, Study, StudyError, UnitError, fmt_number};
+use nlvid_study::{LeafValue, Section, Study, StudyError};
 use serde_json::json;
 
 use super::{Context, Run};
-use crate::output::print_json;
+use crate::output::{print_json, print_text};
 
 /// A stage's schema check for one top-level section: reads it fully (the
 /// caller then reports unknown keys).
@@ -43,6 +42,7 @@ pub struct Config {
     path: PathBuf,
     hash: String,
     leaves: Vec<nlvid_study::Leaf>,
+    table: String,
     schema_checked: Vec<&'static str>,
     warnings: Vec<String>,
     strict: bool,
@@ -61,47 +61,16 @@ impl Run for Args {
                 schema_checked.push(*name);
             }
         }
-        let leaves = study.leaves();
-        let mut warnings = Vec::new();
-        for leaf in &leaves {
-            match &leaf.value {
-                LeafValue::Number(x) if !x.is_finite() => {
-                    anyhow::bail!(
-                        "{}:{}:{}: key `{}`: `{x}` is not a finite number",
-                        study.name(),
-                        leaf.line,
-                        leaf.column,
-                        leaf.key
-                    );
-                }
-                LeafValue::Text(t) => match Quantity::parse(t) {
-                    Err(UnitError::NotFinite) => anyhow::bail!(
-                        "{}:{}:{}: key `{}`: `{t}` is not a finite number",
-                        study.name(),
-                        leaf.line,
-                        leaf.column,
-                        leaf.key
-                    ),
-                    Err(
-                        e @ (UnitError::UnknownUnit(_)
-                        | UnitError::BadExponent(_)
-                        | UnitError::Syntax(..)),
-                    ) => warnings.push(format!(
-                        "{}:{}:{}: key `{}`: `{t}` looks like a quantity but cannot be read: {e}",
-                        study.name(),
-                        leaf.line,
-                        leaf.column,
-                        leaf.key
-                    )),
-                    _ => {}
-                },
-                _ => {}
-            }
+        let lint = study.lint();
+        if let Some(e) = lint.errors.first() {
+            anyhow::bail!("{e}");
         }
+        let (leaves, warnings) = (study.leaves(), lint.warnings);
         Ok(Config {
             path: self.study,
             hash: study.hash().to_string(),
             leaves,
+            table: study.values_table(),
             schema_checked,
             warnings,
             strict: self.strict,
@@ -119,7 +88,15 @@ impl Run for Args {
                 "warnings": c.warnings,
             }))?;
         } else {
-            print_text(&c).context("writing to stdout")?;
+            let checked = if c.schema_checked.is_empty() {
+                "none registered yet".to_string()
+            } else {
+                c.schema_checked.join(", ")
+            };
+            print_text(&format!(
+                "{}ok: syntax, units and numbers valid; section schemas checked: {checked}\n",
+                c.table
+            ))?;
             for w in &c.warnings {
                 eprintln!("warning: {w}");
             }
@@ -130,43 +107,6 @@ impl Run for Args {
         }
         Ok(ExitCode::SUCCESS)
     }
-}
-
-fn print_text(c: &Config) -> std::io::Result<()> {
-    use std::io::Write;
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "{}  sha256 {}", c.path.display(), c.hash)?;
-    let kw = c
-        .leaves
-        .iter()
-        .map(|l| l.key.len())
-        .max()
-        .unwrap_or(3)
-        .max(3);
-    writeln!(
-        out,
-        "{:>4}  {:kw$}  {:20}  as written",
-        "line", "key", "value (SI)"
-    )?;
-    for l in &c.leaves {
-        let (si, written) = match &l.value {
-            LeafValue::Quantity { text, si } => (si.to_string(), text.clone()),
-            LeafValue::Number(x) => (fmt_number(*x), String::new()),
-            LeafValue::Integer(i) => (i.to_string(), String::new()),
-            LeafValue::Bool(b) => (b.to_string(), String::new()),
-            LeafValue::Text(t) | LeafValue::Datetime(t) => (t.clone(), String::new()),
-        };
-        writeln!(out, "{:>4}  {:kw$}  {:20}  {written}", l.line, l.key, si)?;
-    }
-    let checked = if c.schema_checked.is_empty() {
-        "none registered yet".to_string()
-    } else {
-        c.schema_checked.join(", ")
-    };
-    writeln!(
-        out,
-        "ok: syntax, units and numbers valid; section schemas checked: {checked}"
-    )
 }
 
 fn leaf_json(l: &nlvid_study::Leaf) -> serde_json::Value {

@@ -2,13 +2,12 @@
 //! (parallel, progress bar, resumable), one row per cell in `results.csv`
 //! (format of docs/cli/compare.md). See docs/cli/cohort.md.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-use nlvid_report::cell::{CellResult, CellStatus};
-use nlvid_report::cohort::{self, CellInput, CohortOutcome, RunOptions};
+use nlvid_report::cell::CellResult;
+use nlvid_report::cohort::{self, CellInput, RunOptions};
 use nlvid_report::settings::CohortSettings;
-use serde_json::json;
 
 use super::{Context, Run};
 
@@ -60,93 +59,19 @@ impl Run for Args {
     }
 
     fn execute(c: Config, ctx: &Context) -> anyhow::Result<ExitCode> {
-        let run = run_with_progress(&c.settings, &c.study, &c.input, &c.cells, &c.out)?;
-        print_outcome(&c.settings, &c.out, &run, ctx.json)?;
-        Ok(ExitCode::SUCCESS)
-    }
-}
-
-/// Runs a cohort with a progress bar on stderr.
-///
-/// # Errors
-/// The output directory cannot be written.
-pub fn run_with_progress(
-    settings: &CohortSettings,
-    study: &Path,
-    input: &Path,
-    cells: &[CellInput],
-    out: &Path,
-) -> anyhow::Result<CohortOutcome> {
-    let bar = crate::progress::bar(cells.len() as u64, "cells");
-    let tick = |_: &CellResult| bar.inc(1);
-    let run = cohort::run_cohort(
-        settings,
-        study,
-        input,
-        cells,
-        out,
-        &RunOptions {
+        let bar = crate::progress::bar(c.cells.len() as u64, "cells");
+        let tick = |_: &CellResult| bar.inc(1);
+        let opts = RunOptions {
             max_new_fits: None,
             on_cell: Some(&tick),
-        },
-    )?;
-    bar.finish_and_clear();
-    Ok(run)
-}
-
-fn count(run: &CohortOutcome, s: CellStatus) -> usize {
-    run.cells.iter().filter(|c| c.status == s).count()
-}
-
-/// Prints what a cohort run did (text or one JSON document).
-///
-/// # Errors
-/// stdout cannot be written.
-pub fn print_outcome(
-    settings: &CohortSettings,
-    out: &Path,
-    run: &CohortOutcome,
-    json: bool,
-) -> anyhow::Result<()> {
-    let listed: Vec<&CellResult> = run
-        .cells
-        .iter()
-        .filter(|c| c.status != CellStatus::Ok)
-        .collect();
-    let results = run.results_csv.as_ref().map(|p| p.display().to_string());
-    if json {
-        crate::output::print_json(&json!({
-            "study_sha256": settings.study_hash,
-            "forward_model": settings.model.describe(),
-            "out": out.display().to_string(),
-            "cells": run.cells.len(),
-            "fitted": run.fitted,
-            "reused": run.reused,
-            "ok": count(run, CellStatus::Ok),
-            "suspicious": count(run, CellStatus::Suspicious),
-            "failed": count(run, CellStatus::Failed),
-            "listed": listed.iter().map(|c| json!({
-                "group": c.group, "file": c.file, "status": c.status.as_str(), "reason": c.reason,
-            })).collect::<Vec<_>>(),
-            "results_csv": results,
-        }))?;
-        return Ok(());
+        };
+        let run = cohort::run_cohort(&c.settings, &c.study, &c.input, &c.cells, &c.out, &opts)?;
+        bar.finish_and_clear();
+        if ctx.json {
+            crate::output::print_json(&run.to_json(&c.out))?;
+        } else {
+            crate::output::print_text(&run.text())?;
+        }
+        Ok(ExitCode::SUCCESS)
     }
-    println!("forward model: {}", settings.model.describe());
-    println!(
-        "{} cells: {} fitted now, {} reused from an earlier run; {} ok, {} suspicious, {} failed",
-        run.cells.len(),
-        run.fitted,
-        run.reused,
-        count(run, CellStatus::Ok),
-        count(run, CellStatus::Suspicious),
-        count(run, CellStatus::Failed)
-    );
-    for c in listed {
-        println!("  {} {}: {}", c.status.as_str(), c.file, c.reason);
-    }
-    if let Some(r) = results {
-        println!("wrote {r}");
-    }
-    Ok(())
 }

@@ -8,10 +8,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use nlvid_report::cohort;
-use nlvid_report::demo::{DemoSpec, write_demo_data};
-use nlvid_report::report::{ReportOptions, write_report};
-use nlvid_report::settings::CohortSettings;
+use nlvid_report::demo::{DemoSpec, run_demo, write_demo_data};
 
 use super::{Context, Run};
 
@@ -34,25 +31,6 @@ pub struct Args {
     pub write_data: bool,
 }
 
-fn demo_dir(given: Option<PathBuf>) -> anyhow::Result<PathBuf> {
-    if let Some(d) = given {
-        return Ok(d);
-    }
-    let here = PathBuf::from("examples/demo");
-    if here.join("study.toml").is_file() {
-        return Ok(here);
-    }
-    let built = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/demo"));
-    if built.join("study.toml").is_file() {
-        // Print `/…/examples/demo`, not `/…/crates/cli/../../examples/demo`.
-        return Ok(std::fs::canonicalize(&built).unwrap_or(built));
-    }
-    anyhow::bail!(
-        "no bundled example: neither ./examples/demo nor {} has a study.toml; give --demo DIR",
-        built.display()
-    )
-}
-
 impl Run for Args {
     type Config = Args;
 
@@ -65,66 +43,36 @@ impl Run for Args {
         Ok(self)
     }
 
-    fn execute(a: Args, ctx: &Context) -> anyhow::Result<ExitCode> {
+    fn execute(a: Args, _ctx: &Context) -> anyhow::Result<ExitCode> {
         let start = Instant::now();
-        let demo = demo_dir(a.demo)?;
+        let built = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/demo"));
+        let demo = nlvid_report::demo::demo_dir(a.demo, &built)?;
         let study = demo.join("study.toml");
-        let data = demo.join("data");
         if a.write_data {
             let spec = DemoSpec::default();
             let files = write_demo_data(&spec, &study, &demo.join("metamodel.toml"))?;
-            println!(
+            say!(
                 "wrote {} groups × {} cells from known parameters into {} (truth: {})",
                 spec.groups.len(),
                 spec.cells_per_group,
                 files.data.display(),
                 files.truth.display()
-            );
+            )?;
             return Ok(ExitCode::SUCCESS);
         }
-        let settings = CohortSettings::load(&study)?;
-        let cells = cohort::discover(&data)?;
-        println!(
-            "1. bundled study {}: {} cells made by the forward model from known parameters \
-             (truth: {})",
-            study.display(),
-            cells.len(),
-            demo.join("ground_truth.csv").display()
-        );
-        if let Some(f) = &settings.surrogate {
-            println!(
-                "   fitted on the pre-built meta-model {} of `{}`",
-                f.model.display(),
-                f.forward
-            );
-        }
-        let out = a.out.join("cohort");
-        println!(
-            "2. nlvid cohort {} {} --out {}",
-            study.display(),
-            data.display(),
-            out.display()
-        );
-        let run = super::cohort::run_with_progress(&settings, &study, &data, &cells, &out)?;
-        super::cohort::print_outcome(&settings, &out, &run, false)?;
-        let results = out.join("results.csv");
-        println!("3. nlvid compare {}", results.display());
-        super::compare::Args {
-            results,
-            groups: None,
-            t_end: settings.hold_end,
-            points: 53,
-            method: "matlab".into(),
-            out_dir: None,
-        }
-        .run(ctx)?;
-        println!("4. nlvid report {}", out.display());
-        let page = write_report(&out, &ReportOptions::default())?;
-        println!(
+        let n = nlvid_report::cohort::discover(&demo.join("data"))?.len();
+        let bar = crate::progress::bar(n as u64, "cells");
+        let tick = |_: &nlvid_report::cell::CellResult| bar.inc(1);
+        let page = run_demo(&demo, &a.out, Some(&tick), &mut |t| {
+            use std::io::Write as _;
+            bar.suspend(|| std::io::stdout().lock().write_all(t.as_bytes()))
+        })?;
+        bar.finish_and_clear();
+        say!(
             "done in {:.1} s. Report: {}",
             start.elapsed().as_secs_f64(),
             page.html.display()
-        );
+        )?;
         Ok(ExitCode::SUCCESS)
     }
 }

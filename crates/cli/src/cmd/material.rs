@@ -13,7 +13,7 @@ use nlvid_study::Study;
 use serde_json::json;
 
 use super::{Context, Run};
-use crate::output::{Column, Table, print_json, provenance};
+use crate::output::{curve_json, next_to, parameters_json, print_json, provenance, write_atomic};
 
 /// Raw arguments of `nlvid material`.
 #[derive(Debug, clap::Args)]
@@ -41,13 +41,9 @@ impl Run for Args {
         let mut study = Study::load(&self.study)?;
         let material: MaterialSpec = study.read("material")?;
         let loading: LoadingSpec = study.read("loading")?;
-        let output = self.output.unwrap_or_else(|| {
-            let stem = self
-                .study
-                .file_stem()
-                .map_or_else(|| "study".into(), |s| s.to_string_lossy().into_owned());
-            self.study.with_file_name(format!("{stem}.material.csv"))
-        });
+        let output = self
+            .output
+            .unwrap_or_else(|| next_to(&self.study, "material.csv"));
         Ok(Config {
             study,
             material,
@@ -62,69 +58,26 @@ impl Run for Args {
             .drive(c.loading.mode, &c.loading.history, c.loading.max_dt)
             .with_context(|| format!("{}: driving the material", c.study.name()))?;
         let shear = c.loading.mode == Mode::SimpleShear;
-        let mut cols = vec![
-            Column::new("time", "s"),
-            Column::new(if shear { "shear" } else { "stretch" }, ""),
-            Column::new("sigma_1", "Pa"),
-            Column::new("sigma_2", "Pa"),
-            Column::new("sigma_3", "Pa"),
-        ];
-        if shear {
-            cols.extend([
-                Column::new("sigma_11", "Pa"),
-                Column::new("sigma_22", "Pa"),
-                Column::new("sigma_12", "Pa"),
-                Column::new("N_1", "Pa"),
-                Column::new("N_2", "Pa"),
-            ]);
-        }
-        let mut table = Table::new(cols);
-        for s in &samples {
-            let mut row = vec![
-                s.time,
-                s.value,
-                s.principal[0],
-                s.principal[1],
-                s.principal[2],
-            ];
-            if shear {
-                let m = &s.cauchy;
-                row.extend([
-                    m[(0, 0)],
-                    m[(1, 1)],
-                    m[(0, 1)],
-                    m[(0, 0)] - m[(1, 1)],
-                    m[(1, 1)] - m[(2, 2)],
-                ]);
-            }
-            table.push_row(&row)?;
-        }
-        table.write_csv(&c.output)?;
+        let curve = nlvid_material::samples_curve(&samples, c.loading.mode)?;
+        write_atomic(&c.output, curve.to_csv().as_bytes())?;
         let (model, params) = c.material.parameters();
         if ctx.json {
-            let p: serde_json::Map<String, serde_json::Value> = params
+            let p: Vec<(String, f64, String)> = params
                 .iter()
-                .map(|(n, v, u)| {
-                    let key = if u.is_empty() {
-                        n.clone()
-                    } else {
-                        format!("{n}_{u}")
-                    };
-                    (key, json!(v))
-                })
+                .map(|(n, v, u)| (n.to_string(), *v, u.to_string()))
                 .collect();
             print_json(&json!({
                 "provenance": provenance(&c.study),
                 "model": model,
-                "parameters": p,
+                "parameters": parameters_json(&p),
                 "mode": c.loading.mode.name(),
                 "max_dt_s": c.loading.max_dt,
                 "csv": c.output.display().to_string(),
-                "curve": table.to_json(),
+                "curve": curve_json(&curve),
             }))?;
         } else {
             let last = samples.last().context("no samples")?;
-            println!(
+            say!(
                 "{model}, {}: {} points to t = {} s; final {} = {}, sigma_1 = {} Pa",
                 c.loading.mode.name(),
                 samples.len(),
@@ -132,8 +85,8 @@ impl Run for Args {
                 if shear { "shear" } else { "stretch" },
                 last.value,
                 last.principal[0]
-            );
-            println!("wrote {}", c.output.display());
+            )?;
+            say!("wrote {}", c.output.display())?;
         }
         Ok(ExitCode::SUCCESS)
     }

@@ -1,33 +1,40 @@
-//! `nlvid membrane`: the semi-analytical fluid-filled membrane between plates
-//! (thesis ch. II, §2.3) for one study, or `--reproduce thesis` to regenerate
-//! the data and plots of Figs. 2.3–2.14 and Table 2.1.
+//! `nlvid membrane`: the fluid-filled membrane between plates (thesis ch.
+//! II, §2.3) for one study — the `membrane` forward model of `[forward]`
+//! and `[protocol]` at the values of `[parameters]`, the study `nlvid
+//! simulate` and `nlvid build` read — with its profiles; or `--reproduce
+//! thesis` to regenerate the data and plots of Figs. 2.3–2.14 and Table 2.1.
+//! See docs/cli/membrane.md.
 
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 use clap::{Args, ValueEnum};
-use nlvid_membrane::thesis::{Figure, SlopeRow};
-use nlvid_membrane::{ControlKind, Geometry, Loading, MembraneRun, PipkinRogersParams, simulate};
-use nlvid_protocol::{Quantity, programs};
-use nlvid_study::{Bounds, Dimension, Study};
+use nlvid_forward::{ForwardSpec, SimulateStudy};
+use nlvid_study::{Dimension, Study};
+use serde_json::json;
+
+use crate::args::quantity;
+use crate::output::{next_to, print_json, print_text, provenance, write_atomic};
 
 /// Arguments of `nlvid membrane`.
 #[derive(Debug, Args)]
 pub struct MembraneArgs {
-    /// Study file with a `[membrane]` section (see docs/cli/membrane.md).
+    /// Study file with `[forward] model = "membrane"`, `[protocol]` and
+    /// `[parameters]` (see docs/cli/membrane.md).
     #[arg(required_unless_present = "reproduce")]
     pub study: Option<PathBuf>,
     /// Regenerate a published data set instead of running a study.
-    #[arg(long, value_enum)]
+    #[arg(long, value_enum, conflicts_with = "study")]
     pub reproduce: Option<Reproduce>,
-    /// Output directory for CSV (and SVG) files.
-    #[arg(long, default_value = "membrane-out")]
-    pub out: PathBuf,
-    /// Set from the global `--json` flag.
-    #[arg(skip)]
-    pub json: bool,
+    /// Output directory, created if missing (default: `<study stem>.membrane`
+    /// next to the study; `membrane-thesis` for --reproduce).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Times at which profiles are written, e.g. `--profile-times "0 s,10 s"`
+    /// (default: the last solve time).
+    #[arg(long, value_delimiter = ',', value_parser = |s: &str| quantity(s.trim(), Dimension::TIME))]
+    pub profile_times: Option<Vec<f64>>,
 }
 
 /// Published data sets.
@@ -37,303 +44,95 @@ pub enum Reproduce {
     Thesis,
 }
 
-/// Optional dimensional scales: r0, h0, C1, τ1.
-#[derive(Debug, Clone, Copy)]
-struct Scales {
-    r0: f64,
-    h0: f64,
-    c1: f64,
-    tau1: f64,
+fn create(dir: &Path) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))
 }
 
-struct MembraneStudy {
-    params: PipkinRogersParams,
-    geometry: Geometry,
-    loading: Loading,
-    scales: Option<Scales>,
-}
-
-fn read_study(path: &Path) -> anyhow::Result<MembraneStudy> {
-    let mut study = Study::load(path)?;
-    let mut s = study.section("membrane")?;
-    let rs = s.f64_or("rs", Bounds::closed_open(1.0, 3.0), 1.03)?;
-    let nodes = s
-        .opt_usize("nodes", Bounds::closed(8.0, 100_000.0))?
-        .unwrap_or(64);
-    let control = s
-        .opt_enum(
-            "control",
-            &[
-                ("displacement", ControlKind::Displacement),
-                ("force", ControlKind::Force),
-            ],
-        )?
-        .unwrap_or(ControlKind::Displacement);
-    let program = s.req_str("program")?;
-    let value = s.req_f64("value", Bounds::non_negative())?;
-    let t_end = s.req_f64("t_end", Bounds::positive())?;
-    let steps = s
-        .opt_usize("steps", Bounds::closed(1.0, 1e7))?
-        .unwrap_or(100);
-    let prog = match program.as_str() {
-        "step" => programs::step(Quantity::Dimensionless, value, t_end),
-        "ramp" => {
-            let rate = s.req_f64("rate", Bounds::positive())?;
-            programs::constant_rate(Quantity::Dimensionless, rate, t_end)
-        }
-        "ramp-hold" => {
-            let rate = s.req_f64("rate", Bounds::positive())?;
-            programs::ramp_hold(
-                Quantity::Dimensionless,
-                value,
-                rate,
-                (t_end - value / rate).max(1e-9),
-            )
-        }
-        "load-unload" => {
-            let rate = s.req_f64("rate", Bounds::positive())?;
-            let unload = s.req_f64("unload_rate", Bounds::positive())?;
-            programs::load_unload(Quantity::Dimensionless, value, rate, unload, 0.0)
-        }
-        other => {
-            return Err(s
-                .invalid(
-                    "program",
-                    format!("unknown program `{other}` (step, ramp, ramp-hold, load-unload)"),
-                )
-                .into());
-        }
-    }
-    .with_context(|| format!("{}: key `membrane.program`", path.display()))?;
-    let profile_times = if s.has("profile_times") {
-        s.req_f64s("profile_times", Bounds::non_negative())?
-    } else {
-        vec![t_end]
-    };
-    let mut m = s.subsection("material")?;
-    let params = PipkinRogersParams {
-        c1: 1.0,
-        tau1: 1.0,
-        gamma0: m.f64_or("gamma0", Bounds::non_negative(), 0.1)?,
-        g1: m.f64_or("g1", Bounds::open_closed(0.0, 1.0), 1.0)?,
-        g2: m.f64_or("g2", Bounds::open_closed(0.0, 1.0), 1.0)?,
-        c: m.f64_or("c", Bounds::positive(), 1.0)?,
-        a: m.f64_or("a", Bounds::non_negative(), 0.0)?,
-    };
-    m.finish()?;
-    let scales = match s.opt_subsection("scale")? {
-        Some(mut sc) => {
-            let v = Scales {
-                r0: sc.req_quantity("r0", Dimension::LENGTH, Bounds::positive())?,
-                h0: sc.req_quantity("h0", Dimension::LENGTH, Bounds::positive())?,
-                c1: sc.req_quantity("c1", Dimension::PRESSURE, Bounds::positive())?,
-                tau1: sc.req_quantity("tau1", Dimension::TIME, Bounds::positive())?,
-            };
-            sc.finish()?;
-            Some(v)
-        }
-        None => None,
-    };
-    s.finish()?;
-    let times = (0..=steps)
-        .map(|k| t_end * k as f64 / steps as f64)
-        .collect();
-    let loading = Loading::new(control, prog, times)?.with_profiles(&profile_times);
-    Ok(MembraneStudy {
-        params,
-        geometry: Geometry { rs, nodes },
-        loading,
-        scales,
-    })
-}
-
-fn write_atomic(path: &Path, text: &str) -> anyhow::Result<()> {
-    crate::output::write_atomic(path, text.as_bytes())
-}
-
-fn history_csv(run: &MembraneRun, sc: Option<Scales>) -> String {
-    let mut s = String::from(
-        "t0,D_over_r0,H1_over_r0,F_over_C1h0r0,p_r0_over_C1h0,psi_c_rad,lambda0,a_over_r0,r_eq_over_r0,min_tension_over_C1h0",
-    );
-    if sc.is_some() {
-        s.push_str(",t_s,D_m,F_N,p_Pa,a_m");
-    }
-    s.push('\n');
-    for r in &run.history {
-        let _ = write!(
-            s,
-            "{},{},{},{},{},{},{},{},{},{}",
-            r.time,
-            r.displacement,
-            r.h1,
-            r.force,
-            r.pressure,
-            r.psi_c,
-            r.lambda0,
-            r.contact_radius,
-            r.equator_radius,
-            r.min_tension
+fn run_study(args: &MembraneArgs, path: &Path, json: bool) -> anyhow::Result<ExitCode> {
+    let study = Study::load(path)?;
+    let (name, prov) = (study.name().to_string(), provenance(&study));
+    let sim = SimulateStudy::from_study(study)?;
+    let ForwardSpec::Membrane(spec) = &sim.forward.spec else {
+        bail!(
+            "{name}: [forward] model = \"{}\"; `nlvid membrane` runs model = \"membrane\" \
+             (use `nlvid simulate` for the other models)",
+            sim.model()
         );
-        if let Some(c) = sc {
-            let _ = write!(
-                s,
-                ",{},{},{},{},{}",
-                r.time * c.tau1,
-                r.displacement * c.r0,
-                r.force * c.c1 * c.h0 * c.r0,
-                r.pressure * c.c1 * c.h0 / c.r0,
-                r.contact_radius * c.r0
-            );
-        }
-        s.push('\n');
-    }
-    s
-}
-
-fn profile_csv(sol: &nlvid_membrane::Solution) -> String {
-    let mut s = String::from(
-        "psi_rad,rho_over_r0,eta_over_r0,lambda1,lambda2,sigma1_over_C1,sigma2_over_C1,T1_over_C1h0,T2_over_C1h0,theta_rad,in_contact\n",
-    );
-    for v in &sol.profile {
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{},{},{},{},{}",
-            v.psi,
-            v.rho,
-            v.eta,
-            v.lambda1,
-            v.lambda2,
-            v.sigma1,
-            v.sigma2,
-            v.t1,
-            v.t2,
-            v.theta,
-            u8::from(v.psi <= sol.psi_c)
-        );
-    }
-    s
-}
-
-fn run_study(args: &MembraneArgs, path: &Path) -> anyhow::Result<ExitCode> {
-    let st = read_study(path)?;
-    let run = simulate(&st.params, &st.geometry, &st.loading)
-        .with_context(|| format!("study {}", path.display()))?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
-    write_atomic(&args.out.join("history.csv"), &history_csv(&run, st.scales))?;
+    };
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| next_to(path, "membrane"));
+    let profile_times = args.profile_times.clone();
+    let run = sim
+        .run(&profile_times.unwrap_or_else(|| vec![spec.program.end()]))
+        .with_context(|| format!("study {name}"))?;
+    create(&out)?;
+    write_atomic(&out.join("history.csv"), run.curve()?.to_csv().as_bytes())?;
     let mut files = vec!["history.csv".to_string()];
-    for sol in &run.profiles {
-        let name = format!("profile_t{:.4}.csv", sol.time);
-        write_atomic(&args.out.join(&name), &profile_csv(sol))?;
-        files.push(name);
+    for (time, csv) in run.profiles_csv() {
+        files.push(format!("profile_t{time:.4}s.csv"));
+        write_atomic(&out.join(&files[files.len() - 1]), csv.as_bytes())?;
     }
-    let last = run.history.last().copied();
-    if args.json {
-        let summary = serde_json::json!({
-            "study": path.display().to_string(),
-            "params": st.params,
-            "geometry": st.geometry,
-            "steps": run.history.len(),
-            "final": last,
-            "files": files,
-            "out": args.out.display().to_string(),
-        });
-        println!("{}", serde_json::to_string_pretty(&summary)?);
-    } else if let Some(l) = last {
-        println!(
-            "t0 = {:.4}: D/r0 = {:.5}, F/(C1 h0 r0) = {:.6}, ψc = {:.5} rad, p = {:.5}; wrote {} files to {}",
-            l.time,
-            l.displacement,
-            l.force,
-            l.psi_c,
-            l.pressure,
-            files.len(),
-            args.out.display()
-        );
-    }
+    let wrote = format!("{} files in {}", files.len(), out.display());
+    let files = json!({ "files": files, "out": out });
+    super::simulate::report(json, &name, &prov, &sim, &run, files, &wrote)?;
     Ok(ExitCode::SUCCESS)
 }
 
-fn figure_csv(f: &Figure) -> String {
-    let mut s = String::from("series,x,y\n");
-    for ser in &f.series {
-        for (x, y) in ser.x.iter().zip(&ser.y) {
-            let _ = writeln!(s, "\"{}\",{},{}", ser.label.replace('"', "'"), x, y);
-        }
-    }
-    s
-}
-
-fn run_reproduce(args: &MembraneArgs) -> anyhow::Result<ExitCode> {
-    let (figs, rows, notes): (Vec<Figure>, Vec<SlopeRow>, Vec<String>) =
-        nlvid_membrane::thesis::reproduce().context("reproducing ch. II")?;
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
+fn run_reproduce(args: &MembraneArgs, json: bool) -> anyhow::Result<ExitCode> {
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("membrane-thesis"));
+    let (figs, rows, notes) = nlvid_membrane::thesis::reproduce().context("reproducing ch. II")?;
+    create(&out)?;
     let mut files = Vec::new();
     for f in &figs {
-        write_atomic(&args.out.join(format!("{}.csv", f.id)), &figure_csv(f))?;
         let svg = nlvid_membrane::plot::svg(f).with_context(|| format!("drawing {}", f.id))?;
-        write_atomic(&args.out.join(format!("{}.svg", f.id)), &svg)?;
-        files.push(format!("{}.csv", f.id));
-        files.push(format!("{}.svg", f.id));
+        for (ext, text) in [("csv", f.to_csv()), ("svg", svg)] {
+            write_atomic(&out.join(format!("{}.{ext}", f.id)), text.as_bytes())?;
+            files.push(format!("{}.{ext}", f.id));
+        }
     }
-    let mut t = String::from(
-        "D_over_r0,unloading_rate,model,thesis_slope,tangent_slope,secant_slope_dD_0.01,secant_over_2_div_thesis\n",
-    );
-    for r in &rows {
-        let _ = writeln!(
-            t,
-            "{},{},{},{},{},{},{}",
-            r.d_max,
-            r.unload_rate,
-            r.model,
-            r.thesis.map(|v| v.to_string()).unwrap_or_default(),
-            r.slope,
-            r.secant,
-            r.ratio.map(|v| v.to_string()).unwrap_or_default()
-        );
-    }
-    write_atomic(&args.out.join("table2_1.csv"), &t)?;
-    files.push("table2_1.csv".into());
+    let table = nlvid_membrane::table2_1_csv(&rows);
+    write_atomic(&out.join("table2_1.csv"), table.as_bytes())?;
     let notes_text: String = notes.iter().map(|n| format!("{n}\n")).collect();
-    write_atomic(&args.out.join("notes.txt"), &notes_text)?;
-    files.push("notes.txt".into());
+    write_atomic(&out.join("notes.txt"), notes_text.as_bytes())?;
+    files.extend(["table2_1.csv".to_string(), "notes.txt".into()]);
     for n in &notes {
         eprintln!("note: {n}");
     }
-    if args.json {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(
-                &serde_json::json!({ "files": files, "table2_1": rows, "notes": notes, "out": args.out.display().to_string() })
-            )?
-        );
-    } else {
-        println!(
-            "Table 2.1 (initial unloading slope dF̄/dD̄: tangent over the first step, secant over ΔD/r0 = 0.01; ratio = secant/2 ÷ thesis):"
-        );
-        for r in &rows {
-            println!(
-                "  D/r0 = {:.2}, s_u = {:.1}, {:<10} thesis {:>7}  tangent {:8.2}  secant {:8.2}  ratio {}",
-                r.d_max,
-                r.unload_rate,
-                r.model,
-                r.thesis.map(|v| v.to_string()).unwrap_or("-".into()),
-                r.slope,
-                r.secant,
-                r.ratio.map(|v| format!("{v:.3}")).unwrap_or("-".into())
-            );
-        }
-        println!("wrote {} files to {}", files.len(), args.out.display());
+    if json {
+        // Dimensionless quantities of eq. 2.47, named as the CSV columns.
+        let table: Vec<_> = rows
+            .iter()
+            .map(|r| {
+                json!({
+                    "D_over_r0": r.d_max, "unloading_rate": r.unload_rate, "model": r.model,
+                    "thesis_slope": r.thesis, "tangent_slope": r.slope,
+                    "secant_slope_dD_0.01": r.secant, "secant_over_2_div_thesis": r.ratio,
+                })
+            })
+            .collect();
+        return print_json(
+            &json!({ "files": files, "table2_1": table, "notes": notes, "out": out }),
+        )
+        .map(|()| ExitCode::SUCCESS);
     }
+    print_text(&nlvid_membrane::table2_1_text(&rows))?;
+    say!("wrote {} files to {}", files.len(), out.display())?;
     Ok(ExitCode::SUCCESS)
 }
 
 /// Run `nlvid membrane`.
-pub fn run(args: MembraneArgs) -> anyhow::Result<ExitCode> {
+///
+/// # Errors
+/// A bad study, a failed run, unwritable outputs.
+pub fn run(args: MembraneArgs, json: bool) -> anyhow::Result<ExitCode> {
     match (&args.reproduce, &args.study) {
-        (Some(Reproduce::Thesis), _) => run_reproduce(&args),
-        (None, Some(p)) => run_study(&args, &p.clone()),
+        (Some(Reproduce::Thesis), _) => run_reproduce(&args, json),
+        (None, Some(p)) => run_study(&args, &p.clone(), json),
         (None, None) => bail!("give a study file or --reproduce thesis"),
     }
 }

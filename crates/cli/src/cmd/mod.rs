@@ -25,6 +25,7 @@ pub mod membrane;
 mod report;
 pub mod sample;
 mod simulate;
+mod slurm;
 pub mod surrogate;
 
 /// Identify non-linear viscoelastic properties of capsules and cells from
@@ -100,6 +101,8 @@ pub enum Command {
     Build(build::BuildArgs),
     /// Merge shard stores of one build.
     Merge(build::MergeArgs),
+    /// A build as a Slurm job array plus a merge job; `--status DIR` reports it.
+    Slurm(slurm::Args),
     /// Kriging surrogates: fit, predict, check.
     #[command(subcommand)]
     Surrogate(surrogate::SurrogateCmd),
@@ -126,24 +129,19 @@ impl Command {
                         "version": env!("CARGO_PKG_VERSION"),
                     }))?;
                 } else {
-                    println!("nlvid {}", env!("CARGO_PKG_VERSION"));
+                    say!("nlvid {}", env!("CARGO_PKG_VERSION"))?;
                 }
                 Ok(ExitCode::SUCCESS)
             }
             Command::Check(a) => a.run(ctx),
             Command::Material(a) => a.run(ctx),
-            Command::Membrane(mut args) => {
-                args.json = ctx.json;
-                membrane::run(args)
-            }
+            Command::Membrane(args) => membrane::run(args, ctx.json),
             Command::Simulate(a) => a.run(ctx),
-            Command::Inspect(mut args) => {
-                args.json = ctx.json;
-                args.run()
-            }
+            Command::Inspect(args) => args.run(ctx.json),
             Command::Sample(a) => a.run(),
             Command::Build(a) => a.run(),
             Command::Merge(a) => a.run(),
+            Command::Slurm(a) => a.run(ctx),
             Command::Surrogate(c) => c.run(ctx.json),
             Command::Cohort(a) => a.run(ctx),
             Command::Compare(a) => a.run(ctx),

@@ -33,10 +33,10 @@ impl Run for Args {
                 self.dir.display()
             );
         }
-        if let Some(p) = &self.surrogate_check {
-            if !p.is_file() {
-                anyhow::bail!("--surrogate-check {}: no such file", p.display());
-            }
+        if let Some(p) = &self.surrogate_check
+            && !p.is_file()
+        {
+            anyhow::bail!("--surrogate-check {}: no such file", p.display());
         }
         Ok((
             self.dir,
@@ -57,11 +57,11 @@ impl Run for Args {
                 "svgs": files.svgs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
             }))?;
         } else {
-            println!(
+            say!(
                 "report: {} ({} figures)",
                 files.html.display(),
                 files.figure_ids.len()
-            );
+            )?;
         }
         Ok(ExitCode::SUCCESS)
     }

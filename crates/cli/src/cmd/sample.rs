@@ -5,16 +5,15 @@ use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 use clap::Args;
-use nlvid_surrogate::doe::{Domain, training_and_checking};
-
-use super::surrogate::write_table;
+use nlvid_surrogate::doe::training_and_checking;
+use nlvid_surrogate::{read_domain, write_table};
 
 /// Arguments of `sample`.
 #[derive(Debug, Args)]
 pub struct SampleArgs {
     /// Study file with `[forward]` and `[design]` sections (docs/study-format.md).
     pub study: Option<PathBuf>,
-    /// Domain file (TOML: `[[axes]]` name, unit, lower, upper, log; `[[constraints]]` coeffs, bound); flag-only use.
+    /// Domain file (TOML: `[[parameters]]` name, unit, lower, upper, scale = "linear"/"log"; `[[constraints]]` coefficients, rhs, label); flag-only use.
     #[arg(long, conflicts_with = "study")]
     pub domain: Option<PathBuf>,
     /// Training points (flag-only use).
@@ -39,19 +38,13 @@ impl SampleArgs {
     pub fn run(self) -> anyhow::Result<ExitCode> {
         let (domain, train, check) = if let Some(path) = &self.study {
             let st = super::build::read_study(path)?;
-            let (train, check) = st.design.designs()?;
-            (st.design.domain, train, check)
+            let (train, check) = st.settings.design.designs()?;
+            (st.settings.design.domain, train, check)
         } else {
             let (Some(dpath), Some(n)) = (&self.domain, self.n) else {
                 bail!("give a study file, or --domain FILE and -n N");
             };
-            let text = std::fs::read_to_string(dpath)
-                .with_context(|| format!("cannot read {}", dpath.display()))?;
-            let domain: Domain =
-                toml::from_str(&text).with_context(|| format!("{}", dpath.display()))?;
-            domain
-                .validate()
-                .with_context(|| format!("{}", dpath.display()))?;
+            let domain = read_domain(dpath, &[], &[])?;
             let (train, check) = training_and_checking(
                 &domain,
                 n,
@@ -65,17 +58,20 @@ impl SampleArgs {
         };
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("cannot create {}", self.out.display()))?;
-        let header: Vec<String> = domain.axes.iter().map(|a| a.name.clone()).collect();
-        write_table(Some(&self.out.join("train.csv")), &header, &train)?;
-        if !check.is_empty() {
-            write_table(Some(&self.out.join("check.csv")), &header, &check)?;
+        let header = domain.names();
+        for (name, rows) in [("train.csv", &train), ("check.csv", &check)] {
+            if !rows.is_empty() {
+                let mut buf = Vec::new();
+                write_table(&mut buf, &header, rows)?;
+                crate::output::write_atomic(&self.out.join(name), &buf)?;
+            }
         }
-        println!(
+        say!(
             "wrote {} training and {} checking points to {}",
             train.len(),
             check.len(),
             self.out.display()
-        );
+        )?;
         Ok(ExitCode::SUCCESS)
     }
 }

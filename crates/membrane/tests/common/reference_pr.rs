@@ -47,8 +47,8 @@ impl PipkinRogersMembrane {
     /// G1(0), G2(0), G1(∞), G2(∞), τ1, τ2.
     fn moduli(&self) -> (f64, f64, f64, f64, f64, f64) {
         let p = &self.p;
-        let g10 = p.c1;
-        let g20 = p.gamma0 * p.c1;
+        let g10 = p.g10;
+        let g20 = p.gamma0 * p.g10;
         (g10, g20, p.g1 * g10, p.g2 * g20, p.tau1, p.tau1 / p.c)
     }
 

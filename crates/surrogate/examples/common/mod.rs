@@ -4,8 +4,9 @@
 //! domain, N training sites and 200 checking sites (seed 42).
 #![allow(dead_code)] // each example uses a part
 
-use nlvid_surrogate::doe::{Domain, training_and_checking};
-use nlvid_surrogate::{ForwardModel, HertzProny};
+use nlvid_forward::HertzProny;
+use nlvid_model::{Domain, ForwardModel};
+use nlvid_surrogate::doe::training_and_checking;
 
 /// Domain, training and checking sites (physical units) and the model's
 /// responses at them.
@@ -25,7 +26,7 @@ pub const N_CHECK: usize = 200;
 
 /// The forward model of the problem.
 pub fn cell_model() -> HertzProny {
-    HertzProny::new(5e-6, 1e-6, 1.0, 10.0, OUTPUTS)
+    HertzProny::new(5e-6, 1e-6, 1.0, 10.0, OUTPUTS).expect("valid settings")
 }
 
 /// The problem with `n` training sites, the model run at every site:
@@ -45,7 +46,7 @@ pub fn cell_problem(n: usize) -> Result<CellProblem, Box<dyn std::error::Error>>
 /// design is drawn).
 pub fn kriging_inputs(domain: &Domain, x: &[f64]) -> Vec<f64> {
     x.iter()
-        .zip(&domain.axes)
-        .map(|(v, a)| if a.log { v.ln() } else { *v })
+        .zip(domain.params())
+        .map(|(v, p)| if p.is_log() { v.ln() } else { *v })
         .collect()
 }

@@ -1,4 +1,4 @@
-//! What `nlvid fit` reports: parameters with units, G(t) and E(t) = 3G(t)
+//! What a fit reports: parameters with units, G(t) and E(t) = 3G(t)
 //! (eq. 5.1), per experiment the surrogate and real-model misfits (eq. 5.3)
 //! and whether they agree within the surrogate's checking error, the flags
 //! of the fit (parameter on a bound, alternatives that fit almost as well,
@@ -7,15 +7,16 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::Context as _;
 use nlvid_inverse::{
-    Experiment, FigureCurve, FitFigure, FitResult, Identifiability, Misfit, Model, ModulusPoint,
-    Rerun, SensitivityScaling, Z95, identifiability, range_normalised_rmse,
+    Experiment, FigureCurve, FitFigure, FitResult, Identifiability, Misfit, Model, Rerun,
+    SensitivityScaling, Z95, identifiability, range_normalised_rmse,
 };
+use nlvid_model::ModulusPoint;
 use serde_json::json;
 
-use super::config::FitSettings;
 use super::data::LoadedExperiment;
+use crate::error::{ReportError, Result};
+use crate::settings::FitSettings;
 
 /// Whether the surrogate and real-model misfits agree within the checking
 /// error (issue 6): `yes`, `no`, or `unknown` (no real model or no
@@ -95,7 +96,7 @@ pub struct Outcome {
     experiments: Vec<ExperimentOutcome>,
     modulus: Vec<ModulusPoint>,
     /// Local identifiability on the surrogates at the optimum, or why not.
-    identifiability: Result<Identifiability, String>,
+    identifiability: std::result::Result<Identifiability, String>,
     seconds: f64,
 }
 
@@ -108,9 +109,9 @@ impl Outcome {
         settings: &FitSettings,
         experiments: &[LoadedExperiment],
         fit: FitResult,
-        reruns: Vec<Result<Option<Rerun>, String>>,
+        reruns: Vec<std::result::Result<Option<Rerun>, String>>,
         seconds: f64,
-    ) -> anyhow::Result<Self> {
+    ) -> Result<Self> {
         let x = &fit.best.x;
         let mut out = Vec::with_capacity(experiments.len());
         for (e, result) in experiments.iter().zip(reruns) {
@@ -143,7 +144,7 @@ impl Outcome {
                         "no checking error: run `nlvid surrogate check {} --x X.csv --y Y.csv` \
                          on independent checking runs (it saves {}), or set `checking` in [fit]",
                         e.surrogate.path.display(),
-                        super::data::default_checking_path(&e.surrogate.path).display()
+                        nlvid_surrogate::check::summary_path(&e.surrogate.path).display()
                     )),
                 ),
             };
@@ -179,12 +180,9 @@ impl Outcome {
     ///
     /// # Errors
     /// The directory or a figure cannot be written.
-    pub fn with_plots(
-        mut self,
-        experiments: &[LoadedExperiment],
-        dir: &Path,
-    ) -> anyhow::Result<Self> {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    pub fn with_plots(mut self, experiments: &[LoadedExperiment], dir: &Path) -> Result<Self> {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| ReportError::io(dir, format!("cannot create: {e}")))?;
         for (o, e) in self.experiments.iter_mut().zip(experiments) {
             let path = dir.join(format!("fit-{}.svg", file_safe(&o.label)));
             let title = format!(
@@ -231,7 +229,7 @@ impl Outcome {
     ///
     /// # Errors
     /// Never for a result of a fit (parameter count mismatch otherwise).
-    pub fn to_json(&self) -> anyhow::Result<serde_json::Value> {
+    pub fn to_json(&self) -> Result<serde_json::Value> {
         let params = self.fit.parameters()?;
         Ok(json!({
             "study": self.study,

@@ -1,13 +1,13 @@
 //! The real forward model at the optimum (§4.4.1 step 5, §5.4.1): any
-//! `nlvid_surrogate::ForwardModel` is run once and scored with eq. 5.3
+//! `nlvid_model::ForwardModel` is run once and scored with eq. 5.3
 //! ([`nlvid_inverse::rerun`]); this module only sets up the model an
 //! experiment names.
 
-use anyhow::{Context as _, bail};
-use nlvid_inverse::{Domain, ForwardFromModel, LeeRadokHertz, Model as _, Rerun, rerun};
-use nlvid_surrogate::ForwardModel;
+use nlvid_inverse::{ForwardFromModel, LeeRadokHertz, Model as _, Rerun, rerun};
+use nlvid_model::{Domain, ForwardModel};
 
 use super::data::{LoadedExperiment, RealModel};
+use crate::error::{ReportError, Result};
 
 /// Lee–Radok Hertz driven by the curve's own measured indentation, on
 /// 0 ∪ the surrogate grid (the hereditary integral starts from rest at
@@ -17,12 +17,12 @@ fn lee_radok(
     domain: &Domain,
     radius: f64,
     poisson: f64,
-) -> anyhow::Result<Box<dyn ForwardModel>> {
+) -> Result<Box<dyn ForwardModel>> {
     let Some(delta) = &exp.curve.indentation else {
-        bail!(
+        return Err(ReportError::InvalidSetting(format!(
             "{}: the Lee-Radok re-check needs an indentation history (AFM data)",
             exp.curve.path.display()
-        );
+        )));
     };
     let times = exp.surrogate.model.times();
     let grid: Vec<f64> = (times[0] > 0.0)
@@ -42,11 +42,7 @@ fn lee_radok(
 ///
 /// # Errors
 /// Set-up or run failures, naming the curve.
-pub fn recheck(
-    exp: &LoadedExperiment,
-    domain: &Domain,
-    x: &[f64],
-) -> anyhow::Result<Option<Rerun>> {
+pub fn recheck(exp: &LoadedExperiment, domain: &Domain, x: &[f64]) -> Result<Option<Rerun>> {
     let built;
     let model: &dyn ForwardModel = match &exp.real {
         None => return Ok(None),
@@ -64,6 +60,8 @@ pub fn recheck(
         &exp.force,
         exp.weights.as_deref(),
     )
-    .with_context(|| format!("{}: re-check with the real model", exp.label))?;
+    .map_err(|e| {
+        ReportError::InvalidSetting(format!("{}: re-check with the real model: {e}", exp.label))
+    })?;
     Ok(Some(r))
 }

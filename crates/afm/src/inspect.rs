@@ -1,0 +1,318 @@
+//! What `nlvid inspect` shows of a force curve: a text summary of the file
+//! (calibration, segments, channel ranges), a quick Hertz (eq. 1.1) or
+//! Lee–Radok Prony fit, and the SVG of data (vs fit).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde_json::json;
+
+use crate::error::Result;
+use crate::{
+    ContactMethod, ForceCurve, HertzSettings, LeeRadokSettings, fit_hertz, fit_lee_radok,
+    hertz_force, plot, prepare_approach, prepare_ramp_hold,
+};
+
+/// The quick fits of `nlvid inspect`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum QuickFitKind {
+    /// Paraboloidal Hertz fit of the approach (eq. 1.1), E and contact point free.
+    Hertz {
+        /// Poisson's ratio of the sample.
+        poisson: f64,
+    },
+    /// Lee–Radok Prony fit of the extend + hold segments.
+    LeeRadok {
+        /// Prony terms (1 to 3).
+        terms: usize,
+    },
+}
+
+/// A quick fit: its results with units, one line of text, and the data
+/// and model curves (nN against µm or s) for a plot.
+#[derive(Debug, Clone, PartialEq)]
+pub struct QuickFit {
+    /// `hertz-paraboloid` or `lee-radok-prony`.
+    pub model: &'static str,
+    /// `(key with unit suffix, value)`, e.g. `("youngs_modulus_Pa", 2.3e5)`.
+    pub values: Vec<(String, f64)>,
+    /// Prony terms `(G_k Pa, τ_k s)` of a Lee–Radok fit.
+    pub terms: Vec<(f64, f64)>,
+    /// One line for people.
+    pub text: String,
+    /// Abscissae of the plot.
+    pub x: Vec<f64>,
+    /// Measured force, nN.
+    pub data: Vec<f64>,
+    /// Fitted force, nN.
+    pub model_force: Vec<f64>,
+    /// Abscissa label.
+    pub x_label: &'static str,
+}
+
+impl QuickFit {
+    /// JSON: `model`, the values by their unit-suffixed keys, and `terms`
+    /// (`g_Pa`, `tau_s`) of a Lee–Radok fit.
+    pub fn to_json(&self) -> serde_json::Value {
+        let mut m: serde_json::Map<_, _> = self
+            .values
+            .iter()
+            .map(|(k, x)| (k.clone(), json!(x)))
+            .collect();
+        m.insert("model".into(), json!(self.model));
+        if !self.terms.is_empty() {
+            let t: Vec<_> = self
+                .terms
+                .iter()
+                .map(|(g, t)| json!({"g_Pa": g, "tau_s": t}))
+                .collect();
+            m.insert("terms".into(), json!(t));
+        }
+        m.into()
+    }
+}
+
+/// Runs a quick fit with probe radius `r` (m).
+///
+/// # Errors
+/// No contact point, too few points, a fit that does not converge.
+pub fn quick_fit(
+    curve: &ForceCurve,
+    kind: QuickFitKind,
+    r: f64,
+    method: ContactMethod,
+) -> Result<QuickFit> {
+    let nano = |v: &[f64]| v.iter().map(|f| f * 1e9).collect::<Vec<_>>();
+    match kind {
+        QuickFitKind::Hertz { poisson: nu } => {
+            let a = prepare_approach(curve, method)?;
+            let f = fit_hertz(&a.separation, &a.force, &HertzSettings::new(r, nu))?;
+            let model: Vec<f64> = a
+                .separation
+                .iter()
+                .map(|s| f.offset + hertz_force(f.contact_point - s, f.youngs_modulus, r, nu))
+                .collect();
+            Ok(QuickFit {
+                model: "hertz-paraboloid",
+                values: vec![
+                    ("tip_radius_m".into(), r),
+                    ("poisson".into(), nu),
+                    ("youngs_modulus_Pa".into(), f.youngs_modulus),
+                    ("contact_point_m".into(), f.contact_point),
+                    ("offset_N".into(), f.offset),
+                    ("rmse_N".into(), f.rmse),
+                    ("range_normalised_rmse".into(), f.range_normalised_rmse),
+                    ("n_points".into(), f.n_points as f64),
+                ],
+                terms: Vec::new(),
+                text: format!(
+                    "Hertz (paraboloid, R = {r:e} m, ν = {nu}): E = {:.6e} Pa, contact point = {:.6e} m, offset = {:.3e} N, range-normalised RMSE = {:.4}, {} points",
+                    f.youngs_modulus,
+                    f.contact_point,
+                    f.offset,
+                    f.range_normalised_rmse,
+                    f.n_points
+                ),
+                x: a.separation.iter().map(|s| s * 1e6).collect(),
+                data: nano(&a.force),
+                model_force: nano(&model),
+                x_label: "tip-sample separation (um)",
+            })
+        }
+        QuickFitKind::LeeRadok { terms } => {
+            let rh = prepare_ramp_hold(curve, method)?;
+            let mut s = LeeRadokSettings::new(r);
+            s.n_terms = terms;
+            let f = fit_lee_radok(&rh.time, &rh.indentation, &rh.force, &s)?;
+            let g = &f.relaxation;
+            // Term moduli G_k = G0 g_k (Pa).
+            let moduli: Vec<(f64, f64)> = g
+                .prony()
+                .terms()
+                .iter()
+                .map(|t| (g.g0() * t.weight, t.tau))
+                .collect();
+            let terms_txt: Vec<String> = moduli
+                .iter()
+                .map(|(g, t)| format!("G = {g:.4e} Pa, tau = {t:.4e} s"))
+                .collect();
+            Ok(QuickFit {
+                model: "lee-radok-prony",
+                values: vec![
+                    ("tip_radius_m".into(), r),
+                    ("g_inf_Pa".into(), g.g_inf()),
+                    ("g0_Pa".into(), g.g0()),
+                    ("rmse_N".into(), f.rmse),
+                    ("range_normalised_rmse".into(), f.range_normalised_rmse),
+                    ("contact_time_s".into(), rh.contact_time),
+                    ("iterations".into(), f.iterations as f64),
+                ],
+                terms: moduli,
+                text: format!(
+                    "Lee-Radok Prony (R = {r:e} m, {} terms): G_inf = {:.4e} Pa; {}; G(0) = {:.4e} Pa; range-normalised RMSE = {:.4} ({} points from contact at t = {:.4} s, {} Nelder-Mead iterations)",
+                    s.n_terms,
+                    g.g_inf(),
+                    terms_txt.join("; "),
+                    g.g0(),
+                    f.range_normalised_rmse,
+                    rh.time.len(),
+                    rh.contact_time,
+                    f.iterations
+                ),
+                x: rh.time.clone(),
+                data: nano(&rh.force),
+                model_force: nano(&f.force_fit),
+                x_label: "time since contact (s)",
+            })
+        }
+    }
+}
+
+/// The file name of a curve's source, for titles.
+fn source_name(source: &str) -> String {
+    Path::new(source)
+        .file_name()
+        .map_or_else(|| source.to_string(), |n| n.to_string_lossy().into_owned())
+}
+
+/// SVG of force (nN) against time for every segment, or data vs fit.
+///
+/// # Errors
+/// A channel cannot be converted to force; the file cannot be written.
+pub fn write_plot(path: &Path, curve: &ForceCurve, fit: Option<&QuickFit>) -> Result<()> {
+    let title = source_name(&curve.source);
+    if let Some(f) = fit {
+        let series = [
+            plot::Series {
+                label: "data",
+                x: &f.x,
+                y: &f.data,
+            },
+            plot::Series {
+                label: "fit",
+                x: &f.x,
+                y: &f.model_force,
+            },
+        ];
+        let title = format!("{title}: data vs fit");
+        return plot::write_svg(path, &title, f.x_label, "force (nN)", &series);
+    }
+    let forces: Vec<Vec<f64>> = curve
+        .segments
+        .iter()
+        .map(|s| s.force().map(|f| f.iter().map(|v| v * 1e9).collect()))
+        .collect::<Result<_>>()?;
+    let labels: Vec<String> = curve
+        .segments
+        .iter()
+        .map(|s| format!("{} {}", s.index, s.kind))
+        .collect();
+    let series: Vec<plot::Series<'_>> = curve
+        .segments
+        .iter()
+        .zip(&forces)
+        .zip(&labels)
+        .map(|((s, f), l)| plot::Series {
+            label: l,
+            x: &s.time,
+            y: f,
+        })
+        .collect();
+    plot::write_svg(path, &title, "time (s)", "force (nN)", &series)
+}
+
+/// Smallest and largest value.
+pub fn range(values: &[f64]) -> (f64, f64) {
+    values
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(*v), hi.max(*v))
+        })
+}
+
+/// The text summary of a curve (`n_curves`: curves in its file).
+pub fn summary_text(c: &ForceCurve, n_curves: usize) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "file:        {}", c.source);
+    if n_curves > 1 {
+        let _ = writeln!(out, "curves:      {n_curves} in the map");
+    }
+    let _ = writeln!(out, "format:      JPK {}", c.format_version);
+    if let Some(i) = &c.instrument {
+        let _ = writeln!(out, "instrument:  {i}");
+    }
+    if let Some((x, y)) = c.position {
+        let _ = writeln!(out, "position:    x = {x:e} m, y = {y:e} m");
+    }
+    let cal = &c.calibration;
+    let _ = writeln!(
+        out,
+        "calibration: spring constant {} N/m ({:?}), sensitivity {} nm/V ({:?})",
+        cal.spring_constant,
+        cal.spring_constant_source,
+        cal.sensitivity * 1e9,
+        cal.sensitivity_source
+    );
+    let _ = writeln!(out, "segments:");
+    for s in &c.segments {
+        let _ = writeln!(
+            out,
+            "  {} {:<8} {:<12} {:>6} points  {:>9.4} s  t = {:.4} .. {:.4} s",
+            s.index,
+            s.kind.as_str(),
+            s.name,
+            s.len(),
+            s.duration,
+            s.time.first().copied().unwrap_or(f64::NAN),
+            s.time.last().copied().unwrap_or(f64::NAN)
+        );
+        for ch in &s.channels {
+            let (lo, hi) = range(&ch.values);
+            let _ = writeln!(
+                out,
+                "      {:<18} [{}] via {:<10} {lo:.6e} .. {hi:.6e}",
+                ch.name, ch.unit, ch.conversion
+            );
+        }
+    }
+    out
+}
+
+/// The JSON summary of a curve (`n_curves`: curves in its file); with
+/// `samples`, every segment's `time_s` and every channel's `values` too.
+pub fn summary_json(c: &ForceCurve, n_curves: usize, samples: bool) -> serde_json::Value {
+    let source = |s| format!("{s:?}").to_lowercase();
+    json!({
+        "source": c.source,
+        "curves_in_file": n_curves,
+        "format_version": c.format_version,
+        "instrument": c.instrument,
+        "position_m": c.position.map(|(x, y)| [x, y]),
+        "calibration": {
+            "spring_constant_N_per_m": c.calibration.spring_constant,
+            "spring_constant_source": source(c.calibration.spring_constant_source),
+            "sensitivity_m_per_V": c.calibration.sensitivity,
+            "sensitivity_source": source(c.calibration.sensitivity_source),
+        },
+        "segments": c.segments.iter().map(|s| {
+            let mut seg = json!({
+                "index": s.index, "kind": s.kind.as_str(), "name": s.name,
+                "points": s.len(), "duration_s": s.duration,
+                "t_start_s": s.time.first(), "t_end_s": s.time.last(),
+                "channels": s.channels.iter().map(|ch| {
+                    let (min, max) = range(&ch.values);
+                    let mut v = json!({ "name": ch.name, "unit": ch.unit,
+                        "conversion": ch.conversion, "min": min, "max": max });
+                    if samples {
+                        v["values"] = json!(ch.values);
+                    }
+                    v
+                }).collect::<Vec<_>>(),
+            });
+            if samples {
+                seg["time_s"] = json!(s.time);
+            }
+            seg
+        }).collect::<Vec<_>>(),
+    })
+}

@@ -1,0 +1,325 @@
+//! The element kinds a [`crate::Model`] can be built from: the mesh type,
+//! the number of displacement components per node and the element kernel.
+//!
+//! - [`Axisymmetric`]: [`crate::Mesh`] of 4-node quadrilaterals in the
+//!   (r, z) half-plane, dofs (u_r, u_z), the F-bar Q4 of [`crate::element`].
+//! - [`Solid`]: [`crate::Mesh3`] of 8-node hexahedra, dofs (u_x, u_y, u_z),
+//!   the F-bar hexahedron of [`crate::hex`].
+//!
+//! Everything else in the model (supports, rigid planes, the fluid cavity,
+//! the sparse solver, Newton and the time stepping) is shared.
+
+use crate::element::{ElementOutput, PointFailure, PointGeometry, TangentPart};
+use crate::hex::{HexOutput, HexPoint};
+use crate::{FemError, Mesh, Mesh3, Result};
+use nlvid_material::{Mat3, Material3};
+
+/// Axisymmetric solids (module docs).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Axisymmetric;
+
+/// 3D solids (module docs).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Solid;
+
+/// The boundary of a fluid cavity, as the mesh describes it.
+#[doc(hidden)]
+#[derive(Debug, Clone)]
+pub enum CavityCells {
+    /// Straight segments (a, b) of an (r, z) polyline (axisymmetric).
+    Segments(Vec<[usize; 2]>),
+    /// Bilinear quadrilaterals (3D).
+    Quads(Vec<[usize; 4]>),
+}
+
+/// What a mesh offers the model (implemented by [`Mesh`] and [`Mesh3`]).
+pub trait Topology: Send + Sync {
+    /// Number of nodes.
+    fn node_count(&self) -> usize;
+    /// Reference coordinates of node `a` (2 or 3 components).
+    fn position(&self, a: usize) -> &[f64];
+    /// Number of elements.
+    fn element_count(&self) -> usize;
+    /// Nodes of element `e`.
+    fn connectivity(&self, e: usize) -> &[usize];
+    /// The node set `name`.
+    ///
+    /// # Errors
+    /// [`FemError::Mesh`] if there is no such set.
+    fn node_set(&self, name: &str) -> Result<&[usize]>;
+    /// Nodes of the contact surface `name`, their tributary areas (m², the
+    /// full revolved area for axisymmetric meshes) and spacings (m).
+    ///
+    /// # Errors
+    /// [`FemError::Mesh`] if there is no such surface.
+    fn contact_weights(&self, name: &str) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>)>;
+    /// The cells bounding the cavity `name`.
+    ///
+    /// # Errors
+    /// [`FemError::Mesh`] if there is no such boundary.
+    #[doc(hidden)]
+    fn cavity_cells(&self, name: &str) -> Result<CavityCells>;
+}
+
+impl Topology for Mesh {
+    fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+    fn position(&self, a: usize) -> &[f64] {
+        &self.nodes[a]
+    }
+    fn element_count(&self) -> usize {
+        self.elements.len()
+    }
+    fn connectivity(&self, e: usize) -> &[usize] {
+        &self.elements[e]
+    }
+    fn node_set(&self, name: &str) -> Result<&[usize]> {
+        self.nodes_in(name)
+    }
+    fn contact_weights(&self, name: &str) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>)> {
+        let nodes = self.nodes_in(name)?.to_vec();
+        let (area, len) = tributary(self, &nodes);
+        Ok((nodes, area, len))
+    }
+    /// An ordered node set read as a polyline (consecutive nodes joined).
+    fn cavity_cells(&self, name: &str) -> Result<CavityCells> {
+        let nodes = self.nodes_in(name)?;
+        if nodes.len() < 2 {
+            return Err(FemError::Mesh(format!(
+                "cavity boundary `{name}` needs at least two nodes"
+            )));
+        }
+        Ok(CavityCells::Segments(
+            nodes.windows(2).map(|w| [w[0], w[1]]).collect(),
+        ))
+    }
+}
+
+impl Topology for Mesh3 {
+    fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+    fn position(&self, a: usize) -> &[f64] {
+        &self.nodes[a]
+    }
+    fn element_count(&self) -> usize {
+        self.elements.len()
+    }
+    fn connectivity(&self, e: usize) -> &[usize] {
+        &self.elements[e]
+    }
+    fn node_set(&self, name: &str) -> Result<&[usize]> {
+        self.nodes_in(name)
+    }
+    fn contact_weights(&self, name: &str) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>)> {
+        self.tributary(name)
+    }
+    fn cavity_cells(&self, name: &str) -> Result<CavityCells> {
+        let faces = self.faces_in(name)?;
+        if faces.is_empty() {
+            return Err(FemError::Mesh(format!("cavity boundary `{name}` is empty")));
+        }
+        Ok(CavityCells::Quads(faces.to_vec()))
+    }
+}
+
+/// Consistent tributary areas 2π∫N_a r ds and spacings of an ordered
+/// surface node set of an axisymmetric mesh.
+fn tributary(mesh: &Mesh, nodes: &[usize]) -> (Vec<f64>, Vec<f64>) {
+    let mut area = vec![0.0; nodes.len()];
+    let mut len = vec![0.0; nodes.len()];
+    for k in 0..nodes.len().saturating_sub(1) {
+        let a = mesh.nodes[nodes[k]];
+        let b = mesh.nodes[nodes[k + 1]];
+        let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        let tp = 2.0 * std::f64::consts::PI * l;
+        area[k] += tp * (a[0] / 3.0 + b[0] / 6.0);
+        area[k + 1] += tp * (a[0] / 6.0 + b[0] / 3.0);
+        len[k] += 0.5 * l;
+        len[k + 1] += 0.5 * l;
+    }
+    // End nodes have one segment: use its full length as the spacing.
+    if let Some(f) = len.first_mut() {
+        *f *= 2.0;
+    }
+    if let Some(l) = len.last_mut() {
+        *l *= 2.0;
+    }
+    (area, len)
+}
+
+/// An element kind (module docs). Implemented by [`Axisymmetric`] and
+/// [`Solid`] only.
+pub trait ElementKind: Send + Sync + 'static {
+    /// Displacement components per node.
+    const DIM: usize;
+    /// Nodes per element.
+    const NODES: usize;
+    /// Quadrature points per element.
+    const POINTS: usize;
+    /// Mesh type.
+    type Mesh: Topology;
+    /// Precomputed reference geometry of one element.
+    #[doc(hidden)]
+    type Geometry: Send + Sync;
+    /// Residual and tangent storage of one element.
+    #[doc(hidden)]
+    type Output: Clone + Send;
+
+    /// An empty output.
+    #[doc(hidden)]
+    fn output() -> Self::Output;
+
+    /// Reference geometry of every element.
+    ///
+    /// # Errors
+    /// [`FemError::Mesh`] for a degenerate element.
+    #[doc(hidden)]
+    fn geometry(mesh: &Self::Mesh) -> Result<Vec<Self::Geometry>>;
+
+    /// Residual (and tangent unless `part` is [`TangentPart::None`]) of one
+    /// element for its dof values `u` (node-major).
+    #[doc(hidden)]
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate<M: Material3>(
+        material: &M,
+        geometry: &Self::Geometry,
+        u: &[f64],
+        state_n: &[M::State],
+        trial: &mut [M::State],
+        dt: f64,
+        fbar: bool,
+        part: TangentPart,
+        out: &mut Self::Output,
+    ) -> std::result::Result<(), PointFailure>;
+
+    /// The element residual.
+    #[doc(hidden)]
+    fn residual(out: &Self::Output) -> &[f64];
+
+    /// Row `a` of the element tangent.
+    #[doc(hidden)]
+    fn tangent_row(out: &Self::Output, a: usize) -> &[f64];
+
+    /// `Σ_q w_q ψ(F̄_q)` of one element for a strain-energy density `psi`.
+    #[doc(hidden)]
+    fn energy(geometry: &Self::Geometry, u: &[f64], fbar: bool, psi: &dyn Fn(&Mat3) -> f64) -> f64;
+}
+
+fn bad_length(n: usize) -> PointFailure {
+    (
+        0,
+        nlvid_material::MaterialError::Deformation(format!("element dof vector has {n} entries")),
+    )
+}
+
+impl ElementKind for Axisymmetric {
+    const DIM: usize = 2;
+    const NODES: usize = 4;
+    const POINTS: usize = 4;
+    type Mesh = Mesh;
+    type Geometry = [PointGeometry; 4];
+    type Output = ElementOutput;
+
+    fn output() -> ElementOutput {
+        ElementOutput::zero()
+    }
+
+    fn geometry(mesh: &Mesh) -> Result<Vec<[PointGeometry; 4]>> {
+        Ok(mesh
+            .elements
+            .iter()
+            .map(|conn| crate::element::element_geometry(&conn.map(|a| mesh.nodes[a])))
+            .collect())
+    }
+
+    fn evaluate<M: Material3>(
+        material: &M,
+        geometry: &[PointGeometry; 4],
+        u: &[f64],
+        state_n: &[M::State],
+        trial: &mut [M::State],
+        dt: f64,
+        fbar: bool,
+        part: TangentPart,
+        out: &mut ElementOutput,
+    ) -> std::result::Result<(), PointFailure> {
+        let u: &[f64; 8] = u.try_into().map_err(|_| bad_length(u.len()))?;
+        crate::element::fbar_element(material, geometry, u, state_n, trial, dt, fbar, part, out)
+    }
+
+    fn residual(out: &ElementOutput) -> &[f64] {
+        &out.r
+    }
+
+    fn tangent_row(out: &ElementOutput, a: usize) -> &[f64] {
+        &out.k[a]
+    }
+
+    fn energy(
+        geometry: &[PointGeometry; 4],
+        u: &[f64],
+        fbar: bool,
+        psi: &dyn Fn(&Mat3) -> f64,
+    ) -> f64 {
+        crate::element::element_energy(geometry, u, fbar, psi)
+    }
+}
+
+impl ElementKind for Solid {
+    const DIM: usize = 3;
+    const NODES: usize = 8;
+    const POINTS: usize = 8;
+    type Mesh = Mesh3;
+    type Geometry = [HexPoint; 8];
+    type Output = Box<HexOutput>;
+
+    fn output() -> Box<HexOutput> {
+        Box::new(HexOutput::zero())
+    }
+
+    fn geometry(mesh: &Mesh3) -> Result<Vec<[HexPoint; 8]>> {
+        mesh.elements
+            .iter()
+            .enumerate()
+            .map(|(e, conn)| {
+                crate::hex::element_geometry(&conn.map(|a| mesh.nodes[a])).map_err(|(q, det)| {
+                    FemError::Mesh(format!(
+                        "element {e} is inverted or degenerate at Gauss point {q} (det J = {det:.3e})"
+                    ))
+                })
+            })
+            .collect()
+    }
+
+    fn evaluate<M: Material3>(
+        material: &M,
+        geometry: &[HexPoint; 8],
+        u: &[f64],
+        state_n: &[M::State],
+        trial: &mut [M::State],
+        dt: f64,
+        fbar: bool,
+        part: TangentPart,
+        out: &mut Box<HexOutput>,
+    ) -> std::result::Result<(), PointFailure> {
+        let u: &[f64; 24] = u.try_into().map_err(|_| bad_length(u.len()))?;
+        crate::hex::fbar_hex(material, geometry, u, state_n, trial, dt, fbar, part, out)
+    }
+
+    fn residual(out: &Box<HexOutput>) -> &[f64] {
+        &out.r
+    }
+
+    fn tangent_row(out: &Box<HexOutput>, a: usize) -> &[f64] {
+        &out.k[a]
+    }
+
+    fn energy(geometry: &[HexPoint; 8], u: &[f64], fbar: bool, psi: &dyn Fn(&Mat3) -> f64) -> f64 {
+        match <&[f64; 24]>::try_from(u) {
+            Ok(u) => crate::hex::element_energy(geometry, u, fbar, psi),
+            Err(_) => f64::NAN,
+        }
+    }
+}

@@ -1,0 +1,262 @@
+//! Loading what a fit needs: each experiment's surrogate (model file, time
+//! grid from `meta.json`, measured checking error) and its data file (CSV
+//! or `.jpk-force`), checked against the protocol and resampled onto the
+//! surrogate's grid. Every error names the file (and row/column where there
+//! is one) before any fitting starts.
+
+use std::path::{Path, PathBuf};
+
+use nlvid_inverse::Model as _;
+use nlvid_inverse::{
+    Calibration, Coordinates, KrigingSurrogate, MeasuredCurve, load_kriging_surrogate,
+    ramp_hold_indentation, read_afm_csv, read_compression_csv, segment_weights,
+};
+
+use crate::error::{ReportError, Result};
+use crate::settings::{DataColumns, ExperimentSettings, FitSettings, RealModelSpec};
+
+/// A surrogate ready to fit with, and how good it is.
+pub struct Surrogate {
+    /// The model file.
+    pub path: PathBuf,
+    /// The surrogate as a fit model.
+    pub model: KrigingSurrogate,
+    /// Max eq. 4.4 checking error and the file it came from.
+    pub checking: Option<(f64, PathBuf)>,
+}
+
+/// One measured curve with everything it is fitted and checked with.
+pub struct LoadedExperiment {
+    /// Label in reports.
+    pub label: String,
+    /// Its surrogate.
+    pub surrogate: Surrogate,
+    /// The curve as read (SI).
+    pub curve: MeasuredCurve,
+    /// Measured force on the surrogate's time grid.
+    pub force: Vec<f64>,
+    /// Eq. 5.3 weights on the grid (None: all 1).
+    pub weights: Option<Vec<f64>>,
+    /// Real model for the re-check.
+    pub real: Option<RealModel>,
+}
+
+/// A real model ready to re-run.
+pub enum RealModel {
+    /// Lee–Radok Hertz with this curve's indentation (built at the re-check).
+    LeeRadok {
+        /// Probe radius (m).
+        radius: f64,
+        /// Poisson's ratio.
+        poisson: f64,
+    },
+    /// A study's forward model.
+    Forward(Box<dyn nlvid_model::ForwardModel>),
+}
+
+/// Sets up the real model named by `spec` (a `[forward]` section is read
+/// and checked now, before any fitting).
+fn real_model(spec: &RealModelSpec) -> Result<RealModel> {
+    Ok(match spec {
+        RealModelSpec::LeeRadok { radius, poisson } => RealModel::LeeRadok {
+            radius: *radius,
+            poisson: *poisson,
+        },
+        RealModelSpec::Forward { study } => {
+            let mut st = nlvid_study::Study::load(study)?;
+            let model = nlvid_forward::from_study(&mut st).map_err(|e| {
+                ReportError::InvalidSetting(format!(
+                    "{}: real model from [forward]: {e}",
+                    study.display()
+                ))
+            })?;
+            RealModel::Forward(model)
+        }
+    })
+}
+
+/// Reads every surrogate and data file named by `settings` and `files`.
+///
+/// # Errors
+/// Unreadable files, malformed data (file, row, column), protocol
+/// mismatches, or a number of files that does not match the experiments.
+pub fn load(settings: &FitSettings, files: &[PathBuf]) -> Result<Vec<LoadedExperiment>> {
+    let pairs: Vec<(&ExperimentSettings, &PathBuf)> = if settings.repeat {
+        files
+            .iter()
+            .map(|f| (&settings.experiments[0], f))
+            .collect()
+    } else {
+        if files.len() != settings.experiments.len() {
+            return Err(ReportError::InvalidSetting(format!(
+                "{}: {} [[fit.experiment]] tables but {} data files were given: \
+                 give one data file per experiment, in the same order",
+                settings.study.display(),
+                settings.experiments.len(),
+                files.len()
+            )));
+        }
+        settings.experiments.iter().zip(files).collect()
+    };
+    let mut out: Vec<LoadedExperiment> = Vec::with_capacity(pairs.len());
+    for (exp, file) in pairs {
+        let surrogate = load_surrogate(settings, exp, settings.inputs)?;
+        if let Some(first) = out.first() {
+            same_domain(&first.surrogate, &surrogate)?;
+        }
+        let times = surrogate.model.times().to_vec();
+        let curve = read_curve(file, &settings.columns)?;
+        check_protocol(&curve, exp, &times, &settings.study)?;
+        let force = curve.resample(&curve.force, &times)?;
+        let weights =
+            (!exp.segments.is_empty()).then(|| segment_weights(&times, &exp.segments, 1.0));
+        let label = exp.label.clone().unwrap_or_else(|| {
+            file.file_stem().map_or_else(
+                || file.display().to_string(),
+                |s| s.to_string_lossy().into(),
+            )
+        });
+        out.push(LoadedExperiment {
+            label,
+            surrogate,
+            curve,
+            force,
+            weights,
+            real: exp.real.as_ref().map(real_model).transpose()?,
+        });
+    }
+    Ok(out)
+}
+
+/// Curves fitted with one parameter set are fitted in one domain: every
+/// meta-model must carry the same one.
+fn same_domain(first: &Surrogate, other: &Surrogate) -> Result<()> {
+    let (a, b) = (first.model.domain(), other.model.domain());
+    if a != b {
+        return Err(ReportError::InvalidSetting(format!(
+            "{} and {} were built on different parameter domains ({:?} vs {:?}): \
+             curves fitted together need meta-models of one [design] domain",
+            first.path.display(),
+            other.path.display(),
+            a,
+            b
+        )));
+    }
+    Ok(())
+}
+
+fn load_surrogate(
+    settings: &FitSettings,
+    exp: &ExperimentSettings,
+    inputs: Coordinates,
+) -> Result<Surrogate> {
+    let (Some(path), Some(meta)) = (&exp.surrogate, &exp.meta) else {
+        return Err(ReportError::InvalidSetting(format!(
+            "{}: [fit]: `nlvid fit` fits on a surrogate: give `surrogate` and `meta` \
+             (model = \"lee-radok\" is for `nlvid cohort`)",
+            settings.study.display()
+        )));
+    };
+    let model = load_kriging_surrogate(path, meta, inputs)
+        .map_err(|e| ReportError::InvalidSetting(format!("surrogate {}: {e}", path.display())))?;
+    let checking = match exp.check_file() {
+        Some(p) => Some((read_checking_error(&p)?, p)),
+        None => None,
+    };
+    Ok(Surrogate {
+        path: path.clone(),
+        model,
+        checking,
+    })
+}
+
+/// The max eq. 4.4 RMSE of a `nlvid --json surrogate check` output.
+fn read_checking_error(path: &Path) -> Result<f64> {
+    let bad = |message: String| ReportError::Data {
+        path: path.to_path_buf(),
+        line: 0,
+        message,
+    };
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| ReportError::io(path, format!("cannot read the checking summary: {e}")))?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+        bad(format!(
+            "not JSON ({e}); expected the summary `nlvid surrogate check` saves"
+        ))
+    })?;
+    match v.get("max").and_then(serde_json::Value::as_f64) {
+        Some(e) if e.is_finite() && e >= 0.0 => Ok(e),
+        _ => Err(bad(
+            "key `max` (largest eq. 4.4 checking error, a number >= 0) missing; \
+             expected the summary `nlvid surrogate check` saves"
+                .into(),
+        )),
+    }
+}
+
+fn read_curve(path: &Path, columns: &DataColumns) -> Result<MeasuredCurve> {
+    let is_jpk = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("jpk-force"));
+    Ok(match columns {
+        DataColumns::Afm(_, cal) if is_jpk => read_jpk(path, Some(cal))?,
+        DataColumns::Compression(_) if is_jpk => read_jpk(path, None)?,
+        DataColumns::Afm(c, cal) => read_afm_csv(path, c, cal)?,
+        DataColumns::Compression(c) => read_compression_csv(path, c)?,
+    })
+}
+
+/// A JPK ramp-hold file ([`nlvid_afm::read_ramp_hold`]) as a measured
+/// curve; a calibration in the study replaces the file's.
+fn read_jpk(path: &Path, cal: Option<&Calibration>) -> Result<MeasuredCurve> {
+    let options = nlvid_afm::ReadOptions {
+        spring_constant: cal.map(|c| c.spring_constant),
+        sensitivity: cal.and_then(|c| c.deflection_sensitivity),
+    };
+    let c = nlvid_afm::read_ramp_hold(path, &options)
+        .map_err(|e| ReportError::io(path, format!("cannot read the JPK ramp-hold curve: {e}")))?;
+    let channel = |name: &str| c.values(name).map(<[f64]>::to_vec).unwrap_or_default();
+    Ok(MeasuredCurve {
+        path: path.to_path_buf(),
+        lines: (1..=c.len()).collect(),
+        time: c.time().to_vec(),
+        displacement: channel("displacement"),
+        force: channel("force"),
+        indentation: Some(channel("indentation")),
+        contact_area: None,
+    })
+}
+
+/// Ramp from 0 at `rate` to `amplitude`, then hold to the grid's end.
+fn check_protocol(
+    curve: &MeasuredCurve,
+    exp: &ExperimentSettings,
+    times: &[f64],
+    study: &Path,
+) -> Result<()> {
+    let Some(p) = &exp.protocol else {
+        return Err(ReportError::InvalidSetting(format!(
+            "{}: [fit]: missing [fit.protocol] (rate, amplitude): `nlvid fit` checks every \
+             data file against the expected ramp-hold",
+            study.display()
+        )));
+    };
+    let t_end = times.last().copied().unwrap_or(0.0);
+    let t_ramp = p.amplitude / p.rate;
+    if t_ramp >= t_end {
+        return Err(ReportError::InvalidSetting(format!(
+            "{}: [fit.protocol] ramp to {:e} m at {:e} m/s takes {t_ramp} s, \
+             longer than the surrogate's time grid ({t_end} s, {})",
+            study.display(),
+            p.amplitude,
+            p.rate,
+            exp.meta
+                .as_deref()
+                .map_or_else(String::new, |m| m.display().to_string())
+        )));
+    }
+    let expected_t = [0.0, t_ramp, t_end];
+    let expected = ramp_hold_indentation(&expected_t, p.rate, p.amplitude);
+    curve.check_protocol(&expected_t, &expected, p.tolerance)?;
+    Ok(())
+}

@@ -1,0 +1,210 @@
+//! What `nlvid build`, `nlvid sample` and `nlvid merge` read from a study
+//! besides the forward model: `[design]` (training and checking designs)
+//! and `[build]` (store, export, admissibility filters). The study's other
+//! stages (`[parameters]` of `nlvid simulate`, `[fit]`, …) may share the
+//! file; they are left to their commands.
+
+use std::path::{Path, PathBuf};
+
+use nlvid_model::Domain;
+use nlvid_study::Study;
+
+use crate::build::{Admissibility, BuildOptions, build, export, load};
+use crate::doe::DesignSettings;
+use crate::error::{Result, SurrogateError};
+use nlvid_model::ForwardModel;
+
+/// Sections of the other pipeline stages a build study may hold.
+const OTHER_STAGES: [&str; 6] = ["parameters", "fit", "probe", "material", "loading", "cell"];
+
+/// `[design]` and `[build]` of a study.
+#[derive(Debug, Clone)]
+pub struct BuildSettings {
+    /// `[design]`.
+    pub design: DesignSettings,
+    /// `[build] store`.
+    pub store: Option<PathBuf>,
+    /// `[build] export`.
+    pub export: Option<PathBuf>,
+    /// `[build]` filters.
+    pub filters: Admissibility,
+}
+
+impl BuildSettings {
+    /// Reads `[design]` for parameters `names` in `units` and `[build]`
+    /// (filters look from `contact_index` on), then checks the study for
+    /// unknown sections (call after the forward model has read its own).
+    ///
+    /// # Errors
+    /// Missing, unknown or invalid keys (file, line, key).
+    pub fn from_study(
+        mut study: Study,
+        names: &[String],
+        units: &[String],
+        contact_index: usize,
+    ) -> nlvid_study::Result<Self> {
+        let _ = study.root().opt_str("title")?;
+        let mut ds = study.section("design")?;
+        let design = DesignSettings::from_section(&mut ds, names, units)?;
+        ds.finish()?;
+        let (store, export, filters) = match study.opt_section("build")? {
+            Some(mut b) => {
+                let store = b.opt_path("store")?;
+                let export = b.opt_path("export")?;
+                let filters = Admissibility::from_section(&mut b, contact_index)?;
+                b.finish()?;
+                (store, export, filters)
+            }
+            None => (
+                None,
+                None,
+                Admissibility {
+                    contact_index,
+                    ..Default::default()
+                },
+            ),
+        };
+        for other in OTHER_STAGES {
+            study.root().skip(other);
+        }
+        study.finish()?;
+        Ok(Self {
+            design,
+            store,
+            export,
+            filters,
+        })
+    }
+}
+
+/// The stores to merge: `[None]` when every shard directory is a store
+/// (`meta.json`), `[Some("train")]` (and `Some("check")`) when every one
+/// holds the `train/` (and `check/`) stores of a study build.
+///
+/// # Errors
+/// Shard directories of neither kind.
+pub fn shard_sets(shards: &[PathBuf]) -> Result<Vec<Option<&'static str>>> {
+    let all = |sub: &str| {
+        shards
+            .iter()
+            .all(|d| d.join(sub).join("meta.json").is_file())
+    };
+    if shards.iter().all(|d| d.join("meta.json").is_file()) {
+        Ok(vec![None])
+    } else if all("train") {
+        Ok(if all("check") {
+            vec![Some("train"), Some("check")]
+        } else {
+            vec![Some("train")]
+        })
+    } else {
+        Err(SurrogateError::InvalidInput(
+            "each shard directory must be a store (meta.json) or hold train/ (and check/) stores"
+                .into(),
+        ))
+    }
+}
+
+/// `dir`, or its sub-directory `set`.
+pub fn set_dir(dir: &Path, set: Option<&str>) -> PathBuf {
+    set.map_or_else(|| dir.to_path_buf(), |s| dir.join(s))
+}
+
+/// Builds the set `name` of `design` into `store` ([`build`]) and reports
+/// it for people: runs in the shard, done before, run now, failed, time per
+/// run, then each failure with its reason.
+///
+/// # Errors
+/// As [`build`]; the store cannot be read back.
+pub fn build_report(
+    name: &str,
+    model: &dyn ForwardModel,
+    design: &[Vec<f64>],
+    store: &Path,
+    opts: &BuildOptions<'_>,
+) -> Result<String> {
+    let t0 = std::time::Instant::now();
+    let s = build(model, design, store, opts)?;
+    let secs = t0.elapsed().as_secs_f64();
+    let per_run = if s.ran > 0 {
+        format!(", {:.3} s per run", secs / s.ran as f64)
+    } else {
+        String::new()
+    };
+    let mut text = format!(
+        "{name}: {} runs in shard: {} already done, {} run now ({} failed) in {secs:.2} s{per_run}\n",
+        s.in_shard, s.skipped, s.ran, s.failed
+    );
+    if s.failed > 0 {
+        for (i, status, reason, secs) in &load(store, &Admissibility::default())?.status {
+            if status == "failed" {
+                text.push_str(&format!("run {i} failed after {secs:.3} s: {reason}\n"));
+            }
+        }
+    }
+    Ok(text)
+}
+
+/// Exports the admissible runs of `store` to `dir` ([`export`]; `domain`
+/// is stored in its `meta.json` for the fits) and says how many each filter
+/// removed — and, without a domain, that fits cannot use the export.
+///
+/// # Errors
+/// As [`load`] and [`export`].
+pub fn export_report(
+    store: &Path,
+    dir: &Path,
+    filters: &Admissibility,
+    domain: Option<&Domain>,
+) -> Result<String> {
+    let mm = load(store, filters)?;
+    export(&mm, dir, domain)?;
+    let c = &mm.counts;
+    let warning = if domain.is_none() {
+        format!(
+            "warning: {} has no parameter domain (give --domain FILE, or build from a study): \
+             `nlvid fit` and `nlvid cohort` cannot use it\n",
+            dir.join("meta.json").display()
+        )
+    } else {
+        String::new()
+    };
+    Ok(format!(
+        "{warning}exported {} of {} runs to {} (failed {}, missing {}, below peak force {}, non-repulsive {})\n",
+        c.kept,
+        c.design,
+        dir.display(),
+        c.failed,
+        c.missing,
+        c.below_peak,
+        c.non_repulsive
+    ))
+}
+
+/// Reads a domain file (the stored form of [`Domain`], checked when read);
+/// with `names`, they must be its parameters, in order; every row of
+/// `design` must lie inside it.
+///
+/// # Errors
+/// Unreadable or invalid file, parameters other than `names`, a design row
+/// outside the domain (naming its CSV line).
+pub fn read_domain(path: &Path, names: &[String], design: &[Vec<f64>]) -> Result<Domain> {
+    let text = std::fs::read_to_string(path).map_err(crate::error::io_err(path))?;
+    let bad = |m: String| SurrogateError::Parse {
+        path: path.to_path_buf(),
+        message: m,
+    };
+    let domain: Domain = toml::from_str(&text).map_err(|e| bad(e.to_string()))?;
+    if !names.is_empty() {
+        domain
+            .check_names(names)
+            .map_err(|e| bad(format!("the model's parameters: {e}")))?;
+    }
+    if let Some(i) = design.iter().position(|x| !domain.contains(x, 1e-9)) {
+        return Err(bad(format!(
+            "design row {} (CSV line) lies outside the domain",
+            i + 2
+        )));
+    }
+    Ok(domain)
+}
