@@ -5,13 +5,14 @@
 //! (`cargo run -p nlvid-fem --release --example afm_setup1`), which reports
 //! the median thread-CPU time of 5 runs and the phase breakdown.
 //!
-//! `cargo bench -p nlvid-fem --bench afm_run`
+//! `cargo bench -p nlvid-fem --bench afm_run` (also the elastic dome of
+//! issue 15).
 
 #![allow(clippy::needless_range_loop, clippy::unwrap_used)]
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use nlvid_fem::afm::{self, AfmSetup};
-use nlvid_model::{Relaxation, names};
+use nlvid_fem::afm::{self, AfmSetup, Cantilever, Engagement};
+use nlvid_model::{Prony, Relaxation, names};
 
 fn bench(c: &mut Criterion) {
     // G0 = 1 kPa (shear modulus), g1 = g2 = 0.3, tau1 = 0.5 s, tau2 = 10 s.
@@ -27,6 +28,22 @@ fn bench(c: &mut Criterion) {
     });
     group.bench_function("setup1_default_mesh_full_protocol_2_threads", |b| {
         b.iter(|| afm::run(&params, &two).map(|r| r.peak_force))
+    });
+    // Issue 15's elastic dome: K = 1000 G, rigid sphere to 2 µm, 201
+    // samples (the example `elastic_dome` is the same run).
+    let mut dome = AfmSetup::thesis_setup1();
+    dome.cantilever = Cantilever::Rigid;
+    dome.engagement = Engagement {
+        force: 0.0,
+        ramp: 1.0,
+        hold: 0.0,
+    };
+    dome.bulk_ratio = 1000.0;
+    dome.piezo = vec![(0.0, 0.0), (1.0, 2e-6)];
+    dome.output_times = (0..=200).map(|i| i as f64 / 200.0).collect();
+    let elastic = Relaxation::new(names::G0, 1e3, Prony::elastic()).unwrap();
+    group.bench_function("elastic_dome_default_mesh", |b| {
+        b.iter(|| afm::run(&elastic, &dome).map(|r| r.peak_force))
     });
     group.finish();
 }

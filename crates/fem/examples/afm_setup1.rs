@@ -65,6 +65,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let mut setup = AfmSetup::thesis_setup1();
     if let Ok(n) = std::env::var("NLVID_FEM_N") {
+        // The sessions-1–3 Coons patch with n × n elements.
+        setup.mesh_layout = afm::MeshLayout::Coons;
         setup.mesh.elements_per_side = n.parse()?;
     }
     // Experiment knobs (solver settings of the run).
@@ -94,6 +96,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     if let Ok(v) = std::env::var("NLVID_FEM_LAZY") {
         setup.settings.lazy_tangent = v.parse()?;
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_OUTPUT_TOL") {
+        setup.settings.output_tolerance = v.parse()?;
     }
     if let Ok(v) = std::env::var("NLVID_FEM_LS") {
         setup.settings.residual_growth = v.parse()?;

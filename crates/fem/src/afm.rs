@@ -14,7 +14,7 @@ use crate::model::{
     Component, Control, ProbeDrive, Settings, SphereProbe, Stage, StepRecord, Support,
 };
 use crate::reference::PronyNeoHookean;
-use crate::{FemError, Mesh, Model, Result};
+use crate::{ContactMesh, FemError, Mesh, Model, Result, dense};
 use nlvid_material::Material3;
 use nlvid_model::Relaxation;
 
@@ -41,7 +41,19 @@ pub struct Engagement {
     pub hold: f64,
 }
 
-/// Mesh density of the cell (see [`Mesh::oblate_cell`]).
+/// Which mesh the cell gets.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum MeshLayout {
+    /// Rings graded to the contact point ([`Mesh::contact_graded_cell`]);
+    /// the default since issue 15 (converged from δ = 0.05 µm).
+    ContactGraded(ContactMesh),
+    /// The sessions-1–3 single transfinite patch ([`Mesh::oblate_cell`])
+    /// sized by [`AfmSetup::mesh`].
+    Coons,
+}
+
+/// Density of the Coons-patch cell mesh (see [`Mesh::oblate_cell`]), used
+/// with [`MeshLayout::Coons`].
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MeshSpec {
     /// Elements per side (n × n elements).
@@ -64,10 +76,15 @@ pub struct AfmSetup {
     pub cantilever: Cantilever,
     /// Step 1.
     pub engagement: Engagement,
-    /// Step 2: piezo position Z (m, toward the cell, relative to its value
-    /// at the end of step 1) at increasing times (s) from 0, linear between.
+    /// Step 2: piezo position Z (m, toward the cell) at increasing times (s)
+    /// from 0, linear between. With an engagement step, only Z(t) − Z(0)
+    /// matters (the free end moves from its engaged position); without one,
+    /// Z is measured from first contact, so the probe starts at δ = Z(0) ≤ 0
+    /// (above the cell for Z(0) < 0) with the spring relaxed.
     pub piezo: Vec<(f64, f64)>,
-    /// Mesh density.
+    /// Which mesh: graded to the contact (default) or the Coons patch.
+    pub mesh_layout: MeshLayout,
+    /// Density of the Coons-patch mesh (only with [`MeshLayout::Coons`]).
     pub mesh: MeshSpec,
     /// Bulk modulus over G₀ (near-incompressibility penalty; the thesis
     /// cell is incompressible). Default 200: the force error against the
@@ -123,6 +140,7 @@ impl AfmSetup {
                 hold: 0.0,
             },
             piezo,
+            mesh_layout: MeshLayout::ContactGraded(ContactMesh::cell_default(2.5e-6)),
             mesh: MeshSpec {
                 elements_per_side: 35,
                 bias: 4.0,
@@ -135,7 +153,9 @@ impl AfmSetup {
             bulk_ratio: 200.0,
             output_times: (0..m).map(|i| end * i as f64 / (m - 1) as f64).collect(),
             ramp_step_fraction: 0.1,
-            hold_step_max: 2.0,
+            // Holds: the dense-output control sizes the steps; 10 s only
+            // bounds them (was 2 s: 8 more steps on the thesis run).
+            hold_step_max: 10.0,
             settings: Settings::default(),
         }
     }
@@ -176,6 +196,36 @@ impl AfmSetup {
                 name: "piezo program",
                 value: self.piezo.len() as f64,
                 reason: "needs ≥ 2 points starting at t = 0",
+            });
+        }
+        if self.engagement.force == 0.0 && self.piezo[0].1 > 0.0 {
+            return Err(FemError::Setting {
+                name: "piezo program start Z(0)",
+                value: self.piezo[0].1,
+                reason: "starts the probe inside the cell: without an engagement step Z is \
+                         measured from first contact, so Z(0) must be ≤ 0 (probe above or \
+                         touching the cell)",
+            });
+        }
+        // Deepest indentation: the piezo travel (from first contact without
+        // engagement, from the engaged position with it; the engagement
+        // adds its own small depth).
+        let z_ref = if self.engagement.force == 0.0 {
+            0.0
+        } else {
+            self.piezo[0].1
+        };
+        let travel = self
+            .piezo
+            .iter()
+            .map(|p| p.1 - z_ref)
+            .fold(f64::NEG_INFINITY, f64::max);
+        if travel >= self.height {
+            return Err(FemError::Setting {
+                name: "piezo program depth",
+                value: travel,
+                reason: "the indentation would be deeper than the cell height: the probe \
+                         would reach the substrate; lower the program's largest Z",
             });
         }
         for w in self.piezo.windows(2) {
@@ -247,6 +297,9 @@ pub struct AfmRun {
 /// the neo-Hookean constant is C1 = G0/2 (`PronyViscoelastic::cell`,
 /// docs/theory/model.md); the bulk modulus is `bulk_ratio × G0`.
 ///
+/// An elastic cell is a relaxation modulus without Prony terms
+/// (`nlvid_model::Prony::elastic()`).
+///
 /// # Errors
 /// [`FemError::Material`] naming the offending parameter.
 pub fn cell_material(
@@ -316,12 +369,26 @@ pub fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
 /// As [`Model::new`].
 pub fn build<M: Material3>(material: M, setup: &AfmSetup) -> Result<Model<M>> {
     setup.check()?;
-    let mesh = Mesh::oblate_cell(
-        setup.height,
-        setup.diameter,
-        setup.mesh.elements_per_side,
-        setup.mesh.bias,
-    )?;
+    let mesh = match &setup.mesh_layout {
+        MeshLayout::ContactGraded(spec) => {
+            Mesh::contact_graded_cell(setup.height, setup.diameter, spec)
+        }
+        MeshLayout::Coons => Mesh::oblate_cell(
+            setup.height,
+            setup.diameter,
+            setup.mesh.elements_per_side,
+            setup.mesh.bias,
+        ),
+    }
+    .map_err(|e| match e {
+        // An inverted element: name the settings that made it.
+        FemError::Mesh(m) => FemError::Mesh(format!(
+            "{m}: the mesh settings {:?} (Coons: {:?}) do not fit the cell of height {:e} m \
+             and diameter {:e} m; refine the mesh (smaller spacing or growth, more elements)",
+            setup.mesh_layout, setup.mesh, setup.height, setup.diameter
+        )),
+        other => other,
+    })?;
     let supports = [
         Support::fixed("axis", Component::R),
         Support::fixed("base", Component::R),
@@ -356,7 +423,8 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
     } else {
         0.0
     };
-    model.set_time(-t_engage);
+    // 0 − t (not −t): no engagement starts the clock at +0, not −0.
+    model.set_time(0.0 - t_engage);
     if eng.force > 0.0 {
         let ramp_end = -eng.hold;
         let force_at = move |t: f64| {
@@ -387,11 +455,17 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
             })?;
         }
     }
-    // Step 2 clock starts here.
+    // Step 2 clock starts here. Without engagement Z is measured from
+    // first contact: the probe starts at δ = Z(0) ≤ 0 (above the cell,
+    // spring relaxed); with it, Z(t) − Z(0) moves the engaged free end.
+    let z_start = setup.piezo[0].1;
+    if eng.force == 0.0 {
+        model.set_probe_displacement(-z_start);
+    }
     let w0 = model.probe_displacement();
     let (k, free0) = match setup.cantilever {
-        Cantilever::Spring { stiffness } => (stiffness, w0 - eng.force / stiffness),
-        Cantilever::Rigid => (f64::INFINITY, w0),
+        Cantilever::Spring { stiffness } => (stiffness, w0 - eng.force / stiffness + z_start),
+        Cantilever::Rigid => (f64::INFINITY, w0 + z_start),
     };
     let n_engage_records = model.records().len();
     let piezo = &setup.piezo;
@@ -419,8 +493,11 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
                 setup.hold_step_max.min(duration),
             )
         } else {
+            // A ramp starts with h/8: its first interval is written before
+            // the dense-output error can be estimated (it needs four
+            // points), so it starts small and grows under control.
             let h = setup.ramp_step_fraction * duration;
-            (h, h)
+            (h / 8.0, h)
         };
         let name = format!("piezo segment {seg}");
         model.run_stage(&Stage {
@@ -431,27 +508,25 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
             control: &drive,
         })?;
     }
-    // Traces at the converged steps, starting with the engaged state.
-    let recs: &[StepRecord] = model.records();
-    let mut ts = vec![0.0];
-    let mut zs = vec![0.0];
-    let mut fs = vec![eng.force];
-    let mut ws = vec![w0];
-    for r in &recs[n_engage_records..] {
-        let z_piezo = interpolate(
-            &piezo.iter().map(|p| p.0).collect::<Vec<_>>(),
-            &piezo.iter().map(|p| p.1).collect::<Vec<_>>(),
-            r.time,
-        );
-        ts.push(r.time);
-        zs.push(z_piezo);
-        let f = match setup.cantilever {
-            Cantilever::Spring { stiffness } => stiffness * (r.probe_w - r.free_end),
-            Cantilever::Rigid => r.contact_force,
-        };
-        fs.push(f);
-        ws.push(r.probe_w);
-    }
+    // Step 2's records, starting with the engaged (or initial) state.
+    let recs: &[StepRecord] = &model.records()[n_engage_records.saturating_sub(1)..];
+    let (piezo_t, piezo_z): (Vec<f64>, Vec<f64>) = piezo.iter().copied().unzip();
+    let z_at = |t: f64| interpolate(&piezo_t, &piezo_z, t);
+    // Probe displacement w (dense output) and force at time t: spring
+    // F = k (w − z_free) with the free end z_free = free0 − Z(t) exact from
+    // the program; rigid: w exact, F the contact force (dense output).
+    let w_at = |t: f64| match setup.cantilever {
+        Cantilever::Spring { .. } => dense::interpolate_records(recs, t, |r| r.probe_w),
+        Cantilever::Rigid => free0 - z_at(t),
+    };
+    let f_at = |t: f64, w: f64| match setup.cantilever {
+        Cantilever::Spring { stiffness } => stiffness * (w - (free0 - z_at(t))),
+        Cantilever::Rigid => dense::interpolate_records(recs, t, |r| r.contact_force),
+    };
+    let peak_force = recs
+        .iter()
+        .map(|r| f_at(r.time, r.probe_w))
+        .fold(f64::NEG_INFINITY, f64::max);
     // Absolute piezo position: Z_abs = −z_free, so that δ = −w = Z − d.
     let z_offset = -free0;
     let mut out = AfmRun {
@@ -460,7 +535,7 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
         deflection: Vec::with_capacity(setup.output_times.len()),
         force: Vec::with_capacity(setup.output_times.len()),
         indentation: Vec::with_capacity(setup.output_times.len()),
-        peak_force: fs.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+        peak_force,
         final_force: 0.0,
         steps: model.counters().steps,
         cutbacks: model.counters().cutbacks,
@@ -484,9 +559,9 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
         elements_connectivity: model.mesh().elements.clone(),
     };
     for &t in &setup.output_times {
-        let f = interpolate(&ts, &fs, t);
-        let w = interpolate(&ts, &ws, t);
-        let z = interpolate(&ts, &zs, t) + z_offset;
+        let w = w_at(t);
+        let f = f_at(t, w);
+        let z = z_at(t) + z_offset;
         let d = if k.is_finite() { f / k } else { 0.0 };
         out.piezo.push(z);
         out.deflection.push(d);

@@ -19,8 +19,10 @@
 //! without the tangent) plus one sparse supernodal LDLᵀ factorisation of
 //! the lower triangle, stored in the fill-reducing order so the symbolic
 //! analysis is reused for the whole run (LU fallback); the thesis-scale AFM
-//! run (1225 elements, ≈ 130 steps, ≈ 500 iterations) takes ≈ 1.9 s of CPU
-//! time on one core; see `docs/theory/fem.md` for the measured breakdown.
+//! run (912 elements graded to the contact, ≈ 220 steps with curves written
+//! to 0.1 % at the samples, ≈ 900 iterations) takes ≈ 1.6–2.1 s of CPU
+//! time on one (shared) core; see `docs/theory/fem.md` for the measured
+//! breakdown.
 //!
 //! ```
 //! use nlvid_fem::{Component, Control, Mesh, Model, ProbeDrive, Settings, SphereProbe, Stage, Support};
@@ -48,6 +50,8 @@
 pub mod afm;
 pub mod capsule;
 pub mod cavity;
+mod contact;
+pub mod dense;
 pub mod element;
 mod error;
 pub mod hex;
@@ -56,6 +60,7 @@ mod kind;
 pub mod membrane;
 pub mod mesh;
 pub mod mesh3;
+mod mesh_graded;
 mod model;
 pub mod plates;
 pub mod reference;
@@ -69,6 +74,7 @@ pub use history::History;
 pub use kind::{Axisymmetric, ElementKind, Solid, Topology};
 pub use membrane::{Membrane, MembraneMesh, MembranePoint};
 pub use mesh::Mesh;
+pub use mesh_graded::ContactMesh;
 pub use mesh3::Mesh3;
 pub use model::{
     Cavity, Component, Control, Counters, Fluid, Model, Parts, PlaneSide, ProbeDrive, RigidPlane,

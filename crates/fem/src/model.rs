@@ -26,6 +26,7 @@
 //! a cavity: p is a Lagrange multiplier).
 
 use crate::cavity::{quad_area_normals, quad_volume, segment_area_normals, segment_volume};
+use crate::contact::{self, ContactSurface, Obstacle};
 use crate::element::TangentPart;
 use crate::history::History;
 use crate::kind::{Axisymmetric, CavityCells, ElementKind, Solid, Topology};
@@ -265,6 +266,12 @@ pub struct Settings {
     /// point turns out not converged. 0 disables. Default 1e4 (measured on
     /// the thesis run: 105 tangent assemblies saved, 3 redone).
     pub lazy_tangent: f64,
+    /// Dense output: largest estimated interpolation error of the probe
+    /// (or plane) force between steps, relative to the force (floor
+    /// 1e-7 G L²); steps that exceed 1.5× it are redone smaller, and the
+    /// next step is sized for it (module `dense`). 0 disables. Default
+    /// 2e-4.
+    pub output_tolerance: f64,
     /// Threads for the element loop (material updates); 0 or 1 = serial. The
     /// result is bitwise the same for any number (element outputs are
     /// computed in parallel, then added in element order).
@@ -288,6 +295,7 @@ impl Default for Settings {
             symmetric: true,
             residual_growth: 1.0,
             lazy_tangent: 1e4,
+            output_tolerance: 2e-4,
             threads: 1,
         }
     }
@@ -330,6 +338,9 @@ pub struct StepRecord {
     pub cavity_volume: f64,
     /// Newton iterations of the step.
     pub iterations: usize,
+    /// Stage of the step (1, 2, … in the order run; 0: the initial state).
+    /// Dense output does not interpolate across stages.
+    pub stage: usize,
 }
 
 /// Counters of a run. Times are CPU time of the calling thread
@@ -348,6 +359,9 @@ pub struct Counters {
     pub steps: usize,
     /// Failed attempts that were cut back.
     pub cutbacks: usize,
+    /// Converged steps rejected for their dense-output error and redone
+    /// smaller.
+    pub rejected_steps: usize,
     /// Newton iterations (linear solves) in total.
     pub iterations: usize,
     /// Global assemblies in total (including line-search trials).
@@ -423,7 +437,9 @@ pub struct Model<M: Material3, K: ElementKind<M> = Axisymmetric> {
     time: f64,
     last_dt: f64,
     elem_slots: Vec<usize>,
-    probe: Option<(SphereProbe, ContactSet)>,
+    probe: Option<(SphereProbe, ContactSurface)>,
+    /// Reference (r, z) of every node (2D models with a probe; else empty).
+    positions2: Vec<[f64; 2]>,
     planes: Vec<(PlaneSide, ContactSet)>,
     cavity: Option<CavityModel>,
     system: SparseSystem,
@@ -435,6 +451,15 @@ pub struct Model<M: Material3, K: ElementKind<M> = Axisymmetric> {
     pool: Option<rayon::ThreadPool>,
     probe_diag: f64,
     length: f64,
+    /// Shear modulus at F = I (Pa).
+    modulus: f64,
+    /// Stages run so far (the current one during `run_stage`).
+    stage: usize,
+    /// Absolute floor of the dense-output force scale: 1e-7 G L².
+    output_floor: f64,
+    /// Force below which residuals are round-off, whatever the loads:
+    /// 32 ε K L² (K ≈ the stiffest modulus at F = I, L the model size).
+    force_floor: f64,
     records: Vec<StepRecord>,
     /// Loads of the last converged step.
     control: Control,
@@ -562,15 +587,8 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             None => Vec::new(),
         };
         if probe.is_some() {
-            // The probe couples with each surface node, not nodes with each other.
-            for &a in &probe_nodes {
-                blocks.push(
-                    [dof_eq[dim * a], dof_eq[dim * a + dim - 1], dof_eq[wdof]]
-                        .into_iter()
-                        .filter(|&e| e != NO_SLOT)
-                        .collect(),
-                );
-            }
+            // The probe couples with each surface segment's two nodes (2D).
+            blocks.extend(contact::blocks(&probe_nodes, &dof_eq, Some(dof_eq[wdof])));
             blocks.push(vec![dof_eq[wdof]]);
         }
         // The cavity: each cell couples its nodes; s couples with every
@@ -651,8 +669,9 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             system.block_slots(&elem_eqs(mesh.connectivity(e)), &mut tmp)?;
             lower_slots(&tmp, nd, &mut elem_slots);
         }
-        // Shear modulus at F = I for the penalty scale.
-        let g0 = {
+        // Shear modulus at F = I for the penalty scale, and the stiffest
+        // modulus (≈ K + 4G/3) for the round-off floor of the residual.
+        let (g0, stiffest) = {
             let s0 = material.initial_state();
             let mut tr = s0.clone();
             let resp = material
@@ -662,7 +681,8 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                     point: 0,
                     source,
                 })?;
-            resp.tangent[(1, 1)]
+            let stiffest = resp.tangent.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+            (resp.tangent[(1, 1)], stiffest)
         };
         let make_set = |surface: &str, with_w: bool, tmp: &mut Vec<usize>| -> Result<ContactSet> {
             let (nodes, area, len) = mesh.contact_weights(surface)?;
@@ -681,10 +701,30 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             }
             Ok(ContactSet { nodes, eps, slots })
         };
+        // The probe (2D only, checked above): contact integrated along the
+        // surface segments (`crate::contact`).
+        let positions2: Vec<[f64; 2]> = if probe.is_some() {
+            (0..nn)
+                .map(|a| {
+                    let x = mesh.position(a);
+                    [x[0], x[dim - 1]]
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         let probe = match probe {
             Some(p) => {
-                let set = make_set(&p.surface, true, &mut tmp)?;
-                Some((p, set))
+                let surface = ContactSurface::new(
+                    &positions2,
+                    &probe_nodes,
+                    &dof_eq,
+                    Some(dof_eq[wdof]),
+                    settings.penalty,
+                    g0,
+                    &system,
+                )?;
+                Some((p, surface))
             }
             None => None,
         };
@@ -694,7 +734,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         }
         let probe_diag = probe
             .as_ref()
-            .map(|(_, s)| s.eps.iter().cloned().fold(0.0, f64::max))
+            .map(|(_, s)| s.stiffness_scale())
             .unwrap_or(1.0)
             .max(f64::MIN_POSITIVE);
         let geometry = K::geometry(&mesh)?;
@@ -797,6 +837,15 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             },
             probe_diag,
             length,
+            modulus: g0,
+            stage: 0,
+            output_floor: 1e-7 * g0.abs() * length * length,
+            // Residual round-off: stresses, in particular the pressure
+            // K(J − 1), carry an absolute error ≈ ε K whatever the
+            // deformation (measured: the residual of a 1e-12 m indentation
+            // stalls at ≈ 5 ε K L² for K = 1e6 G).
+            force_floor: 32.0 * f64::EPSILON * stiffest * length * length,
+            positions2,
             records: Vec::new(),
             control: Control::default(),
             counters: Counters::default(),
@@ -820,6 +869,15 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
     /// Sets the clock (before the first stage).
     pub fn set_time(&mut self, t: f64) {
         self.time = t;
+    }
+
+    /// Places the probe at displacement `w` (m, z up) before the first
+    /// stage, e.g. above the body so that it starts out of contact.
+    pub fn set_probe_displacement(&mut self, w: f64) {
+        let wdof = K::DIM * self.mesh.node_count();
+        self.u[wdof] = w;
+        self.u_committed[wdof] = w;
+        self.u_previous[wdof] = w;
     }
 
     /// Converged nodal displacements, node-major (`K::DIM` per node).
@@ -1127,59 +1185,23 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         let nn = self.mesh.node_count();
         let wdof = dim * nn;
         let w_free = !matches!(ctl.probe, ProbeDrive::Displacement(_));
-        if let Some((probe, set)) = &self.probe {
-            let cz = probe.centre_z + self.u[wdof];
-            for (k, &a) in set.nodes.iter().enumerate() {
-                let x = [
-                    self.mesh.position(a)[0] + self.u[dim * a],
-                    self.mesh.position(a)[dim - 1] + self.u[dim * a + dim - 1],
-                ];
-                let d = [x[0], x[1] - cz];
-                let dist = (d[0] * d[0] + d[1] * d[1]).sqrt();
-                let g = dist - probe.radius;
-                if g > 0.0 || dist <= 0.0 {
-                    continue;
-                }
-                let n = [d[0] / dist, d[1] / dist];
-                let eps = set.eps[k];
-                let f = eps * g;
-                self.residual[dim * a] += f * n[0];
-                self.residual[dim * a + dim - 1] += f * n[1];
-                self.residual[wdof] -= f * n[1];
-                asm.contact_force += f * n[1];
-                asm.penetration = asm.penetration.max(-g);
-                asm.active += 1;
-                if tangent {
-                    let dg = [n[0], n[1], -n[1]];
-                    // ∂²g = Bᵀ (I − n nᵀ)/|d| B, B = [[1,0,0],[0,1,−1]].
-                    let p = [
-                        [1.0 - n[0] * n[0], -n[0] * n[1]],
-                        [-n[0] * n[1], 1.0 - n[1] * n[1]],
-                    ];
-                    let bmat = [[1.0, 0.0, 0.0], [0.0, 1.0, -1.0]];
-                    for i in 0..3 {
-                        if i == 2 && !w_free {
-                            continue;
-                        }
-                        for j in 0..3 {
-                            if j == 2 && !w_free {
-                                continue;
-                            }
-                            let s = set.slots[k][3 * i + j];
-                            if s == NO_SLOT {
-                                continue;
-                            }
-                            let mut h = 0.0;
-                            for r in 0..2 {
-                                for c in 0..2 {
-                                    h += bmat[r][i] * p[r][c] * bmat[c][j];
-                                }
-                            }
-                            self.system.values[s] += eps * dg[i] * dg[j] + f * h / dist;
-                        }
-                    }
-                }
-            }
+        if let Some((probe, surface)) = &mut self.probe {
+            let sums = surface.assemble(
+                &self.positions2,
+                &self.u,
+                wdof,
+                Obstacle::Sphere {
+                    centre_z: probe.centre_z + self.u[wdof],
+                    radius: probe.radius,
+                },
+                w_free,
+                tangent,
+                &mut self.residual,
+                &mut self.system.values,
+            );
+            asm.contact_force = sums.force;
+            asm.penetration = sums.penetration;
+            asm.active = sums.active;
             asm.scale = asm.scale.max(asm.contact_force.abs());
         }
         for (side, set) in &self.planes {
@@ -1248,7 +1270,9 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                     stiffness,
                     free_end,
                 } => {
-                    self.residual[wdof] += stiffness * (self.u[wdof] - free_end);
+                    let spring = stiffness * (self.u[wdof] - free_end);
+                    self.residual[wdof] += spring;
+                    asm.scale = asm.scale.max(spring.abs());
                     if tangent {
                         self.system.values[diag] += stiffness;
                     }
@@ -1266,6 +1290,30 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         Ok(asm)
     }
 
+    /// Residual norm reported as the tolerance: `rtol` × the gross force
+    /// of the assembly, or the round-off floor if that is larger.
+    fn tolerance(&self, asm: &Assembly) -> f64 {
+        (self.settings.rtol * asm.scale)
+            .max(self.settings.atol)
+            .max(self.force_floor)
+    }
+
+    /// Convergence test of a Newton iterate with residual norm `norm`
+    /// (`previous` before the last correction; `corrected`: at least one
+    /// correction made): `norm` ≤ `rtol` × the gross force of the assembly
+    /// (element forces, contact, spring, applied force); or, when the
+    /// forces are so small that this is below round-off (t = 0, first
+    /// touch, a probe out of contact, any bulk modulus), `norm` below the
+    /// round-off floor 32 ε K L² *and* stagnating (the last correction
+    /// gained less than 10×), so a Newton iteration that is still
+    /// converging quadratically is never cut short by the floor, and a
+    /// predictor is never accepted because its forces are tiny.
+    fn converged(&self, norm: f64, previous: f64, asm: &Assembly, corrected: bool) -> bool {
+        norm == 0.0
+            || norm <= (self.settings.rtol * asm.scale).max(self.settings.atol)
+            || (corrected && norm <= self.force_floor && norm > 0.1 * previous)
+    }
+
     fn rhs_norm(&self) -> f64 {
         self.rhs.iter().map(|x| x * x).sum::<f64>().sqrt()
     }
@@ -1276,6 +1324,32 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         }
         if let (Some(_), ProbeDrive::Displacement(w)) = (&self.probe, ctl.probe) {
             self.u[K::DIM * self.mesh.node_count()] = w;
+        }
+    }
+
+    /// A force-driven probe that touches the body at most at a point (first
+    /// touch) or not at all has no contact stiffness, and Newton cannot
+    /// start there. Predictor: lower the probe to first contact and then by
+    /// the Hertz depth of the set force on an incompressible half-space,
+    /// δ = (3F / (16 G √R))^{2/3} (eq. 1.1 with E = 3G); Newton then starts
+    /// in contact and converges from there.
+    fn force_drive_predictor(&mut self, ctl: &Control) {
+        let (ProbeDrive::Force(force), Some((probe, surface))) = (ctl.probe, &self.probe) else {
+            return;
+        };
+        if !(force > 0.0) {
+            return;
+        }
+        let wdof = K::DIM * self.mesh.node_count();
+        let obstacle = Obstacle::Sphere {
+            centre_z: probe.centre_z + self.u[wdof],
+            radius: probe.radius,
+        };
+        let gap = surface.min_gap(&self.positions2, &self.u, obstacle);
+        let depth = (3.0 * force / (16.0 * self.modulus * probe.radius.sqrt())).powf(2.0 / 3.0);
+        // Touching (|gap| at round-off) or above: no usable stiffness yet.
+        if gap.is_finite() && gap > -1e-3 * depth {
+            self.u[wdof] -= gap + depth;
         }
     }
 
@@ -1295,17 +1369,18 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         dt: f64,
     ) -> std::result::Result<(usize, Assembly), (f64, f64, usize, String)> {
         self.apply_prescribed(ctl);
+        self.force_drive_predictor(ctl);
         let mut asm = match self.assemble(ctl, dt, true) {
             Ok(a) => a,
             Err(e) => return Err((f64::NAN, 0.0, 0, e.to_string())),
         };
         let mut norm = self.rhs_norm();
+        let mut previous_norm = f64::INFINITY;
         let mut du = vec![0.0; self.rhs.len()];
         let mut base = self.u.clone();
         let growth_limit = self.settings.residual_growth;
         for it in 0..=self.settings.max_iterations {
-            let tol =
-                (self.settings.rtol * asm.scale.max(f64::MIN_POSITIVE)).max(self.settings.atol);
+            let tol = self.tolerance(&asm);
             if trace() {
                 let (mut rmax, mut dmax) = (0.0, 0);
                 for (d, &eq) in self.dof_eq.iter().enumerate() {
@@ -1325,7 +1400,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                     asm.active, asm.contact_force, node[0], node[1]
                 );
             }
-            if norm <= tol || norm == 0.0 {
+            if self.converged(norm, previous_norm, &asm, it > 0) {
                 return Ok((it, asm));
             }
             if !norm.is_finite() {
@@ -1403,6 +1478,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                         };
                         if n.is_finite() && n <= limit {
                             asm = a;
+                            previous_norm = norm;
                             norm = n;
                             accepted = true;
                             break;
@@ -1417,11 +1493,18 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                 alpha *= 0.5;
             }
             if !accepted {
+                if norm <= self.force_floor {
+                    // No direction improves a residual already at round-off
+                    // level: the state cannot be made better; keep it.
+                    self.u.copy_from_slice(&base);
+                    return match self.assemble(ctl, dt, false) {
+                        Ok(a) => Ok((it + 1, a)),
+                        Err(e) => Err((norm, tol, it + 1, e.to_string())),
+                    };
+                }
                 return Err((norm, tol, it + 1, last_err));
             }
-            let converged = norm
-                <= (self.settings.rtol * asm.scale.max(f64::MIN_POSITIVE)).max(self.settings.atol);
-            if lazy && !converged && norm != 0.0 {
+            if lazy && !self.converged(norm, previous_norm, &asm, true) {
                 // Predicted convergence did not happen: the next iteration
                 // needs the tangent at this point.
                 asm = match self.assemble(ctl, dt, true) {
@@ -1437,6 +1520,66 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             self.settings.max_iterations,
             "iteration limit".into(),
         ))
+    }
+
+    fn push_record(&mut self, time: f64, ctl: &Control, asm: &Assembly, iterations: usize) {
+        let free_end = match ctl.probe {
+            ProbeDrive::Spring { free_end, .. } => free_end,
+            _ => f64::NAN,
+        };
+        let has_cavity = self.cavity.is_some();
+        self.records.push(StepRecord {
+            time,
+            probe_w: self.u[K::DIM * self.mesh.node_count()],
+            free_end,
+            contact_force: asm.contact_force,
+            plane_force: asm.plane_force,
+            base_force: asm.base_force,
+            penetration: asm.penetration,
+            cavity_pressure: if has_cavity { asm.pressure } else { f64::NAN },
+            cavity_volume: if has_cavity { asm.volume } else { f64::NAN },
+            iterations,
+            stage: self.stage,
+        });
+    }
+
+    /// Dense-output error of a candidate step to `t_new` with force
+    /// `force` (probe or plane), relative to `output_tolerance` × the
+    /// force scale, and the step that would meet the tolerance (from the
+    /// third-order error law, ×0.9, between ×0.2 and ×2); (0, ∞) when the
+    /// stage has fewer than three earlier points or control is off.
+    fn output_error(&self, t_new: f64, force: f64, dt: f64) -> (f64, f64) {
+        let tol = self.settings.output_tolerance;
+        let n = self.records.len();
+        if !(tol > 0.0) || n < 3 {
+            return (0.0, f64::INFINITY);
+        }
+        // The stage's records and its start point.
+        let in_stage = self.records[n - 3..]
+            .iter()
+            .skip(1)
+            .all(|r| r.stage == self.stage);
+        if !in_stage {
+            return (0.0, f64::INFINITY);
+        }
+        let value = |r: &StepRecord| {
+            if self.probe.is_some() {
+                r.contact_force
+            } else {
+                r.plane_force
+            }
+        };
+        let p = &self.records[n - 3..];
+        let ts = [p[0].time, p[1].time, p[2].time, t_new];
+        let ys = [value(&p[0]), value(&p[1]), value(&p[2]), force];
+        let scale = ys[2].abs().max(force.abs()) + self.output_floor;
+        let ratio = crate::dense::interpolation_error(ts, ys) / (tol * scale);
+        let factor = if ratio > 0.0 {
+            (0.9 * ratio.powf(-1.0 / 3.0)).clamp(0.2, 2.0)
+        } else {
+            2.0
+        };
+        (ratio, dt * factor)
     }
 
     /// Advances through `stage` with adaptive steps: a failed attempt is
@@ -1478,6 +1621,14 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         // The last attempt of the current step that met an inadmissible
         // deformation (reported if the step finally fails for another cause).
         let mut inadmissible: Option<String> = None;
+        if self.records.is_empty() {
+            // The initial state, the start point of the first stage.
+            let ctl = (stage.control)(self.time);
+            self.u.copy_from_slice(&self.u_committed);
+            let asm = self.assemble(&ctl, 0.0, false)?;
+            self.push_record(self.time, &ctl, &asm, 0);
+        }
+        self.stage += 1;
         while self.time < stage.end - 1e-12 * duration {
             let remaining = stage.end - self.time;
             if dt > remaining || remaining - dt < 0.01 * dt {
@@ -1503,6 +1654,25 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                             asm.contact_force
                         );
                     }
+                    // Dense-output error of the new interval (module
+                    // `dense`): reject and retry smaller if it is too large.
+                    let force = if self.probe.is_some() {
+                        asm.contact_force
+                    } else {
+                        asm.plane_force
+                    };
+                    let (ratio, dt_error) = self.output_error(t_new, force, dt);
+                    if ratio > 1.5 && dt > dt_min * (1.0 + 1e-9) {
+                        if trace() {
+                            eprintln!(
+                                "reject t={t_new:.5} dt={dt:.3e} output error {ratio:.2} × tolerance"
+                            );
+                        }
+                        self.counters.rejected_steps += 1;
+                        self.u.copy_from_slice(&self.u_committed);
+                        dt = dt_error.max(dt_min);
+                        continue;
+                    }
                     self.history.commit();
                     self.u_previous.copy_from_slice(&self.u_committed);
                     self.u_committed.copy_from_slice(&self.u);
@@ -1510,29 +1680,14 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                     self.last_dt = dt;
                     first = false;
                     self.counters.steps += 1;
-                    let (free_end, contact_force) = match ctl.probe {
-                        ProbeDrive::Spring { free_end, .. } => (free_end, asm.contact_force),
-                        _ => (f64::NAN, asm.contact_force),
-                    };
                     self.control = ctl;
-                    let has_cavity = self.cavity.is_some();
-                    self.records.push(StepRecord {
-                        time: t_new,
-                        probe_w: self.u[K::DIM * self.mesh.node_count()],
-                        free_end,
-                        contact_force,
-                        plane_force: asm.plane_force,
-                        base_force: asm.base_force,
-                        penetration: asm.penetration,
-                        cavity_pressure: if has_cavity { asm.pressure } else { f64::NAN },
-                        cavity_volume: if has_cavity { asm.volume } else { f64::NAN },
-                        iterations,
-                    });
+                    self.push_record(t_new, &ctl, &asm, iterations);
                     inadmissible = None;
                     observe(self)?;
                     if iterations <= self.settings.easy_iterations {
-                        dt = (dt * self.settings.growth).min(stage.dt_max);
+                        dt *= self.settings.growth;
                     }
+                    dt = dt.min(dt_error).min(stage.dt_max);
                 }
                 Err((residual, tolerance, iterations, cause)) => {
                     if trace() {
@@ -1556,7 +1711,8 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                             ));
                         }
                         return Err(FemError::NonConvergence(Box::new(NonConvergence {
-                            time: self.time,
+                            // + 0.0: a clock started at −0.0 prints as 0.
+                            time: self.time + 0.0,
                             dt,
                             residual,
                             tolerance,

@@ -91,15 +91,94 @@ fn hertz_errors(n: usize, size_over_r: f64, bias: f64) -> Vec<(f64, f64)> {
     errors
 }
 
-#[test]
-fn hertz_neo_hookean_half_space_within_3_percent() {
-    // Block 40 R wide and deep (Dimitriadis thickness correction < 0.7 %),
-    // 40×40 elements graded to ≈ R/40 at the contact.
-    let errors = hertz_errors(40, 40.0, 250.0);
-    eprintln!("Hertz (δ/R, relative error): {errors:.4?}");
-    for &(d, e) in &errors {
-        assert!(e.abs() < 0.03, "δ/R = {d}: error {e:+.4}");
+/// Sneddon's exact small-strain force of a rigid sphere (not Hertz's
+/// paraboloid) on an elastic half space with plane-strain modulus `e_star`:
+/// δ = (a/2) ln((R + a)/(R − a)), F = (E*/2)[(a² + R²) ln((R + a)/(R − a))
+/// − 2aR]; a from δ by bisection. Below Hertz by ≈ 0.1 δ/R.
+fn sneddon_sphere(e_star: f64, delta: f64) -> f64 {
+    let depth = |a: f64| 0.5 * a * ((R + a) / (R - a)).ln();
+    let (mut lo, mut hi) = (0.0, 0.999 * R);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if depth(mid) < delta {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
     }
+    let a = 0.5 * (lo + hi);
+    0.5 * e_star * ((a * a + R * R) * ((R + a) / (R - a)).ln() - 2.0 * a * R)
+}
+
+/// Elastic half space (issue 15): the neo-Hookean quarter disc of radius
+/// 200 R around the contact, meshed by `Mesh::contact_graded_half_space`
+/// with the default cell mesh parameters, far boundary fixed, κ = 200 G
+/// (the cell model's default): the force is within 1 % of the exact
+/// small-strain sphere solution for δ/R ≤ 0.05. (Against Hertz's
+/// paraboloid, eq. 1.1, the same run is 0.5–1.3 % low: the sphere's own
+/// −0.1 δ/R plus finite strain.)
+#[test]
+fn graded_half_space_matches_the_sphere_solution_within_1_percent() {
+    let g = 1e3;
+    let ratio = 200.0;
+    let l = 200.0 * R;
+    let spec = nlvid_fem::ContactMesh::cell_default(R);
+    let mesh = Mesh::contact_graded_half_space(l, &spec).unwrap();
+    let probe = SphereProbe {
+        radius: R,
+        centre_z: l + R,
+        surface: "surface".into(),
+    };
+    let supports = [
+        Support::fixed("axis", Component::R),
+        Support::fixed("outer", Component::R),
+        Support::fixed("outer", Component::Z),
+    ];
+    let material = NeoHookean {
+        mu: g,
+        kappa: ratio * g,
+    };
+    let mut model = Model::new(
+        mesh,
+        material,
+        &supports,
+        Some(probe),
+        None,
+        Settings::default(),
+    )
+    .unwrap();
+    let nu = (3.0 * ratio - 2.0) / (2.0 * (3.0 * ratio + 1.0));
+    let e_star = 2.0 * g / (1.0 - nu);
+    let depth = 0.05 * R;
+    let control = |t: f64| Control {
+        probe: ProbeDrive::Displacement(-depth * t),
+        ..Control::default()
+    };
+    let mut worst: f64 = 0.0;
+    for k in 1..=10 {
+        let t = k as f64 / 10.0;
+        model
+            .run_stage(&Stage {
+                name: "indent",
+                end: t,
+                dt_initial: 0.1,
+                dt_max: 0.1,
+                control: &control,
+            })
+            .unwrap();
+        let rec = model.records().last().copied().unwrap();
+        let delta = -rec.probe_w;
+        let e = rec.contact_force / sneddon_sphere(e_star, delta) - 1.0;
+        let hertz = 4.0 / 3.0 * e_star * R.sqrt() * delta.powf(1.5);
+        eprintln!(
+            "δ/R = {:.4}: vs sphere {:+.3} %, vs Hertz {:+.3} %",
+            delta / R,
+            100.0 * e,
+            100.0 * (rec.contact_force / hertz - 1.0)
+        );
+        worst = worst.max(e.abs());
+    }
+    assert!(worst < 0.01, "worst {worst}");
 }
 
 /// The finer Hertz check that session 1 had to drop: its first Newton
@@ -312,7 +391,65 @@ fn soft_cantilever_force_follows_rigid_curve_at_delta_z_minus_d() {
         );
         assert!(
             (delta + s.1).abs() < 1e-6 * delta,
-            "δ = Z − d must equal the probe travel"
+            "δ = Z − d = {delta} must equal the probe travel {}",
+            -s.1
         );
     }
+}
+
+/// Residual tolerances at near-zero forces (issue 15): a 1e-15…1e-8 m
+/// indentation loads the body by forces of 1e-33…1e-11 N, where a
+/// tolerance relative to the force itself asks for a residual below the
+/// round-off of the near-incompressible pressure (≈ ε K per unit area).
+/// With the floor 32 ε K L² on stagnation every bulk ratio converges (the
+/// old rule failed at κ/G = 100, δ = 1e-15 m, "tolerance 8.9e-27 N"), the
+/// force grows with the depth, and above the floor it barely depends on κ
+/// (near incompressible).
+#[test]
+fn tiny_indentations_converge_at_any_bulk_ratio() {
+    let g = 1e3;
+    let l = 20.0 * R;
+    let mut slopes = Vec::new();
+    for ratio in [1e2, 1e4, 1e6] {
+        let mut model = block(
+            NeoHookean {
+                mu: g,
+                kappa: ratio * g,
+            },
+            8,
+            20.0,
+            20.0,
+        );
+        let floor = 32.0 * f64::EPSILON * (ratio + 4.0 / 3.0) * g * l * l;
+        let depths = [1e-15, 1e-13, 1e-11, 1e-9, 1e-8];
+        let mut forces = Vec::new();
+        let mut previous = 0.0;
+        for (k, depth) in depths.into_iter().enumerate() {
+            // From the previous depth to this one over the stage.
+            let control = move |t: f64| Control {
+                probe: ProbeDrive::Displacement(
+                    -(previous + (depth - previous) * (t - k as f64).clamp(0.0, 1.0)),
+                ),
+                ..Control::default()
+            };
+            previous = depth;
+            model
+                .run_stage(&Stage {
+                    name: "tiny",
+                    end: (k + 1) as f64,
+                    dt_initial: 1.0,
+                    dt_max: 1.0,
+                    control: &control,
+                })
+                .unwrap_or_else(|e| panic!("κ/G = {ratio:e}, δ = {depth:e}: {e}"));
+            forces.push(model.records().last().unwrap().contact_force);
+        }
+        eprintln!("κ/G = {ratio:e}: forces {forces:?}, floor {floor:.2e} N");
+        assert!(forces.windows(2).all(|w| w[1] > w[0]), "{forces:?}");
+        assert!(forces[4] > 100.0 * floor);
+        slopes.push(forces[4] / depths[4]);
+    }
+    // Near-incompressible: the contact stiffness barely depends on κ.
+    assert!((slopes[2] / slopes[1] - 1.0).abs() < 0.01, "{slopes:?}");
+    assert!((slopes[1] / slopes[0] - 1.0).abs() < 0.02, "{slopes:?}");
 }

@@ -1,0 +1,90 @@
+//! The elastic dome of issue 15 (benchmark): the setup-1 half spheroid
+//! (H = 12.22 µm, D = 28.88 µm), neo-Hookean G = 1 kPa, K = 1000 G, pushed
+//! 2 µm by a rigid 2.5 µm sphere on the default mesh (converged to 0.5 %
+//! at every depth from 0.05 µm, docs/theory/fem.md), forces written at 201
+//! depths. Prints the forces at a few depths and the CPU time (median of
+//! 5).
+//!
+//! ```text
+//! cargo run -p nlvid-fem --release --example elastic_dome
+//! ```
+
+#![allow(clippy::unwrap_used)]
+
+use nlvid_fem::afm::{self, AfmSetup, Cantilever, Engagement};
+use nlvid_model::{Prony, Relaxation, names};
+
+/// The benchmark setup.
+fn setup() -> AfmSetup {
+    let mut s = AfmSetup::thesis_setup1();
+    s.cantilever = Cantilever::Rigid;
+    s.engagement = Engagement {
+        force: 0.0,
+        ramp: 1.0,
+        hold: 0.0,
+    };
+    s.bulk_ratio = 1000.0;
+    s.piezo = vec![(0.0, 0.0), (1.0, 2e-6)];
+    s.output_times = (0..=200).map(|i| i as f64 / 200.0).collect();
+    s
+}
+
+fn main() {
+    faer::set_global_parallelism(faer::Par::Seq);
+    let mut setup = setup();
+    // Experiment knobs: NLVID_FEM_OUTPUT_TOL, NLVID_FEM_REFINE (the default
+    // mesh refined that many times), NLVID_FEM_DUMP (write "δ F" lines).
+    if let Ok(v) = std::env::var("NLVID_FEM_OUTPUT_TOL") {
+        setup.settings.output_tolerance = v.parse().unwrap();
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_RAMP_STEPS") {
+        setup.ramp_step_fraction = 1.0 / v.parse::<f64>().unwrap();
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_REFINE")
+        && let afm::MeshLayout::ContactGraded(spec) = setup.mesh_layout
+    {
+        setup.mesh_layout = afm::MeshLayout::ContactGraded(spec.refined(v.parse().unwrap()));
+    }
+    let repeats = if std::env::var_os("NLVID_FEM_DUMP").is_some() {
+        1
+    } else {
+        5
+    };
+    let params = Relaxation::new(names::G0, 1e3, Prony::elastic()).unwrap();
+    let mut cpu = Vec::new();
+    let mut last = None;
+    for _ in 0..repeats {
+        let run = afm::run(&params, &setup).unwrap();
+        cpu.push(run.cpu_seconds);
+        last = Some(run);
+    }
+    cpu.sort_by(f64::total_cmp);
+    let run = last.unwrap();
+    if let Some(path) = std::env::var_os("NLVID_FEM_DUMP") {
+        let text: String = run
+            .indentation
+            .iter()
+            .zip(&run.force)
+            .map(|(d, f)| format!("{d:.6e} {f:.9e}\n"))
+            .collect();
+        std::fs::write(path, text).unwrap();
+    }
+    for depth in [0.1e-6, 0.25e-6, 0.5e-6, 1e-6, 2e-6] {
+        let i = run
+            .time
+            .iter()
+            .position(|&t| (t * 2e-6 - depth).abs() < 1e-12)
+            .unwrap();
+        println!("δ = {:.2} µm: F = {:.6e} N", depth * 1e6, run.force[i]);
+    }
+    println!(
+        "{} elements, {} steps ({} cut-backs), {} Newton iterations, {} assemblies; CPU median = {:.3} s (all {:.3?})",
+        run.elements,
+        run.steps,
+        run.cutbacks,
+        run.iterations,
+        run.assemblies,
+        cpu[cpu.len() / 2],
+        cpu
+    );
+}
