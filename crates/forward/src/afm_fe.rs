@@ -6,11 +6,12 @@
 //!
 //! `nlvid simulate`, `nlvid build` and `nlvid fit` (real model) read these
 //! same `[forward]` keys with the same defaults; the defaults are the fem
-//! crate's (`AfmSetup::thesis_setup1`: 35 × 35 mesh, bias 4, κ/G0 = 200),
-//! which give the verified setup-1 forces (docs/theory/forward.md).
+//! crate's (`AfmSetup::thesis_setup1`: the mesh graded to the contact,
+//! κ/G0 = 200), which give the verified setup-1 forces
+//! (docs/theory/forward.md, docs/theory/fem.md "Mesh graded to the contact").
 
 use nlvid_fem::FemError;
-use nlvid_fem::afm::{AfmSetup, Cantilever, Engagement, MeshSpec};
+use nlvid_fem::afm::{AfmSetup, Cantilever, Engagement, MeshLayout, MeshSpec};
 use nlvid_model::{FailureKind, ForwardModel, Relaxation, RunFailure, names};
 use nlvid_protocol::{Loading as ProtocolLoading, Program, Quantity};
 use nlvid_study::{Bounds, Dimension, Section};
@@ -34,10 +35,10 @@ pub struct AfmFeSpec {
     pub loading: ProtocolLoading,
     /// Output points m, equally spaced over step 2 (thesis: 5095).
     pub points: usize,
-    /// Mesh: elements per side (n × n).
-    pub elements_per_side: usize,
-    /// Mesh: coarsest/finest spacing ratio toward the contact.
-    pub mesh_bias: f64,
+    /// Mesh: graded to the contact (default), or the sessions-1–3 Coons
+    /// patch with `coons` = (elements per side, coarsest/finest spacing
+    /// ratio toward the contact).
+    pub mesh: AfmMesh,
     /// Bulk modulus over G0 (near-incompressibility).
     pub bulk_ratio: f64,
     /// Largest time step in ramps, as a fraction of the ramp duration.
@@ -48,13 +49,13 @@ pub struct AfmFeSpec {
 
 impl AfmFeSpec {
     /// Reads the `[forward]` keys (`height`, `diameter`, `probe_radius`,
-    /// `spring_constant` or `cantilever = "rigid"`, `points`,
-    /// `elements_per_side`, `mesh_bias`, `bulk_ratio`,
+    /// `spring_constant` or `cantilever = "rigid"`, `points`, `mesh`
+    /// (`"graded"` or `"coons"`), `mesh_refinement` (graded),
+    /// `elements_per_side` and `mesh_bias` (coons), `bulk_ratio`,
     /// `ramp_step_fraction`, `hold_step_max`); `loading` is the
     /// `[protocol]` section's. Defaults are those of
-    /// `AfmSetup::thesis_setup1` (probe radius 2.5 µm, 35 elements per
-    /// side, mesh bias 4, bulk ratio 200, ramp step fraction 0.1, hold step
-    /// 2 s).
+    /// `AfmSetup::thesis_setup1` (probe radius 2.5 µm, the mesh graded to
+    /// the contact, bulk ratio 200, ramp step fraction 0.1, hold step 2 s).
     ///
     /// # Errors
     /// Missing key, wrong unit, out-of-range value (file, line, key).
@@ -106,10 +107,7 @@ impl AfmFeSpec {
                     .into());
             }
         };
-        let elements_per_side = s
-            .opt_usize("elements_per_side", Bounds::closed(2.0, 10_000.0))?
-            .unwrap_or(d.mesh.elements_per_side);
-        let mesh_bias = s.f64_or("mesh_bias", Bounds::at_least(1.0), d.mesh.bias)?;
+        let mesh = AfmMesh::from_section(s, &d)?;
         let bulk_ratio = s.f64_or("bulk_ratio", Bounds::at_least(1.0), d.bulk_ratio)?;
         let ramp_step_fraction = s.f64_or(
             "ramp_step_fraction",
@@ -125,8 +123,7 @@ impl AfmFeSpec {
             spring_constant,
             loading,
             points,
-            elements_per_side,
-            mesh_bias,
+            mesh,
             bulk_ratio,
             ramp_step_fraction,
             hold_step_max,
@@ -191,10 +188,17 @@ impl AfmFeSpec {
         };
         setup.engagement = engagement;
         setup.piezo = breakpoints(&piezo);
-        setup.mesh = MeshSpec {
-            elements_per_side: self.elements_per_side,
-            bias: self.mesh_bias,
-        };
+        match self.mesh {
+            AfmMesh::Graded { refinement } => {
+                if let MeshLayout::ContactGraded(spec) = setup.mesh_layout {
+                    setup.mesh_layout = MeshLayout::ContactGraded(spec.refined(refinement));
+                }
+            }
+            AfmMesh::Coons(spec) => {
+                setup.mesh_layout = MeshLayout::Coons;
+                setup.mesh = spec;
+            }
+        }
         setup.bulk_ratio = self.bulk_ratio;
         let t0 = piezo.start();
         setup.output_times = piezo
@@ -214,6 +218,65 @@ impl AfmFeSpec {
     /// As [`AfmFeSpec::setup`].
     pub fn build(&self) -> Result<AfmFeModel> {
         Ok(AfmFeModel::new(self.setup()?))
+    }
+}
+
+/// The cell mesh of `[forward] mesh`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AfmMesh {
+    /// Rings graded to the contact (the default, converged from
+    /// δ = 0.05 µm), each element split `refinement` times per direction
+    /// (1: the default density; 2, 4: the convergence study's meshes).
+    Graded {
+        /// Refinement factor (≥ 1).
+        refinement: usize,
+    },
+    /// The sessions-1–3 single transfinite patch (kept to reproduce
+    /// earlier numbers; 2 % off at δ = 0.25 µm on 35 × 35).
+    Coons(MeshSpec),
+}
+
+impl AfmMesh {
+    /// `mesh = "graded" | "coons"`, with `mesh_refinement` (graded) or
+    /// `elements_per_side`, `mesh_bias` (coons). A key of the other layout
+    /// is an error saying which layout it belongs to.
+    fn from_section(s: &mut Section, defaults: &AfmSetup) -> Result<Self> {
+        let coons = s.opt_enum("mesh", &[("graded", false), ("coons", true)])?;
+        let coons = coons.unwrap_or(false);
+        if coons {
+            if s.has("mesh_refinement") {
+                return Err(s
+                    .invalid(
+                        "mesh_refinement",
+                        "refines the graded mesh; with mesh = \"coons\" set elements_per_side",
+                    )
+                    .into());
+            }
+            let elements_per_side = s
+                .opt_usize("elements_per_side", Bounds::closed(2.0, 10_000.0))?
+                .unwrap_or(defaults.mesh.elements_per_side);
+            let bias = s.f64_or("mesh_bias", Bounds::at_least(1.0), defaults.mesh.bias)?;
+            return Ok(Self::Coons(MeshSpec {
+                elements_per_side,
+                bias,
+            }));
+        }
+        for key in ["elements_per_side", "mesh_bias"] {
+            if s.has(key) {
+                return Err(s
+                    .invalid(
+                        key,
+                        "sizes the Coons-patch mesh, which is no longer the default: the default \
+                         mesh is graded to the contact (mesh = \"graded\", refine it with \
+                         mesh_refinement = 2); add mesh = \"coons\" to keep the old mesh",
+                    )
+                    .into());
+            }
+        }
+        let refinement = s
+            .opt_usize("mesh_refinement", Bounds::closed(1.0, 16.0))?
+            .unwrap_or(1);
+        Ok(Self::Graded { refinement })
     }
 }
 

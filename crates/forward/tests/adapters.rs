@@ -3,7 +3,7 @@
 
 #![allow(clippy::unwrap_used)]
 
-use nlvid_fem::afm::{AfmSetup, Cantilever, Engagement, MeshSpec};
+use nlvid_fem::afm::{AfmSetup, Cantilever, Engagement, MeshLayout, MeshSpec};
 use nlvid_fem::{FemError, NonConvergence};
 use nlvid_forward::{ForwardSettings, ForwardSpec, HertzProny, fem_failure, from_study};
 use nlvid_membrane::{ControlKind, Geometry, Loading, PipkinRogersParams, simulate};
@@ -141,6 +141,7 @@ height = "6 um"
 diameter = "14 um"
 probe_radius = "2.5 um"
 spring_constant = "0.12 N/m"
+mesh = "coons"
 elements_per_side = 6
 hold_step_max = "0.5 s"
 points = 12
@@ -175,6 +176,7 @@ fn afm_setup_by_hand() -> AfmSetup {
         (0.1, 0.5e-6),
         (1.1, 0.5e-6),
     ];
+    s.mesh_layout = MeshLayout::Coons;
     s.mesh = MeshSpec {
         elements_per_side: 6,
         bias: 4.0,
@@ -316,4 +318,33 @@ fn bad_studies_name_file_line_and_key() {
         "control = \"force\"\ntarget = \"1 mN\"\nrate = \"1 mN/s\"",
     ));
     assert!(e.contains("protocol.control"), "{e}");
+}
+
+/// `elements_per_side` and `mesh_bias` size the Coons mesh only: without
+/// `mesh = "coons"` they are an error naming the graded default, and
+/// `mesh_refinement` refines the graded mesh.
+#[test]
+fn coons_mesh_keys_need_mesh_coons_and_the_graded_mesh_refines() {
+    let graded = AFM.replace("mesh = \"coons\"\n", "");
+    let mut s = study(&graded);
+    let e = ForwardSettings::from_study(&mut s).unwrap_err().to_string();
+    assert!(
+        e.contains("elements_per_side") && e.contains("mesh = \"coons\""),
+        "{e}"
+    );
+
+    let refined = graded.replace("elements_per_side = 6\n", "mesh_refinement = 2\n");
+    let mut s = study(&refined);
+    let settings = ForwardSettings::from_study(&mut s).unwrap();
+    let ForwardSpec::AfmFe(spec) = &settings.spec else {
+        panic!("not afm-fe")
+    };
+    let MeshLayout::ContactGraded(got) = spec.setup().unwrap().mesh_layout else {
+        panic!("not the graded mesh")
+    };
+    let MeshLayout::ContactGraded(default) = AfmSetup::thesis_setup1().mesh_layout else {
+        panic!("the default mesh is graded")
+    };
+    assert_eq!(got.core, 2 * default.core);
+    assert_eq!(got.spacing, default.spacing / 2.0);
 }
