@@ -250,7 +250,10 @@ pub fn fit_creep(data: &Creep, settings: &CreepSettings) -> Result<CreepFit> {
     let c = 3.0 / (16.0 * settings.tip_radius.sqrt());
     let column = |tau: f64| {
         let h = hereditary(t, f, tau);
-        f.iter().zip(&h).map(|(f, h)| c * (f - h)).collect::<Vec<f64>>()
+        f.iter()
+            .zip(&h)
+            .map(|(f, h)| c * (f - h))
+            .collect::<Vec<f64>>()
     };
     let problem = Separable {
         fixed: f.iter().map(|f| c * f).collect(),

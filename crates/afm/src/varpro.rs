@@ -149,7 +149,9 @@ impl Separable<'_> {
             Ok(res) => {
                 let st = res.state();
                 (
-                    st.get_best_param().cloned().unwrap_or_else(|| start.to_vec()),
+                    st.get_best_param()
+                        .cloned()
+                        .unwrap_or_else(|| start.to_vec()),
                     st.get_iter(),
                     matches!(
                         st.get_termination_status(),
@@ -183,7 +185,11 @@ impl Separable<'_> {
             .collect();
         if terms <= g {
             let cols: Vec<Vec<f64>> = std::iter::once(self.fixed.clone())
-                .chain(grid.par_iter().map(|&t| (self.column)(t)).collect::<Vec<_>>())
+                .chain(
+                    grid.par_iter()
+                        .map(|&t| (self.column)(t))
+                        .collect::<Vec<_>>(),
+                )
                 .collect();
             let (gram, rhs) = gram(&cols, self.y);
             let yy = self.yy();
@@ -389,7 +395,10 @@ mod tests {
         let y: Vec<f64> = a.iter().zip(&b).map(|(p, q)| 2.0 * p + 3.0 * q).collect();
         let (g, r) = gram(&[a.to_vec(), b.to_vec()], &y);
         let (x, sse) = nnls_gram(&g, &r, y.iter().map(|v| v * v).sum());
-        assert!((x[0] - 2.0).abs() < 1e-12 && (x[1] - 3.0).abs() < 1e-12, "{x:?}");
+        assert!(
+            (x[0] - 2.0).abs() < 1e-12 && (x[1] - 3.0).abs() < 1e-12,
+            "{x:?}"
+        );
         assert!(sse.abs() < 1e-9);
         // y = a − b = [0, 2, 2, 4]: the non-negative optimum drops b; x₀ = aᵀy/aᵀa = 26/30
         let y: Vec<f64> = a.iter().zip(&b).map(|(p, q)| p - q).collect();

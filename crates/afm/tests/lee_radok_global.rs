@@ -13,7 +13,7 @@ mod common;
 
 use common::*;
 use nlvid_afm::{
-    ContactMethod, LeeRadokFit, LeeRadokSettings, ReadOptions, RampHold, fit_lee_radok,
+    ContactMethod, LeeRadokFit, LeeRadokSettings, RampHold, ReadOptions, fit_lee_radok,
     fit_lee_radok_from, prepare_ramp_hold, read_jpk_bytes,
 };
 use nlvid_forward::LeeRadok;
@@ -52,7 +52,11 @@ fn best_of_random(rh: &RampHold, terms: usize, starts: usize, seed: u64) -> (f64
     let draws: Vec<Vec<f64>> = (0..starts)
         .map(|_| {
             (0..terms)
-                .map(|_| (lo + (hi - lo) * rng.random::<f64>()).exp().clamp(dt, hi.exp()))
+                .map(|_| {
+                    (lo + (hi - lo) * rng.random::<f64>())
+                        .exp()
+                        .clamp(dt, hi.exp())
+                })
                 .collect()
         })
         .collect();

@@ -255,7 +255,12 @@ impl LeeRadok {
 /// The Lee–Radok hereditary integral in displacement control takes
 /// x = δ^{3/2} ([`LeeRadok::sampled`]); in force control (creep, the
 /// compliance form δ^{3/2} = 3/(16√R) ∫ J(t − s) dF) it takes x = F.
-pub fn exp_convolution(times: &[f64], x: &[f64], tau: f64, with_dtau: bool) -> (Vec<f64>, Vec<f64>) {
+pub fn exp_convolution(
+    times: &[f64],
+    x: &[f64],
+    tau: f64,
+    with_dtau: bool,
+) -> (Vec<f64>, Vec<f64>) {
     let m = times.len().min(x.len());
     let mut h = vec![0.0; m];
     let mut dh = vec![0.0; if with_dtau { m } else { 0 }];
