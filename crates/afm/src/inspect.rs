@@ -9,8 +9,9 @@ use serde_json::json;
 
 use crate::error::Result;
 use crate::{
-    ContactMethod, ForceCurve, HertzSettings, LeeRadokSettings, fit_hertz, fit_lee_radok,
-    hertz_force, plot, prepare_approach, prepare_ramp_hold,
+    ContactMethod, CreepSettings, ForceCurve, HertzSettings, LeeRadokSettings, SegmentKind,
+    creep_indentation, fit_creep, fit_hertz, fit_lee_radok, hertz_force, plot, prepare_approach,
+    prepare_creep, prepare_ramp_hold,
 };
 
 /// The quick fits of `nlvid inspect`.
@@ -32,22 +33,25 @@ pub enum QuickFitKind {
 /// and model curves (nN against µm or s) for a plot.
 #[derive(Debug, Clone, PartialEq)]
 pub struct QuickFit {
-    /// `hertz-paraboloid` or `lee-radok-prony`.
+    /// `hertz-paraboloid`, `lee-radok-prony` or `lee-radok-creep`.
     pub model: &'static str,
     /// `(key with unit suffix, value)`, e.g. `("youngs_modulus_Pa", 2.3e5)`.
     pub values: Vec<(String, f64)>,
-    /// Prony terms `(G_k Pa, τ_k s)` of a Lee–Radok fit.
+    /// Prony terms of a Lee–Radok fit: `(G_k Pa, τ_k s)` in relaxation, `(J_k 1/Pa, τ_k s)`
+    /// in creep (`model` `lee-radok-creep`).
     pub terms: Vec<(f64, f64)>,
     /// One line for people.
     pub text: String,
     /// Abscissae of the plot.
     pub x: Vec<f64>,
-    /// Measured force, nN.
+    /// Measured force, nN (indentation, µm, for a creep fit).
     pub data: Vec<f64>,
-    /// Fitted force, nN.
+    /// Fitted force, nN (indentation, µm, for a creep fit).
     pub model_force: Vec<f64>,
     /// Abscissa label.
     pub x_label: &'static str,
+    /// Ordinate label (of `data` and `model_force`).
+    pub y_label: &'static str,
 }
 
 impl QuickFit {
@@ -64,7 +68,13 @@ impl QuickFit {
             let t: Vec<_> = self
                 .terms
                 .iter()
-                .map(|(g, t)| json!({"g_Pa": g, "tau_s": t}))
+                .map(|(g, t)| {
+                    if self.model == "lee-radok-creep" {
+                        json!({"j_per_Pa": g, "tau_s": t})
+                    } else {
+                        json!({"g_Pa": g, "tau_s": t})
+                    }
+                })
                 .collect();
             m.insert("terms".into(), json!(t));
         }
@@ -117,7 +127,11 @@ pub fn quick_fit(
                 data: nano(&a.force),
                 model_force: nano(&model),
                 x_label: "tip-sample separation (um)",
+                y_label: "force (nN)",
             })
+        }
+        QuickFitKind::LeeRadok { terms } if has_creep_pause(curve) => {
+            creep_fit(curve, terms, r, method)
         }
         QuickFitKind::LeeRadok { terms } => {
             let rh = prepare_ramp_hold(curve, method)?;
@@ -146,26 +160,88 @@ pub fn quick_fit(
                     ("range_normalised_rmse".into(), f.range_normalised_rmse),
                     ("contact_time_s".into(), rh.contact_time),
                     ("iterations".into(), f.iterations as f64),
+                    ("starts".into(), f.starts as f64),
+                    ("collapsed_terms".into(), f.collapsed as f64),
                 ],
                 terms: moduli,
                 text: format!(
-                    "Lee-Radok Prony (R = {r:e} m, {} terms): G_inf = {:.4e} Pa; {}; G(0) = {:.4e} Pa; range-normalised RMSE = {:.4} ({} points from contact at t = {:.4} s, {} Nelder-Mead iterations)",
+                    "Lee-Radok Prony (R = {r:e} m, {} terms{}): G_inf = {:.4e} Pa; {}; G(0) = {:.4e} Pa; range-normalised RMSE = {:.4} ({} points from contact at t = {:.4} s; best of {} Nelder-Mead starts, {} iterations)",
                     s.n_terms,
+                    if f.collapsed > 0 {
+                        format!(", {} collapsed to modulus 0 and dropped", f.collapsed)
+                    } else {
+                        String::new()
+                    },
                     g.g_inf(),
                     terms_txt.join("; "),
                     g.g0(),
                     f.range_normalised_rmse,
                     rh.time.len(),
                     rh.contact_time,
+                    f.starts,
                     f.iterations
                 ),
                 x: rh.time.clone(),
                 data: nano(&rh.force),
                 model_force: nano(&f.force_fit),
                 x_label: "time since contact (s)",
+                y_label: "force (nN)",
             })
         }
     }
+}
+
+/// Whether the segment right after the (first) extend is a constant-force pause.
+fn has_creep_pause(curve: &ForceCurve) -> bool {
+    curve
+        .segments
+        .iter()
+        .position(|s| s.kind == SegmentKind::Extend)
+        .and_then(|i| curve.segments.get(i + 1))
+        .is_some_and(|s| s.kind == SegmentKind::Creep)
+}
+
+/// Lee–Radok in force control: the Prony creep-compliance fit of extend + constant-force
+/// pause ([`fit_creep`]), reported as G(0) = 1/J₀, G∞ = 1/J(∞) and the compliance terms.
+fn creep_fit(curve: &ForceCurve, terms: usize, r: f64, method: ContactMethod) -> Result<QuickFit> {
+    let data = prepare_creep(curve, method)?;
+    let f = fit_creep(&data, &CreepSettings::new(r, terms))?;
+    let j = &f.compliance;
+    let model = creep_indentation(&data.time, &data.force, j, r);
+    let micro = |v: &[f64]| v.iter().map(|d| d * 1e6).collect::<Vec<_>>();
+    let terms_txt: Vec<String> = j
+        .terms
+        .iter()
+        .map(|(jk, t)| format!("J = {jk:.4e} 1/Pa, tau = {t:.4e} s"))
+        .collect();
+    Ok(QuickFit {
+        model: "lee-radok-creep",
+        values: vec![
+            ("tip_radius_m".into(), r),
+            ("g0_Pa".into(), j.g0()),
+            ("g_inf_Pa".into(), j.g_inf()),
+            ("j0_per_Pa".into(), j.j0),
+            ("rmse_m".into(), f.rmse),
+            ("range_normalised_rmse".into(), f.range_normalised_rmse),
+            ("n_points".into(), f.n_points as f64),
+            ("collapsed_terms".into(), f.collapsed as f64),
+        ],
+        terms: j.terms.clone(),
+        text: format!(
+            "Lee-Radok creep (force clamp; R = {r:e} m, {terms} terms, {} collapsed to 0): G(0) = 1/J0 = {:.4e} Pa; G_inf = {:.4e} Pa; {}; range-normalised RMSE of the indentation = {:.4} ({} points from contact)",
+            f.collapsed,
+            j.g0(),
+            j.g_inf(),
+            terms_txt.join("; "),
+            f.range_normalised_rmse,
+            f.n_points
+        ),
+        x: data.time.clone(),
+        data: micro(&data.indentation),
+        model_force: micro(&model),
+        x_label: "time since contact (s)",
+        y_label: "indentation (um)",
+    })
 }
 
 /// The file name of a curve's source, for titles.
@@ -195,7 +271,7 @@ pub fn write_plot(path: &Path, curve: &ForceCurve, fit: Option<&QuickFit>) -> Re
             },
         ];
         let title = format!("{title}: data vs fit");
-        return plot::write_svg(path, &title, f.x_label, "force (nN)", &series);
+        return plot::write_svg(path, &title, f.x_label, f.y_label, &series);
     }
     let forces: Vec<Vec<f64>> = curve
         .segments

@@ -15,12 +15,13 @@
 //! The integral is the one Lee–Radok kernel of the pipeline, `nlvid_forward::LeeRadok`,
 //! on the measured indentation (exact for u = δ^{3/2} piecewise linear between samples),
 //! O(n) per evaluation. The moduli G∞ = G0 g∞ and Gₖ = G0 gₖ enter linearly, so the fit
-//! is a variable projection: Nelder–Mead (argmin) over log τₖ, non-negative least squares
-//! for (G∞, Gₖ) at each trial. Non-negative moduli make G(t) monotonically non-increasing
-//! by construction; the result is an `nlvid_model::Relaxation`.
+//! is a variable projection (`varpro.rs`): non-negative least squares for (G∞, Gₖ) at
+//! given τₖ, and a global search over log τₖ — every combination of a 40-point log grid,
+//! then Nelder–Mead from the best grid combinations, from log-spaced τ and from seeded
+//! random starts; the lowest SSE wins. Non-negative moduli make G(t) monotonically
+//! non-increasing by construction; terms whose modulus is 0 at the optimum are dropped
+//! and counted as collapsed; the result is an `nlvid_model::Relaxation`.
 
-use argmin::core::{CostFunction, Executor, State, TerminationReason, TerminationStatus};
-use argmin::solver::neldermead::NelderMead;
 use nlvid_forward::LeeRadok;
 use nlvid_model::{Prony, Relaxation};
 
@@ -30,19 +31,12 @@ use crate::prepare::{
     Baseline, ContactMethod, ContactPoint, contact_point, contact_point_from_baseline,
     tip_sample_separation,
 };
+use crate::varpro::{Multistart, Optimum, Separable};
 
 /// The kernel on a measured curve (ν = ½), with the crate's error type.
 fn kernel(time: &[f64], delta: &[f64], tip_radius: f64) -> Result<LeeRadok> {
     LeeRadok::sampled(tip_radius, 0.5, time.to_vec(), delta)
         .map_err(|e| AfmError::InvalidInput(e.to_string()))
-}
-
-/// Columns [P u, P h_1, ..., P h_m] with P = (16/3)√R: the force per unit modulus of the
-/// long-term part and of each term.
-fn basis(kernel: &LeeRadok, taus: &[f64]) -> Vec<Vec<f64>> {
-    std::iter::once(kernel.elastic())
-        .chain(taus.iter().map(|&tau| kernel.hereditary(tau)))
-        .collect()
 }
 
 /// Settings of a Lee–Radok Prony fit.
@@ -52,17 +46,20 @@ pub struct LeeRadokSettings {
     pub tip_radius: f64,
     /// Number of Prony terms, 1 to 3.
     pub n_terms: usize,
-    /// Maximum Nelder–Mead iterations.
+    /// Maximum Nelder–Mead iterations per start.
     pub max_iters: u64,
+    /// The global τ search (grid, starts, seed).
+    pub multistart: Multistart,
 }
 
 impl LeeRadokSettings {
-    /// Two-term fit for a probe of radius `tip_radius`.
+    /// Two-term fit for a probe of radius `tip_radius`, default global search.
     pub fn new(tip_radius: f64) -> Self {
         LeeRadokSettings {
             tip_radius,
             n_terms: 2,
             max_iters: 2000,
+            multistart: Multistart::default(),
         }
     }
 }
@@ -70,158 +67,40 @@ impl LeeRadokSettings {
 /// Result of a Lee–Radok Prony fit.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LeeRadokFit {
-    /// Fitted shear relaxation modulus G(t) (eq. 5.1), terms sorted by τ.
+    /// Fitted shear relaxation modulus G(t) (eq. 5.1), terms sorted by τ; collapsed
+    /// terms (modulus 0) are dropped.
     pub relaxation: Relaxation,
     /// Root-mean-square residual, N.
     pub rmse: f64,
     /// RMSE divided by the range of the measured force (eq. 5.2 convention).
     pub range_normalised_rmse: f64,
-    /// Nelder–Mead iterations used.
+    /// Nelder–Mead iterations of the winning start.
     pub iterations: u64,
+    /// Nelder–Mead starts run (1 for [`fit_lee_radok_from`]).
+    pub starts: usize,
+    /// Nelder–Mead met its tolerance at the winning start.
+    pub converged: bool,
+    /// Terms asked for whose modulus came out 0 (dropped: the data support fewer).
+    pub collapsed: usize,
     /// Model force at the fitted samples, N.
     pub force_fit: Vec<f64>,
 }
 
-struct VarPro<'a> {
-    kernel: &'a LeeRadok,
-    force: &'a [f64],
-    log_tau_bounds: (f64, f64),
-    scale: f64,
+/// Checked inputs: the kernel, the τ bounds [Δt_min, 10·T], Δt_min, T and the force range.
+struct Checked {
+    kernel: LeeRadok,
+    ln_tau: (f64, f64),
+    dt_min: f64,
+    span: f64,
+    range: f64,
 }
 
-impl VarPro<'_> {
-    /// Moduli and SSE for the given log τ's; None if out of bounds.
-    fn solve(&self, log_tau: &[f64]) -> Option<(Vec<f64>, Vec<f64>, f64)> {
-        if log_tau
-            .iter()
-            .any(|l| !(*l >= self.log_tau_bounds.0 && *l <= self.log_tau_bounds.1))
-        {
-            return None;
-        }
-        let mut taus: Vec<f64> = log_tau.iter().map(|l| l.exp()).collect();
-        taus.sort_by(f64::total_cmp);
-        let cols = basis(self.kernel, &taus);
-        let (g, sse) = nnls(&cols, self.force)?;
-        Some((taus, g, sse))
-    }
-}
-
-impl CostFunction for VarPro<'_> {
-    type Param = Vec<f64>;
-    type Output = f64;
-    fn cost(&self, p: &Vec<f64>) -> std::result::Result<f64, argmin::core::Error> {
-        Ok(match self.solve(p) {
-            Some((_, _, sse)) => sse * self.scale,
-            None => f64::MAX / 4.0,
-        })
-    }
-}
-
-/// Non-negative least squares min ‖Σ g_j c_j − y‖², g ≥ 0, by enumerating active sets
-/// (m ≤ 4 columns: at most 15 small solves). Returns (g, sse).
-fn nnls(cols: &[Vec<f64>], y: &[f64]) -> Option<(Vec<f64>, f64)> {
-    let m = cols.len();
-    let norms: Vec<f64> = cols
-        .iter()
-        .map(|c| c.iter().map(|v| v * v).sum::<f64>().sqrt())
-        .collect();
-    let yy: f64 = y.iter().map(|v| v * v).sum();
-    // Gram matrix and right-hand side of the normalised columns
-    let mut gram = vec![vec![0.0; m]; m];
-    let mut rhs = vec![0.0; m];
-    for a in 0..m {
-        if norms[a] == 0.0 {
-            continue;
-        }
-        rhs[a] = cols[a].iter().zip(y).map(|(c, v)| c * v).sum::<f64>() / norms[a];
-        for b in a..m {
-            if norms[b] == 0.0 {
-                continue;
-            }
-            let v = cols[a]
-                .iter()
-                .zip(&cols[b])
-                .map(|(p, q)| p * q)
-                .sum::<f64>()
-                / (norms[a] * norms[b]);
-            gram[a][b] = v;
-            gram[b][a] = v;
-        }
-    }
-    let mut best: Option<(Vec<f64>, f64)> = None;
-    for mask in 1u32..(1 << m) {
-        let idx: Vec<usize> = (0..m)
-            .filter(|j| mask & (1 << j) != 0 && norms[*j] > 0.0)
-            .collect();
-        if idx.len() != mask.count_ones() as usize {
-            continue;
-        }
-        let a: Vec<Vec<f64>> = idx
-            .iter()
-            .map(|&i| idx.iter().map(|&j| gram[i][j]).collect())
-            .collect();
-        let b: Vec<f64> = idx.iter().map(|&i| rhs[i]).collect();
-        let Some(x) = solve_spd(a, b.clone()) else {
-            continue;
-        };
-        if x.iter().any(|v| *v < 0.0) {
-            continue;
-        }
-        // sse = yy − 2 xᵀb + xᵀ A x = yy − xᵀb at the LS optimum
-        let sse = (yy - x.iter().zip(&b).map(|(p, q)| p * q).sum::<f64>()).max(0.0);
-        if best.as_ref().is_none_or(|bst| sse < bst.1) {
-            let mut g = vec![0.0; m];
-            for (k, &i) in idx.iter().enumerate() {
-                g[i] = x[k] / norms[i];
-            }
-            best = Some((g, sse));
-        }
-    }
-    best
-}
-
-/// Gaussian elimination with partial pivoting for a small system; None if singular.
-fn solve_spd(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
-    let n = b.len();
-    for col in 0..n {
-        let piv = (col..n).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[piv][col].abs() < 1e-13 {
-            return None;
-        }
-        a.swap(col, piv);
-        b.swap(col, piv);
-        for row in col + 1..n {
-            let f = a[row][col] / a[col][col];
-            let pivot_row = a[col].clone();
-            for (v, p) in a[row].iter_mut().zip(&pivot_row).skip(col) {
-                *v -= f * p;
-            }
-            b[row] -= f * b[col];
-        }
-    }
-    let mut x = vec![0.0; n];
-    for i in (0..n).rev() {
-        let s: f64 = (i + 1..n).map(|k| a[i][k] * x[k]).sum();
-        x[i] = (b[i] - s) / a[i][i];
-    }
-    Some(x)
-}
-
-/// Fit a Prony series to a ramp-hold curve: time (s, from contact), indentation δ (m),
-/// force (N, baseline-corrected).
-///
-/// Relaxation times are kept within [Δt_min, 10·T] (sampling step to ten times the record
-/// length); start values are log-spaced over [10·Δt_min, T/3].
-///
-/// # Errors
-/// [`AfmError::InvalidInput`] for bad settings or data; [`AfmError::NotConverged`] when
-/// Nelder–Mead reaches `max_iters` or no non-negative solution exists.
-pub fn fit_lee_radok(
+fn check(
     time: &[f64],
     delta: &[f64],
     force: &[f64],
     settings: &LeeRadokSettings,
-) -> Result<LeeRadokFit> {
+) -> Result<Checked> {
     let kernel = kernel(time, delta, settings.tip_radius)?;
     if force.len() != time.len() || force.iter().any(|f| !f.is_finite()) {
         return Err(AfmError::InvalidInput(
@@ -249,76 +128,106 @@ pub fn fit_lee_radok(
     let fmax = force.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let fmin = force.iter().copied().fold(f64::INFINITY, f64::min);
     let range = fmax - fmin;
-    if range <= 0.0 {
+    if !(range > 0.0) {
         return Err(AfmError::InvalidInput("force does not vary".into()));
     }
-    // Unscaled problem for the final solve; the search minimises the
-    // range-normalised RMSE² (the same problem, scaled).
-    let unscaled = VarPro {
-        kernel: &kernel,
-        force,
-        log_tau_bounds: (dt_min.ln(), (10.0 * span).ln()),
-        scale: 1.0,
+    Ok(Checked {
+        kernel,
+        ln_tau: (dt_min.ln(), (10.0 * span).ln()),
+        dt_min,
+        span,
+        range,
+    })
+}
+
+/// Fit a Prony series to a ramp-hold curve: time (s, from contact), indentation δ (m),
+/// force (N, baseline-corrected), searching the relaxation times globally (module
+/// documentation; deterministic for given settings).
+///
+/// Relaxation times are kept within [Δt_min, 10·T] (sampling step to ten times the record
+/// length).
+///
+/// # Errors
+/// [`AfmError::InvalidInput`] for bad settings or data; [`AfmError::NotConverged`] when
+/// no non-negative solution with a long-term modulus exists.
+pub fn fit_lee_radok(
+    time: &[f64],
+    delta: &[f64],
+    force: &[f64],
+    settings: &LeeRadokSettings,
+) -> Result<LeeRadokFit> {
+    let c = check(time, delta, force, settings)?;
+    let column = |tau: f64| c.kernel.hereditary(tau);
+    let problem = Separable {
+        fixed: c.kernel.elastic(),
+        column: &column,
+        y: force,
+        ln_tau: c.ln_tau,
     };
-    let problem = VarPro {
-        scale: 1.0 / (n as f64 * range * range),
-        ..unscaled
-    };
-    let m = settings.n_terms;
-    let (lo, hi) = ((10.0 * dt_min).ln(), (span / 3.0).ln());
-    let start: Vec<f64> = (0..m)
-        .map(|k| lo + (hi - lo) * (k as f64 + 0.5) / m as f64)
-        .collect();
-    let mut simplex = vec![start.clone()];
-    for k in 0..m {
-        let mut v = start.clone();
-        v[k] += 0.7;
-        simplex.push(v);
-    }
-    let solver = NelderMead::new(simplex)
-        .with_sd_tolerance(1e-14)
-        .map_err(|e| AfmError::InvalidInput(e.to_string()))?;
-    let res = Executor::new(problem, solver)
-        .configure(|s| s.max_iters(settings.max_iters))
-        .run()
-        .map_err(|e| AfmError::NotConverged {
-            fit: "Lee–Radok",
-            detail: e.to_string(),
-            hint: "check the ramp-hold data and the tip radius",
-        })?;
-    let state = res.state();
-    let iterations = state.get_iter();
-    if !matches!(
-        state.get_termination_status(),
-        TerminationStatus::Terminated(TerminationReason::SolverConverged)
-    ) {
-        return Err(AfmError::NotConverged {
-            fit: "Lee–Radok",
-            detail: format!(
-                "Nelder–Mead on log τ stopped after {iterations} iterations ({:?}), range-normalised RMSE² {:.3e}",
-                state.get_termination_status(),
-                state.get_best_cost()
-            ),
-            hint: "raise max_iters or use fewer Prony terms",
-        });
-    }
-    let best = state.get_best_param().cloned().unwrap_or(start);
-    let (taus, g, sse) = unscaled
-        .solve(&best)
+    let starts = problem.starts(settings.n_terms, &settings.multistart, (c.dt_min, c.span));
+    let best = problem
+        .best_of(&starts, settings.max_iters)
         .ok_or_else(|| AfmError::NotConverged {
             fit: "Lee–Radok",
-            detail: "no non-negative Prony moduli fit the data".into(),
-            hint: "check the contact point and baseline (force must rise with indentation)",
+            detail: "no start gave a finite misfit".into(),
+            hint: "check the ramp-hold data and the tip radius",
         })?;
+    finish(&c, force, best)
+}
+
+/// One local Lee–Radok fit: Nelder–Mead in log τ from `start_taus` (s, one per term;
+/// `settings.n_terms` is ignored), the moduli by non-negative least squares. What the
+/// global search of [`fit_lee_radok`] runs from each of its starts.
+///
+/// # Errors
+/// As [`fit_lee_radok`]; a start outside the τ bounds or of more than 3 terms is
+/// [`AfmError::InvalidInput`].
+pub fn fit_lee_radok_from(
+    time: &[f64],
+    delta: &[f64],
+    force: &[f64],
+    settings: &LeeRadokSettings,
+    start_taus: &[f64],
+) -> Result<LeeRadokFit> {
+    let mut s = *settings;
+    s.n_terms = start_taus.len();
+    let c = check(time, delta, force, &s)?;
+    let ln: Vec<f64> = start_taus.iter().map(|t| t.ln()).collect();
+    if ln.iter().any(|l| !(*l >= c.ln_tau.0 && *l <= c.ln_tau.1)) {
+        return Err(AfmError::InvalidInput(format!(
+            "start τ {start_taus:?} s outside [{:e}, {:e}] s",
+            c.ln_tau.0.exp(),
+            c.ln_tau.1.exp()
+        )));
+    }
+    let column = |tau: f64| c.kernel.hereditary(tau);
+    let problem = Separable {
+        fixed: c.kernel.elastic(),
+        column: &column,
+        y: force,
+        ln_tau: c.ln_tau,
+    };
+    finish(&c, force, problem.local(&ln, settings.max_iters))
+}
+
+/// The relaxation modulus of an optimum, collapsed terms dropped, and its misfit.
+fn finish(c: &Checked, force: &[f64], best: Optimum) -> Result<LeeRadokFit> {
+    let g = &best.coefs;
     let g0: f64 = g.iter().sum();
     if !g0.is_finite() || g0 <= 0.0 {
         return Err(AfmError::NotConverged {
             fit: "Lee–Radok",
             detail: format!("instantaneous modulus G(0) = {g0} Pa"),
-            hint: "check the contact point and baseline",
+            hint: "check the contact point and baseline (force must rise with indentation)",
         });
     }
-    let weights: Vec<(f64, f64)> = g[1..].iter().map(|gk| gk / g0).zip(taus).collect();
+    let weights: Vec<(f64, f64)> = g[1..]
+        .iter()
+        .zip(&best.taus)
+        .filter(|(gk, _)| **gk > 0.0)
+        .map(|(gk, tau)| (gk / g0, *tau))
+        .collect();
+    let collapsed = best.taus.len() - weights.len();
     let relaxation = Prony::new("G", &weights)
         .and_then(|p| Relaxation::new("G0", g0, p))
         .map_err(|e| AfmError::NotConverged {
@@ -330,13 +239,22 @@ pub fn fit_lee_radok(
             hint: "the force has not levelled off by the end of the hold: record a longer hold \
                    or fit fewer Prony terms",
         })?;
-    let force_fit = kernel.force(&relaxation);
+    let force_fit = c.kernel.force(&relaxation);
+    let n = force.len();
+    let sse: f64 = force_fit
+        .iter()
+        .zip(force)
+        .map(|(m, f)| (m - f).powi(2))
+        .sum();
     let rmse = (sse / n as f64).sqrt();
     Ok(LeeRadokFit {
         relaxation,
         rmse,
-        range_normalised_rmse: rmse / range,
-        iterations,
+        range_normalised_rmse: rmse / c.range,
+        iterations: best.iterations,
+        starts: best.starts,
+        converged: best.converged,
+        collapsed,
         force_fit,
     })
 }

@@ -51,6 +51,7 @@ mod lee_radok;
 pub mod plot;
 mod prepare;
 mod ramp_hold;
+mod varpro;
 
 pub use batch::{Batch, BatchRow, CurveFailure, for_each_curve};
 pub use creep::{
@@ -72,9 +73,12 @@ pub use jpk::{
     JpkArchive, ReadOptions, read_force_curve, read_force_curve_with, read_force_map,
     read_jpk_bytes, read_jpk_each,
 };
-pub use lee_radok::{LeeRadokFit, LeeRadokSettings, RampHold, fit_lee_radok, prepare_ramp_hold};
+pub use lee_radok::{
+    LeeRadokFit, LeeRadokSettings, RampHold, fit_lee_radok, fit_lee_radok_from, prepare_ramp_hold,
+};
 pub use prepare::{
     Baseline, ContactMethod, ContactPoint, approach_baseline, contact_point,
     contact_point_from_baseline, indentation, tip_sample_separation,
 };
-pub use ramp_hold::read_ramp_hold;
+pub use ramp_hold::{read_ramp_hold, read_ramp_hold_curve};
+pub use varpro::Multistart;

@@ -8,7 +8,7 @@ use std::path::Path;
 use nlvid_model::Curve;
 
 use crate::error::{AfmError, Result};
-use crate::{ContactMethod, ReadOptions, prepare_ramp_hold, read_force_curve_with};
+use crate::{ContactMethod, JpkArchive, ReadOptions, prepare_ramp_hold, read_ibw_bytes};
 
 /// Reads a `.jpk-force` ramp-hold curve (extend, then constant-height
 /// pause) and cuts it at the contact point (default [`ContactMethod`]):
@@ -19,8 +19,51 @@ use crate::{ContactMethod, ReadOptions, prepare_ramp_hold, read_force_curve_with
 /// The file cannot be read, has no ramp-hold segments or no contact point
 /// (each error names the file).
 pub fn read_ramp_hold(path: &Path, options: &ReadOptions) -> Result<Curve> {
-    let named = |e: AfmError| AfmError::InvalidInput(format!("{}: {e}", path.display()));
-    let curve = read_force_curve_with(path, options).map_err(named)?;
+    read_ramp_hold_curve(path, None, options)
+}
+
+/// As [`read_ramp_hold`] for any instrument file (JPK single curve, force map or QI,
+/// Asylum `.ibw`) and curve `curve` of it (`None`: the first). Only that curve is
+/// decoded, so a damaged other curve of the map does not matter.
+///
+/// # Errors
+/// As [`read_ramp_hold`]; a curve index beyond the file's curves. Each error names
+/// the file and, for a map, the curve.
+pub fn read_ramp_hold_curve(
+    path: &Path,
+    curve: Option<usize>,
+    options: &ReadOptions,
+) -> Result<Curve> {
+    let which = curve.map_or_else(String::new, |i| format!(" curve {i}"));
+    let named = |e: AfmError| AfmError::InvalidInput(format!("{}{which}: {e}", path.display()));
+    let bytes = std::fs::read(path).map_err(|source| AfmError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let name = path.display().to_string();
+    let is_ibw = path
+        .extension()
+        .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case("ibw"));
+    let curve = if is_ibw {
+        match curve {
+            None | Some(0) => read_ibw_bytes(&bytes, &name, options).map_err(named)?,
+            Some(i) => {
+                return Err(named(AfmError::InvalidInput(format!(
+                    "an .ibw file holds one curve, asked for curve {i}"
+                ))));
+            }
+        }
+    } else {
+        let archive = JpkArchive::open(&bytes, &name, options).map_err(named)?;
+        let i = curve.unwrap_or(0);
+        if i >= archive.len() {
+            return Err(named(AfmError::InvalidInput(format!(
+                "the file holds {} curve(s)",
+                archive.len()
+            ))));
+        }
+        archive.read(i).map_err(named)?
+    };
     let k = curve.calibration.spring_constant;
     let ramp = prepare_ramp_hold(&curve, ContactMethod::default()).map_err(named)?;
     let displacement = ramp
@@ -33,7 +76,7 @@ pub fn read_ramp_hold(path: &Path, options: &ReadOptions) -> Result<Curve> {
         .and_then(|c| c.with("displacement", "m", displacement))
         .and_then(|c| c.with("force", "N", ramp.force))
         .and_then(|c| c.with("indentation", "m", ramp.indentation))
-        .map_err(|e| AfmError::InvalidInput(format!("{}: {e}", path.display())))
+        .map_err(|e| named(AfmError::InvalidInput(e.to_string())))
 }
 
 #[cfg(test)]

@@ -241,3 +241,35 @@ fn grid_minimum(data: &Creep, lo: f64, hi: f64, n: usize) -> f64 {
     }
     best
 }
+
+/// `nlvid inspect --fit lee-radok` on the creep file: the constant-force pause is fitted
+/// in force control (it used to fail with "curve has no hold … segment"), giving the
+/// same compliance as `fit_creep` and G(0) = 1/J0.
+#[test]
+fn quick_lee_radok_fit_of_the_creep_file_runs_in_force_control() {
+    let c = read_force_map(data(CREEP), &ReadOptions::default()).expect("read")[0].clone();
+    let q = nlvid_afm::quick_fit(
+        &c,
+        nlvid_afm::QuickFitKind::LeeRadok { terms: 2 },
+        R,
+        ContactMethod::default(),
+    )
+    .expect("creep quick fit");
+    assert_eq!(q.model, "lee-radok-creep");
+    let data = prepare_creep(&c, ContactMethod::default()).expect("creep");
+    let fit = fit_creep(&data, &CreepSettings::new(R, 2)).expect("fit");
+    let value = |k: &str| {
+        q.values
+            .iter()
+            .find(|(n, _)| n == k)
+            .map(|(_, v)| *v)
+            .expect(k)
+    };
+    assert_eq!(value("g0_Pa"), 1.0 / fit.compliance.j0);
+    assert_eq!(value("collapsed_terms"), fit.collapsed as f64);
+    // model indentation (µm) is the forward model of the fitted compliance
+    let model = creep_indentation(&data.time, &data.force, &fit.compliance, R);
+    assert_eq!(q.model_force.len(), model.len());
+    assert!((q.model_force[100] - model[100] * 1e6).abs() < 1e-12);
+    assert!(q.text.contains("force clamp"), "{}", q.text);
+}

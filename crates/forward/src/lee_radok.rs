@@ -241,29 +241,51 @@ impl LeeRadok {
                 }
                 (h, dh)
             }
-            History::Sampled => {
-                let m = self.times.len();
-                let mut h = vec![0.0; m];
-                let mut dh = vec![0.0; if with_dtau { m } else { 0 }];
-                // The history starts at ε(t₀): a jump at t₀ loads instantaneously.
-                h[0] = self.eps[0];
-                for j in 0..m - 1 {
-                    let dt = self.times[j + 1] - self.times[j];
-                    let rate = (self.eps[j + 1] - self.eps[j]) / dt;
-                    let a = (-dt / tau).exp();
-                    // τ(1 − e^{−Δ/τ}), accurate for Δ ≪ τ.
-                    let b = -tau * (-dt / tau).exp_m1();
-                    h[j + 1] = a * h[j] + rate * b;
-                    if with_dtau {
-                        let da = a * dt / (tau * tau);
-                        let db = -(-dt / tau).exp_m1() - a * dt / tau;
-                        dh[j + 1] = da * h[j] + a * dh[j] + rate * db;
-                    }
-                }
-                (h, dh)
-            }
+            History::Sampled => exp_convolution(&self.times, &self.eps, tau, with_dtau),
         }
     }
+}
+
+/// h(t_j) = ∫₀^{t_j} e^{−(t_j−s)/τ} dx(s) for a history x sampled at `times`
+/// (strictly increasing) and linear between samples, x jumping from 0 to x(t₀)
+/// at t₀ (an instantaneous load), and, if `with_dtau`, ∂h/∂τ (otherwise an
+/// empty vector). Exact for piecewise-linear x, O(m):
+/// h(t_{j+1}) = e^{−Δ/τ} h(t_j) + (Δx/Δ) τ (1 − e^{−Δ/τ}).
+///
+/// The Lee–Radok hereditary integral in displacement control takes
+/// x = δ^{3/2} ([`LeeRadok::sampled`]); in force control (creep, the
+/// compliance form δ^{3/2} = 3/(16√R) ∫ J(t − s) dF) it takes x = F.
+pub fn exp_convolution(
+    times: &[f64],
+    x: &[f64],
+    tau: f64,
+    with_dtau: bool,
+) -> (Vec<f64>, Vec<f64>) {
+    let m = times.len().min(x.len());
+    let mut h = vec![0.0; m];
+    let mut dh = vec![0.0; if with_dtau { m } else { 0 }];
+    if m == 0 {
+        return (h, dh);
+    }
+    h[0] = x[0];
+    // Equal steps (the usual instrument grid) share one exponential.
+    let mut last = (f64::NAN, 0.0, 0.0);
+    for j in 0..m - 1 {
+        let dt = times[j + 1] - times[j];
+        let rate = (x[j + 1] - x[j]) / dt;
+        if dt != last.0 {
+            // τ(1 − e^{−Δ/τ}), accurate for Δ ≪ τ.
+            last = (dt, (-dt / tau).exp(), -tau * (-dt / tau).exp_m1());
+        }
+        let (_, a, b) = last;
+        h[j + 1] = a * h[j] + rate * b;
+        if with_dtau {
+            let da = a * dt / (tau * tau);
+            let db = -(-dt / tau).exp_m1() - a * dt / tau;
+            dh[j + 1] = da * h[j] + a * dh[j] + rate * db;
+        }
+    }
+    (h, dh)
 }
 
 /// φ(x) = ∫₀ˣ e^{−(x−u)} u^{1/2} du and χ(x) = ∫₀ˣ (x − u) e^{−(x−u)} u^{1/2} du

@@ -64,7 +64,7 @@ use nlvid_study::{Bounds, Dimension, Section, Study};
 pub use afm_fe::{AfmFeModel, AfmFeSpec, fem_failure};
 pub use error::{ForwardError, Result};
 pub use hertz::{HertzGrid, HertzProny, HertzPronySpec};
-pub use lee_radok::LeeRadok;
+pub use lee_radok::{LeeRadok, exp_convolution};
 pub use membrane::{
     MembraneModel, MembraneSpec, PARAMETERS as MEMBRANE_PARAMETERS, membrane_failure,
 };

@@ -219,6 +219,42 @@ pub fn model_grid(settings: &CohortSettings) -> nlvid_inverse::Result<Vec<f64>> 
     )
 }
 
+/// The measured curve of a cell: a CSV file with the study's columns and
+/// `[fit.calibration]`, or an instrument file (curve `input.curve` of a map) with
+/// its own calibration, replaced by `[fit.calibration]` when given, cut at the
+/// contact (`nlvid_afm::read_ramp_hold_curve`).
+fn read_cell_curve(
+    settings: &CohortSettings,
+    input: &CellInput,
+) -> std::result::Result<nlvid_inverse::MeasuredCurve, String> {
+    if nlvid_afm::batch::is_afm_file(&input.path) {
+        let options = nlvid_afm::ReadOptions {
+            spring_constant: settings.spring_constant,
+            sensitivity: settings.deflection_sensitivity,
+        };
+        let c = nlvid_afm::read_ramp_hold_curve(&input.path, input.curve, &options)
+            .map_err(|e| e.to_string())?;
+        return Ok(crate::fit::measured_from_ramp_hold(&input.path, &c));
+    }
+    let Some(spring_constant) = settings.spring_constant else {
+        return Err(format!(
+            "{}: a CSV curve needs [fit.calibration] spring_constant (instrument files \
+             such as .jpk-force carry their own)",
+            input.path.display()
+        ));
+    };
+    let cols = AfmColumns {
+        time: settings.time_column.clone(),
+        piezo: settings.piezo_column.clone(),
+        deflection: settings.deflection_column.clone(),
+    };
+    let cal = Calibration {
+        deflection_sensitivity: settings.deflection_sensitivity,
+        spring_constant,
+    };
+    nlvid_inverse::read_afm_csv(&input.path, &cols, &cal).map_err(|e| e.to_string())
+}
+
 /// Reads and fits one cell. Never fails: problems become a `failed` cell.
 pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput) -> CellResult {
     let (group, file) = (input.group.as_str(), input.file.as_str());
@@ -228,16 +264,7 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
     let hash = settings.study_hash.as_str();
     let fail = |reason: String| CellResult::failed(group, file, &cell, hash, reason);
 
-    let cols = AfmColumns {
-        time: settings.time_column.clone(),
-        piezo: settings.piezo_column.clone(),
-        deflection: settings.deflection_column.clone(),
-    };
-    let cal = Calibration {
-        deflection_sensitivity: settings.deflection_sensitivity,
-        spring_constant: settings.spring_constant,
-    };
-    let curve = match nlvid_inverse::read_afm_csv(&input.path, &cols, &cal) {
+    let curve = match read_cell_curve(settings, input) {
         Ok(c) => c,
         Err(e) => return fail(format!("cannot read the curve: {e}")),
     };

@@ -252,7 +252,11 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
         .check_names(&model.parameter_names())
         .map_err(|e| ReportError::InvalidSetting(format!("forward model: {e}")))?;
     let times: Vec<f64> = model.time_grid().to_vec();
-    let k = settings.spring_constant;
+    let k = settings.spring_constant.ok_or_else(|| {
+        ReportError::InvalidSetting(
+            "the demo writes CSV curves: its study needs [fit.calibration] spring_constant".into(),
+        )
+    })?;
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let data = dir.join("data");
     let mut cells = Vec::new();

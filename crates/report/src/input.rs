@@ -20,6 +20,47 @@ pub struct CellInput {
     /// Geometry measurements from the manifest (App. B.2), if any.
     #[serde(default)]
     pub geometry: Geometry,
+    /// Curve of an instrument file holding several (force map, QI): each is a cell;
+    /// `None` for CSV and single-curve files.
+    #[serde(default)]
+    pub curve: Option<usize>,
+}
+
+/// True for the curve files a cohort reads: `*.csv` and the instrument files of
+/// [`nlvid_afm::batch::AFM_EXTENSIONS`].
+fn is_cell_file(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+        || nlvid_afm::batch::is_afm_file(path)
+}
+
+/// One cell per curve of a multi-curve instrument file (`file#i`); anything else, and
+/// a file that cannot be opened (its cell then fails with the reason), as it is.
+fn per_curve(cell: CellInput) -> Vec<CellInput> {
+    let is_jpk = nlvid_afm::batch::is_afm_file(&cell.path)
+        && !cell
+            .path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("ibw"));
+    if !is_jpk {
+        return vec![cell];
+    }
+    let Ok(bytes) = fs::read(&cell.path) else {
+        return vec![cell];
+    };
+    let name = cell.path.display().to_string();
+    let n = nlvid_afm::JpkArchive::open(&bytes, &name, &nlvid_afm::ReadOptions::default())
+        .map_or(1, |a| a.len());
+    if n <= 1 {
+        return vec![cell];
+    }
+    (0..n)
+        .map(|i| CellInput {
+            file: format!("{}#{i}", cell.file),
+            curve: Some(i),
+            ..cell.clone()
+        })
+        .collect()
 }
 
 /// A cell's geometry measurements as given in a manifest (App. B.2).
@@ -34,9 +75,11 @@ pub struct Geometry {
 }
 
 /// The cells of a cohort input: a folder whose sub-folders are the groups
-/// (each `*.csv` in them a cell), or a manifest CSV with columns `group`
-/// and `file` (relative to the manifest's directory) and optionally the
-/// geometry columns of [`Geometry`]. Sorted by group, file.
+/// (each `*.csv` or instrument file in them a cell, each curve of a force map a
+/// cell), instrument files directly in the folder forming a group named after it,
+/// or a manifest CSV with columns `group` and `file` (relative to the manifest's
+/// directory) and optionally the geometry columns of [`Geometry`]. Other files are
+/// skipped. Sorted by group, file.
 ///
 /// # Errors
 /// Unreadable folder or manifest, a manifest row without group or file
@@ -65,8 +108,10 @@ pub fn discover(input: &Path) -> Result<Vec<CellInput>> {
         return Err(ReportError::Data {
             path: input.to_path_buf(),
             line: 0,
-            message: "no cells: expected group sub-folders with *.csv files, or a manifest \
-                      with columns group,file"
+            message: "no cells: expected group sub-folders with *.csv or instrument files \
+                      (.jpk-force, .jpk-force-map, .jpk-qi-data, .jpk-qi-series, .ibw), \
+                      instrument files in the folder itself, or a manifest with columns \
+                      group,file"
                 .into(),
         });
     }
@@ -84,26 +129,35 @@ pub(crate) fn sorted_entries(dir: &Path) -> Result<Vec<PathBuf>> {
 
 fn from_folder(dir: &Path) -> Result<Vec<CellInput>> {
     let mut cells = Vec::new();
+    let name_of = |p: &Path| {
+        p.file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    let top = name_of(dir);
     for sub in sorted_entries(dir)? {
+        if sub.is_file() && nlvid_afm::batch::is_afm_file(&sub) {
+            cells.extend(per_curve(CellInput {
+                group: top.clone(),
+                file: name_of(&sub),
+                path: sub.clone(),
+                geometry: Geometry::default(),
+                curve: None,
+            }));
+        }
         if !sub.is_dir() {
             continue;
         }
-        let group = sub
-            .file_name()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let group = name_of(&sub);
         for f in sorted_entries(&sub)? {
-            if f.is_file() && f.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")) {
-                let name = f
-                    .file_name()
-                    .map(|s| s.to_string_lossy().into_owned())
-                    .unwrap_or_default();
-                cells.push(CellInput {
+            if f.is_file() && is_cell_file(&f) {
+                cells.extend(per_curve(CellInput {
                     group: group.clone(),
-                    file: format!("{group}/{name}"),
+                    file: format!("{group}/{}", name_of(&f)),
                     path: f,
                     geometry: Geometry::default(),
-                });
+                    curve: None,
+                }));
             }
         }
     }
@@ -208,12 +262,13 @@ fn from_manifest(path: &Path) -> Result<Vec<CellInput>> {
                 }
             }
         }
-        cells.push(CellInput {
+        cells.extend(per_curve(CellInput {
             group,
             file,
             path: p,
             geometry,
-        });
+            curve: None,
+        }));
     }
     Ok(cells)
 }

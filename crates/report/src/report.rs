@@ -431,13 +431,14 @@ pub fn write_report_of(
     h.push_str("<h2 id=\"study\">Study</h2>\n");
     let _ = writeln!(
         h,
-        "<p>Sphere radius R = {} µm, ν = {}, cantilever k = {} N/m; fitted window: \
+        "<p>Sphere radius R = {} µm, ν = {}, cantilever k: {}; fitted window: \
          ramp to {} s, hold to {} s; {} multistart SLSQP starts per cell (seed {}), \
          Table 5.3 parameter domain with g1 + g2 ≤ 1 − {}; misfit of eq. 5.3; a cell \
          whose misfit exceeds {} is marked suspicious.</p>",
         sig(s.radius * 1e6, 4),
         s.poisson,
-        s.spring_constant,
+        s.spring_constant
+            .map_or_else(|| "each file's own".to_string(), |k| format!("{k} N/m")),
         s.ramp,
         s.hold_end,
         s.starts,

@@ -25,8 +25,8 @@
 //! time = "time"
 //! piezo = "piezo"
 //! deflection = "deflection"
-//! [fit.calibration]
-//! spring_constant = "0.12 N/m" # k, F = k d (§5.2.2)
+//! [fit.calibration]            # CSV data only: JPK/.ibw files carry their own
+//! spring_constant = "0.12 N/m" # k, F = k d (§5.2.2); replaces a file's if given
 //! deflection_sensitivity = "50 nm/V"  # only if the deflection is in volts
 //! ```
 //!
@@ -76,8 +76,10 @@ impl FitModel {
 /// What kind of measured data the files hold.
 #[derive(Debug, Clone, PartialEq)]
 pub enum DataColumns {
-    /// AFM: time, piezo Z, deflection (V, m or N) with a calibration.
-    Afm(AfmColumns, Calibration),
+    /// AFM: time, piezo Z, deflection (V, m or N) of CSV files, with the
+    /// calibration of `[fit.calibration]` (required for CSV files; instrument
+    /// files carry their own, which a given calibration replaces).
+    Afm(AfmColumns, Option<Calibration>),
     /// Plate compression: time, displacement, force, optional contact area.
     Compression(CompressionColumns),
 }
@@ -351,20 +353,25 @@ fn read_columns(s: &mut Section) -> Result<DataColumns> {
                 piezo: name("piezo", "piezo")?,
                 deflection: name("deflection", "deflection")?,
             };
-            let mut c = s.subsection("calibration")?;
-            let cal = Calibration {
-                spring_constant: c.req_quantity(
-                    "spring_constant",
-                    Dimension::STIFFNESS,
-                    Bounds::positive(),
-                )?,
-                deflection_sensitivity: c.opt_quantity(
-                    "deflection_sensitivity",
-                    Dimension::LENGTH_PER_VOLTAGE,
-                    Bounds::positive(),
-                )?,
+            let cal = match s.opt_subsection("calibration")? {
+                Some(mut c) => {
+                    let cal = Calibration {
+                        spring_constant: c.req_quantity(
+                            "spring_constant",
+                            Dimension::STIFFNESS,
+                            Bounds::positive(),
+                        )?,
+                        deflection_sensitivity: c.opt_quantity(
+                            "deflection_sensitivity",
+                            Dimension::LENGTH_PER_VOLTAGE,
+                            Bounds::positive(),
+                        )?,
+                    };
+                    c.finish()?;
+                    Some(cal)
+                }
+                None => None,
             };
-            c.finish()?;
             DataColumns::Afm(names, cal)
         }
         Kind::Compression => {
@@ -535,8 +542,9 @@ pub struct CohortSettings {
     pub radius: f64,
     /// Poisson ratio ν.
     pub poisson: f64,
-    /// Cantilever spring constant k, N/m.
-    pub spring_constant: f64,
+    /// Cantilever spring constant k, N/m (`[fit.calibration]`: required for CSV
+    /// cells; replaces an instrument file's own when given).
+    pub spring_constant: Option<f64>,
     /// Deflection sensitivity, m/V (only for a deflection in volts).
     pub deflection_sensitivity: Option<f64>,
     /// Time column name.
@@ -706,8 +714,8 @@ impl CohortSettings {
             seed: fit.seed,
             radius: probe.radius,
             poisson: probe.poisson,
-            spring_constant: cal.spring_constant,
-            deflection_sensitivity: cal.deflection_sensitivity,
+            spring_constant: cal.as_ref().map(|c| c.spring_constant),
+            deflection_sensitivity: cal.as_ref().and_then(|c| c.deflection_sensitivity),
             time_column: cols.time.clone(),
             piezo_column: cols.piezo.clone(),
             deflection_column: cols.deflection.clone(),

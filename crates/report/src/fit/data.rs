@@ -81,6 +81,7 @@ fn real_model(spec: &RealModelSpec) -> Result<RealModel> {
 /// Unreadable files, malformed data (file, row, column), protocol
 /// mismatches, or a number of files that does not match the experiments.
 pub fn load(settings: &FitSettings, files: &[PathBuf]) -> Result<Vec<LoadedExperiment>> {
+    let files = &expand_folders(files)?;
     let pairs: Vec<(&ExperimentSettings, &PathBuf)> = if settings.repeat {
         files
             .iter()
@@ -194,14 +195,50 @@ fn read_checking_error(path: &Path) -> Result<f64> {
     }
 }
 
+/// Data paths with each folder replaced by its curve files (`*.csv` and instrument
+/// files such as `.jpk-force`, not recursive, sorted by name).
+///
+/// # Errors
+/// An unreadable folder, or one without curve files (naming it).
+fn expand_folders(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    for p in paths {
+        if !p.is_dir() {
+            out.push(p.clone());
+            continue;
+        }
+        let mut found: Vec<PathBuf> = crate::input::sorted_entries(p)?
+            .into_iter()
+            .filter(|f| {
+                f.is_file()
+                    && (nlvid_afm::batch::is_afm_file(f)
+                        || f.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")))
+            })
+            .collect();
+        if found.is_empty() {
+            return Err(ReportError::io(
+                p,
+                "no curve files (*.csv, .jpk-force, .jpk-force-map, .ibw …) in this folder",
+            ));
+        }
+        out.append(&mut found);
+    }
+    Ok(out)
+}
+
 fn read_curve(path: &Path, columns: &DataColumns) -> Result<MeasuredCurve> {
-    let is_jpk = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("jpk-force"));
+    let is_jpk = nlvid_afm::batch::is_afm_file(path);
     Ok(match columns {
-        DataColumns::Afm(_, cal) if is_jpk => read_jpk(path, Some(cal))?,
+        DataColumns::Afm(_, cal) if is_jpk => read_jpk(path, cal.as_ref())?,
         DataColumns::Compression(_) if is_jpk => read_jpk(path, None)?,
-        DataColumns::Afm(c, cal) => read_afm_csv(path, c, cal)?,
+        DataColumns::Afm(c, Some(cal)) => read_afm_csv(path, c, cal)?,
+        DataColumns::Afm(_, None) => {
+            return Err(ReportError::InvalidSetting(format!(
+                "{}: a CSV AFM curve needs [fit.calibration] spring_constant (instrument \
+                 files such as .jpk-force carry their own)",
+                path.display()
+            )));
+        }
         DataColumns::Compression(c) => read_compression_csv(path, c)?,
     })
 }
@@ -215,8 +252,14 @@ fn read_jpk(path: &Path, cal: Option<&Calibration>) -> Result<MeasuredCurve> {
     };
     let c = nlvid_afm::read_ramp_hold(path, &options)
         .map_err(|e| ReportError::io(path, format!("cannot read the JPK ramp-hold curve: {e}")))?;
+    Ok(measured_from_ramp_hold(path, &c))
+}
+
+/// A ramp-hold curve of `nlvid_afm::read_ramp_hold_curve` (channels `displacement`,
+/// `force`, `indentation`) as a measured curve of `path`.
+pub(crate) fn measured_from_ramp_hold(path: &Path, c: &nlvid_model::Curve) -> MeasuredCurve {
     let channel = |name: &str| c.values(name).map(<[f64]>::to_vec).unwrap_or_default();
-    Ok(MeasuredCurve {
+    MeasuredCurve {
         path: path.to_path_buf(),
         lines: (1..=c.len()).collect(),
         time: c.time().to_vec(),
@@ -224,7 +267,7 @@ fn read_jpk(path: &Path, cal: Option<&Calibration>) -> Result<MeasuredCurve> {
         force: channel("force"),
         indentation: Some(channel("indentation")),
         contact_area: None,
-    })
+    }
 }
 
 /// Ramp from 0 at `rate` to `amplitude`, then hold to the grid's end.

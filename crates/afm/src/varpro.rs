@@ -1,0 +1,421 @@
+//! Variable projection with a global search over the relaxation (or retardation) times,
+//! shared by the Lee–Radok relaxation fit ([`crate::fit_lee_radok`], eq. 5.1) and the
+//! creep-compliance fit ([`crate::fit_creep`]).
+//!
+//! Both models are linear in their moduli (compliances) for given times τₖ:
+//! `y ≈ c₀ a + Σₖ cₖ bₖ(τₖ)` with a τ-free column `a` and one column `b(τ)` per term,
+//! coefficients c ≥ 0 (G(t) non-increasing, J(t) non-decreasing). For given τ the
+//! coefficients are a non-negative least-squares solve (every active set of ≤ 4
+//! columns); the τ are searched in log τ within bounds:
+//!
+//! 1. every combination τ₁ < … < τ_m of a log-spaced grid, from one Gram matrix of all
+//!    grid columns (a combination costs a few ≤ 4 × 4 solves);
+//! 2. Nelder–Mead in log τ from the best few grid combinations, from τ log-spaced over
+//!    the record, and from `random_starts` seeded log-uniform random points;
+//! 3. the lowest SSE of all wins (ties: the first start).
+//!
+//! The objective is the SSE divided by Σy² (scale-free), summed directly (the Gram form
+//! `yy − xᵀr` cancels near a perfect fit); outside the bounds the cost of the nearest
+//! admissible point times a steep wall.
+
+use argmin::core::{CostFunction, Executor, State, TerminationReason, TerminationStatus};
+use argmin::solver::neldermead::NelderMead;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+/// How the τ are searched.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Multistart {
+    /// Points of the log τ grid of stage 1 (≥ 4).
+    pub grid: usize,
+    /// Best distinct grid combinations refined by Nelder–Mead.
+    pub grid_starts: usize,
+    /// Seeded random starts (log-uniform within the bounds).
+    pub random_starts: usize,
+    /// Seed of the random starts.
+    pub seed: u64,
+    /// Nelder–Mead iterations per start.
+    pub max_iters: u64,
+}
+
+impl Default for Multistart {
+    fn default() -> Self {
+        Multistart {
+            grid: 40,
+            grid_starts: 3,
+            random_starts: 8,
+            seed: 14,
+            max_iters: 2000,
+        }
+    }
+}
+
+/// The separable least-squares problem.
+pub(crate) struct Separable<'a> {
+    /// The τ-free column.
+    pub fixed: Vec<f64>,
+    /// The column of one term with time τ.
+    pub column: &'a (dyn Fn(f64) -> Vec<f64> + Sync),
+    /// Data.
+    pub y: &'a [f64],
+    /// Bounds of ln τ.
+    pub ln_tau: (f64, f64),
+}
+
+/// One local (or the global) optimum.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Optimum {
+    /// τₖ sorted ascending, s.
+    pub taus: Vec<f64>,
+    /// Coefficients: τ-free column first, then one per τ (same order).
+    pub coefs: Vec<f64>,
+    /// Sum of squared residuals (units of y²).
+    pub sse: f64,
+    /// Nelder–Mead iterations of this start.
+    pub iterations: u64,
+    /// Nelder–Mead met its tolerance.
+    pub converged: bool,
+    /// Starts run to find it (1 for a local fit).
+    pub starts: usize,
+}
+
+impl Separable<'_> {
+    fn yy(&self) -> f64 {
+        self.y.iter().map(|v| v * v).sum()
+    }
+
+    /// Coefficients and SSE (summed directly) of the non-negative fit for `taus`.
+    pub fn solve(&self, taus: &[f64]) -> (Vec<f64>, f64) {
+        let cols: Vec<Vec<f64>> = std::iter::once(self.fixed.clone())
+            .chain(taus.iter().map(|&t| (self.column)(t)))
+            .collect();
+        let (gram, rhs) = gram(&cols, self.y);
+        let (x, _) = nnls_gram(&gram, &rhs, self.yy());
+        let sse = self
+            .y
+            .iter()
+            .enumerate()
+            .map(|(i, y)| {
+                let m: f64 = cols.iter().zip(&x).map(|(c, xk)| xk * c[i]).sum();
+                (y - m).powi(2)
+            })
+            .sum();
+        (x, sse)
+    }
+
+    /// Clamp ln τ into the bounds: (sorted τ, squared distance outside).
+    fn taus(&self, ln_tau: &[f64]) -> (Vec<f64>, f64) {
+        let (lo, hi) = self.ln_tau;
+        let mut wall = 0.0;
+        let mut taus: Vec<f64> = ln_tau
+            .iter()
+            .map(|&x| {
+                let c = if x.is_nan() { lo } else { x.clamp(lo, hi) };
+                wall += if x.is_nan() { 1e6 } else { (x - c).powi(2) };
+                c.exp()
+            })
+            .collect();
+        taus.sort_by(f64::total_cmp);
+        (taus, wall)
+    }
+
+    /// Nelder–Mead in ln τ from `start` (ln τ, one per term).
+    pub fn local(&self, start: &[f64], max_iters: u64) -> Optimum {
+        let step = 0.1 * (self.ln_tau.1 - self.ln_tau.0).max(1e-3);
+        let mut simplex = vec![start.to_vec()];
+        for k in 0..start.len() {
+            let mut v = start.to_vec();
+            v[k] += if v[k] + step <= self.ln_tau.1 {
+                step
+            } else {
+                -step
+            };
+            simplex.push(v);
+        }
+        let scale = 1.0 / self.yy().max(f64::MIN_POSITIVE);
+        let cost = Cost {
+            problem: self,
+            scale,
+        };
+        let run = NelderMead::new(simplex)
+            .with_sd_tolerance(1e-24)
+            .and_then(|solver| {
+                Executor::new(cost, solver)
+                    .configure(|s| s.max_iters(max_iters))
+                    .run()
+            });
+        let (best, iterations, converged) = match run {
+            Ok(res) => {
+                let st = res.state();
+                (
+                    st.get_best_param()
+                        .cloned()
+                        .unwrap_or_else(|| start.to_vec()),
+                    st.get_iter(),
+                    matches!(
+                        st.get_termination_status(),
+                        TerminationStatus::Terminated(TerminationReason::SolverConverged)
+                    ),
+                )
+            }
+            Err(_) => (start.to_vec(), 0, false),
+        };
+        let (taus, _) = self.taus(&best);
+        let (coefs, sse) = self.solve(&taus);
+        Optimum {
+            taus,
+            coefs,
+            sse,
+            iterations,
+            converged,
+            starts: 1,
+        }
+    }
+
+    /// The starts of the global search for `terms` terms (ln τ each), see the module
+    /// documentation; `span` = (shortest sampling step, record length), s.
+    pub fn starts(&self, terms: usize, opts: &Multistart, span: (f64, f64)) -> Vec<Vec<f64>> {
+        let (lo, hi) = self.ln_tau;
+        let mut starts = Vec::new();
+        // 1. grid combinations from one Gram matrix
+        let g = opts.grid.max(4);
+        let grid: Vec<f64> = (0..g)
+            .map(|i| (lo + (hi - lo) * i as f64 / (g - 1) as f64).exp())
+            .collect();
+        if terms <= g {
+            let cols: Vec<Vec<f64>> = std::iter::once(self.fixed.clone())
+                .chain(
+                    grid.par_iter()
+                        .map(|&t| (self.column)(t))
+                        .collect::<Vec<_>>(),
+                )
+                .collect();
+            let (gram, rhs) = gram(&cols, self.y);
+            let yy = self.yy();
+            let mut scored: Vec<(f64, Vec<usize>)> = Vec::new();
+            let mut combo: Vec<usize> = (0..terms).collect();
+            loop {
+                let idx: Vec<usize> = std::iter::once(0)
+                    .chain(combo.iter().map(|c| c + 1))
+                    .collect();
+                let sub: Vec<Vec<f64>> = idx
+                    .iter()
+                    .map(|&a| idx.iter().map(|&b| gram[a][b]).collect())
+                    .collect();
+                let r: Vec<f64> = idx.iter().map(|&a| rhs[a]).collect();
+                let (_, sse) = nnls_gram(&sub, &r, yy);
+                scored.push((sse, combo.clone()));
+                if !next_combination(&mut combo, g) {
+                    break;
+                }
+            }
+            scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+            // distinct: no two picked combinations within one grid step of each other
+            let mut picked: Vec<Vec<usize>> = Vec::new();
+            for (_, c) in scored {
+                if picked.len() >= opts.grid_starts {
+                    break;
+                }
+                let near = picked
+                    .iter()
+                    .any(|p| p.iter().zip(&c).all(|(a, b)| a.abs_diff(*b) <= 1));
+                if !near {
+                    picked.push(c);
+                }
+            }
+            starts.extend(
+                picked
+                    .into_iter()
+                    .map(|c| c.iter().map(|&i| grid[i].ln()).collect()),
+            );
+        }
+        // 2. log-spaced over [10 Δt, T/3]
+        let (a, b) = (
+            (10.0 * span.0).ln().clamp(lo, hi),
+            (span.1 / 3.0).ln().clamp(lo, hi),
+        );
+        starts.push(
+            (0..terms)
+                .map(|k| a + (b - a) * (k as f64 + 0.5) / terms as f64)
+                .collect(),
+        );
+        // 3. seeded random starts
+        let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);
+        for _ in 0..opts.random_starts {
+            starts.push(
+                (0..terms)
+                    .map(|_| lo + (hi - lo) * rng.random::<f64>())
+                    .collect(),
+            );
+        }
+        starts
+    }
+
+    /// Nelder–Mead from every start; the lowest SSE (first on ties).
+    pub fn best_of(&self, starts: &[Vec<f64>], max_iters: u64) -> Option<Optimum> {
+        let results: Vec<Optimum> = starts
+            .par_iter()
+            .map(|s| self.local(s, max_iters))
+            .collect();
+        let n = results.len();
+        let mut best = results
+            .into_iter()
+            .filter(|o| o.sse.is_finite())
+            .reduce(|a, b| if b.sse < a.sse { b } else { a })?;
+        best.starts = n;
+        Some(best)
+    }
+}
+
+struct Cost<'a, 'b> {
+    problem: &'a Separable<'b>,
+    scale: f64,
+}
+
+impl CostFunction for Cost<'_, '_> {
+    type Param = Vec<f64>;
+    type Output = f64;
+    fn cost(&self, p: &Vec<f64>) -> std::result::Result<f64, argmin::core::Error> {
+        let (taus, wall) = self.problem.taus(p);
+        let (_, sse) = self.problem.solve(&taus);
+        Ok(sse * self.scale * (1.0 + 1e3 * wall))
+    }
+}
+
+/// Gram matrix `AᵀA` and `Aᵀy` of the columns of A.
+fn gram(cols: &[Vec<f64>], y: &[f64]) -> (Vec<Vec<f64>>, Vec<f64>) {
+    let m = cols.len();
+    let mut g = vec![vec![0.0; m]; m];
+    let mut r = vec![0.0; m];
+    for a in 0..m {
+        for b in a..m {
+            let v: f64 = cols[a].iter().zip(&cols[b]).map(|(x, y)| x * y).sum();
+            g[a][b] = v;
+            g[b][a] = v;
+        }
+        r[a] = cols[a].iter().zip(y).map(|(x, y)| x * y).sum();
+    }
+    (g, r)
+}
+
+/// Non-negative least squares from the Gram matrix `g = AᵀA`, `r = Aᵀy`, `yy = yᵀy`:
+/// every active set is tried (≤ 4 unknowns, 15 sets); returns (x, SSE).
+pub(crate) fn nnls_gram(g: &[Vec<f64>], r: &[f64], yy: f64) -> (Vec<f64>, f64) {
+    let m = r.len();
+    let mut best = (vec![0.0; m], yy);
+    for mask in 1u32..(1 << m) {
+        let idx: Vec<usize> = (0..m).filter(|i| mask & (1 << i) != 0).collect();
+        let Some(x) = solve_spd(
+            &idx.iter()
+                .map(|&a| idx.iter().map(|&b| g[a][b]).collect())
+                .collect::<Vec<Vec<f64>>>(),
+            &idx.iter().map(|&a| r[a]).collect::<Vec<_>>(),
+        ) else {
+            continue;
+        };
+        if x.iter().any(|v| !(*v >= 0.0)) {
+            continue;
+        }
+        // SSE = yy − 2 xᵀr + xᵀGx = yy − xᵀr at the subset's normal-equation solution.
+        let sse = yy - x.iter().zip(&idx).map(|(xi, &a)| xi * r[a]).sum::<f64>();
+        if sse < best.1 {
+            let mut full = vec![0.0; m];
+            for (xi, &a) in x.iter().zip(&idx) {
+                full[a] = *xi;
+            }
+            best = (full, sse.max(0.0));
+        }
+    }
+    best
+}
+
+/// Solve the small symmetric positive definite system `a x = b` (Cholesky on the
+/// diagonally scaled matrix); None if singular.
+fn solve_spd(a: &[Vec<f64>], b: &[f64]) -> Option<Vec<f64>> {
+    let n = b.len();
+    let d: Vec<f64> = (0..n).map(|i| a[i][i].sqrt()).collect();
+    if d.iter().any(|v| !(*v > 0.0)) {
+        return None;
+    }
+    let s = |i: usize, j: usize| a[i][j] / (d[i] * d[j]);
+    let mut l = vec![vec![0.0; n]; n];
+    for i in 0..n {
+        for j in 0..=i {
+            let sum: f64 = (0..j).map(|k| l[i][k] * l[j][k]).sum();
+            if i == j {
+                let v = s(i, i) - sum;
+                if !(v > 1e-13) {
+                    return None;
+                }
+                l[i][i] = v.sqrt();
+            } else {
+                l[i][j] = (s(i, j) - sum) / l[j][j];
+            }
+        }
+    }
+    let mut y = vec![0.0; n];
+    for i in 0..n {
+        let sum: f64 = (0..i).map(|k| l[i][k] * y[k]).sum();
+        y[i] = (b[i] / d[i] - sum) / l[i][i];
+    }
+    let mut x = vec![0.0; n];
+    for i in (0..n).rev() {
+        let sum: f64 = (i + 1..n).map(|k| l[k][i] * x[k]).sum();
+        x[i] = (y[i] - sum) / l[i][i];
+    }
+    Some(x.iter().zip(&d).map(|(x, d)| x / d).collect())
+}
+
+/// Advance `c` (strictly increasing indices below `n`) to the next combination in
+/// lexicographic order; false after the last.
+fn next_combination(c: &mut [usize], n: usize) -> bool {
+    let k = c.len();
+    for i in (0..k).rev() {
+        if c[i] < n - k + i {
+            c[i] += 1;
+            for j in i + 1..k {
+                c[j] = c[j - 1] + 1;
+            }
+            return true;
+        }
+    }
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nnls_matches_the_unconstrained_solution_when_it_is_non_negative() {
+        // y = 2 a + 3 b exactly
+        let a = [1.0, 2.0, 3.0, 4.0];
+        let b = [1.0, 0.0, 1.0, 0.0];
+        let y: Vec<f64> = a.iter().zip(&b).map(|(p, q)| 2.0 * p + 3.0 * q).collect();
+        let (g, r) = gram(&[a.to_vec(), b.to_vec()], &y);
+        let (x, sse) = nnls_gram(&g, &r, y.iter().map(|v| v * v).sum());
+        assert!(
+            (x[0] - 2.0).abs() < 1e-12 && (x[1] - 3.0).abs() < 1e-12,
+            "{x:?}"
+        );
+        assert!(sse.abs() < 1e-9);
+        // y = a − b = [0, 2, 2, 4]: the non-negative optimum drops b; x₀ = aᵀy/aᵀa = 26/30
+        let y: Vec<f64> = a.iter().zip(&b).map(|(p, q)| p - q).collect();
+        let (g, r) = gram(&[a.to_vec(), b.to_vec()], &y);
+        let (x, _) = nnls_gram(&g, &r, y.iter().map(|v| v * v).sum());
+        assert_eq!(x[1], 0.0);
+        assert!((x[0] - 26.0 / 30.0).abs() < 1e-12, "{x:?}");
+    }
+
+    #[test]
+    fn combinations_are_enumerated_once_each() {
+        let mut c = vec![0, 1, 2];
+        let mut n = 1;
+        while next_combination(&mut c, 6) {
+            n += 1;
+        }
+        assert_eq!(n, 20); // C(6, 3)
+        assert_eq!(c, vec![3, 4, 5]);
+    }
+}
