@@ -285,7 +285,7 @@ impl CapsuleFeModel {
                 p.len()
             )));
         };
-        if !(c1 > 0.0 && c1.is_finite()) || !(alpha >= 0.0 && alpha.is_finite()) {
+        if !(c1 > 0.0 && c1.is_finite() && alpha >= 0.0 && alpha.is_finite()) {
             return Err(invalid(format!(
                 "C1 = {c1} Pa must be positive and alpha = {alpha} non-negative"
             )));

@@ -171,7 +171,7 @@ fn bad_plate_input_is_a_clear_error_or_a_flagged_output() {
     let f = model.run(&SET).unwrap();
     assert!(f.iter().copied().fold(0.0, f64::max) > 1.0);
     assert_eq!(f[f.len() - 1], 0.0);
-    let spec = match ForwardSettings::from_study(&mut Study::load(&dir.join("s.toml")).unwrap())
+    let spec = match ForwardSettings::from_study(&mut Study::load(dir.join("s.toml")).unwrap())
         .unwrap()
         .spec
     {
