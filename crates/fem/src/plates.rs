@@ -185,12 +185,37 @@ fn program_error(message: String) -> FemError {
     FemError::Program(message)
 }
 
-/// Checks the program against the capsule's geometry and returns the top
-/// of the measured surface z_top and the stage ends.
+/// Checks that `model` is fresh, then the program against its mesh
+/// ([`PlateProgram::check`]); returns z_top and the stage ends.
 fn check<M: Material3, K: ElementKind<M>>(
     model: &Model<M, K>,
     p: &PlateProgram,
 ) -> Result<(f64, Vec<f64>)> {
+    if !model.records().is_empty() || (model.time() != 0.0 && model.time() != p.program.start()) {
+        return Err(program_error(
+            "run the plate program on a freshly built model".into(),
+        ));
+    }
+    p.check(model.mesh())
+}
+
+impl PlateProgram {
+    /// Checks the program, the stepping and the output times against the
+    /// capsule mesh `mesh` before anything runs (module docs: not a
+    /// displacement, a jump, starting pressed, output times not increasing
+    /// or outside the program, plates closer than the two walls at the
+    /// poles); returns the top of the measured surface z_top and the stage
+    /// ends. [`run_plate_program`] calls it; a forward model calls it once
+    /// when it is built, so that bad input is refused before a design runs.
+    ///
+    /// # Errors
+    /// [`FemError::Program`] naming the value; a missing node set.
+    pub fn check<T: Topology>(&self, mesh: &T) -> Result<(f64, Vec<f64>)> {
+        check_program(mesh, self)
+    }
+}
+
+fn check_program<T: Topology>(mesh: &T, p: &PlateProgram) -> Result<(f64, Vec<f64>)> {
     let prog = &p.program;
     if prog.quantity() != Quantity::Displacement {
         return Err(program_error(format!(
@@ -210,11 +235,6 @@ fn check<M: Material3, K: ElementKind<M>>(
             "the plate starts pressed (d = {:.6} mm at t = {t0} s); start the table at d ≤ 0",
             d0 * 1e3
         )));
-    }
-    if !model.records().is_empty() || (model.time() != 0.0 && model.time() != t0) {
-        return Err(program_error(
-            "run the plate program on a freshly built model".into(),
-        ));
     }
     if p.min_steps == 0 || !(p.first_step > 0.0 && p.first_step <= 1.0) || !(p.kink >= 0.0) {
         return Err(program_error(format!(
@@ -244,7 +264,6 @@ fn check<M: Material3, K: ElementKind<M>>(
     }
     // Crushing: the plates' gap at the largest approach against the two
     // walls at the poles.
-    let mesh = model.mesh();
     let z = |set: &str| -> Result<(f64, f64)> {
         let nodes = mesh.node_set(set)?;
         Ok(nodes

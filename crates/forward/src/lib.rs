@@ -20,6 +20,11 @@
 //!   `[G10, gamma0, g1_long_term, g2_long_term, tau1, tau2]`
 //!   ([`MEMBRANE_PARAMETERS`], eq. 2.56: ch. II's G1(0) and long-term
 //!   fractions); tenths of a second per run.
+//! * `capsule-fe` — the 3D finite-element fluid-filled capsule between
+//!   plates of thesis ch. IV (§4.3, `nlvid_fem::plates`) under the RH / RR
+//!   programs or a measured plate table ([`CapsuleFeSpec`],
+//!   [`CapsuleFeModel`]); parameters `[C1, alpha, g1, g2, tau1, tau2]`
+//!   ([`CAPSULE_PARAMETERS`], eqs. 4.1–4.3, Table 4.1); seconds per run.
 //!
 //! Every model reports SI units (`parameter_units`) and an `identity`
 //! string holding every setting, which enters the build's study hash.
@@ -48,6 +53,7 @@
 #![warn(missing_docs)]
 
 mod afm_fe;
+mod capsule_fe;
 mod error;
 mod hertz;
 mod lee_radok;
@@ -62,6 +68,9 @@ use nlvid_study::FromSection as _;
 use nlvid_study::{Bounds, Dimension, Section, Study};
 
 pub use afm_fe::{AfmFeModel, AfmFeSpec, fem_failure};
+pub use capsule_fe::{
+    AreaKind, CapsuleFeModel, CapsuleFeSpec, PARAMETERS as CAPSULE_PARAMETERS, samples_curve,
+};
 pub use error::{ForwardError, Result};
 pub use hertz::{HertzGrid, HertzProny, HertzPronySpec};
 pub use lee_radok::{LeeRadok, exp_convolution};
@@ -79,6 +88,20 @@ pub enum ForwardSpec {
     AfmFe(AfmFeSpec),
     /// Ch. II membrane solver.
     Membrane(MembraneSpec),
+    /// Ch. IV 3D finite-element capsule between plates.
+    CapsuleFe(CapsuleFeSpec),
+}
+
+impl ForwardSpec {
+    /// The model's name in `[forward] model`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::HertzProny(_) => "hertz-prony",
+            Self::AfmFe(_) => "afm-fe",
+            Self::Membrane(_) => "membrane",
+            Self::CapsuleFe(_) => "capsule-fe",
+        }
+    }
 }
 
 /// The `[forward]` section: the model and a test-only delay.
@@ -97,6 +120,7 @@ enum Kind {
     HertzProny,
     AfmFe,
     Membrane,
+    CapsuleFe,
 }
 
 /// Output points m: `points` in `[forward]` or `output_points`/`sampling`
@@ -121,6 +145,41 @@ fn points(f: &mut Section, protocol: Option<(&Section, &ProtocolSettings)>) -> R
     }
 }
 
+/// The `[protocol]` section of a plate model (`membrane`, `capsule-fe`): a
+/// displacement program (RH, RR, a measured table, …) and the number of
+/// output points (`[forward] points` or `[protocol] output_points`).
+fn plate_program(
+    study: &mut Study,
+    f: &mut Section,
+    model: &str,
+) -> Result<(nlvid_protocol::Program, usize)> {
+    let mut ps = study.section("protocol")?;
+    let settings = ProtocolSettings::from_section(&mut ps)?;
+    let ProtocolLoading::Program(program) = &settings.loading else {
+        return Err(ps
+            .invalid(
+                "kind",
+                format!(
+                    "model `{model}` needs a plate program (e.g. kind = \"ramp-hold\"), not the AFM script"
+                ),
+            )
+            .into());
+    };
+    if program.quantity() != nlvid_protocol::Quantity::Displacement {
+        return Err(ps
+            .invalid(
+                "control",
+                format!(
+                    "model `{model}` follows a plate displacement program (control = \"displacement\", lengths and times with units)"
+                ),
+            )
+            .into());
+    }
+    let m = points(f, Some((&ps, &settings)))?;
+    ps.finish()?;
+    Ok((program.clone(), m))
+}
+
 impl ForwardSettings {
     /// Reads `[forward]` (and `[protocol]` for `afm-fe` and `membrane`).
     /// The caller still owns the study and must `finish()` it.
@@ -137,6 +196,7 @@ impl ForwardSettings {
                 ("hertz-prony", Kind::HertzProny),
                 ("afm-fe", Kind::AfmFe),
                 ("membrane", Kind::Membrane),
+                ("capsule-fe", Kind::CapsuleFe),
             ],
         )?;
         let test_delay = f.opt_quantity("test_delay", Dimension::TIME, Bounds::non_negative())?;
@@ -150,24 +210,12 @@ impl ForwardSettings {
                 ForwardSpec::AfmFe(AfmFeSpec::from_section(&mut f, settings.loading, m)?)
             }
             Kind::Membrane => {
-                let mut ps = study.section("protocol")?;
-                let settings = ProtocolSettings::from_section(&mut ps)?;
-                let ProtocolLoading::Program(program) = &settings.loading else {
-                    return Err(ps
-                        .invalid("kind", "model `membrane` needs a plate program (e.g. kind = \"ramp-hold\"), not the AFM script")
-                        .into());
-                };
-                if program.quantity() != nlvid_protocol::Quantity::Displacement {
-                    return Err(ps
-                        .invalid(
-                            "control",
-                            "model `membrane` follows a plate displacement program (control = \"displacement\", lengths and times with units)",
-                        )
-                        .into());
-                }
-                let m = points(&mut f, Some((&ps, &settings)))?;
-                ps.finish()?;
-                ForwardSpec::Membrane(MembraneSpec::from_section(&mut f, program.clone(), m)?)
+                let (program, m) = plate_program(study, &mut f, "membrane")?;
+                ForwardSpec::Membrane(MembraneSpec::from_section(&mut f, program, m)?)
+            }
+            Kind::CapsuleFe => {
+                let (program, m) = plate_program(study, &mut f, "capsule-fe")?;
+                ForwardSpec::CapsuleFe(CapsuleFeSpec::from_section(&mut f, program, m)?)
             }
         };
         f.finish()?;
@@ -183,6 +231,7 @@ impl ForwardSettings {
             ForwardSpec::HertzProny(s) => Box::new(s.build()?),
             ForwardSpec::AfmFe(s) => Box::new(s.build()?),
             ForwardSpec::Membrane(s) => Box::new(s.build()?),
+            ForwardSpec::CapsuleFe(s) => Box::new(s.build()?),
         };
         Ok(match self.test_delay {
             Some(d) if d > 0.0 => Box::new(Delayed {

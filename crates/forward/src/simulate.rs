@@ -141,11 +141,7 @@ impl SimulateStudy {
 }
 
 fn model_name(spec: &ForwardSpec) -> &'static str {
-    match spec {
-        ForwardSpec::HertzProny(_) => "hertz-prony",
-        ForwardSpec::AfmFe(_) => "afm-fe",
-        ForwardSpec::Membrane(_) => "membrane",
-    }
+    spec.name()
 }
 
 /// The result of one run.
@@ -202,6 +198,13 @@ impl SimulateStudy {
                     .scales(&self.values)
                     .map_err(|e| failed(e.to_string()))?;
                 Ok(Simulation::Membrane { run, scales })
+            }
+            ForwardSpec::CapsuleFe(spec) => {
+                let (curve, _notes) = spec
+                    .build()?
+                    .run_curve(&self.values)
+                    .map_err(|e| failed(e.to_string()))?;
+                Ok(Simulation::Response(curve))
             }
             ForwardSpec::HertzProny(_) => {
                 let model = self.forward.build()?;

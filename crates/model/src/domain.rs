@@ -247,6 +247,42 @@ impl Domain {
         .with_sum_constraint(&["g1", "g2"], 1.0 - eps)
     }
 
+    /// The six-parameter capsule domain of Table 4.1 in nlvid's order
+    /// ([`names::CAPSULE`]): C1 ∈ [5, 50] MPa (log), α ∈ [0, 0.5],
+    /// g1 ∈ [0.5, 1], g2 ∈ [0, 0.5], τ1 ∈ [0.03, 0.3] s (log),
+    /// τ2 ∈ [1, 5] s (log), g1 + g2 ≤ 1 − ε (§4.4.1: "satisfies the
+    /// constraint g1 + g2 < 1"). The bounds are the thesis's; the log axes
+    /// for the modulus and the times are nlvid's choice, as in
+    /// [`Domain::table_5_3`] (the thesis's `lhsdesign` drew every axis
+    /// linearly).
+    ///
+    /// # Errors
+    /// [`ModelError::Domain`] if ε is not in [0, 0.5) (g1 ≥ 0.5 needs room).
+    pub fn table_4_1(eps: f64) -> Result<Self> {
+        if !(0.0..0.5).contains(&eps) {
+            return Err(ModelError::Domain(format!(
+                "epsilon of g1 + g2 <= 1 - epsilon must be in [0, 0.5), got {eps}"
+            )));
+        }
+        let bounds = [
+            (5e6, 50e6, Scale::Log),
+            (0.0, 0.5, Scale::Linear),
+            (0.5, 1.0, Scale::Linear),
+            (0.0, 0.5, Scale::Linear),
+            (0.03, 0.3, Scale::Log),
+            (1.0, 5.0, Scale::Log),
+        ];
+        Self::new(
+            names::CAPSULE
+                .iter()
+                .zip(names::CAPSULE_UNITS)
+                .zip(bounds)
+                .map(|((n, u), (lo, hi, s))| Parameter::new(n, u, lo, hi, s))
+                .collect(),
+        )?
+        .with_sum_constraint(&["g1", "g2"], 1.0 - eps)
+    }
+
     /// The wider cell domain of the surrogate accuracy and timing studies
     /// (`docs/theory/surrogate.md`): G0 ∈ [100, 5000] Pa (log), g1, g2 ∈
     /// [0, 0.9], τ1 ∈ [0.01, 1] s (log), τ2 ∈ [1, 100] s (log),
@@ -537,6 +573,31 @@ mod tests {
         }
         let g0 = &d.params()[0];
         assert!((g0.to_unit((80.0f64 * 4000.0).sqrt()) - 0.5).abs() < 1e-14);
+    }
+
+    #[test]
+    fn table_4_1_holds_the_thesis_bounds_and_the_weight_constraint() {
+        let d = Domain::table_4_1(0.01).expect("domain");
+        assert_eq!(d.names(), names::CAPSULE);
+        let bounds: Vec<(f64, f64)> = d.params().iter().map(|p| (p.lower, p.upper)).collect();
+        // Table 4.1, in nlvid's order C1 (MPa → Pa), α, g1, g2, τ1, τ2.
+        assert_eq!(
+            bounds,
+            [
+                (5e6, 50e6),
+                (0.0, 0.5),
+                (0.5, 1.0),
+                (0.0, 0.5),
+                (0.03, 0.3),
+                (1.0, 5.0)
+            ]
+        );
+        // Material Set 1 of §4.4.2 (g1 + g2 = 0.9835) is inside, and so is
+        // Set 2; g1 + g2 = 0.995 is not.
+        assert!(d.contains(&[28.8179e6, 0.0, 0.7652, 0.2183, 0.1608, 5.0], 1e-12));
+        assert!(d.contains(&[21.9096e6, 0.0, 0.5036, 0.3464, 0.2018, 1.1285], 1e-12));
+        assert!(!d.contains(&[20e6, 0.1, 0.8, 0.195, 0.1, 2.0], 1e-12));
+        assert!(Domain::table_4_1(0.5).is_err());
     }
 
     #[test]

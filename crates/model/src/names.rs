@@ -29,6 +29,14 @@ pub const PRONY2: [&str; 5] = [G0, "g1", "g2", "tau1", "tau2"];
 /// SI units of [`PRONY2`] (`"1"` for dimensionless).
 pub const PRONY2_UNITS: [&str; 5] = ["Pa", "1", "1", "s", "s"];
 
+/// The six capsule-wall parameters of ch. IV (eqs. 4.1–4.3, Table 4.1) in
+/// nlvid's order — modulus, Mooney–Rivlin ratio, weights, times:
+/// `C1` (eq. 4.1, Pa), `alpha` = C2/C1, `g1`, `g2`, `tau1`, `tau2`. The
+/// thesis lists them as x(C1, α, g1, τ1, g2, τ2); nlvid never permutes.
+pub const CAPSULE: [&str; 6] = [C1, ALPHA, "g1", "g2", "tau1", "tau2"];
+/// SI units of [`CAPSULE`].
+pub const CAPSULE_UNITS: [&str; 6] = ["Pa", "1", "1", "1", "s", "s"];
+
 /// Name of the k-th (1-based) Prony weight: `g1`, `g2`, …
 pub fn weight(k: usize) -> String {
     format!("g{k}")
@@ -80,7 +88,11 @@ mod tests {
 
     #[test]
     fn every_cell_parameter_has_the_unit_listed_beside_it() {
-        for (name, u) in PRONY2.iter().zip(PRONY2_UNITS) {
+        for (name, u) in PRONY2
+            .iter()
+            .zip(PRONY2_UNITS)
+            .chain(CAPSULE.iter().zip(CAPSULE_UNITS))
+        {
             assert_eq!(unit(name), Some(u), "{name}");
             assert!(describe(name).is_some(), "{name}");
         }

@@ -175,11 +175,7 @@ fn load_forward(path: &Path) -> Result<HertzPronySpec> {
              only (it needs the indentation history δ(t) for the piezo column; an AFM FE \
              generator is for later)",
             path.display(),
-            match other {
-                ForwardSpec::AfmFe(_) => "afm-fe",
-                ForwardSpec::Membrane(_) => "membrane",
-                ForwardSpec::HertzProny(_) => "hertz-prony",
-            }
+            other.name()
         ))),
     }
 }

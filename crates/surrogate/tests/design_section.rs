@@ -192,3 +192,29 @@ fn the_bundled_demo_design_reproduces_its_study_hash_and_domain() {
     let stored: Domain = serde_json::from_value(committed["domain"].clone()).unwrap();
     assert_eq!(stored, d.domain);
 }
+
+/// The capsule example study (`examples/metamodel/capsule-rh.toml`) reads
+/// to the `capsule-fe` model and its `[design]` to Table 4.1's domain
+/// (`Domain::table_4_1`), with the thesis's N = 492 and M = 92; every design
+/// point satisfies g1 + g2 ≤ 0.99.
+#[test]
+fn the_capsule_study_designs_over_table_4_1() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/metamodel/capsule-rh.toml");
+    let mut study = Study::load(&path).unwrap();
+    let model = nlvid_forward::from_study(&mut study).unwrap();
+    let mut ds = study.section("design").unwrap();
+    let d =
+        DesignSettings::from_section(&mut ds, &model.parameter_names(), &model.parameter_units())
+            .unwrap();
+    ds.finish().unwrap();
+    assert_eq!(d.domain, Domain::table_4_1(0.01).unwrap());
+    let (train, check) = d.designs().unwrap();
+    assert_eq!((train.len(), check.len()), (492, 92));
+    assert!(
+        train
+            .iter()
+            .chain(&check)
+            .all(|x| d.domain.contains(x, 1e-12))
+    );
+}
