@@ -26,7 +26,7 @@ mod recheck;
 
 use nlvid_inverse::{MultiStart, Precomputed, SurrogateCurve, SurrogateMisfit};
 
-pub use data::{LoadedExperiment, RealModel, Surrogate, load};
+pub use data::{LoadedExperiment, RealModel, Surrogate, load, load_curves};
 pub use outcome::{Agreement, ExperimentOutcome, Outcome};
 
 use crate::error::Result;
