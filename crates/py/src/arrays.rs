@@ -36,24 +36,39 @@ impl Vector<'_> {
     }
 }
 
-/// A float64 matrix (rows are points) borrowed from numpy.
-pub(crate) struct Matrix<'py> {
-    array: PyReadonlyArray2<'py, f64>,
+/// A float64 matrix (rows are points) borrowed from numpy; a 1-d array
+/// is one row.
+pub(crate) enum Matrix<'py> {
+    /// A 2-d array.
+    Rows(PyReadonlyArray2<'py, f64>),
+    /// A 1-d array: one point.
+    Row(PyReadonlyArray1<'py, f64>),
 }
 
 impl Matrix<'_> {
     /// (rows, columns).
     pub(crate) fn shape(&self) -> (usize, usize) {
-        let s = self.array.shape();
-        (s[0], s[1])
+        match self {
+            Matrix::Rows(a) => {
+                let s = a.shape();
+                (s[0], s[1])
+            }
+            Matrix::Row(a) => (1, a.len()),
+        }
     }
 
     /// The values in row-major order: the numpy buffer itself when
     /// C-contiguous.
     pub(crate) fn row_major(&self) -> Cow<'_, [f64]> {
-        match self.array.as_slice() {
-            Ok(s) => Cow::Borrowed(s),
-            Err(_) => Cow::Owned(self.array.as_array().iter().copied().collect()),
+        match self {
+            Matrix::Rows(a) => match a.as_slice() {
+                Ok(s) => Cow::Borrowed(s),
+                Err(_) => Cow::Owned(a.as_array().iter().copied().collect()),
+            },
+            Matrix::Row(a) => match a.as_slice() {
+                Ok(s) => Cow::Borrowed(s),
+                Err(_) => Cow::Owned(a.as_array().iter().copied().collect()),
+            },
         }
     }
 }
@@ -122,23 +137,25 @@ pub(crate) fn vector<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Vecto
 /// A 2-d float64 array argument (a 1-d one is one row), finite.
 pub(crate) fn matrix<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Matrix<'py>> {
     let a = float_array(obj, name)?;
-    let a = match a.ndim() {
-        2 => a,
-        1 => a
-            .call_method1("reshape", ((1, a.len()),))?
-            .cast_into::<PyArrayDyn<f64>>()?,
+    let m = match a.ndim() {
+        1 => Matrix::Row(
+            a.cast_into::<numpy::PyArray1<f64>>()
+                .map_err(|_| dtype_error(name, obj))?
+                .try_readonly()
+                .map_err(|e| input(format!("{name}: {e}")))?,
+        ),
+        2 => Matrix::Rows(
+            a.cast_into::<numpy::PyArray2<f64>>()
+                .map_err(|_| dtype_error(name, obj))?
+                .try_readonly()
+                .map_err(|e| input(format!("{name}: {e}")))?,
+        ),
         n => {
             return Err(input(format!(
                 "{name}: expected a 2-d array (one row per point), got {n} dimension(s)"
             )));
         }
     };
-    let array: PyReadonlyArray2<'py, f64> = a
-        .cast_into::<numpy::PyArray2<f64>>()
-        .map_err(|_| dtype_error(name, obj))?
-        .try_readonly()
-        .map_err(|e| input(format!("{name}: {e}")))?;
-    let m = Matrix { array };
     finite(name, &m.row_major())?;
     Ok(m)
 }

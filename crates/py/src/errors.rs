@@ -12,13 +12,13 @@ use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
 create_exception!(
-    _nlvid,
+    nlvid,
     NlvidError,
     PyException,
     "Any error reported by nlvid."
 );
 create_exception!(
-    _nlvid,
+    nlvid,
     StudyError,
     NlvidError,
     "An error in a study file: attributes file, line, column, key."

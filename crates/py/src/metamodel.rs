@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use numpy::{PyArray1, PyArrayMethods};
+use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -62,8 +62,11 @@ impl MetaModel {
     }
 }
 
+/// `v` (row-major, `n` × `m`) as a 2-d array, moved, not copied.
 fn to_2d<'py>(py: Python<'py>, v: Vec<f64>, n: usize, m: usize) -> PyResult<Bound<'py, PyAny>> {
-    Ok(PyArray1::from_vec(py, v).reshape([n, m])?.into_any())
+    let a = numpy::ndarray::Array2::from_shape_vec((n, m), v)
+        .map_err(|e| crate::errors::NlvidError::new_err(e.to_string()))?;
+    Ok(a.into_pyarray(py).into_any())
 }
 
 #[pymethods]
