@@ -41,6 +41,9 @@ def main():
     ap.add_argument("-n", type=int, default=1000)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--limit", type=float, default=0.05)
+    ap.add_argument("--only", help="run one case on one side and time nothing (for "
+                    "valgrind --tool=callgrind: instructions of N calls minus those of 0)")
+    ap.add_argument("--side", choices=["python", "rust"], default="python")
     a = ap.parse_args()
     meta = ROOT / "examples/demo/metamodel"
     model = nlvid.MetaModel.load(meta / "model.json")
@@ -59,6 +62,14 @@ def main():
         ("fit_hertz", lambda: nlvid.fit_hertz(s, F, "5 um"),
          lambda: _nlvid._bench_fit_hertz(s, F, "5 um", a.n)),
     ]
+    if a.only:
+        name, py_call, rust_loop = next(c for c in cases if c[0] == a.only)
+        if a.side == "python":
+            for _ in range(a.n):
+                py_call()
+        else:
+            rust_loop()
+        return 0
     failed = False
     print(f"{a.n} calls, best of {a.repeat}")
     print(f"{'call':12s} {'python us/call':>15s} {'rust us/call':>13s} {'overhead':>9s}")

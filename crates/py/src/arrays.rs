@@ -99,7 +99,7 @@ fn float_array<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Bound<'py, 
         return Err(dtype_error(name, obj));
     }
     obj.cast::<PyArrayDyn<f64>>()
-        .map(Clone::clone)
+        .cloned()
         .map_err(|_| dtype_error(name, obj))
 }
 
