@@ -81,42 +81,76 @@ fn real_model(spec: &RealModelSpec) -> Result<RealModel> {
 /// Unreadable files, malformed data (file, row, column), protocol
 /// mismatches, or a number of files that does not match the experiments.
 pub fn load(settings: &FitSettings, files: &[PathBuf]) -> Result<Vec<LoadedExperiment>> {
-    let files = &expand_folders(files)?;
-    let pairs: Vec<(&ExperimentSettings, &PathBuf)> = if settings.repeat {
-        files
+    let files = expand_folders(files)?;
+    load_each(settings, &files, "data files", |file| {
+        let label = file.file_stem().map_or_else(
+            || file.display().to_string(),
+            |s| s.to_string_lossy().into(),
+        );
+        Ok((label, read_curve(file, &settings.columns)?))
+    })
+}
+
+/// As [`load`], for curves already in memory (SI: time, displacement or
+/// indentation, force), each with its default label (a `label` of the
+/// experiment's settings takes precedence): the Python bindings' entry.
+///
+/// # Errors
+/// As [`load`], but for reading files.
+pub fn load_curves(
+    settings: &FitSettings,
+    curves: Vec<(String, MeasuredCurve)>,
+) -> Result<Vec<LoadedExperiment>> {
+    let mut slots: Vec<Option<(String, MeasuredCurve)>> = curves.into_iter().map(Some).collect();
+    let n = slots.len();
+    let items: Vec<usize> = (0..n).collect();
+    load_each(settings, &items, "curves", |&i| {
+        slots[i]
+            .take()
+            .ok_or_else(|| ReportError::InvalidSetting(format!("curve {i} given twice")))
+    })
+}
+
+/// Pairs each experiment of `settings` with one of `items` (one item per
+/// experiment, or every item with the single one), then loads its
+/// surrogate and reads its curve with `read` (label, curve).
+fn load_each<T>(
+    settings: &FitSettings,
+    items: &[T],
+    what: &str,
+    mut read: impl FnMut(&T) -> Result<(String, MeasuredCurve)>,
+) -> Result<Vec<LoadedExperiment>> {
+    let pairs: Vec<(&ExperimentSettings, &T)> = if settings.repeat {
+        items
             .iter()
             .map(|f| (&settings.experiments[0], f))
             .collect()
     } else {
-        if files.len() != settings.experiments.len() {
+        if items.len() != settings.experiments.len() {
+            let one = what.trim_end_matches('s');
             return Err(ReportError::InvalidSetting(format!(
-                "{}: {} [[fit.experiment]] tables but {} data files were given: \
-                 give one data file per experiment, in the same order",
+                "{}: {} [[fit.experiment]] tables but {} {what} were given: \
+                 give one {one} per experiment, in the same order",
                 settings.study.display(),
                 settings.experiments.len(),
-                files.len()
+                items.len()
             )));
         }
-        settings.experiments.iter().zip(files).collect()
+        settings.experiments.iter().zip(items).collect()
     };
     let mut out: Vec<LoadedExperiment> = Vec::with_capacity(pairs.len());
-    for (exp, file) in pairs {
+    for (exp, item) in pairs {
         let surrogate = load_surrogate(settings, exp, settings.inputs)?;
         if let Some(first) = out.first() {
             same_domain(&first.surrogate, &surrogate)?;
         }
         let times = surrogate.model.times().to_vec();
-        let curve = read_curve(file, &settings.columns)?;
+        let (default_label, curve) = read(item)?;
         check_protocol(&curve, exp, &times, &settings.study)?;
         let force = curve.resample(&curve.force, &times)?;
         let weights =
             (!exp.segments.is_empty()).then(|| segment_weights(&times, &exp.segments, 1.0));
-        let label = exp.label.clone().unwrap_or_else(|| {
-            file.file_stem().map_or_else(
-                || file.display().to_string(),
-                |s| s.to_string_lossy().into(),
-            )
-        });
+        let label = exp.label.clone().unwrap_or(default_label);
         out.push(LoadedExperiment {
             label,
             surrogate,
