@@ -36,6 +36,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::build::{Admissibility, BuildOptions, MetaModel, build_into, load};
+use crate::doe::Design;
 use crate::error::{Result, SurrogateError};
 use crate::kriging::{KrigingModel, KrigingSettings, OutputScale, VariancePoint};
 use crate::store::{RunStore, StoreMeta};
@@ -290,10 +291,7 @@ pub struct Round {
 ///
 /// # Errors
 /// As [`load`].
-pub fn checking_set(
-    store: &Path,
-    filters: &Admissibility,
-) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>)> {
+pub fn checking_set(store: &Path, filters: &Admissibility) -> Result<(Design, Design)> {
     let mm = load(store, filters)?;
     Ok((mm.x, mm.y))
 }
@@ -366,10 +364,11 @@ pub fn run_infill(
     };
     // The design so far: the stored one when it starts with `initial`.
     let mut design = initial.to_vec();
-    if let Ok(stored) = RunStore::existing(store).and_then(|s| s.meta()) {
-        if stored.design.len() >= initial.len() && stored.design[..initial.len()] == *initial {
-            design = stored.design;
-        }
+    if let Ok(stored) = RunStore::existing(store).and_then(|s| s.meta())
+        && stored.design.len() >= initial.len()
+        && stored.design[..initial.len()] == *initial
+    {
+        design = stored.design;
     }
     let settings = infill.kriging_settings(domain);
     let mut rounds = Vec::new();

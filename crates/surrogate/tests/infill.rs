@@ -4,7 +4,7 @@
 //! it stops at the first round that meets a target, and an interrupted
 //! build resumes to the same design and runs as an uninterrupted one.
 
-#![allow(clippy::unwrap_used)]
+#![allow(clippy::unwrap_used, clippy::type_complexity)]
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
