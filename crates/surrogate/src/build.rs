@@ -96,7 +96,16 @@ pub fn build(
         design.to_vec(),
         model.identity(),
     );
-    let store = RunStore::open(store_dir, &meta)?;
+    build_into(model, design, &RunStore::open(store_dir, &meta)?, opts)
+}
+
+/// [`build`] into an opened store (whose meta data holds `design`).
+pub(crate) fn build_into(
+    model: &dyn ForwardModel,
+    design: &[Vec<f64>],
+    store: &RunStore,
+    opts: &BuildOptions<'_>,
+) -> Result<BuildSummary> {
     let shard = opts.shard.unwrap_or(Shard::ALL);
     let todo_all: Vec<usize> = (0..design.len()).filter(|&i| shard.contains(i)).collect();
     let in_shard = todo_all.len();

@@ -15,6 +15,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SurrogateError};
+use crate::infill::InfillSettings;
 
 /// A design: rows of parameter values (original units).
 pub type Design = Vec<Vec<f64>>;
@@ -379,6 +380,8 @@ pub fn training_and_checking(
 /// [[design.constraint]]      # Σ coefficients·x ≤ at_most
 /// coefficients = { g1 = 1, g2 = 1 }
 /// at_most = 0.99
+/// [design.infill]            # optional: adaptive infill (crate::infill)
+/// initial = 40
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct DesignSettings {
@@ -392,6 +395,10 @@ pub struct DesignSettings {
     pub seed: u64,
     /// ESE outer iterations (0: plain random Latin hypercube).
     pub ese_iterations: usize,
+    /// `[design.infill]`: build the training set adaptively
+    /// ([`crate::infill`]) from a Latin hypercube of `initial` points up to
+    /// `n_train` runs.
+    pub infill: Option<InfillSettings>,
 }
 
 impl DesignSettings {
@@ -419,24 +426,37 @@ impl DesignSettings {
             return Err(s.invalid("ese_iterations", "given with ese = false"));
         }
         let ese_iterations = if ese { iters.unwrap_or(30) } else { 0 };
+        let domain = Domain::from_section(s, names, units)?;
+        let infill = match s.opt_subsection("infill")? {
+            None => None,
+            Some(mut sub) => {
+                let i = InfillSettings::from_section(&mut sub, names, n_train)?;
+                sub.finish()?;
+                Some(i)
+            }
+        };
         Ok(Self {
-            domain: Domain::from_section(s, names, units)?,
+            domain,
             n_train,
             n_check,
             seed,
             ese_iterations,
+            infill,
         })
     }
 
     /// The training and checking designs ([`training_and_checking`], checking
-    /// points at least 1e-6 (unit cube) from every training point).
+    /// points at least 1e-6 (unit cube) from every training point). With
+    /// `[design.infill]` the training design is the starting Latin
+    /// hypercube of `initial` points (the checking design is the same as
+    /// without infill: it depends on the seed and `n_check` only).
     ///
     /// # Errors
     /// As [`training_and_checking`].
     pub fn designs(&self) -> Result<(Design, Design)> {
         let (train, check) = training_and_checking(
             &self.domain,
-            self.n_train,
+            self.infill.as_ref().map_or(self.n_train, |i| i.initial),
             self.n_check.max(1),
             self.seed,
             self.ese_iterations,

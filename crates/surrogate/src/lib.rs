@@ -20,6 +20,9 @@
 //!   `.npy`/CSV for numpy/pandas and a `meta.json` that stores the domain.
 //! * [`slurm`]: a build as a Slurm job array (one shard per task) plus a
 //!   merge job that waits for it; resumable, requeued when killed.
+//! * [`infill`]: adaptive infill — a small Latin hypercube grown batch by
+//!   batch where the predicted error is largest, up to a checking-error
+//!   target or a run budget (`[design.infill]`).
 //! * [`check`]: range-normalised RMSE (thesis eq. 4.4) on a checking set.
 //!
 //! ```
@@ -45,6 +48,7 @@ pub mod check;
 mod correlation;
 pub mod doe;
 mod error;
+pub mod infill;
 mod kriging;
 mod likelihood;
 pub mod optimise;
@@ -66,7 +70,7 @@ pub use error::{Result, SurrogateError};
 pub use faer;
 pub use kriging::{
     FitReport, KrigingModel, KrigingSettings, OutputScale, Pca, PointPrediction, ThetaSearch,
-    likelihood_psi,
+    VariancePoint, likelihood_psi,
 };
 pub use optimise::OptimiserSettings;
 pub use options::FitOptions;

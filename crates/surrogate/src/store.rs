@@ -151,6 +151,43 @@ impl RunStore {
         Ok(s)
     }
 
+    /// Open (creating if needed) a store for `meta` whose design may extend
+    /// the stored one (adaptive infill, [`crate::infill`]): an existing
+    /// store is accepted when its design is a prefix of `meta.design` and
+    /// everything else (names, units, time grid, model) is equal; its
+    /// `meta.json` is then replaced atomically by `meta`. Runs are never
+    /// removed.
+    ///
+    /// # Errors
+    /// I/O errors; an existing store of another study, or whose design is
+    /// not a prefix of this one.
+    pub fn open_growing(dir: impl Into<PathBuf>, meta: &StoreMeta) -> Result<Self> {
+        let dir = dir.into();
+        if let Ok(existing) = RunStore::existing(&dir).and_then(|s| s.meta()) {
+            let same = existing.parameter_names == meta.parameter_names
+                && existing.parameter_units == meta.parameter_units
+                && existing.time == meta.time
+                && existing.model == meta.model
+                && existing.design.len() <= meta.design.len()
+                && existing.design[..] == meta.design[..existing.design.len()];
+            if !same {
+                return Err(SurrogateError::InvalidSettings(format!(
+                    "{} holds runs of another study or another design (its {} design points \
+                     are not the first of these {}); use another directory",
+                    dir.display(),
+                    existing.design.len(),
+                    meta.design.len()
+                )));
+            }
+            if existing.study_hash != meta.study_hash {
+                let bytes = serde_json::to_vec_pretty(meta)
+                    .map_err(|e| SurrogateError::InvalidInput(e.to_string()))?;
+                write_atomic(&dir.join("meta.json"), &bytes)?;
+            }
+        }
+        RunStore::open(dir, meta)
+    }
+
     /// Open an existing store (for merge, export, check).
     pub fn existing(dir: impl Into<PathBuf>) -> Result<Self> {
         let s = RunStore { dir: dir.into() };

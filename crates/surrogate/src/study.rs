@@ -61,9 +61,15 @@ impl BuildStudy {
             .into_iter()
             .filter(|(_, d)| !d.is_empty())
             .collect();
-        for (name, design) in &sets {
-            let text = build_report(name, self.model.as_ref(), design, &store.join(name), opts)?;
-            said(say(&text))?;
+        match &self.settings.design.infill {
+            None => {
+                for (name, design) in &sets {
+                    let text =
+                        build_report(name, self.model.as_ref(), design, &store.join(name), opts)?;
+                    said(say(&text))?;
+                }
+            }
+            Some(infill) => self.build_infill(infill, &sets, store, opts, say)?,
         }
         for (name, _) in sets.iter().filter(|_| export.is_some()) {
             let dir = export.map(|e| e.join(name)).unwrap_or_default();
@@ -75,6 +81,59 @@ impl BuildStudy {
                 Some(domain),
             )?))?;
         }
+        Ok(())
+    }
+}
+
+impl BuildStudy {
+    /// The checking set as usual, then the training set by adaptive infill
+    /// ([`crate::infill::run_infill`]) from the starting design of `sets`.
+    fn build_infill(
+        &self,
+        infill: &crate::infill::InfillSettings,
+        sets: &[(&str, Vec<Vec<f64>>)],
+        store: &Path,
+        opts: &BuildOptions<'_>,
+        say: &mut dyn FnMut(&str) -> std::io::Result<()>,
+    ) -> Result<()> {
+        let said = |r: std::io::Result<()>| r.map_err(crate::error::io_err("stdout"));
+        let design = &self.settings.design;
+        let (mut cx, mut cy) = (Vec::new(), Vec::new());
+        if let Some((_, check)) = sets.iter().find(|(n, _)| *n == "check") {
+            let dir = store.join("check");
+            said(say(&build_report(
+                "check",
+                self.model.as_ref(),
+                check,
+                &dir,
+                opts,
+            )?))?;
+            if opts
+                .cancel
+                .is_some_and(|c| c.load(std::sync::atomic::Ordering::SeqCst))
+            {
+                return Ok(());
+            }
+            (cx, cy) = crate::infill::checking_set(&dir, &self.settings.filters)?;
+        }
+        let initial = sets
+            .iter()
+            .find(|(n, _)| *n == "train")
+            .map(|(_, d)| d.clone())
+            .unwrap_or_default();
+        crate::infill::run_infill(
+            self.model.as_ref(),
+            &design.domain,
+            infill,
+            &initial,
+            design.n_train,
+            design.seed,
+            &self.settings.filters,
+            &store.join("train"),
+            (&cx, &cy),
+            opts,
+            &mut |t| said(say(t)),
+        )?;
         Ok(())
     }
 }

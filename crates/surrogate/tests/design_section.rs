@@ -218,3 +218,43 @@ fn the_capsule_study_designs_over_table_4_1() {
             .all(|x| d.domain.contains(x, 1e-12))
     );
 }
+
+#[test]
+fn infill_subsection_is_read_and_checked() {
+    let with = |extra: &str| format!("{DESIGN}\n[design.infill]\n{extra}");
+    let d = read(&with(
+        "initial = 12\nbatch = 4\ntarget_max_error = 0.01\nproportional_to = \"G0\"\n",
+    ))
+    .unwrap();
+    let i = d.infill.clone().unwrap();
+    assert_eq!(
+        (i.initial, i.batch, i.target_max_error, i.proportional_to),
+        (12, 4, Some(0.01), Some(0))
+    );
+    assert_eq!((i.candidates, i.pca_energy), (4000, Some(1.0 - 1e-6)));
+    // The training design is the starting Latin hypercube; the checking
+    // design is the one without infill.
+    let (train, check) = d.designs().unwrap();
+    let plain = read(DESIGN).unwrap();
+    assert_eq!(train.len(), 12);
+    assert_eq!(check, plain.designs().unwrap().1);
+    for (text, key) in [
+        (with("batch = 4\n"), "design.infill.initial"),
+        (with("initial = 25\n"), "design.infill.initial"),
+        (
+            with("initial = 12\nproportional_to = \"E\"\n"),
+            "design.infill.proportional_to",
+        ),
+        (
+            with("initial = 12\ntarget_max_error = 0\n"),
+            "design.infill.target_max_error",
+        ),
+        (with("initial = 12\nbatches = 3\n"), "design.infill.batches"),
+    ] {
+        let e = read(&text).unwrap_err();
+        assert!(
+            e.contains("d.toml:") && e.contains(key),
+            "expected `{key}` in: {e}"
+        );
+    }
+}
