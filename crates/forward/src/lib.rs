@@ -48,6 +48,7 @@
 #![warn(missing_docs)]
 
 mod afm_fe;
+pub mod curves;
 mod error;
 mod hertz;
 mod lee_radok;
@@ -62,6 +63,7 @@ use nlvid_study::FromSection as _;
 use nlvid_study::{Bounds, Dimension, Section, Study};
 
 pub use afm_fe::{AfmFeModel, AfmFeSpec, fem_failure};
+pub use curves::{AfmCurve, Noise, afm_curve, afm_curves};
 pub use error::{ForwardError, Result};
 pub use hertz::{HertzGrid, HertzProny, HertzPronySpec};
 pub use lee_radok::LeeRadok;
