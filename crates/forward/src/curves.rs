@@ -208,9 +208,20 @@ pub fn add_noise(curve: &mut AfmCurve, noise: Noise, index: usize, spring_consta
     }
     let mut rng = ChaCha8Rng::seed_from_u64(noise.seed);
     rng.set_stream(index as u64);
-    let sd = noise.relative * curve.peak_force();
+    add_noise_from(curve, noise.relative, &mut rng, spring_constant);
+}
+
+/// Adds noise of sd `relative` × peak force to the deflection, one
+/// deviate per sample in time order from `rng` (the caller's stream).
+pub fn add_noise_from(
+    curve: &mut AfmCurve,
+    relative: f64,
+    rng: &mut ChaCha8Rng,
+    spring_constant: f64,
+) {
+    let sd = relative * curve.peak_force();
     for (d, &f) in curve.deflection.iter_mut().zip(&curve.force) {
-        *d = (f + sd * standard_normal(&mut rng)) / spring_constant;
+        *d = (f + sd * standard_normal(rng)) / spring_constant;
     }
 }
 
@@ -262,20 +273,30 @@ pub fn read_parameter_sets(
     file: &str,
     names: &[String],
 ) -> Result<Vec<(String, Vec<f64>)>> {
-    let bad = |line: usize, message: String| setting("curve writer", format!("{file}:{line}: {message}"));
+    let bad =
+        |line: usize, message: String| setting("curve writer", format!("{file}:{line}: {message}"));
     let mut rows = text
         .lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
     let Some((h, header)) = rows.next() else {
-        return Err(bad(1, "empty table: expected a header naming the parameters".into()));
+        return Err(bad(
+            1,
+            "empty table: expected a header naming the parameters".into(),
+        ));
     };
     let cols: Vec<&str> = header.split(',').map(str::trim).collect();
     let name_col = cols.iter().position(|c| *c == "name");
-    if let Some(c) = cols.iter().find(|c| **c != "name" && !names.iter().any(|n| n == *c)) {
+    if let Some(c) = cols
+        .iter()
+        .find(|c| **c != "name" && !names.iter().any(|n| n == *c))
+    {
         return Err(bad(
             h + 1,
-            format!("unknown column `{c}`: the model's parameters are {}", names.join(", ")),
+            format!(
+                "unknown column `{c}`: the model's parameters are {}",
+                names.join(", ")
+            ),
         ));
     }
     let mut index = Vec::with_capacity(names.len());
@@ -298,7 +319,12 @@ pub fn read_parameter_sets(
         for (n, &j) in names.iter().zip(&index) {
             match cells[j].parse::<f64>() {
                 Ok(v) if v.is_finite() => x.push(v),
-                _ => return Err(bad(l + 1, format!("`{n}` = `{}`: not a finite number", cells[j]))),
+                _ => {
+                    return Err(bad(
+                        l + 1,
+                        format!("`{n}` = `{}`: not a finite number", cells[j]),
+                    ));
+                }
             }
         }
         let name = match name_col {
@@ -316,6 +342,7 @@ pub fn read_parameter_sets(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nlvid_model::ForwardModel as _;
 
     fn names() -> Vec<String> {
         nlvid_model::names::PRONY2.map(String::from).to_vec()
@@ -339,6 +366,70 @@ mod tests {
             .expect_err("bad number")
             .to_string();
         assert!(e.contains("p.csv:2") && e.contains("g1"), "{e}");
+    }
+
+    fn forward(text: &str) -> ForwardSettings {
+        let mut study = nlvid_study::Study::parse("s.toml", text).expect("toml");
+        ForwardSettings::from_study(&mut study).expect("forward")
+    }
+
+    const HERTZ: &str = "[forward]\nmodel = \"hertz-prony\"\nprobe_radius = \"2.5 um\"\n\
+        rate = \"2 um/s\"\nramp = \"1 s\"\nhold = \"3 s\"\npoints = 40\n";
+
+    /// hertz-prony: Z − d is the nominal indentation 2 µm/s · min(t, 1 s)
+    /// (closed form), d·k the model's force on its grid, 0 at t = 0.
+    #[test]
+    fn hertz_curve_piezo_minus_deflection_is_the_nominal_indentation() {
+        let fwd = forward(HERTZ);
+        let x = [1000.0, 0.3, 0.2, 0.5, 10.0];
+        let times: Vec<f64> = std::iter::once(0.0)
+            .chain((1..=40).map(|i| 4.0 * i as f64 / 40.0))
+            .collect();
+        let k = 0.12;
+        let c = afm_curve(&fwd, &x, &times, k).expect("curve");
+        let model = fwd.build().expect("model");
+        let f = model.run(&x).expect("run");
+        for (i, &t) in times.iter().enumerate() {
+            let delta = 2e-6 * t.min(1.0);
+            assert!(
+                (c.piezo[i] - c.deflection[i] - delta).abs() < 1e-18,
+                "t = {t}"
+            );
+            let expected = if i == 0 { 0.0 } else { f[i - 1] };
+            assert_eq!(c.deflection[i], expected / k, "t = {t}");
+        }
+        let e = afm_curve(&fwd, &x, &[0.05], k)
+            .expect_err("off the grid")
+            .to_string();
+        assert!(e.contains("not on the model's output grid"), "{e}");
+    }
+
+    /// Settings the writer refuses, each before any FE run.
+    #[test]
+    fn afm_fe_writer_refuses_a_rigid_probe_a_foreign_spring_and_bad_times() {
+        let fe = "[forward]\nmodel = \"afm-fe\"\nheight = \"12.22 um\"\n\
+            diameter = \"28.88 um\"\npoints = 11\n";
+        let protocol = "[protocol]\nkind = \"ramp-hold\"\ndisplacement = \"2 um\"\n\
+            speed = \"2 um/s\"\nhold = \"1 s\"\n";
+        let x = [1000.0, 0.3, 0.2, 0.5, 10.0];
+        let rigid = forward(&format!("{fe}cantilever = \"rigid\"\n{protocol}"));
+        let e = afm_curve(&rigid, &x, &[0.0, 1.0], 0.12)
+            .expect_err("rigid")
+            .to_string();
+        assert!(e.contains("spring cantilever"), "{e}");
+        let spring = forward(&format!("{fe}spring_constant = \"0.12 N/m\"\n{protocol}"));
+        let e = afm_curve(&spring, &x, &[0.0, 1.0], 0.1)
+            .expect_err("k")
+            .to_string();
+        assert!(e.contains("spring_constant"), "{e}");
+        let e = afm_curve(&spring, &x, &[0.0, 5.0], 0.12)
+            .expect_err("late")
+            .to_string();
+        assert!(e.contains("outside the piezo program"), "{e}");
+        let e = afm_curve(&spring, &x, &[1.0, 0.5], 0.12)
+            .expect_err("order")
+            .to_string();
+        assert!(e.contains("increasing"), "{e}");
     }
 
     /// Noise: per-curve streams, σ = relative × peak, zero mean; the

@@ -20,7 +20,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use nlvid_forward::{ForwardSettings, ForwardSpec, HertzGrid, HertzPronySpec, Noise};
-use nlvid_model::{Domain, ForwardModel};
+use nlvid_model::Domain;
 use nlvid_study::Study;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -262,11 +262,18 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
         .chain(keep.iter().map(|&j| t_end * (j + 1) as f64 / fine as f64))
         .collect();
     let k = settings.spring_constant;
+    // One seeded stream, cell by cell: the parameters, then the noise of
+    // every sample (the order of the committed demo data). The parameters
+    // are drawn first (skipping the noise deviates) so that the noise-free
+    // curves can run in parallel; the stream is then replayed.
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
     let mut cells = Vec::new();
     for g in &spec.groups {
         for i in 0..spec.cells_per_group {
             let x = draw(g, &domain, &mut rng)?;
+            for _ in &times {
+                normal(&mut rng);
+            }
             cells.push(TrueCell {
                 group: g.name.clone(),
                 cell: format!("{}-{:02}", g.name.to_lowercase(), i + 1),
@@ -275,12 +282,22 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
         }
     }
     let sets: Vec<Vec<f64>> = cells.iter().map(|c| c.x.to_vec()).collect();
-    let noise = Noise {
-        relative: spec.noise,
+    let clean = Noise {
+        relative: 0.0,
         seed: spec.seed,
     };
-    let curves = nlvid_forward::afm_curves(&fwd, &sets, &times, k, noise)
+    let mut curves = nlvid_forward::afm_curves(&fwd, &sets, &times, k, clean)
         .map_err(|e| ReportError::InvalidSetting(format!("forward model: {e}")))?;
+    let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
+    for (g, curve) in spec
+        .groups
+        .iter()
+        .flat_map(|g| std::iter::repeat_n(g, spec.cells_per_group))
+        .zip(&mut curves)
+    {
+        draw(g, &domain, &mut rng)?;
+        nlvid_forward::curves::add_noise_from(curve, spec.noise, &mut rng, k);
+    }
     let data = dir.join("data");
     let mut truth = String::from("group,cell,G0_Pa,g1,g2,tau1_s,tau2_s,G_end_Pa,relaxation_end\n");
     for (c, curve) in cells.iter().zip(&curves) {

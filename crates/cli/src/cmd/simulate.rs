@@ -64,7 +64,15 @@ impl Curves {
         };
         let mut study = Study::load(&a.study)?;
         let forward = nlvid_forward::ForwardSettings::from_study(&mut study)?;
-        for other in ["parameters", "design", "build", "fit", "probe", "material", "loading"] {
+        for other in [
+            "parameters",
+            "design",
+            "build",
+            "fit",
+            "probe",
+            "material",
+            "loading",
+        ] {
             study.root().skip(other);
         }
         let _ = study.root().opt_str("title")?;
@@ -87,8 +95,11 @@ impl Curves {
         let names = forward.build()?.parameter_names();
         let text = std::fs::read_to_string(table)
             .with_context(|| format!("cannot read {}", table.display()))?;
-        let sets =
-            nlvid_forward::curves::read_parameter_sets(&text, &table.display().to_string(), &names)?;
+        let sets = nlvid_forward::curves::read_parameter_sets(
+            &text,
+            &table.display().to_string(),
+            &names,
+        )?;
         Ok(Some(Curves {
             forward,
             sets,
@@ -105,8 +116,13 @@ impl Curves {
         let model = self.forward.build()?;
         let times = model.time_grid().to_vec();
         let xs: Vec<Vec<f64>> = self.sets.iter().map(|s| s.1.clone()).collect();
-        let curves =
-            nlvid_forward::afm_curves(&self.forward, &xs, &times, self.spring_constant, self.noise)?;
+        let curves = nlvid_forward::afm_curves(
+            &self.forward,
+            &xs,
+            &times,
+            self.spring_constant,
+            self.noise,
+        )?;
         let mut files = Vec::new();
         for ((name, _), c) in self.sets.iter().zip(&curves) {
             let path = self.out_dir.join(format!("{name}.csv"));
