@@ -342,7 +342,6 @@ pub fn read_parameter_sets(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nlvid_model::ForwardModel as _;
 
     fn names() -> Vec<String> {
         nlvid_model::names::PRONY2.map(String::from).to_vec()

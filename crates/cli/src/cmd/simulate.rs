@@ -130,7 +130,8 @@ impl Curves {
             files.push(path);
         }
         if ctx.json {
-            return print_json(&json!({ "curves": files }));
+            print_json(&json!({ "curves": files }))?;
+            return Ok(ExitCode::SUCCESS);
         }
         say!(
             "wrote {} curves ({} samples each, noise {} of the peak force, seed {}) into {}",
