@@ -54,6 +54,8 @@
 
 mod afm_fe;
 mod capsule_fe;
+
+pub mod curves;
 mod error;
 mod hertz;
 mod lee_radok;
@@ -71,6 +73,8 @@ pub use afm_fe::{AfmFeModel, AfmFeSpec, fem_failure};
 pub use capsule_fe::{
     AreaKind, CapsuleFeModel, CapsuleFeSpec, PARAMETERS as CAPSULE_PARAMETERS, samples_curve,
 };
+
+pub use curves::{AfmCurve, Noise, afm_curve, afm_curves};
 pub use error::{ForwardError, Result};
 pub use hertz::{HertzGrid, HertzProny, HertzPronySpec};
 pub use lee_radok::{LeeRadok, exp_convolution};

@@ -185,7 +185,14 @@ impl SimulateStudy {
                 let params =
                     nlvid_model::Relaxation::from_named(&nlvid_model::names::PRONY2, &self.values)
                         .map_err(|e| failed(e.to_string()))?;
-                nlvid_fem::afm::run(&params, &spec.setup()?)
+                // A single run is all that is going on: its element loop
+                // uses both cores (bitwise the serial result, fem crate
+                // test `parallel_element_loop_is_bitwise_serial`).
+                let mut setup = spec.setup()?;
+                setup.settings.threads = std::thread::available_parallelism()
+                    .map_or(1, std::num::NonZeroUsize::get)
+                    .min(2);
+                nlvid_fem::afm::run(&params, &setup)
                     .map(|r| Simulation::AfmFe(Box::new(r)))
                     .map_err(|e| failed(fem_failure(&e).to_string()))
             }

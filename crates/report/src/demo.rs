@@ -6,10 +6,10 @@
 //! The meta-model's study (`examples/demo/metamodel.toml`) names the
 //! forward model in its `[forward]` section; the same section drives
 //! `nlvid build`, so the meta-model the cohort fits on and the curves it
-//! fits are made by one model (see `examples/demo/regenerate.sh`). Today only `hertz-prony`
-//! (analytic Lee–Radok ramp-hold, `nlvid_forward::HertzProny`) can write
-//! curves: its indentation history δ(t) is known in closed form, which the
-//! piezo column Z = δ + F/k needs.
+//! fits are made by one model (see `examples/demo/regenerate.sh`). The
+//! curves come from the curve writer `nlvid_forward::curves` (`afm-fe`: the
+//! FE cell model at the sample times; `hertz-prony`: the analytic Lee–Radok
+//! ramp-hold).
 //!
 //! Files written next to the study: `data/<group>/<cell>.csv` (`time [s]`,
 //! `piezo [um]`, `deflection [nm]`; `fast_rate` Hz until `fast_until`,
@@ -19,10 +19,10 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use nlvid_forward::{ForwardSettings, ForwardSpec, HertzGrid, HertzPronySpec};
-use nlvid_model::{Domain, ForwardModel};
+use nlvid_forward::{ForwardSettings, ForwardSpec, HertzGrid, HertzPronySpec, Noise};
+use nlvid_model::Domain;
 use nlvid_study::Study;
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::cohort::write_atomic;
@@ -127,10 +127,7 @@ pub struct DemoFiles {
 }
 
 fn normal(rng: &mut ChaCha8Rng) -> f64 {
-    // Box–Muller; u1 in (0, 1].
-    let u1: f64 = 1.0 - rng.random::<f64>();
-    let u2: f64 = rng.random();
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    nlvid_forward::curves::standard_normal(rng)
 }
 
 /// Draws a cell of `g` inside the Table 5.3 domain (redraws otherwise).
@@ -158,26 +155,36 @@ fn draw(g: &GroupSpec, domain: &Domain, rng: &mut ChaCha8Rng) -> Result<[f64; 5]
     )))
 }
 
-/// The `hertz-prony` settings of the `[forward]` section of the study at
-/// `path`, read by `nlvid_forward` (the reader `nlvid build` uses).
+/// The `[forward]` section of the study at `path`, read by
+/// `nlvid_forward` (the reader `nlvid build` uses), with its probe radius,
+/// loading ramp and protocol end [m, s, s].
 ///
 /// # Errors
-/// A missing section or key (naming file, line, key), or a model other
-/// than `hertz-prony`.
-fn load_forward(path: &Path) -> Result<HertzPronySpec> {
+/// A missing section or key (naming file, line, key), or a model the curve
+/// writer cannot drive (membrane).
+fn load_forward(path: &Path) -> Result<(ForwardSettings, f64, f64, f64)> {
     let mut study = Study::load(path)?;
     let fwd = ForwardSettings::from_study(&mut study)
         .map_err(|e| ReportError::InvalidSetting(e.to_string()))?;
-    match fwd.spec {
-        ForwardSpec::HertzProny(h) => Ok(h),
-        other => Err(ReportError::InvalidSetting(format!(
-            "{}: [forward] {}: the demo data generator writes curves for `hertz-prony` \
-             only (it needs the indentation history δ(t) for the piezo column; an AFM FE \
-             generator is for later)",
-            path.display(),
-            other.name()
-        ))),
-    }
+    let bad = |e: nlvid_forward::ForwardError| ReportError::InvalidSetting(e.to_string());
+    let (radius, ramp, end) = match &fwd.spec {
+        ForwardSpec::HertzProny(h) => (h.probe_radius, h.ramp, h.ramp + h.hold),
+        ForwardSpec::AfmFe(a) => {
+            // The loading ramp is the piezo program's first segment.
+            let piezo = a.setup().map_err(bad)?.piezo;
+            let ramp = piezo.get(1).map_or(0.0, |p| p.0);
+            let end = piezo.last().map_or(0.0, |p| p.0);
+            (a.probe_radius, ramp, end)
+        }
+        ForwardSpec::Membrane(_) => {
+            return Err(ReportError::InvalidSetting(format!(
+                "{}: [forward] membrane: the demo data generator writes AFM curves \
+                 (afm-fe, hertz-prony)",
+                path.display()
+            )));
+        }
+    };
+    Ok((fwd, radius, ramp, end))
 }
 
 /// Sample times of a cell's file (a subset of the fine model grid of
@@ -210,99 +217,114 @@ fn sampling(spec: &DemoSpec, t_end: f64) -> Result<(usize, Vec<usize>)> {
 /// group distribution outside the domain, an unwritable directory.
 pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<DemoFiles> {
     let settings = CohortSettings::load(study)?;
-    let fwd = load_forward(forward)?;
-    if (settings.radius / fwd.probe_radius - 1.0).abs() > 1e-12 {
+    let (fwd, probe_radius, ramp, t_end) = load_forward(forward)?;
+    if (settings.radius / probe_radius - 1.0).abs() > 1e-12 {
         return Err(ReportError::InvalidSetting(format!(
             "{}: probe.radius = {} m but {} has forward.probe_radius = {} m",
             study.display(),
             settings.radius,
             forward.display(),
-            fwd.probe_radius
+            probe_radius
         )));
     }
     let dir = study.parent().map(Path::to_path_buf).unwrap_or_default();
     let domain = Domain::table_5_3(settings.constraint_epsilon)?;
-    let t_end = fwd.ramp + fwd.hold;
-    if (settings.ramp - fwd.ramp).abs() > 1e-9 * fwd.ramp
-        || settings.hold_end > t_end * (1.0 + 1e-12)
-    {
+    if (settings.ramp - ramp).abs() > 1e-9 * ramp || settings.hold_end > t_end * (1.0 + 1e-12) {
         return Err(ReportError::InvalidSetting(format!(
             "{}: the fitted window (ramp {} s, hold_end {} s) must match the forward model's \
-             ramp ({} s) and end within its protocol ({t_end} s)",
+             ramp ({ramp} s) and end within its protocol ({t_end} s)",
             study.display(),
             settings.ramp,
             settings.hold_end,
-            fwd.ramp
         )));
     }
     let (fine, keep) = sampling(spec, t_end)?;
-    // The forward model on `fine` equally spaced times in (0, ramp + hold].
-    let model = HertzPronySpec {
-        points: fine,
-        grid: HertzGrid::Uniform,
-        ..fwd.clone()
-    }
-    .build()
-    .map_err(|e| ReportError::InvalidSetting(format!("forward model: {e}")))?;
+    // Sample times: 0, then the kept points of the fine grid
+    // (i + 1)/fast_rate; hertz-prony runs on that fine grid.
+    let fwd = match fwd.spec {
+        ForwardSpec::HertzProny(h) => ForwardSettings {
+            spec: ForwardSpec::HertzProny(HertzPronySpec {
+                points: fine,
+                grid: HertzGrid::Uniform,
+                ..h
+            }),
+            ..fwd
+        },
+        _ => fwd,
+    };
+    let model = fwd
+        .build()
+        .map_err(|e| ReportError::InvalidSetting(format!("forward model: {e}")))?;
     domain
         .check_names(&model.parameter_names())
         .map_err(|e| ReportError::InvalidSetting(format!("forward model: {e}")))?;
-    let times: Vec<f64> = model.time_grid().to_vec();
+    let times: Vec<f64> = std::iter::once(0.0)
+        .chain(keep.iter().map(|&j| t_end * (j + 1) as f64 / fine as f64))
+        .collect();
     let k = settings.spring_constant.ok_or_else(|| {
         ReportError::InvalidSetting(
             "the demo writes CSV curves: its study needs [fit.calibration] spring_constant".into(),
         )
     })?;
+    // One seeded stream, cell by cell: the parameters, then the noise of
+    // every sample (the order of the committed demo data). The parameters
+    // are drawn first (skipping the noise deviates) so that the noise-free
+    // curves can run in parallel; the stream is then replayed.
     let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
-    let data = dir.join("data");
     let mut cells = Vec::new();
-    let mut truth = String::from("group,cell,G0_Pa,g1,g2,tau1_s,tau2_s,G_end_Pa,relaxation_end\n");
     for g in &spec.groups {
         for i in 0..spec.cells_per_group {
             let x = draw(g, &domain, &mut rng)?;
-            let f = model
-                .run(&x)
-                .map_err(|e| ReportError::InvalidSetting(format!("forward model: {e}")))?;
-            let peak = f.iter().fold(0.0f64, |a, &b| a.max(b));
-            let mut csv = format!(
-                "{},{},{}\n0.0000,0.000000,{:.4}\n",
-                "time [s]",
-                "piezo [um]",
-                "deflection [nm]",
-                spec.noise * peak * normal(&mut rng) / k * 1e9
-            );
-            for &j in &keep {
-                let (tj, fj) = (times[j], f[j]);
-                let z = fwd.indentation(tj) + fj / k;
-                let d_meas = (fj + spec.noise * peak * normal(&mut rng)) / k;
-                let _ = writeln!(csv, "{tj:.4},{:.6},{:.4}", z * 1e6, d_meas * 1e9);
+            for _ in &times {
+                normal(&mut rng);
             }
-            let cell = format!("{}-{:02}", g.name.to_lowercase(), i + 1);
-            write_atomic(
-                &data.join(&g.name).join(format!("{cell}.csv")),
-                csv.as_bytes(),
-            )?;
-            let end = settings.hold_end;
-            // G(t) of eq. 5.1 through the one Prony type, by parameter name.
-            let g_end = nlvid_inverse::relaxation(&domain, &x)?.value(end);
-            let _ = writeln!(
-                truth,
-                "{},{cell},{},{},{},{},{},{},{}",
-                g.name,
-                x[0],
-                x[1],
-                x[2],
-                x[3],
-                x[4],
-                g_end,
-                1.0 - g_end / x[0]
-            );
             cells.push(TrueCell {
                 group: g.name.clone(),
-                cell,
+                cell: format!("{}-{:02}", g.name.to_lowercase(), i + 1),
                 x,
             });
         }
+    }
+    let sets: Vec<Vec<f64>> = cells.iter().map(|c| c.x.to_vec()).collect();
+    let clean = Noise {
+        relative: 0.0,
+        seed: spec.seed,
+    };
+    let mut curves = nlvid_forward::afm_curves(&fwd, &sets, &times, k, clean)
+        .map_err(|e| ReportError::InvalidSetting(format!("forward model: {e}")))?;
+    let mut rng = ChaCha8Rng::seed_from_u64(spec.seed);
+    for (g, curve) in spec
+        .groups
+        .iter()
+        .flat_map(|g| std::iter::repeat_n(g, spec.cells_per_group))
+        .zip(&mut curves)
+    {
+        draw(g, &domain, &mut rng)?;
+        nlvid_forward::curves::add_noise_from(curve, spec.noise, &mut rng, k);
+    }
+    let data = dir.join("data");
+    let mut truth = String::from("group,cell,G0_Pa,g1,g2,tau1_s,tau2_s,G_end_Pa,relaxation_end\n");
+    for (c, curve) in cells.iter().zip(&curves) {
+        write_atomic(
+            &data.join(&c.group).join(format!("{}.csv", c.cell)),
+            curve.to_csv().as_bytes(),
+        )?;
+        let x = c.x;
+        // G(t) of eq. 5.1 through the one Prony type, by parameter name.
+        let g_end = nlvid_inverse::relaxation(&domain, &x)?.value(settings.hold_end);
+        let _ = writeln!(
+            truth,
+            "{},{},{},{},{},{},{},{},{}",
+            c.group,
+            c.cell,
+            x[0],
+            x[1],
+            x[2],
+            x[3],
+            x[4],
+            g_end,
+            1.0 - g_end / x[0]
+        );
     }
     let truth_path = dir.join("ground_truth.csv");
     write_atomic(&truth_path, truth.as_bytes())?;

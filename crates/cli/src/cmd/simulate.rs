@@ -25,6 +25,124 @@ pub struct Args {
     /// afm-fe: also write the deformed mesh at the end of the run (node, r_m, z_m; elements as comment lines) to this CSV.
     #[arg(long)]
     pub mesh_output: Option<PathBuf>,
+    /// Curve writer: a CSV of parameter sets (header: the model's parameter
+    /// names, SI values; optional `name` column). Writes one synthetic AFM
+    /// curve per row (`time [s]`, `piezo [um]`, `deflection [nm]`) on the
+    /// model's output grid into --out-dir; the study needs no [parameters].
+    #[arg(long, requires = "out_dir")]
+    pub parameters: Option<PathBuf>,
+    /// Curve writer: the output folder (`<name>.csv` per set).
+    #[arg(long, requires = "parameters")]
+    pub out_dir: Option<PathBuf>,
+    /// Curve writer: Gaussian force noise, sd as a fraction of each curve's
+    /// peak force, written on the deflection.
+    #[arg(long, default_value_t = 0.0, requires = "parameters")]
+    pub noise: f64,
+    /// Curve writer: seed of the noise (one stream per row).
+    #[arg(long, default_value_t = 1, requires = "parameters")]
+    pub seed: u64,
+    /// Curve writer, hertz-prony only: the cantilever's spring constant
+    /// [N/m] for the deflection column (afm-fe uses its own).
+    #[arg(long, requires = "parameters")]
+    pub spring_constant: Option<f64>,
+}
+
+/// The curve writer's job (`--parameters`).
+#[derive(Debug)]
+pub struct Curves {
+    forward: nlvid_forward::ForwardSettings,
+    sets: Vec<(String, Vec<f64>)>,
+    out_dir: PathBuf,
+    noise: nlvid_forward::Noise,
+    spring_constant: f64,
+}
+
+impl Curves {
+    fn validate(a: &Args) -> anyhow::Result<Option<Curves>> {
+        let (Some(table), Some(out_dir)) = (&a.parameters, &a.out_dir) else {
+            return Ok(None);
+        };
+        let mut study = Study::load(&a.study)?;
+        let forward = nlvid_forward::ForwardSettings::from_study(&mut study)?;
+        for other in [
+            "parameters",
+            "design",
+            "build",
+            "fit",
+            "probe",
+            "material",
+            "loading",
+        ] {
+            study.root().skip(other);
+        }
+        let _ = study.root().opt_str("title")?;
+        study.finish()?;
+        let spring_constant = match (&forward.spec, a.spring_constant) {
+            (nlvid_forward::ForwardSpec::AfmFe(s), None) => s.spring_constant.ok_or_else(|| {
+                anyhow::anyhow!(
+                    "{}: the curve writer needs a spring cantilever ([forward] spring_constant)",
+                    a.study.display()
+                )
+            })?,
+            (nlvid_forward::ForwardSpec::AfmFe(_), Some(_)) => anyhow::bail!(
+                "--spring-constant: afm-fe deflects its own [forward] spring_constant"
+            ),
+            (_, Some(k)) => k,
+            (_, None) => anyhow::bail!(
+                "--spring-constant (N/m) is needed for the deflection column of a rigid-indenter model"
+            ),
+        };
+        let names = forward.build()?.parameter_names();
+        let text = std::fs::read_to_string(table)
+            .with_context(|| format!("cannot read {}", table.display()))?;
+        let sets = nlvid_forward::curves::read_parameter_sets(
+            &text,
+            &table.display().to_string(),
+            &names,
+        )?;
+        Ok(Some(Curves {
+            forward,
+            sets,
+            out_dir: out_dir.clone(),
+            noise: nlvid_forward::Noise {
+                relative: a.noise,
+                seed: a.seed,
+            },
+            spring_constant,
+        }))
+    }
+
+    fn execute(self, ctx: &Context) -> anyhow::Result<ExitCode> {
+        let model = self.forward.build()?;
+        let times = model.time_grid().to_vec();
+        let xs: Vec<Vec<f64>> = self.sets.iter().map(|s| s.1.clone()).collect();
+        let curves = nlvid_forward::afm_curves(
+            &self.forward,
+            &xs,
+            &times,
+            self.spring_constant,
+            self.noise,
+        )?;
+        let mut files = Vec::new();
+        for ((name, _), c) in self.sets.iter().zip(&curves) {
+            let path = self.out_dir.join(format!("{name}.csv"));
+            write_atomic(&path, c.to_csv().as_bytes())?;
+            files.push(path);
+        }
+        if ctx.json {
+            print_json(&json!({ "curves": files }))?;
+            return Ok(ExitCode::SUCCESS);
+        }
+        say!(
+            "wrote {} curves ({} samples each, noise {} of the peak force, seed {}) into {}",
+            files.len(),
+            times.len(),
+            self.noise.relative,
+            self.noise.seed,
+            self.out_dir.display()
+        )?;
+        Ok(ExitCode::SUCCESS)
+    }
 }
 
 /// A validated simulation.
@@ -35,12 +153,30 @@ pub struct Config {
     sim: SimulateStudy,
     output: PathBuf,
     mesh_output: Option<PathBuf>,
+    curves: Option<Curves>,
 }
 
 impl Run for Args {
     type Config = Config;
 
     fn validate(self, _ctx: &Context) -> anyhow::Result<Config> {
+        if let Some(curves) = Curves::validate(&self)? {
+            let study = Study::load(&self.study)?;
+            let sim = SimulateStudy {
+                forward: curves.forward.clone(),
+                names: Vec::new(),
+                units: Vec::new(),
+                values: Vec::new(),
+            };
+            return Ok(Config {
+                name: study.name().to_string(),
+                provenance: provenance(&study),
+                sim,
+                output: PathBuf::new(),
+                mesh_output: None,
+                curves: Some(curves),
+            });
+        }
         let study = Study::load(&self.study)?;
         let (name, provenance) = (study.name().to_string(), provenance(&study));
         let sim = SimulateStudy::from_study(study)?;
@@ -55,10 +191,14 @@ impl Run for Args {
             provenance,
             sim,
             mesh_output: self.mesh_output,
+            curves: None,
         })
     }
 
     fn execute(c: Config, ctx: &Context) -> anyhow::Result<ExitCode> {
+        if let Some(curves) = c.curves {
+            return curves.execute(ctx);
+        }
         let run = c
             .sim
             .run(&[])
