@@ -27,6 +27,9 @@ use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 mod reduced;
+mod variance;
+
+pub use variance::OutputCovariance;
 
 /// How θ is chosen.
 #[derive(Debug, Clone)]

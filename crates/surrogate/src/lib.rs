@@ -65,7 +65,7 @@ pub use correlation::Correlation;
 pub use error::{Result, SurrogateError};
 pub use faer;
 pub use kriging::{
-    FitReport, KrigingModel, KrigingSettings, OutputScale, Pca, PointPrediction, ThetaSearch,
+    FitReport, KrigingModel, KrigingSettings, OutputCovariance, OutputScale, Pca, PointPrediction, ThetaSearch,
     likelihood_psi,
 };
 pub use optimise::OptimiserSettings;
