@@ -18,8 +18,17 @@
 //!   γ = 2.38/√(2d) (1 every 10th step: mode hopping), ε ~ N(0, 1e-10²),
 //!   accepted with min(1, p(y)/p(x_k)).
 //!
-//! Each step picks the move for the whole ensemble: DE with probability
-//! `de_fraction`, else stretch.
+//! - independence (after burn-in only): y ~ t₅(μ̂, 1.2²·Σ̂) with μ̂, Σ̂ the
+//!   mean and covariance of the ensemble over the second half of burn-in
+//!   (then frozen, so the kept chain is a fixed mixture of valid kernels),
+//!   accepted with min(1, p(y) q(x_k) / (p(x_k) q(y))). Where the
+//!   posterior is close to Gaussian this cuts the autocorrelation time
+//!   from ≈ 25 steps (DE/stretch in 5-D) to a few; where it is not, the
+//!   proposal is mostly rejected and the DE/stretch steps carry the chain.
+//!
+//! Each step picks the move for the whole ensemble: after burn-in the
+//! independence move with probability `independence_fraction`; otherwise
+//! DE with probability `de_fraction`, else stretch.
 
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -39,6 +48,8 @@ pub struct EnsembleSettings {
     pub stretch: f64,
     /// Probability that a step uses the DE move (0: stretch only).
     pub de_fraction: f64,
+    /// Probability that a kept step uses the independence move (0: none).
+    pub independence_fraction: f64,
     /// Seed.
     pub seed: u64,
 }
@@ -51,6 +62,7 @@ impl Default for EnsembleSettings {
             steps: 1200,
             stretch: 2.0,
             de_fraction: 0.8,
+            independence_fraction: 0.5,
             seed: 1,
         }
     }
@@ -135,10 +147,16 @@ pub fn sample_ensemble(
             settings.walkers
         ));
     }
-    if !(settings.stretch > 1.0) || settings.steps == 0 || !(0.0..=1.0).contains(&settings.de_fraction) {
+    let fraction = 0.0..=1.0;
+    if !(settings.stretch > 1.0)
+        || settings.steps == 0
+        || !fraction.contains(&settings.de_fraction)
+        || !fraction.contains(&settings.independence_fraction)
+    {
         return bad(format!(
-            "ensemble: stretch scale {} (must be > 1), {} kept steps (must be > 0), DE fraction {}",
-            settings.stretch, settings.steps, settings.de_fraction
+            "ensemble: stretch scale {} (must be > 1), {} kept steps (must be > 0), DE fraction \
+             {}, independence fraction {} (both in [0, 1])",
+            settings.stretch, settings.steps, settings.de_fraction, settings.independence_fraction
         ));
     }
     let mut pos: Vec<Vec<f64>> = init.to_vec();
@@ -154,7 +172,40 @@ pub fn sample_ensemble(
     let mut log_density_kept = Vec::with_capacity(settings.steps * w);
     let (mut accepted, mut proposed) = (0usize, 0usize);
     let mut y = vec![0.0; d];
+    let mut proposal: Option<TProposal> = None;
+    let mut burn_points: Vec<Vec<f64>> = Vec::new();
     for step in 0..total {
+        if step == settings.burn && settings.independence_fraction > 0.0 {
+            burn_points.extend(pos.iter().cloned());
+            proposal = TProposal::fit(&burn_points, 1.2);
+            burn_points = Vec::new();
+        }
+        if step >= settings.burn / 2 && step < settings.burn && settings.independence_fraction > 0.0
+        {
+            burn_points.extend(pos.iter().cloned());
+        }
+        if let Some(q) = proposal
+            .as_ref()
+            .filter(|_| rng.random::<f64>() < settings.independence_fraction)
+        {
+            for k in 0..w {
+                let (yv, lqy) = q.draw(&mut rng);
+                let lqx = q.log_density(&pos[k]);
+                let lpy = log_density(&yv);
+                proposed += 1;
+                let u: f64 = rng.random();
+                if lpy.is_finite() && u.ln() < lpy - lp[k] + lqx - lqy {
+                    pos[k] = yv;
+                    lp[k] = lpy;
+                    accepted += 1;
+                }
+            }
+            for k in 0..w {
+                samples.extend_from_slice(&pos[k]);
+                log_density_kept.push(lp[k]);
+            }
+            continue;
+        }
         let de = rng.random::<f64>() < settings.de_fraction;
         let gamma = if step % 10 == 9 { 1.0 } else { gamma0 };
         for k in 0..w {
@@ -198,6 +249,75 @@ pub fn sample_ensemble(
         log_density: log_density_kept,
         acceptance: accepted as f64 / proposed as f64,
     })
+}
+
+/// Multivariate Student t with ν = 5: mean μ, scale matrix L Lᵀ.
+struct TProposal {
+    mean: Vec<f64>,
+    /// Lower Cholesky factor, row-major d × d.
+    l: Vec<f64>,
+}
+
+impl TProposal {
+    const NU: f64 = 5.0;
+
+    /// Fitted to `points` (mean, covariance × `scale`²); None when the
+    /// covariance is not positive definite (a collapsed ensemble).
+    fn fit(points: &[Vec<f64>], scale: f64) -> Option<Self> {
+        let n = points.len();
+        let d = points.first()?.len();
+        if n <= d + 1 {
+            return None;
+        }
+        let mean: Vec<f64> = (0..d)
+            .map(|i| points.iter().map(|p| p[i]).sum::<f64>() / n as f64)
+            .collect();
+        let mut cov = nalgebra::DMatrix::zeros(d, d);
+        for p in points {
+            for i in 0..d {
+                for j in 0..d {
+                    cov[(i, j)] += (p[i] - mean[i]) * (p[j] - mean[j]);
+                }
+            }
+        }
+        cov *= scale * scale / (n as f64 - 1.0);
+        let chol = cov.cholesky()?;
+        let lm = chol.l();
+        let l = (0..d * d).map(|k| lm[(k / d, k % d)]).collect();
+        Some(Self { mean, l })
+    }
+
+    fn dim(&self) -> usize {
+        self.mean.len()
+    }
+
+    /// ln q(y) up to a constant: −(ν + d)/2 · ln(1 + |L⁻¹(y − μ)|²/ν).
+    fn log_density(&self, y: &[f64]) -> f64 {
+        let d = self.dim();
+        let mut z = vec![0.0; d];
+        for i in 0..d {
+            let mut s = y[i] - self.mean[i];
+            for j in 0..i {
+                s -= self.l[i * d + j] * z[j];
+            }
+            z[i] = s / self.l[i * d + i];
+        }
+        let q: f64 = z.iter().map(|v| v * v).sum();
+        -0.5 * (Self::NU + d as f64) * (1.0 + q / Self::NU).ln()
+    }
+
+    /// A draw and its ln q: μ + L z·√(ν/χ²_ν), z ~ N(0, I).
+    fn draw(&self, rng: &mut ChaCha8Rng) -> (Vec<f64>, f64) {
+        let d = self.dim();
+        let z: Vec<f64> = (0..d).map(|_| normal(rng)).collect();
+        let chi2: f64 = (0..Self::NU as usize).map(|_| normal(rng).powi(2)).sum();
+        let f = (Self::NU / chi2).sqrt();
+        let y: Vec<f64> = (0..d)
+            .map(|i| self.mean[i] + f * (0..=i).map(|j| self.l[i * d + j] * z[j]).sum::<f64>())
+            .collect();
+        let lq = self.log_density(&y);
+        (y, lq)
+    }
 }
 
 #[cfg(test)]
