@@ -250,7 +250,10 @@ fn a_range_band_spans_its_own_lower_and_upper_limits() {
     let line = &polylines(&tags, GREEN)[0];
     let above = line[0].1 - pts[0].1;
     let below = pts[2 * t.len() - 1].1 - line[0].1;
-    assert!(above > 10.0 * below && below > 0.0, "above {above}, below {below}");
+    assert!(
+        above > 10.0 * below && below > 0.0,
+        "above {above}, below {below}"
+    );
     assert!(texts.iter().any(|x| x.trim() == "A (90 % band)"));
 }
 

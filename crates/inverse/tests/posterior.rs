@@ -87,8 +87,14 @@ fn posterior_of_g0_matches_the_laplace_approximation() {
             "{n}: posterior sd {half} vs Laplace {laplace}"
         );
     }
-    println!("G0 sd: Laplace with noise only {sd_noise_only:.2} Pa, with the Kriging variance {sd_g0:.2} Pa");
-    assert!((post.g0.median - x0[0]).abs() < 2.0 * sd_g0, "{:?}", post.g0);
+    println!(
+        "G0 sd: Laplace with noise only {sd_noise_only:.2} Pa, with the Kriging variance {sd_g0:.2} Pa"
+    );
+    assert!(
+        (post.g0.median - x0[0]).abs() < 2.0 * sd_g0,
+        "{:?}",
+        post.g0
+    );
     // 600 kept steps of an ensemble with τ ≈ 25 give R̂ ≈ 1 + τ/600 ≈ 1.04
     // (docs/theory/inverse.md); a sampler that does not mix gives ≫ 1.1.
     assert!(post.rhat_max < 1.1, "R-hat {}", post.rhat_max);

@@ -9,9 +9,11 @@
 //! is outside 85–95 % or any R̂ > 1.01.
 //!
 //! ```text
-//! cargo run --release -p nlvid-report --example posterior_coverage [cells] [noise] [seed]
+//! cargo run --release -p nlvid-report --example posterior_coverage \
+//!     [cells] [noise] [seed] [walkers] [burn] [steps]
 //! ```
-//! (defaults 100, 0.02, 17; see docs/theory/inverse.md, "Posteriors").
+//! (defaults 100, 0.02, 17, 32, 300, 1000; see docs/theory/inverse.md,
+//! "Posteriors on the surrogate").
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -41,7 +43,10 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     let demo = std::fs::canonicalize(&demo)?;
     let dir = std::env::temp_dir().join(format!("nlvid-coverage-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
-    let study = write_study(&dir, &demo)?;
+    let walkers: usize = args.get(4).map_or(Ok(32), |s| s.parse())?;
+    let burn: usize = args.get(5).map_or(Ok(300), |s| s.parse())?;
+    let steps: usize = args.get(6).map_or(Ok(1000), |s| s.parse())?;
+    let study = write_study(&dir, &demo, (walkers, burn, steps))?;
     // Two broad groups spanning much of the Table 5.3 domain.
     let spec = DemoSpec {
         groups: vec![
@@ -87,7 +92,13 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     let mut misses = Vec::new();
     for c in &run.cells {
         let Some(p) = &c.posterior else {
-            println!("{} {}: no posterior ({} {})", c.group, c.cell, c.status.as_str(), c.reason);
+            println!(
+                "{} {}: no posterior ({} {})",
+                c.group,
+                c.cell,
+                c.status.as_str(),
+                c.reason
+            );
             continue;
         };
         let truth = files
@@ -113,6 +124,12 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
                 ));
             }
         }
+        if p.rhat_max > 1.01 {
+            println!(
+                "  {} R-hat {:.3} ESS {:.0} acceptance {:.2}; truth {:?}; G0 {:?}",
+                c.cell, p.rhat_max, p.ess_min, p.acceptance, truth.x, p.g0
+            );
+        }
         rhat_max = rhat_max.max(p.rhat_max);
         ess_min = ess_min.min(p.ess_min);
     }
@@ -125,7 +142,11 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     let mut ok = n > 0;
     for (k, name) in ["G0", "g1 + g2", "G(t_end)"].iter().enumerate() {
         let frac = cover[k] as f64 / n.max(1) as f64;
-        println!("coverage of the 90 % interval of {name}: {} / {n} = {:.1} %", cover[k], 100.0 * frac);
+        println!(
+            "coverage of the 90 % interval of {name}: {} / {n} = {:.1} %",
+            cover[k],
+            100.0 * frac
+        );
         ok &= (0.85..=0.95).contains(&frac);
     }
     println!("largest split R-hat {rhat_max:.4}, smallest ESS {ess_min:.0}");
@@ -144,14 +165,20 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
 }
 
 /// The demo's cohort study with absolute meta-model paths and `[posterior]`.
-fn write_study(dir: &Path, demo: &Path) -> Result<PathBuf, Box<dyn std::error::Error>> {
+fn write_study(
+    dir: &Path,
+    demo: &Path,
+    (walkers, burn, steps): (usize, usize, usize),
+) -> Result<PathBuf, Box<dyn std::error::Error>> {
     let text = std::fs::read_to_string(demo.join("study.toml"))?;
     let mm = demo.join("metamodel");
     let text = text.replace("\"metamodel/", &format!("\"{}/", mm.display()));
     let study = dir.join("study.toml");
     std::fs::write(
         &study,
-        format!("{text}\n[posterior]\nwalkers = 32\nburn = 300\nsteps = 1000\nlevel = 0.9\n"),
+        format!(
+            "{text}\n[posterior]\nwalkers = {walkers}\nburn = {burn}\nsteps = {steps}\nlevel = 0.9\n"
+        ),
     )?;
     Ok(study)
 }

@@ -736,7 +736,13 @@ fn posterior_parts(
                  the meta-model's error (not the spread between cells, which is the ± sd band \
                  of the figure above)."
             ),
-            svg: range_chart("group_posterior.svg", "Group mean G(t)", "t (s)", "G (Pa)", &rb)?,
+            svg: range_chart(
+                "group_posterior.svg",
+                "Group mean G(t)",
+                "t (s)",
+                "G (Pa)",
+                &rb,
+            )?,
         });
     }
     if let Some(pc) = pair

@@ -607,11 +607,19 @@ impl FromSection for PosteriorSection {
     fn from_section(s: &mut Section) -> std::result::Result<Self, StudyError> {
         let enabled = s.opt_bool("enabled")?.unwrap_or(true);
         let p = PosteriorStudy {
-            walkers: s.opt_usize("walkers", Bounds::closed(12.0, 10000.0))?.unwrap_or(32),
-            burn: s.opt_usize("burn", Bounds::closed(0.0, 1e6))?.unwrap_or(300),
-            steps: s.opt_usize("steps", Bounds::closed(20.0, 1e7))?.unwrap_or(1000),
+            walkers: s
+                .opt_usize("walkers", Bounds::closed(12.0, 10000.0))?
+                .unwrap_or(32),
+            burn: s
+                .opt_usize("burn", Bounds::closed(0.0, 1e6))?
+                .unwrap_or(300),
+            steps: s
+                .opt_usize("steps", Bounds::closed(20.0, 1e7))?
+                .unwrap_or(1000),
             level: s.f64_or("level", Bounds::closed(0.5, 0.999), 0.9)?,
-            keep: s.opt_usize("keep", Bounds::closed(10.0, 1e5))?.unwrap_or(200),
+            keep: s
+                .opt_usize("keep", Bounds::closed(10.0, 1e5))?
+                .unwrap_or(200),
             seed: s.opt_u64("seed")?,
         };
         Ok(Self(enabled.then_some(p)))

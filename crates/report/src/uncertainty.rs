@@ -249,7 +249,11 @@ mod tests {
         // Two cells, 5 draws each: means (100+300)/2 + s·(1+3)/2 = 200 + 2s.
         let cells = vec![
             cell("A", "a1", (0..5).map(|s| el(100.0 + s as f64)).collect()),
-            cell("A", "a2", (0..5).map(|s| el(300.0 + 3.0 * s as f64)).collect()),
+            cell(
+                "A",
+                "a2",
+                (0..5).map(|s| el(300.0 + 3.0 * s as f64)).collect(),
+            ),
         ];
         let b = group_bands(&cells, &d, &[0.0], 0.5).unwrap();
         assert_eq!(b.len(), 1);
@@ -276,7 +280,9 @@ mod tests {
             mk("B", "b2", 210.0),
             mk("B", "b3", 220.0),
         ];
-        let p = p_over_draws(&sep, &d, &[0.0, 10.0], "A", "B").unwrap().unwrap();
+        let p = p_over_draws(&sep, &d, &[0.0, 10.0], "A", "B")
+            .unwrap()
+            .unwrap();
         assert_eq!(p.draws, 4);
         for v in p.p50.iter().chain(&p.p05).chain(&p.p95) {
             assert!((v - 0.1).abs() < 1e-12, "{v}");
@@ -292,6 +298,10 @@ mod tests {
         ];
         let p = p_over_draws(&mixed, &d, &[0.0], "A", "B").unwrap().unwrap();
         assert!((p.p50[0] - 1.0).abs() < 1e-12, "{}", p.p50[0]);
-        assert!(p_over_draws(&mixed, &d, &[0.0], "A", "C").unwrap().is_none());
+        assert!(
+            p_over_draws(&mixed, &d, &[0.0], "A", "C")
+                .unwrap()
+                .is_none()
+        );
     }
 }

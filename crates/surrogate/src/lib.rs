@@ -65,8 +65,8 @@ pub use correlation::Correlation;
 pub use error::{Result, SurrogateError};
 pub use faer;
 pub use kriging::{
-    FitReport, KrigingModel, KrigingSettings, OutputCovariance, OutputScale, Pca, PointPrediction, ThetaSearch,
-    likelihood_psi,
+    FitReport, KrigingModel, KrigingSettings, OutputCovariance, OutputScale, Pca, PointPrediction,
+    ThetaSearch, likelihood_psi,
 };
 pub use optimise::OptimiserSettings;
 pub use options::FitOptions;

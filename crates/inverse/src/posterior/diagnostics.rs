@@ -116,7 +116,10 @@ mod tests {
             let tau = (1.0 + phi) / (1.0 - phi);
             let expected = (m * n) as f64 / tau;
             let ess = effective_sample_size(&chains);
-            assert!((ess / expected - 1.0).abs() < 0.12, "phi {phi}: ESS {ess} vs {expected}");
+            assert!(
+                (ess / expected - 1.0).abs() < 0.12,
+                "phi {phi}: ESS {ess} vs {expected}"
+            );
             let r = split_rhat(&chains);
             assert!(r < 1.01, "phi {phi}: R-hat {r}");
         }
@@ -129,11 +132,19 @@ mod tests {
     fn rhat_flags_separated_and_drifting_chains() {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         let apart: Vec<Vec<f64>> = (0..8)
-            .map(|k| (0..500).map(|_| normal(&mut rng) + if k < 4 { 0.0 } else { 3.0 }).collect())
+            .map(|k| {
+                (0..500)
+                    .map(|_| normal(&mut rng) + if k < 4 { 0.0 } else { 3.0 })
+                    .collect()
+            })
             .collect();
         assert!(split_rhat(&apart) > 1.5);
         let drift: Vec<Vec<f64>> = (0..8)
-            .map(|_| (0..500).map(|i| normal(&mut rng) + 4.0 * i as f64 / 500.0).collect())
+            .map(|_| {
+                (0..500)
+                    .map(|i| normal(&mut rng) + 4.0 * i as f64 / 500.0)
+                    .collect()
+            })
             .collect();
         assert!(split_rhat(&drift) > 1.2, "{}", split_rhat(&drift));
     }

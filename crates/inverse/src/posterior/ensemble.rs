@@ -364,7 +364,11 @@ mod tests {
         }
         let r = cov(0, 1) / (cov(0, 0) * cov(1, 1)).sqrt();
         assert!((r - rho).abs() < 0.03, "correlation {r}");
-        assert!(ch.acceptance > 0.2 && ch.acceptance < 0.9, "acceptance {}", ch.acceptance);
+        assert!(
+            ch.acceptance > 0.2 && ch.acceptance < 0.9,
+            "acceptance {}",
+            ch.acceptance
+        );
     }
 
     /// A uniform density on the triangle x, y ≥ 0, x + y ≤ 1 (the shape of
@@ -391,7 +395,13 @@ mod tests {
         let ch = sample_ensemble(logp, &init, &s).expect("run");
         let n = (ch.steps * ch.walkers) as f64;
         let m = ch.samples.iter().step_by(2).sum::<f64>() / n;
-        let v = ch.samples.iter().step_by(2).map(|x| (x - m).powi(2)).sum::<f64>() / n;
+        let v = ch
+            .samples
+            .iter()
+            .step_by(2)
+            .map(|x| (x - m).powi(2))
+            .sum::<f64>()
+            / n;
         assert!((m - 1.0 / 3.0).abs() < 0.01, "mean {m}");
         assert!((v - 1.0 / 18.0).abs() < 0.004, "var {v}");
     }

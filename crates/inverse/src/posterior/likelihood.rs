@@ -229,7 +229,11 @@ mod tests {
             panic!("PCA model");
         };
         let u = DMatrix::from_column_slice(m, k, &factor);
-        for x in [x0, [1400.0, 0.35, 0.2, 0.3, 14.0], [3000.0, 0.1, 0.6, 1.5, 5.0]] {
+        for x in [
+            x0,
+            [1400.0, 0.35, 0.2, 0.3, 14.0],
+            [3000.0, 0.1, 0.6, 1.5, 5.0],
+        ] {
             let v = s.mse_scale(&x).unwrap();
             let mut sigma = &u * u.transpose() * v;
             for j in 0..m {

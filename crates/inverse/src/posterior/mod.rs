@@ -303,7 +303,10 @@ fn summarise(
     g(&first)?;
     let rel = |u: &[f64]| g(u).ok();
     let t_end = settings.t_end;
-    let g0 = interval(&chains.traces(|u| rel(u).map_or(f64::NAN, |r| r.g0())), settings.level);
+    let g0 = interval(
+        &chains.traces(|u| rel(u).map_or(f64::NAN, |r| r.g0())),
+        settings.level,
+    );
     let g_sum = interval(
         &chains.traces(|u| rel(u).map_or(f64::NAN, |r| 1.0 - r.g_inf())),
         settings.level,

@@ -257,15 +257,21 @@ mod tests {
             panic!("a PCA model has a low-rank covariance");
         };
         for (i, j) in [(0, 0), (3, 17), (39, 2), (20, 21)] {
-            let uu: f64 = (0..k).map(|a| factor[a * mo + i] * factor[a * mo + j]).sum();
+            let uu: f64 = (0..k)
+                .map(|a| factor[a * mo + i] * factor[a * mo + j])
+                .sum();
             let mut dvsvd = 0.0;
             for a in 0..k {
                 for b in 0..k {
-                    dvsvd += pca.basis[a * mo + i] * pca.residual_cov[b * k + a] * pca.basis[b * mo + j];
+                    dvsvd +=
+                        pca.basis[a * mo + i] * pca.residual_cov[b * k + a] * pca.basis[b * mo + j];
                 }
             }
             dvsvd *= m.y_std[i] * m.y_std[j];
-            assert!((uu - dvsvd).abs() <= 1e-10 * dvsvd.abs().max(1e-12), "{i},{j}: {uu} vs {dvsvd}");
+            assert!(
+                (uu - dvsvd).abs() <= 1e-10 * dvsvd.abs().max(1e-12),
+                "{i},{j}: {uu} vs {dvsvd}"
+            );
         }
     }
 
