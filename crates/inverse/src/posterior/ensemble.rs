@@ -175,6 +175,9 @@ pub fn sample_ensemble(
     let mut proposal: Option<TProposal> = None;
     let mut burn_points: Vec<Vec<f64>> = Vec::new();
     for step in 0..total {
+        if step == settings.burn && settings.burn > 0 {
+            prune_strays(&mut pos, &mut lp, d, &mut rng);
+        }
         if step == settings.burn && settings.independence_fraction > 0.0 {
             burn_points.extend(pos.iter().cloned());
             proposal = TProposal::fit(&burn_points, 1.2);
@@ -249,6 +252,31 @@ pub fn sample_ensemble(
         log_density: log_density_kept,
         acceptance: accepted as f64 / proposed as f64,
     })
+}
+
+/// At the end of burn-in, walkers stranded far below the bulk (ln p more
+/// than d/2 + 6√(d/2) + 10 below the ensemble's median, far beyond the
+/// spread of ln p of a d-dimensional Gaussian, ½χ²_d) are moved onto
+/// randomly chosen walkers of the bulk: a stray walker would otherwise
+/// take thousands of steps to return and dominate R̂ (emcee FAQ, "walkers
+/// stuck"). Burn-in only, so the kept chain is unaffected in law.
+fn prune_strays(pos: &mut [Vec<f64>], lp: &mut [f64], d: usize, rng: &mut ChaCha8Rng) {
+    let mut sorted: Vec<f64> = lp.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    let half = d as f64 / 2.0;
+    let cut = median - (half + 6.0 * half.sqrt() + 10.0);
+    let good: Vec<usize> = (0..lp.len()).filter(|&k| lp[k] >= cut).collect();
+    if good.is_empty() {
+        return;
+    }
+    for k in 0..lp.len() {
+        if lp[k] < cut {
+            let j = good[rng.random_range(0..good.len())];
+            pos[k] = pos[j].clone();
+            lp[k] = lp[j];
+        }
+    }
 }
 
 /// Multivariate Student t with ν = 5: mean μ, scale matrix L Lᵀ.

@@ -167,7 +167,7 @@ fn normal(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
     (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
 }
 
-/// Start positions in u: û + ½·L ε with L Lᵀ the Gauss–Newton covariance
+/// Start positions in u: û + L ε with L Lᵀ the Gauss–Newton covariance
 /// (JᵤᵀJᵤ/σ²)⁻¹ at the optimum (eigenvalues floored so that no direction is
 /// wider than the domain), redrawn until inside the prior's support.
 fn starts(
@@ -204,7 +204,7 @@ fn starts(
     let mut out = Vec::with_capacity(walkers);
     let center_ok = inside(&u_hat);
     for _ in 0..walkers {
-        let mut shrink = 0.5;
+        let mut shrink = 1.0;
         let mut placed = None;
         for attempt in 0..200 {
             if attempt % 40 == 39 {
