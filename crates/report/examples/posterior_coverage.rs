@@ -107,7 +107,7 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
             .find(|t| t.cell == c.cell && t.group == c.group)
             .ok_or("cell without truth")?;
         let g = nlvid_inverse::relaxation(&domain, &truth.x)?;
-        let want = [g.g0(), 1.0 - g.g_inf(), g.value(p.t_end)];
+        let want = [g.g0(), 1.0 - g.prony().long_term_weight(), g.value(p.t_end)];
         let got = [p.g0, p.g_sum, p.g_end];
         n += 1;
         for k in 0..3 {

@@ -70,7 +70,7 @@ fn cohort_posteriors_cover_the_truth_and_reach_the_report() {
         let g = nlvid_inverse::relaxation(&domain, &t.x).expect("G(t)");
         for (name, iv, truth) in [
             ("G0", p.g0, g.g0()),
-            ("g1 + g2", p.g_sum, 1.0 - g.g_inf()),
+            ("g1 + g2", p.g_sum, 1.0 - g.prony().long_term_weight()),
             ("G(52 s)", p.g_end, g.value(52.0)),
         ] {
             assert!(iv.covers(truth), "{} {name}: {iv:?} vs {truth}", c.cell);

@@ -308,7 +308,7 @@ fn summarise(
         settings.level,
     );
     let g_sum = interval(
-        &chains.traces(|u| rel(u).map_or(f64::NAN, |r| 1.0 - r.g_inf())),
+        &chains.traces(|u| rel(u).map_or(f64::NAN, |r| 1.0 - r.prony().long_term_weight())),
         settings.level,
     );
     let g_end = interval(
