@@ -28,6 +28,9 @@ pub enum Mark {
     /// A mean line (2 px) over a translucent band mean ± `sd`; `sd[i]`
     /// belongs to point `i`.
     Band(Vec<f64>),
+    /// A line (2 px) over a translucent band between `(lower, upper)[i]`
+    /// at point `i` (an asymmetric band: credible or confidence limits).
+    Range(Vec<(f64, f64)>),
 }
 
 /// Where the legend box sits (or none).
@@ -86,6 +89,12 @@ impl Series {
         Self::from_xy(Mark::Band(sd.to_vec()), colour, x, mean)
     }
 
+    /// A line `mid` over the band `lower`…`upper` ([`Mark::Range`]).
+    pub fn range(colour: Colour, x: &[f64], mid: &[f64], lower: &[f64], upper: &[f64]) -> Self {
+        let limits = lower.iter().copied().zip(upper.iter().copied()).collect();
+        Self::from_xy(Mark::Range(limits), colour, x, mid)
+    }
+
     /// The same series with a legend entry.
     #[must_use]
     pub fn labelled(mut self, label: impl Into<String>) -> Self {
@@ -93,18 +102,25 @@ impl Series {
         self
     }
 
-    /// Drawable points `(x, y, sd)`: finite, and y > 0 on a log axis.
-    fn drawable(&self, scale: Scale) -> Vec<(f64, f64, f64)> {
-        let sd = |i: usize| match &self.mark {
-            Mark::Band(sd) => sd.get(i).copied().unwrap_or(f64::NAN),
-            _ => 0.0,
+    /// Drawable points `(x, y, low, high)` (the band's limits; y itself
+    /// for marks without a band): finite, and y > 0 on a log axis.
+    fn drawable(&self, scale: Scale) -> Vec<(f64, f64, f64, f64)> {
+        let limits = |i: usize, y: f64| match &self.mark {
+            Mark::Band(sd) => sd.get(i).map_or((f64::NAN, f64::NAN), |s| (y - s, y + s)),
+            Mark::Range(r) => r.get(i).copied().unwrap_or((f64::NAN, f64::NAN)),
+            _ => (y, y),
         };
         self.points
             .iter()
             .enumerate()
-            .map(|(i, &(x, y))| (x, y, sd(i)))
-            .filter(|(x, y, s)| x.is_finite() && y.is_finite() && s.is_finite())
-            .filter(|(_, y, _)| scale == Scale::Linear || *y > 0.0)
+            .map(|(i, &(x, y))| {
+                let (lo, hi) = limits(i, y);
+                (x, y, lo, hi)
+            })
+            .filter(|(x, y, lo, hi)| {
+                x.is_finite() && y.is_finite() && lo.is_finite() && hi.is_finite()
+            })
+            .filter(|(_, y, _, _)| scale == Scale::Linear || *y > 0.0)
             .collect()
     }
 
@@ -252,7 +268,7 @@ impl Chart {
     /// extent (padded when there are markers), y their extent (± sd for
     /// bands, with 0 if asked) padded by 4 % (linear) or a factor 1.5 (log).
     fn ranges(&self) -> ((f64, f64), (f64, f64)) {
-        let pts: Vec<(f64, f64, f64)> = self
+        let pts: Vec<(f64, f64, f64, f64)> = self
             .series
             .iter()
             .flat_map(|s| s.drawable(self.y_scale))
@@ -268,7 +284,7 @@ impl Chart {
         let y = self.y_range.unwrap_or_else(|| match self.y_scale {
             Scale::Linear => {
                 let zero = self.y_from_zero.then_some(0.0);
-                let ys = pts.iter().flat_map(|p| [p.1 - p.2, p.1 + p.2]).chain(zero);
+                let ys = pts.iter().flat_map(|p| [p.2, p.3]).chain(zero);
                 padded(extent(ys), PAD)
             }
             Scale::Log => log_padded(extent(pts.iter().map(|p| p.1))),
@@ -354,7 +370,7 @@ impl Chart {
         for s in &self.series {
             let c = RGBColor(s.colour.0, s.colour.1, s.colour.2);
             let pts = s.drawable(self.y_scale);
-            let xy = || pts.iter().map(|&(x, y, _)| (x, y));
+            let xy = || pts.iter().map(|&(x, y, _, _)| (x, y));
             let anno = match &s.mark {
                 Mark::Line | Mark::Thin => {
                     let w = if s.mark == Mark::Line { 2 } else { 1 };
@@ -397,10 +413,10 @@ impl Chart {
                             + Polygon::new(vec![(0, -5), (5, 0), (0, 5), (-5, 0)], st)
                     })
                 }
-                Mark::Band(_) => {
+                Mark::Band(_) | Mark::Range(_) => {
                     let mut poly: Vec<(f64, f64)> =
-                        pts.iter().map(|&(x, m, s)| (x, m + s)).collect();
-                    poly.extend(pts.iter().rev().map(|&(x, m, s)| (x, m - s)));
+                        pts.iter().map(|&(x, _, _, hi)| (x, hi)).collect();
+                    poly.extend(pts.iter().rev().map(|&(x, _, lo, _)| (x, lo)));
                     chart
                         .draw_series(std::iter::once(Polygon::new(poly, c.mix(0.18).filled())))
                         .map_err(draw_err)?;

@@ -219,6 +219,44 @@ fn a_band_is_a_translucent_polygon_under_its_mean_line() {
     assert!(texts.iter().any(|x| x.trim() == "A (mean ± sd)"));
 }
 
+/// An asymmetric (credible) band: its polygon follows the given lower and
+/// upper limits, and the y axis reaches the upper limit (not mid ± anything).
+#[test]
+fn a_range_band_spans_its_own_lower_and_upper_limits() {
+    let (t, m) = t_and_f();
+    let lower: Vec<f64> = m.iter().map(|v| v - 0.5).collect();
+    let upper: Vec<f64> = m.iter().map(|v| v + 30.0).collect();
+    let svg = Chart::new("range", "t (s)", "G (Pa)")
+        .with(Series::range(palette(2), &t, &m, &lower, &upper).labelled("A (90 % band)"))
+        .svg()
+        .unwrap();
+    let (tags, texts) = parse_xml(&svg);
+    let band = tags
+        .iter()
+        .filter(|t| t.name == "polygon")
+        .find(|t| attr(t, "opacity").is_some() || attr(t, "fill-opacity").is_some())
+        .expect("a translucent polygon");
+    let pts: Vec<(f64, f64)> = attr(band, "points")
+        .unwrap()
+        .split_whitespace()
+        .map(|p| {
+            let (x, y) = p.split_once(',').unwrap();
+            (x.parse().unwrap(), y.parse().unwrap())
+        })
+        .collect();
+    assert_eq!(pts.len(), 2 * t.len());
+    // SVG y grows downwards: the upper edge is far above the median line
+    // (30 units) and the lower edge just below it (0.5 units).
+    let line = &polylines(&tags, GREEN)[0];
+    let above = line[0].1 - pts[0].1;
+    let below = pts[2 * t.len() - 1].1 - line[0].1;
+    assert!(
+        above > 10.0 * below && below > 0.0,
+        "above {above}, below {below}"
+    );
+    assert!(texts.iter().any(|x| x.trim() == "A (90 % band)"));
+}
+
 #[test]
 fn markers_are_drawn_as_circles_and_diamonds_with_legend_entries() {
     let svg = Chart::new("m", "D/r0", "F/(C1 h0 r0)")

@@ -29,6 +29,10 @@
 //!   and [`BasisModel`], on the domain its `meta.json` stores
 //!   ([`load_kriging_surrogate`]); [`ForwardFromModel`] runs any [`Model`]
 //!   through `nlvid_surrogate::build`;
+//! - [`posterior`]: per-curve posteriors on a Kriging surrogate (noise
+//!   estimated from the curve, Kriging MSE in the variance, uniform prior
+//!   on the domain), an affine-invariant ensemble sampler, split R̂ and
+//!   effective sample size, credible intervals and G(t) bands;
 //! - [`relaxation`], [`FitResult::relaxation`]: G(t) of eq. 5.1 as the
 //!   shared `nlvid_model::Relaxation` (E(t) = 3G(t));
 //! - [`read_afm_csv`] / [`read_compression_csv`]: measured curves in, with
@@ -69,6 +73,7 @@ mod misfit;
 mod model;
 mod optimise;
 mod plot;
+pub mod posterior;
 mod prony;
 mod reduced;
 mod rerun;
@@ -88,6 +93,7 @@ pub use misfit::{Experiment, Misfit, Objective, Segment, range_normalised_rmse, 
 pub use model::{FD_STEP_UNIT, Model, check_finite, check_jacobian, check_len, fd_jacobian};
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
 pub use plot::{FigureCurve, FitFigure};
+pub use posterior::{Posterior, PosteriorSettings, sample_posterior};
 pub use prony::{ParameterTable, relaxation};
 pub use reduced::{Projection, ReducedExperiment, ReducedMisfit, ReducedModel, projection};
 pub use rerun::{Rerun, rerun};

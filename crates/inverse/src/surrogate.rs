@@ -144,6 +144,17 @@ impl KrigingSurrogate {
         self.kriging.pca.is_some() && self.kriging.n_output_coordinates() < self.kriging.n_outputs
     }
 
+    /// v(x) of the Kriging MSE at physical x: the predictive covariance of
+    /// the curve is v(x)·K with K of [`KrigingModel::output_covariance`]
+    /// (DACE report eq. 2.20; see `nlvid_surrogate::OutputCovariance`).
+    ///
+    /// # Errors
+    /// As [`KrigingModel::mse_scale`], naming x.
+    pub fn mse_scale(&self, x: &[f64]) -> Result<f64> {
+        let (xs, _) = self.inputs(x)?;
+        self.kriging.mse_scale(&xs).map_err(|e| model_err(x, &e))
+    }
+
     /// Surrogate inputs at physical x and d(input_i)/d(x_i).
     fn inputs(&self, x: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
         self.domain.check_len(x)?;

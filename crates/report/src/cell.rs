@@ -14,14 +14,15 @@ use std::path::Path;
 
 use nlvid_inverse::{
     AfmColumns, Calibration, Coordinates, Experiment, FitResult, LeeRadokHertz, MeasuredCurve,
-    Misfit, Model, MultiStart, SurrogateFitter, load_kriging_surrogate, ramp_hold_grid,
+    Misfit, Model, MultiStart, Posterior, PosteriorSettings, SurrogateFitter,
+    load_kriging_surrogate, ramp_hold_grid, sample_posterior,
 };
 use nlvid_model::{BoundSide, Domain};
 use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
 use crate::input::{CellInput, Geometry};
-use crate::settings::{CohortSettings, FitModel};
+use crate::settings::{CohortSettings, FitModel, PosteriorStudy};
 
 /// Outcome class of a cell.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -103,6 +104,9 @@ pub struct CellResult {
     /// Base diameter √(d1·d2) from two image distances (App. B.2), m.
     #[serde(default)]
     pub base_diameter: Option<f64>,
+    /// Posterior on the meta-model (study `[posterior]`), when sampled.
+    #[serde(default)]
+    pub posterior: Option<Posterior>,
 }
 
 /// The familiar Hertz fit (eq. 1.1, rigid sphere on an elastic half-space,
@@ -140,6 +144,7 @@ impl CellResult {
             hertz: None,
             cell_height: None,
             base_diameter: None,
+            posterior: None,
         }
     }
 
@@ -339,10 +344,48 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
             .map(|r| (r.fit, r.response)),
     };
     match fitted {
-        Ok((fit, y)) => record_fit(settings, &mut base, &fit, y),
+        Ok((fit, y)) => {
+            record_fit(settings, &mut base, &fit, y);
+            if let (CellModel::Surrogate(f), Some(p)) = (model, &settings.posterior) {
+                posterior(settings, p, f, &fit.best.x, &mut base);
+            }
+        }
         Err(e) => base.reason = format!("fit: {e}"),
     }
     base
+}
+
+/// The posterior of a fitted cell on the meta-model (study `[posterior]`),
+/// seeded per study (not per cell order). A sampler problem is a flag; R̂
+/// above 1.01 is flagged too.
+fn posterior(
+    settings: &CohortSettings,
+    p: &PosteriorStudy,
+    fitter: &SurrogateFitter,
+    x_hat: &[f64],
+    base: &mut CellResult,
+) {
+    let ps = PosteriorSettings {
+        walkers: p.walkers,
+        burn: p.burn,
+        steps: p.steps,
+        seed: p.seed.unwrap_or(settings.seed),
+        level: p.level,
+        keep: p.keep,
+        ..PosteriorSettings::new(settings.hold_end)
+    };
+    match sample_posterior(fitter.surrogate(), &base.data, x_hat, &ps) {
+        Ok(post) => {
+            if !(post.rhat_max <= 1.01) {
+                base.flags.push(format!(
+                    "posterior not converged: R-hat {:.3} > 1.01 (raise posterior.steps)",
+                    post.rhat_max
+                ));
+            }
+            base.posterior = Some(post);
+        }
+        Err(e) => base.flags.push(format!("posterior not sampled: {e}")),
+    }
 }
 
 /// Parameters, misfit, flags and status of a finished fit.

@@ -264,7 +264,10 @@ pub(crate) fn parameter_names(cells: &[CellResult]) -> Option<Vec<(String, Strin
 /// the parameters with unit-suffixed names, `misfit`, `alternatives`,
 /// `peak_force_N`, `relaxation_pct`, the Hertz baseline (`hertz_E_Pa`,
 /// `hertz_misfit`, `hertz_window`), the geometry (`cell_height_m`,
-/// `base_diameter_m`), `status`, `reason`, `flags`. Numbers
+/// `base_diameter_m`), the posterior when sampled (`post_*`: lower,
+/// median and upper of the credible intervals of G0, g1 + g2 and G(t_end),
+/// the noise sd estimated from the curve, the largest split R̂ and the
+/// smallest effective sample size), `status`, `reason`, `flags`. Numbers
 /// in shortest round-trip form; empty cells where a value is missing.
 ///
 /// # Errors
@@ -296,6 +299,18 @@ pub fn results_csv(cells: &[CellResult]) -> Result<String> {
             "hertz_window",
             "cell_height_m",
             "base_diameter_m",
+            "post_G0_lo_Pa",
+            "post_G0_median_Pa",
+            "post_G0_hi_Pa",
+            "post_g_sum_lo",
+            "post_g_sum_median",
+            "post_g_sum_hi",
+            "post_G_end_lo_Pa",
+            "post_G_end_median_Pa",
+            "post_G_end_hi_Pa",
+            "post_noise_N",
+            "post_rhat_max",
+            "post_ess_min",
             "status",
             "reason",
             "flags",
@@ -329,6 +344,15 @@ pub fn results_csv(cells: &[CellResult]) -> Result<String> {
         );
         row.push(num(c.cell_height));
         row.push(num(c.base_diameter));
+        let p = c.posterior.as_ref();
+        for iv in [p.map(|p| p.g0), p.map(|p| p.g_sum), p.map(|p| p.g_end)] {
+            row.push(num(iv.map(|i| i.lower)));
+            row.push(num(iv.map(|i| i.median)));
+            row.push(num(iv.map(|i| i.upper)));
+        }
+        row.push(num(p.map(|p| p.noise_sd)));
+        row.push(num(p.map(|p| p.rhat_max)));
+        row.push(num(p.map(|p| p.ess_min)));
         row.push(c.status.as_str().into());
         row.push(c.reason.clone());
         row.push(c.flags.join("; "));
@@ -498,6 +522,7 @@ mod tests {
             hertz: None,
             cell_height: None,
             base_diameter: None,
+            posterior: None,
         }
     }
 

@@ -18,6 +18,8 @@
 //!   the format of docs/cli/compare.md;
 //! - [`report`]: the self-contained HTML page with inline SVG figures
 //!   (data overview, per-cell fits, group G(t) with p(t), tables);
+//! - [`uncertainty`]: group bands of the mean G(t) and the rank-sum p(t)
+//!   over posterior draws, from the cells' posteriors (study `[posterior]`);
 //! - [`demo`]: the bundled example's curve writer: two groups of cells made
 //!   by the study's forward model from known distributions, with noise.
 //!
@@ -59,5 +61,6 @@ pub mod fit;
 mod input;
 pub mod report;
 pub mod settings;
+pub mod uncertainty;
 
 pub use error::{ReportError, Result};

@@ -19,7 +19,10 @@ use crate::cohort::{
     CohortRecord, parameter_names, read_cells, read_record, results_table, write_atomic,
 };
 use crate::error::{ReportError, Result};
-use crate::figures::{Band, FitPanel, Line, band_chart, fits_chart, pvalue_chart};
+use crate::figures::{
+    Band, FitPanel, Line, RangeBand, band_chart, fits_chart, p_draws_chart, pvalue_chart,
+    range_chart, range_panels,
+};
 
 /// Options of [`write_report`].
 #[derive(Debug, Clone)]
@@ -399,6 +402,11 @@ pub fn write_report_of(
         }
     }
 
+    // Posteriors (issue 17): per-cell credible bands, group-mean bands,
+    // p(t) over draws.
+    let post = posterior_parts(record, cells, &times, &groups, cmp.pair.as_ref())?;
+    figures.extend(post.figures);
+
     // ---- page ------------------------------------------------------------
     let mut h = String::new();
     let title = escape(&s.title);
@@ -493,6 +501,9 @@ pub fn write_report_of(
         html_table(&mut h, &head, &tests_rows);
     }
 
+    if !post.rows.is_empty() {
+        uncertainty_section(&mut h, &figures, &post.rows, post.level, t_end);
+    }
     h.push_str("<h2 id=\"tables\">Per-cell results</h2>\n");
     let mut head = vec!["group".to_string(), "cell".into()];
     let pnames = parameter_names(cells).unwrap_or_default();
@@ -625,6 +636,211 @@ pub fn write_report_of(
         figure_ids: figures.iter().map(|f| f.id.clone()).collect(),
         svgs,
     })
+}
+
+/// The report's posterior figures and the rows of its interval table.
+struct PosteriorParts {
+    figures: Vec<Figure>,
+    rows: Vec<Vec<String>>,
+    level: f64,
+}
+
+/// Figures and table rows of the cells' posteriors (empty without any).
+fn posterior_parts(
+    record: &CohortRecord,
+    cells: &[CellResult],
+    times: &[f64],
+    groups: &[String],
+    pair: Option<&nlvid_stats::PairComparison>,
+) -> Result<PosteriorParts> {
+    let mut out = PosteriorParts {
+        figures: Vec::new(),
+        rows: Vec::new(),
+        level: 0.9,
+    };
+    let with: Vec<&CellResult> = cells.iter().filter(|c| c.posterior.is_some()).collect();
+    let (Some(first), Some(files)) = (with.first(), record.settings.surrogate.as_ref()) else {
+        return Ok(out);
+    };
+    let level = first.posterior.as_ref().map_or(0.9, |p| p.level);
+    out.level = level;
+    let pct = sig(100.0 * level, 3);
+    let domain = nlvid_inverse::read_meta(&files.meta)?.domain;
+    let gi = |g: &str| groups.iter().position(|x| x == g).unwrap_or(0);
+    let mut panels = Vec::new();
+    for c in &with {
+        let Some(p) = &c.posterior else { continue };
+        let names: Vec<&str> = c.parameters.iter().map(|q| q.name.as_str()).collect();
+        let values: Vec<f64> = c.parameters.iter().map(|q| q.value).collect();
+        let point: Vec<f64> = nlvid_model::Relaxation::from_named(&names, &values)
+            .map(|r| p.band.times.iter().map(|&t| r.value(t)).collect())
+            .unwrap_or_default();
+        panels.push((
+            RangeBand {
+                name: format!("{} / {}", c.group, c.cell),
+                colour_index: gi(&c.group),
+                x: p.band.times.clone(),
+                lower: p.band.lower.clone(),
+                median: p.band.median.clone(),
+                upper: p.band.upper.clone(),
+            },
+            point,
+        ));
+        let iv = |i: &nlvid_inverse::posterior::Interval, scale: f64| {
+            format!(
+                "{} [{}, {}]",
+                sig(scale * i.median, 4),
+                sig(scale * i.lower, 4),
+                sig(scale * i.upper, 4)
+            )
+        };
+        out.rows.push(vec![
+            c.group.clone(),
+            c.cell.clone(),
+            iv(&p.g0, 1.0),
+            iv(&p.g_sum, 1.0),
+            iv(&p.g_end, 1.0),
+            sig(p.noise_sd * 1e9, 3),
+            format!("{:.4}", p.rhat_max),
+            format!("{:.0}", p.ess_min),
+            c.status.as_str().into(),
+        ]);
+    }
+    out.figures.push(Figure {
+        id: "fig-cell-posteriors".into(),
+        file: "cell_posteriors.svg".into(),
+        caption: format!(
+            "Each cell: posterior median of G(t) (colour) inside its {pct} % credible band, and \
+             the point-estimate G(t) of the fit (grey), G in Pa against t in s."
+        ),
+        svg: range_panels("cell_posteriors.svg", "G (Pa)", &panels, 4)?,
+    });
+    let bands = crate::uncertainty::group_bands(cells, &domain, times, level)?;
+    if !bands.is_empty() {
+        let rb: Vec<RangeBand> = bands
+            .iter()
+            .map(|b| RangeBand {
+                name: format!("{} (n = {}, {pct} % band of the mean)", b.group, b.cells),
+                colour_index: gi(&b.group),
+                x: b.times.clone(),
+                lower: b.lower.clone(),
+                median: b.median.clone(),
+                upper: b.upper.clone(),
+            })
+            .collect();
+        out.figures.push(Figure {
+            id: "fig-group-posterior".into(),
+            file: "group_posterior.svg".into(),
+            caption: format!(
+                "Group mean G(t) with its {pct} % credible band from the cells' posteriors: how \
+                 well the mean of these cells is known given each cell's measurement noise and \
+                 the meta-model's error (not the spread between cells, which is the ± sd band \
+                 of the figure above)."
+            ),
+            svg: range_chart(
+                "group_posterior.svg",
+                "Group mean G(t)",
+                "t (s)",
+                "G (Pa)",
+                &rb,
+            )?,
+        });
+    }
+    if let Some(pc) = pair
+        && let Some(pd) = crate::uncertainty::p_over_draws(cells, &domain, times, &pc.a, &pc.b)?
+    {
+        let draws = RangeBand {
+            name: format!("p over {} posterior draws: median, 5–95 %", pd.draws),
+            colour_index: 0,
+            x: pd.times.clone(),
+            lower: pd.p05.clone(),
+            median: pd.p50.clone(),
+            upper: pd.p95.clone(),
+        };
+        let point = Line {
+            name: "p on the point estimates (thesis)".into(),
+            x: pc.over_time.iter().map(|r| r.t).collect(),
+            y: pc.over_time.iter().map(|r| r.shear.p).collect(),
+        };
+        let below_end = pd.frac_below_005.last().copied().unwrap_or(f64::NAN);
+        out.figures.push(Figure {
+            id: "fig-p-draws".into(),
+            file: "p_draws.svg".into(),
+            caption: format!(
+                "Wilcoxon rank-sum p(t) on G(t) between {} and {}: on the fitted point \
+                 estimates (dashed, the thesis's test) and recomputed for every joint posterior \
+                 draw of all cells (band: 5–95 % of p over draws, line: median). Where the whole \
+                 band lies below 0.05 the difference does not hinge on how well single cells \
+                 are determined; at t = {} s, {} % of the draws give p < 0.05.",
+                pc.a,
+                pc.b,
+                sig(*times.last().unwrap_or(&0.0), 4),
+                sig(100.0 * below_end, 3)
+            ),
+            svg: p_draws_chart(
+                "p_draws.svg",
+                &format!("p(t) over posterior draws: {} vs {}", pc.a, pc.b),
+                &draws,
+                &point,
+            )?,
+        });
+    }
+    Ok(out)
+}
+
+/// The page's uncertainty section: what the posteriors are, the figures,
+/// and the per-cell interval table.
+fn uncertainty_section(
+    h: &mut String,
+    figures: &[Figure],
+    rows: &[Vec<String>],
+    level: f64,
+    t_end: f64,
+) {
+    let pct = sig(100.0 * level, 3);
+    let _ = writeln!(
+        h,
+        "<h2 id=\"uncertainty\">Uncertainty: posteriors on the meta-model</h2>\n\
+         <p>Beyond the thesis (which reports one best fit per cell), every fitted cell's \
+         parameters were sampled from their posterior on the meta-model: a flat prior on the \
+         meta-model's parameter domain (log-uniform on its log axes, with g1 + g2 ≤ 1 − ε), and \
+         a Gaussian likelihood whose variance is the curve's measurement noise (estimated from \
+         the curve itself, column <i>noise</i>) plus the meta-model's own Kriging error at that \
+         parameter set. An interval [a, b] below means: given this curve, this model and this \
+         prior, the quantity lies between a and b with probability {pct} %. A wide interval \
+         marks a parameter the curve does not pin down (§4.4.2). R̂ (split, ≤ 1.01 wanted) and \
+         the effective sample size (ESS) say whether the sampler ran long enough.</p>"
+    );
+    for f in figures.iter().filter(|f| {
+        ["fig-cell-posteriors", "fig-group-posterior", "fig-p-draws"].contains(&f.id.as_str())
+    }) {
+        let _ = writeln!(
+            h,
+            "<figure id=\"{}\">{}<figcaption>{} (<a href=\"{}\">{}</a>)</figcaption></figure>",
+            f.id,
+            strip_xml_decl(&f.svg),
+            escape(&f.caption),
+            f.file,
+            f.file
+        );
+    }
+    let head = [
+        "group".to_string(),
+        "cell".into(),
+        "G0 (Pa)".into(),
+        "g1 + g2".into(),
+        format!("G({} s) (Pa)", sig(t_end, 4)),
+        "noise (nN)".into(),
+        "R̂ max".into(),
+        "ESS min".into(),
+        "status".into(),
+    ];
+    let _ = writeln!(
+        h,
+        "<h3>Per-cell credible intervals</h3>\n<p>Posterior median [{pct} % equal-tailed \
+         credible interval]; columns <code>post_*</code> of results.csv.</p>"
+    );
+    html_table(h, &head, rows);
 }
 
 /// The meta-model the cells were fitted on: its files, the forward model it

@@ -575,6 +575,63 @@ pub struct CohortSettings {
     pub constraint_epsilon: f64,
     /// Misfit (eq. 5.3) above which a cell is marked suspicious.
     pub suspicious_misfit: f64,
+    /// Per-cell posteriors (`[posterior]`, opt-in; meta-model fits only).
+    #[serde(default)]
+    pub posterior: Option<PosteriorStudy>,
+}
+
+/// The study's `[posterior]` section: sample each cell's posterior on the
+/// meta-model after its fit (issue 17; docs/cli/cohort.md). Absent, or
+/// `enabled = false`: no posteriors (the thesis's point estimates only).
+///
+/// ```toml
+/// [posterior]
+/// walkers = 32      # ensemble size (>= 12)
+/// burn = 300        # burn-in steps per walker
+/// steps = 1000      # kept steps per walker
+/// level = 0.9       # credible level of intervals and bands
+/// keep = 200        # thinned draws kept per cell (group bands, p(t) over draws)
+/// seed = 1          # default: fit.seed
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PosteriorStudy {
+    /// Walkers of the ensemble.
+    pub walkers: usize,
+    /// Burn-in steps.
+    pub burn: usize,
+    /// Kept steps.
+    pub steps: usize,
+    /// Credible level.
+    pub level: f64,
+    /// Thinned draws kept per cell.
+    pub keep: usize,
+    /// Seed (None: the fit's).
+    pub seed: Option<u64>,
+}
+
+struct PosteriorSection(Option<PosteriorStudy>);
+
+impl FromSection for PosteriorSection {
+    fn from_section(s: &mut Section) -> std::result::Result<Self, StudyError> {
+        let enabled = s.opt_bool("enabled")?.unwrap_or(true);
+        let p = PosteriorStudy {
+            walkers: s
+                .opt_usize("walkers", Bounds::closed(12.0, 10000.0))?
+                .unwrap_or(32),
+            burn: s
+                .opt_usize("burn", Bounds::closed(0.0, 1e6))?
+                .unwrap_or(300),
+            steps: s
+                .opt_usize("steps", Bounds::closed(20.0, 1e7))?
+                .unwrap_or(1000),
+            level: s.f64_or("level", Bounds::closed(0.5, 0.999), 0.9)?,
+            keep: s
+                .opt_usize("keep", Bounds::closed(10.0, 1e5))?
+                .unwrap_or(200),
+            seed: s.opt_u64("seed")?,
+        };
+        Ok(Self(enabled.then_some(p)))
+    }
 }
 
 struct Probe {
@@ -651,6 +708,14 @@ impl CohortSettings {
         }
         let probe: Probe = study.read("probe")?;
         let fit = FitSettings::from_study(&mut study, path)?;
+        let posterior = study
+            .opt_read::<PosteriorSection>("posterior")?
+            .and_then(|p| p.0);
+        if posterior.is_some() && fit.model != FitModel::Surrogate {
+            return Err(ReportError::InvalidSetting(format!(
+                "{name}: [posterior] samples on a meta-model: it needs fit.model = \"surrogate\""
+            )));
+        }
         for other in OTHER_STAGES {
             study.root().skip(other);
         }
@@ -729,6 +794,7 @@ impl CohortSettings {
             first_hold_step: fit.first_hold_step,
             constraint_epsilon: fit.constraint_epsilon,
             suspicious_misfit: fit.suspicious_misfit,
+            posterior,
         })
     }
 }

@@ -29,7 +29,7 @@ use rand_chacha::ChaCha8Rng;
 mod reduced;
 mod variance;
 
-pub use variance::VariancePoint;
+pub use variance::{OutputCovariance, VariancePoint};
 
 /// How θ is chosen.
 #[derive(Debug, Clone)]

@@ -69,8 +69,8 @@ pub use correlation::Correlation;
 pub use error::{Result, SurrogateError};
 pub use faer;
 pub use kriging::{
-    FitReport, KrigingModel, KrigingSettings, OutputScale, Pca, PointPrediction, ThetaSearch,
-    VariancePoint, likelihood_psi,
+    FitReport, KrigingModel, KrigingSettings, OutputCovariance, OutputScale, Pca, PointPrediction,
+    ThetaSearch, VariancePoint, likelihood_psi,
 };
 pub use optimise::OptimiserSettings;
 pub use options::FitOptions;

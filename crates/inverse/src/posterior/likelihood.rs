@@ -1,0 +1,286 @@
+//! The likelihood of one measured curve on a Kriging surrogate, with the
+//! measurement noise estimated from the curve and the surrogate's own
+//! error (its Kriging MSE, with the cross-time covariance) folded into the
+//! variance (issue 17; docs/theory/inverse.md, "Posteriors").
+//!
+//! d = ŷ(x) + e_s + e_n with the surrogate error e_s ~ N(0, v(x)·K) (DACE
+//! report eq. 2.20 across outputs, `nlvid_surrogate::OutputCovariance`) and
+//! the measurement noise e_n ~ N(0, σ²I):
+//! ln L(x) = −½ [ln det Σ + rᵀΣ⁻¹r] + const, Σ = σ²I + v(x)K, r = d − ŷ(x).
+//! For a PCA-reduced surrogate K = U Uᵀ (rank k) and ŷ = A c(x) (rank r,
+//! [`crate::ReducedModel`]), so by the Woodbury identity, with
+//! M = I_k + (v/σ²) UᵀU and w = Uᵀr:
+//! ln det Σ = m ln σ² + ln det M, rᵀΣ⁻¹r = (rᵀr − (v/σ²) wᵀM⁻¹w)/σ²,
+//! rᵀr = dᵀd − 2 dᵀA c + cᵀ(AᵀA)c, w = Uᵀd − (UᵀA)c — O(k³ + r²) per
+//! evaluation after O(m·(k + r)²) once per curve. Otherwise K is diagonal
+//! and the sum runs over the m points.
+
+use nalgebra::{DMatrix, DVector};
+use nlvid_surrogate::OutputCovariance;
+
+use crate::error::{InverseError, Result};
+use crate::model::{Model, check_len};
+use crate::reduced::ReducedModel;
+use crate::surrogate::KrigingSurrogate;
+
+/// Φ⁻¹(0.75): the median of |N(0, 1)|.
+const MAD_NORMAL: f64 = 0.674_489_750_196_081_7;
+
+/// The measurement noise σ of a curve sampled at `times`, from the curve
+/// alone: each interior point minus the straight line through its two
+/// neighbours, e_j = d_j − (w₁ d_{j−1} + w₂ d_{j+1}), has variance
+/// σ²(1 + w₁² + w₂²) where the signal is locally linear; σ̂ is the median
+/// of |e_j|/√(1 + w₁² + w₂²) divided by Φ⁻¹(0.75) — robust to the few
+/// points where the curve bends sharply (end of the ramp, fast relaxation).
+///
+/// # Errors
+/// Fewer than 5 points, lengths that differ, times not increasing, or a
+/// curve without noise (σ̂ = 0: e.g. interpolated between too few samples).
+pub fn noise_sd(times: &[f64], values: &[f64]) -> Result<f64> {
+    check_len("noise estimate: values vs times", times.len(), values.len())?;
+    if times.len() < 5 || times.windows(2).any(|w| !(w[1] > w[0])) {
+        return Err(InverseError::InvalidSetting(format!(
+            "noise estimate: needs at least 5 points at increasing times ({} given)",
+            times.len()
+        )));
+    }
+    let mut e: Vec<f64> = (1..times.len() - 1)
+        .map(|j| {
+            let h = times[j + 1] - times[j - 1];
+            let w1 = (times[j + 1] - times[j]) / h;
+            let w2 = 1.0 - w1;
+            (values[j] - w1 * values[j - 1] - w2 * values[j + 1]).abs()
+                / (1.0 + w1 * w1 + w2 * w2).sqrt()
+        })
+        .collect();
+    e.sort_by(f64::total_cmp);
+    let n = e.len();
+    let median = if n % 2 == 1 {
+        e[n / 2]
+    } else {
+        0.5 * (e[n / 2 - 1] + e[n / 2])
+    };
+    let sd = median / MAD_NORMAL;
+    if sd > 0.0 && sd.is_finite() {
+        Ok(sd)
+    } else {
+        Err(InverseError::InvalidSetting(format!(
+            "noise estimate: the curve shows no noise (sigma = {sd}); is it interpolated \
+             between fewer samples than the model grid has points?"
+        )))
+    }
+}
+
+enum Form {
+    LowRank {
+        ata: DMatrix<f64>,
+        uta: DMatrix<f64>,
+        utu: DMatrix<f64>,
+        atd: DVector<f64>,
+        utd: DVector<f64>,
+        dtd: f64,
+    },
+    Diagonal {
+        k: Vec<f64>,
+    },
+}
+
+/// ln L(x) of one curve on a Kriging surrogate (module docs).
+pub struct CurveLikelihood<'a> {
+    surrogate: &'a KrigingSurrogate,
+    data: Vec<f64>,
+    noise_var: f64,
+    form: Form,
+}
+
+impl<'a> CurveLikelihood<'a> {
+    /// Prepares the likelihood of `data` (on the surrogate's grid) with
+    /// measurement noise sd `noise` (e.g. [`noise_sd`]).
+    ///
+    /// # Errors
+    /// Data of the wrong length or not finite, σ ≤ 0, a surrogate without
+    /// a linear predictor or Kriging variance.
+    pub fn new(surrogate: &'a KrigingSurrogate, data: &[f64], noise: f64) -> Result<Self> {
+        let m = Model::times(surrogate).len();
+        check_len("likelihood data", m, data.len())?;
+        if data.iter().any(|v| !v.is_finite()) || !(noise > 0.0 && noise.is_finite()) {
+            return Err(InverseError::InvalidSetting(format!(
+                "likelihood: data must be finite and the noise sd > 0 (got {noise})"
+            )));
+        }
+        let cov = surrogate.kriging().output_covariance().map_err(|e| {
+            InverseError::InvalidSetting(format!("likelihood: Kriging variance: {e}"))
+        })?;
+        let d = DVector::from_column_slice(data);
+        let form = match cov {
+            OutputCovariance::LowRank { m: mm, k, factor } if surrogate.is_reduced() => {
+                let u = DMatrix::from_column_slice(mm, k, &factor);
+                let a = surrogate.output_map();
+                Form::LowRank {
+                    ata: a.transpose() * a,
+                    uta: u.transpose() * a,
+                    utu: u.transpose() * &u,
+                    atd: a.transpose() * &d,
+                    utd: u.transpose() * &d,
+                    dtd: d.dot(&d),
+                }
+            }
+            other => Form::Diagonal {
+                k: other.diagonal(),
+            },
+        };
+        Ok(Self {
+            surrogate,
+            data: data.to_vec(),
+            noise_var: noise * noise,
+            form,
+        })
+    }
+
+    /// The measurement noise variance σ².
+    pub fn noise_var(&self) -> f64 {
+        self.noise_var
+    }
+
+    /// ln L(x) up to the constant −(m/2) ln 2π, at physical x.
+    ///
+    /// # Errors
+    /// Surrogate failures at x; a non-positive-definite Σ (not expected:
+    /// σ² > 0 and v(x)·K ⪰ 0).
+    pub fn value(&self, x: &[f64]) -> Result<f64> {
+        let s2 = self.noise_var;
+        let v = self.surrogate.mse_scale(x)?;
+        let m = self.data.len() as f64;
+        match &self.form {
+            Form::LowRank {
+                ata,
+                uta,
+                utu,
+                atd,
+                utd,
+                dtd,
+            } => {
+                let c = self.surrogate.coordinate_values(x)?;
+                let rtr = dtd - 2.0 * atd.dot(&c) + c.dot(&(ata * &c));
+                let w = utd - uta * &c;
+                let ratio = v / s2;
+                let mut mm = utu * ratio;
+                for i in 0..mm.nrows() {
+                    mm[(i, i)] += 1.0;
+                }
+                let chol = mm.cholesky().ok_or_else(|| InverseError::Model {
+                    x: x.to_vec(),
+                    message: "likelihood: I + (v/σ²)UᵀU is not positive definite".into(),
+                })?;
+                let logdet_m: f64 = 2.0 * chol.l().diagonal().iter().map(|l| l.ln()).sum::<f64>();
+                let minv_w = chol.solve(&w);
+                let quad = (rtr.max(0.0) - ratio * w.dot(&minv_w)) / s2;
+                Ok(-0.5 * (m * s2.ln() + logdet_m + quad))
+            }
+            Form::Diagonal { k } => {
+                let y = Model::response(self.surrogate, x)?;
+                let mut sum = 0.0;
+                for ((yj, dj), kj) in y.iter().zip(&self.data).zip(k) {
+                    let var = s2 + v * kj;
+                    sum += var.ln() + (dj - yj).powi(2) / var;
+                }
+                Ok(-0.5 * sum)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::surrogate::Coordinates;
+    use crate::surrogate_file::load_kriging_surrogate;
+    use std::path::Path;
+
+    pub(crate) fn demo_surrogate() -> KrigingSurrogate {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo/metamodel");
+        load_kriging_surrogate(
+            &dir.join("model.json"),
+            &dir.join("meta.json"),
+            Coordinates::Physical,
+        )
+        .expect("demo meta-model")
+    }
+
+    /// The Woodbury form equals the dense Gaussian log-density with
+    /// Σ = σ²I + v(x)·diag(σ_y) V Σ_z Vᵀ diag(σ_y) built and factorised as
+    /// an m × m matrix (second method), at the truth and off it.
+    #[test]
+    fn woodbury_likelihood_equals_the_dense_gaussian() {
+        let s = demo_surrogate();
+        assert!(s.is_reduced());
+        let x0 = [1500.0, 0.3, 0.25, 0.5, 10.0];
+        let y0 = s.response(&x0).expect("y");
+        let peak = y0.iter().fold(0.0f64, |a, &b| a.max(b));
+        let noise = 0.02 * peak;
+        let data: Vec<f64> = y0
+            .iter()
+            .enumerate()
+            .map(|(j, y)| y + noise * ((j * 7919 % 101) as f64 / 50.0 - 1.0))
+            .collect();
+        let lik = CurveLikelihood::new(&s, &data, noise).expect("lik");
+        let OutputCovariance::LowRank { m, k, factor } = s.kriging().output_covariance().unwrap()
+        else {
+            panic!("PCA model");
+        };
+        let u = DMatrix::from_column_slice(m, k, &factor);
+        for x in [
+            x0,
+            [1400.0, 0.35, 0.2, 0.3, 14.0],
+            [3000.0, 0.1, 0.6, 1.5, 5.0],
+        ] {
+            let v = s.mse_scale(&x).unwrap();
+            let mut sigma = &u * u.transpose() * v;
+            for j in 0..m {
+                sigma[(j, j)] += noise * noise;
+            }
+            let y = s.response(&x).unwrap();
+            let r = DVector::from_iterator(m, data.iter().zip(&y).map(|(d, y)| d - y));
+            let chol = sigma.cholesky().expect("spd");
+            let logdet: f64 = 2.0 * chol.l().diagonal().iter().map(|l| l.ln()).sum::<f64>();
+            let dense = -0.5 * (logdet + r.dot(&chol.solve(&r)));
+            let ours = lik.value(&x).unwrap();
+            assert!(
+                (ours - dense).abs() < 1e-7 * dense.abs().max(1.0),
+                "x {x:?}: {ours} vs {dense}"
+            );
+        }
+    }
+
+    /// σ̂ of a smooth curve plus N(0, σ²) noise on an uneven grid is σ
+    /// within the estimator's sampling error (MAD: ≈ 1.65σ/√(2n)).
+    #[test]
+    fn noise_estimate_recovers_the_added_noise() {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(4);
+        let n = 3000;
+        let times: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 / n as f64;
+                52.0 * t * t + 0.01 * t
+            })
+            .collect();
+        for sigma in [1e-11, 3e-10] {
+            let values: Vec<f64> = times
+                .iter()
+                .map(|&t| {
+                    let u1: f64 = 1.0 - rng.random::<f64>();
+                    let u2: f64 = rng.random();
+                    let e = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+                    1e-8 * (0.4 + 0.6 * (-t / 0.5).exp()) * t.min(1.0) + sigma * e
+                })
+                .collect();
+            let est = noise_sd(&times, &values).unwrap();
+            assert!((est / sigma - 1.0).abs() < 0.08, "sigma {sigma}: {est}");
+        }
+        assert!(noise_sd(&times[..3], &[0.0; 3]).is_err());
+        let flat = vec![1.0; 10];
+        let t: Vec<f64> = (0..10).map(f64::from).collect();
+        assert!(noise_sd(&t, &flat).is_err());
+    }
+}

@@ -1,0 +1,184 @@
+//! Coverage of the per-cell posteriors (issue 17), on the bundled demo
+//! meta-model (analytic `hertz-prony`, examples/demo/metamodel):
+//! `cells` synthetic cells with known parameters are written by the demo's
+//! curve generator (`nlvid_report::demo::write_demo_data`, the forward
+//! model itself, not the surrogate) with `noise` × peak force of Gaussian
+//! noise, fitted by `nlvid cohort` with `[posterior]`, and the 90 %
+//! credible intervals of G0, g1 + g2 and G(52 s) are checked against the
+//! truth. Prints coverage, R̂ and timings; exits non-zero when a coverage
+//! is outside 85–95 % or any R̂ > 1.01.
+//!
+//! ```text
+//! cargo run --release -p nlvid-report --example posterior_coverage \
+//!     [cells] [noise] [seed] [walkers] [burn] [steps]
+//! ```
+//! (defaults 100, 0.02, 17, 32, 300, 1000; see docs/theory/inverse.md,
+//! "Posteriors on the surrogate").
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use nlvid_report::cohort::{RunOptions, discover, run_cohort};
+use nlvid_report::demo::{DemoSpec, GroupSpec, write_demo_data};
+use nlvid_report::settings::CohortSettings;
+
+fn main() -> ExitCode {
+    match run() {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::FAILURE,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<bool, Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let cells: usize = args.get(1).map_or(Ok(100), |s| s.parse())?;
+    let noise: f64 = args.get(2).map_or(Ok(0.02), |s| s.parse())?;
+    let seed: u64 = args.get(3).map_or(Ok(17), |s| s.parse())?;
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo");
+    let demo = std::fs::canonicalize(&demo)?;
+    let dir = std::env::temp_dir().join(format!("nlvid-coverage-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let walkers: usize = args.get(4).map_or(Ok(32), |s| s.parse())?;
+    let burn: usize = args.get(5).map_or(Ok(300), |s| s.parse())?;
+    let steps: usize = args.get(6).map_or(Ok(1000), |s| s.parse())?;
+    let study = write_study(&dir, &demo, (walkers, burn, steps))?;
+    // Two broad groups spanning much of the Table 5.3 domain.
+    let spec = DemoSpec {
+        groups: vec![
+            GroupSpec {
+                name: "wide-a".into(),
+                g0: (1500.0, 0.5),
+                g1: (0.30, 0.12),
+                g2: (0.30, 0.12),
+                tau1: (0.3, 0.7),
+                tau2: (10.0, 0.4),
+            },
+            GroupSpec {
+                name: "wide-b".into(),
+                g0: (600.0, 0.5),
+                g1: (0.40, 0.12),
+                g2: (0.25, 0.12),
+                tau1: (0.6, 0.7),
+                tau2: (8.0, 0.4),
+            },
+        ],
+        cells_per_group: cells.div_ceil(2),
+        seed,
+        noise,
+        ..DemoSpec::default()
+    };
+    let files = write_demo_data(&spec, &study, &demo.join("metamodel.toml"))?;
+    let settings = CohortSettings::load(&study)?;
+    let inputs = discover(&files.data)?;
+    let t0 = Instant::now();
+    let run = run_cohort(
+        &settings,
+        &study,
+        &files.data,
+        &inputs,
+        &dir.join("out"),
+        &RunOptions::default(),
+    )?;
+    let seconds = t0.elapsed().as_secs_f64();
+    let domain = nlvid_inverse::read_meta(&demo.join("metamodel/meta.json"))?.domain;
+    let (mut n, mut cover) = (0usize, [0usize; 3]);
+    let mut rhat_max = 0.0f64;
+    let mut ess_min = f64::INFINITY;
+    let mut misses = Vec::new();
+    for c in &run.cells {
+        let Some(p) = &c.posterior else {
+            println!(
+                "{} {}: no posterior ({} {})",
+                c.group,
+                c.cell,
+                c.status.as_str(),
+                c.reason
+            );
+            continue;
+        };
+        let truth = files
+            .cells
+            .iter()
+            .find(|t| t.cell == c.cell && t.group == c.group)
+            .ok_or("cell without truth")?;
+        let g = nlvid_inverse::relaxation(&domain, &truth.x)?;
+        let want = [g.g0(), 1.0 - g.prony().long_term_weight(), g.value(p.t_end)];
+        let got = [p.g0, p.g_sum, p.g_end];
+        n += 1;
+        for k in 0..3 {
+            if got[k].covers(want[k]) {
+                cover[k] += 1;
+            } else {
+                misses.push(format!(
+                    "{}:{} [{:.4e}, {:.4e}] vs {:.4e}",
+                    c.cell,
+                    ["G0", "g_sum", "G_end"][k],
+                    got[k].lower,
+                    got[k].upper,
+                    want[k]
+                ));
+            }
+        }
+        if p.rhat_max > 1.01 {
+            println!(
+                "  {} R-hat {:.3} ESS {:.0} acceptance {:.2}; truth {:?}; G0 {:?}",
+                c.cell, p.rhat_max, p.ess_min, p.acceptance, truth.x, p.g0
+            );
+        }
+        rhat_max = rhat_max.max(p.rhat_max);
+        ess_min = ess_min.min(p.ess_min);
+    }
+    let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
+    println!(
+        "{n} cells with posteriors of {} ({} fitted); noise {noise} x peak; seed {seed}",
+        run.cells.len(),
+        run.fitted
+    );
+    let mut ok = n > 0;
+    for (k, name) in ["G0", "g1 + g2", "G(t_end)"].iter().enumerate() {
+        let frac = cover[k] as f64 / n.max(1) as f64;
+        println!(
+            "coverage of the 90 % interval of {name}: {} / {n} = {:.1} %",
+            cover[k],
+            100.0 * frac
+        );
+        ok &= (0.85..=0.95).contains(&frac);
+    }
+    println!("largest split R-hat {rhat_max:.4}, smallest ESS {ess_min:.0}");
+    ok &= rhat_max <= 1.01;
+    println!(
+        "cohort (fit + posterior) wall time {seconds:.1} s, {:.2} s per cell on {} threads; load average {}",
+        seconds / run.cells.len().max(1) as f64,
+        rayon::current_num_threads(),
+        load.trim()
+    );
+    for m in misses.iter().take(20) {
+        println!("  miss {m}");
+    }
+    std::fs::remove_dir_all(&dir)?;
+    Ok(ok)
+}
+
+/// The demo's cohort study with absolute meta-model paths and `[posterior]`.
+fn write_study(
+    dir: &Path,
+    demo: &Path,
+    (walkers, burn, steps): (usize, usize, usize),
+) -> Result<PathBuf, Box<dyn std::error::Error>> {
+    let text = std::fs::read_to_string(demo.join("study.toml"))?;
+    let mm = demo.join("metamodel");
+    let text = text.replace("\"metamodel/", &format!("\"{}/", mm.display()));
+    let study = dir.join("study.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "{text}\n[posterior]\nwalkers = {walkers}\nburn = {burn}\nsteps = {steps}\nlevel = 0.9\n"
+        ),
+    )?;
+    Ok(study)
+}
