@@ -236,6 +236,12 @@ pub fn build_report(
         "{name}: {} runs in shard: {} already done, {} run now ({} failed) in {secs:.2} s{per_run}\n",
         s.in_shard, s.skipped, s.ran, s.failed
     );
+    if s.by_others > 0 {
+        text.push_str(&format!(
+            "{name}: {} runs done meanwhile by another build into this store\n",
+            s.by_others
+        ));
+    }
     if s.failed > 0 {
         for (i, status, reason, secs) in &load(store, &Admissibility::default())?.status {
             if status == "failed" {
