@@ -220,8 +220,9 @@ impl Lcg {
 }
 
 /// The three cases in `root`: a build, a cohort and a report of a finished
-/// cohort. Returns them with the reference snapshot of each (run
-/// uninterrupted in `<root>/reference`) and its wall time.
+/// cohort. Returns them with the reference snapshot of each (an
+/// uninterrupted run, whose outputs are then removed), its wall time and
+/// the function that removes its outputs.
 fn cases(
     root: &Path,
     name: &str,
@@ -295,11 +296,13 @@ fn cases(
                 }
             }
         };
-        let (reference, _) = make(&root.join(format!("{name}-{what}-reference")));
-        let took = reference.run_ok();
-        let snap = snapshot(&reference.out);
-        assert!(!snap.is_empty(), "{what}: no output");
+        // The reference runs in the same directory (outputs record their
+        // paths), then its outputs are removed.
         let (case, reset) = make(&root.join(format!("{name}-{what}")));
+        let took = case.run_ok();
+        let snap = snapshot(&case.out);
+        assert!(!snap.is_empty(), "{what}: no output");
+        reset();
         out.push((case, snap, took, reset));
     }
     out
