@@ -328,7 +328,10 @@ fn concurrent_builds_into_one_store_share_the_work() {
         a.contains("by another build") || b.contains("by another build"),
         "{a}\n{b}"
     );
-    let straight = write_study(&root.join("straight"), &study("test_delay = \"40 ms\"", 24, 8));
+    let straight = write_study(
+        &root.join("straight"),
+        &study("test_delay = \"40 ms\"", 24, 8),
+    );
     ok(
         nlvid(&["build".as_ref(), straight.as_os_str(), "--quiet".as_ref()])
             .output()

@@ -132,14 +132,41 @@ fn check_gives_the_stage_message_for_what_a_stage_refuses() {
             let o = p.with_extension("csv");
             nlvid(&[stage, s, "--output", o.to_str().unwrap()])
         };
-        assert_eq!(checked.status.code(), Some(1), "{name}: {}", text(&checked.stdout));
+        assert_eq!(
+            checked.status.code(),
+            Some(1),
+            "{name}: {}",
+            text(&checked.stdout)
+        );
         assert_eq!(staged.status.code(), Some(1), "{name}");
         assert_eq!(text(&checked.stderr), text(&staged.stderr), "{name}");
     }
     // The typo is named, and the README's wrong unit reads as the README says.
-    let e = text(&nlvid(&["check", write("t2.toml", &build.replace("n_train", "n_trian")).to_str().unwrap()]).stderr);
-    assert!(e.contains("`design.n_train`") && e.contains("`n_trian`"), "{e}");
-    let e = text(&nlvid(&["check", write("u2.toml", &material.replace("G0 = \"1 kPa\"", "C1 = \"0.12 N/m\"")).to_str().unwrap()]).stderr);
+    let e = text(
+        &nlvid(&[
+            "check",
+            write("t2.toml", &build.replace("n_train", "n_trian"))
+                .to_str()
+                .unwrap(),
+        ])
+        .stderr,
+    );
+    assert!(
+        e.contains("`design.n_train`") && e.contains("`n_trian`"),
+        "{e}"
+    );
+    let e = text(
+        &nlvid(&[
+            "check",
+            write(
+                "u2.toml",
+                &material.replace("G0 = \"1 kPa\"", "C1 = \"0.12 N/m\""),
+            )
+            .to_str()
+            .unwrap(),
+        ])
+        .stderr,
+    );
     assert!(
         e.contains("key `material.C1`: `0.12 N/m` is a force per length (N/m), expected a pressure or stress (Pa)"),
         "{e}"
@@ -152,4 +179,26 @@ fn os_errors_are_printed_once() {
     let out = nlvid(&["check", "/no/such/study.toml"]);
     let e = text(&out.stderr);
     assert_eq!(e.matches("os error 2").count(), 1, "{e}");
+}
+
+/// `nlvid material --json | head -0`: a closed stdout ends the command
+/// quietly with status 0 (no `error: Broken pipe`).
+#[test]
+fn a_closed_stdout_pipe_is_quiet() {
+    let study = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/material/pipkin-rogers-ramp-hold.toml"
+    );
+    let out = common::temp_dir("check").join("pipe.csv");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_nlvid"))
+        .args(["material", "--json", study, "--output"])
+        .arg(&out)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // the reader goes away before anything is read
+    let done = child.wait_with_output().unwrap();
+    assert!(done.status.success(), "{}", text(&done.stderr));
+    assert_eq!(text(&done.stderr), "");
 }

@@ -23,8 +23,22 @@ fn rounds(default: usize) -> usize {
 }
 
 const TOKENS: [&str; 16] = [
-    "\"", "=", "[", "]", "\n", "{", "}", ",", "-", "1e308", "nan", "\"1 ns\"", "\"-3 kPa\"",
-    "[[x]]", "#", "\u{feff}",
+    "\"",
+    "=",
+    "[",
+    "]",
+    "\n",
+    "{",
+    "}",
+    ",",
+    "-",
+    "1e308",
+    "nan",
+    "\"1 ns\"",
+    "\"-3 kPa\"",
+    "[[x]]",
+    "#",
+    "\u{feff}",
 ];
 
 fn mutate(rng: &mut ChaCha8Rng, src: &[u8]) -> Vec<u8> {
@@ -103,7 +117,10 @@ fn damaged_study_files_never_panic() {
                 })
                 .map_err(|e| e.to_string()),
             nlvid_study::Study::load(&p)
-                .and_then(|mut s| s.opt_read::<nlvid_material::LoadingSpec>("loading").map(|_| ()))
+                .and_then(|mut s| {
+                    s.opt_read::<nlvid_material::LoadingSpec>("loading")
+                        .map(|_| ())
+                })
                 .map_err(|e| e.to_string()),
             nlvid_surrogate::BuildStudy::load(&p)
                 .map(|_| ())
@@ -129,7 +146,10 @@ fn damaged_study_files_never_panic() {
             }
         }
     }
-    assert!(err > ok / 4, "ok {ok}, err {err}: the damage should be detected");
+    assert!(
+        err > ok / 4,
+        "ok {ok}, err {err}: the damage should be detected"
+    );
 }
 
 #[test]

@@ -86,7 +86,10 @@ fn assert_resumed(dir: &Path, reference: &BTreeMap<String, Vec<u8>>, what: &str)
     let got = snapshot(dir);
     for rel in got.keys() {
         let name = rel.rsplit('/').next().unwrap_or(rel);
-        assert!(!is_temp(name), "{what}: temporary {rel} left after the resume");
+        assert!(
+            !is_temp(name),
+            "{what}: temporary {rel} left after the resume"
+        );
     }
     for (rel, want) in reference {
         if nondeterministic(rel) {
@@ -281,12 +284,7 @@ fn cases(
                     (
                         Case {
                             what,
-                            args: vec![
-                                "report".into(),
-                                c.into(),
-                                "--out".into(),
-                                o.clone().into(),
-                            ],
+                            args: vec!["report".into(), c.into(), "--out".into(), o.clone().into()],
                             out: o.clone(),
                         },
                         Box::new(move || {

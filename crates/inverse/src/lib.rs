@@ -87,8 +87,8 @@ pub use measured::{
 };
 pub use misfit::{Experiment, Misfit, Objective, Segment, range_normalised_rmse, segment_weights};
 pub use model::{FD_STEP_UNIT, Model, check_finite, check_jacobian, check_len, fd_jacobian};
-pub use plausible::{Implausible, MAX_FORCE, MAX_LENGTH};
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
+pub use plausible::{Implausible, MAX_FORCE, MAX_LENGTH};
 pub use plot::{FigureCurve, FitFigure};
 pub use prony::{ParameterTable, relaxation};
 pub use reduced::{Projection, ReducedExperiment, ReducedMisfit, ReducedModel, projection};

@@ -147,7 +147,11 @@ mod tests {
             .zip(&ind)
             .enumerate()
             .map(|(i, (t, d))| {
-                let relax = if *t > 1.0 { 0.5 + 0.5 * (-(t - 1.0)).exp() } else { 1.0 };
+                let relax = if *t > 1.0 {
+                    0.5 + 0.5 * (-(t - 1.0)).exp()
+                } else {
+                    1.0
+                };
                 // ±0.5 % deterministic noise.
                 5e-9 * (d / 1e-6).powf(1.5) * relax + 2.5e-11 * ((i * 7919 % 13) as f64 / 6.0 - 1.0)
             })
@@ -187,11 +191,17 @@ mod tests {
         let mut c = curve();
         c.force.iter_mut().for_each(|f| *f = -*f);
         let e = c.implausible();
-        assert!(e.iter().any(|x| x.reason.contains("sign convention")), "{e:?}");
+        assert!(
+            e.iter().any(|x| x.reason.contains("sign convention")),
+            "{e:?}"
+        );
 
         let mut c = curve();
         c.indentation = Some(vec![-1e-7; c.force.len()]);
         let e = c.implausible();
-        assert!(e.iter().any(|x| x.reason.contains("never makes contact")), "{e:?}");
+        assert!(
+            e.iter().any(|x| x.reason.contains("never makes contact")),
+            "{e:?}"
+        );
     }
 }

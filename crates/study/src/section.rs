@@ -121,7 +121,8 @@ impl Section {
             None => match self.near_typo(key) {
                 Some(k) => {
                     message.push_str(&format!("; the table has the unknown key `{k}`: a typo?"));
-                    self.index(&k).map_or(self.at, |i| self.entries[i].key_span.start)
+                    self.index(&k)
+                        .map_or(self.at, |i| self.entries[i].key_span.start)
                 }
                 None => self.at,
             },

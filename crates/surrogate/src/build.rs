@@ -423,8 +423,13 @@ pub fn export(mm: &MetaModel, dir: &Path, domain: Option<&Domain>) -> Result<()>
     write_csv(&dir.join("X.csv"), head.collect(), x_rows)?;
     write_csv(
         &dir.join("Y.csv"),
-        mm.meta.time.iter().map(|t| format!("F(t={t:e} s) [N]")).collect(),
-        mm.y.iter().map(|y| y.iter().map(|v| format!("{v:e}")).collect()),
+        mm.meta
+            .time
+            .iter()
+            .map(|t| format!("F(t={t:e} s) [N]"))
+            .collect(),
+        mm.y.iter()
+            .map(|y| y.iter().map(|v| format!("{v:e}")).collect()),
     )?;
     // status.csv is deterministic (merged shards and resumed builds
     // reproduce it byte for byte); wall times go to timing.csv.
