@@ -222,14 +222,15 @@ impl Lcg {
     }
 }
 
+/// A case, its reference snapshot, the reference's wall time and the
+/// function that removes its outputs.
+type Prepared = (Case, BTreeMap<String, Vec<u8>>, Duration, Box<dyn Fn()>);
+
 /// The three cases in `root`: a build, a cohort and a report of a finished
 /// cohort. Returns them with the reference snapshot of each (an
 /// uninterrupted run, whose outputs are then removed), its wall time and
 /// the function that removes its outputs.
-fn cases(
-    root: &Path,
-    name: &str,
-) -> Vec<(Case, BTreeMap<String, Vec<u8>>, Duration, Box<dyn Fn()>)> {
+fn cases(root: &Path, name: &str) -> Vec<Prepared> {
     let mut out = Vec::new();
     for (i, what) in ["build", "cohort", "report"].into_iter().enumerate() {
         let make = |dir: &Path| -> (Case, Box<dyn Fn()>) {
