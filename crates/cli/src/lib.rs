@@ -46,16 +46,37 @@ pub fn run() -> anyhow::Result<ExitCode> {
 
 /// Reports a failed run on stderr and gives the exit status: 1 for errors;
 /// a closed stdout pipe (`nlvid ... | head`) ends quietly with status 0.
+/// Each cause is printed once (an OS error wrapped by two layers that both
+/// quote it appears once).
 pub fn report(err: &anyhow::Error) -> ExitCode {
     let broken_pipe = err.chain().any(|e| {
         e.downcast_ref::<std::io::Error>()
             .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            || e.downcast_ref::<serde_json::Error>()
+                .is_some_and(|j| j.io_error_kind() == Some(std::io::ErrorKind::BrokenPipe))
+            || e.to_string().contains("Broken pipe (os error 32)")
     });
     if broken_pipe {
         return ExitCode::SUCCESS;
     }
-    eprintln!("error: {err:#}");
+    eprintln!("error: {}", message(err));
     ExitCode::FAILURE
+}
+
+/// The error and its causes, `: `-joined, each cause text once.
+pub fn message(err: &anyhow::Error) -> String {
+    let mut msg = String::new();
+    for e in err.chain() {
+        let t = e.to_string();
+        if t.is_empty() || msg.contains(&t) {
+            continue;
+        }
+        if !msg.is_empty() {
+            msg.push_str(": ");
+        }
+        msg.push_str(&t);
+    }
+    msg
 }
 
 /// Logs to stderr; `-v` raises the level, `NLVID_LOG` (an `EnvFilter`

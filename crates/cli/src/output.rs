@@ -24,6 +24,59 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
         .with_context(|| format!("{}: cannot write", path.display()))
 }
 
+/// Checks, before any computation, that the directory `dir` exists and is
+/// writable or can be created: its nearest existing ancestor is a
+/// directory a file can be written into. Creates nothing.
+///
+/// # Errors
+/// An ancestor is a file, `dir` is a file, or the directory is not
+/// writable — naming the path and the OS error once.
+pub fn check_output_dir(dir: &Path) -> anyhow::Result<()> {
+    let mut at = dir;
+    loop {
+        if at.as_os_str().is_empty() {
+            at = Path::new(".");
+        }
+        match std::fs::metadata(at) {
+            Ok(m) if m.is_dir() => break,
+            Ok(_) => anyhow::bail!(
+                "output directory {}: {} is a file, not a directory",
+                dir.display(),
+                at.display()
+            ),
+            Err(_) => match at.parent() {
+                Some(p) => at = p,
+                None => anyhow::bail!("output directory {}: no existing parent", dir.display()),
+            },
+        }
+    }
+    let probe = at.join(format!(".nlvid-probe.{}.tmp", std::process::id()));
+    match std::fs::File::create(&probe) {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => anyhow::bail!(
+            "output directory {}: cannot write into {}: {e}",
+            dir.display(),
+            at.display()
+        ),
+    }
+}
+
+/// As [`check_output_dir`] for an output file: `file` is not a directory
+/// and its directory is writable or can be created.
+///
+/// # Errors
+/// As [`check_output_dir`]; `file` is a directory.
+pub fn check_output_file(file: &Path) -> anyhow::Result<()> {
+    if file.is_dir() {
+        anyhow::bail!("output file {}: is a directory", file.display());
+    }
+    let dir = file.parent().unwrap_or(Path::new("."));
+    check_output_dir(dir).with_context(|| format!("output file {}", file.display()))
+}
+
 /// Provenance to embed in every JSON result: the study file, its SHA-256
 /// hash (see `nlvid_study::StudyHash`) and the program version.
 pub fn provenance(study: &nlvid_study::Study) -> Value {

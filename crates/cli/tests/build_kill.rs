@@ -284,3 +284,65 @@ fn a_bad_study_names_file_line_and_key() {
         "{err}"
     );
 }
+
+/// "… N runs in shard: A already done, B run now …" → B for `set`.
+fn run_now(text: &str, set: &str) -> usize {
+    let line = text
+        .lines()
+        .find(|l| l.starts_with(&format!("{set}: ")) && l.contains("run now"))
+        .unwrap_or_else(|| panic!("no `{set}` build line in:\n{text}"));
+    let before = line.split(" run now").next().unwrap_or("");
+    before
+        .rsplit(' ')
+        .next()
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("cannot read the run count in `{line}`"))
+}
+
+#[test]
+fn concurrent_builds_into_one_store_share_the_work() {
+    let root = scratch("concurrent");
+    // 32 runs of 40 ms each: long enough for both builds to overlap.
+    let s = write_study(&root, &study("test_delay = \"40 ms\"", 24, 8));
+    let spawn = || {
+        nlvid(&["build".as_ref(), s.as_os_str(), "--quiet".as_ref()])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("spawn")
+    };
+    let (a, b) = (spawn(), spawn());
+    let (a, b) = (
+        ok(a.wait_with_output().expect("a")),
+        ok(b.wait_with_output().expect("b")),
+    );
+    for (set, n) in [("train", 24), ("check", 8)] {
+        let (ra, rb) = (run_now(&a, set), run_now(&b, set));
+        assert_eq!(
+            ra + rb,
+            n,
+            "{set}: the two builds ran {ra} + {rb} runs of {n}:\n{a}\n{b}"
+        );
+    }
+    assert!(
+        a.contains("by another build") || b.contains("by another build"),
+        "{a}\n{b}"
+    );
+    let straight = write_study(
+        &root.join("straight"),
+        &study("test_delay = \"40 ms\"", 24, 8),
+    );
+    ok(
+        nlvid(&["build".as_ref(), straight.as_os_str(), "--quiet".as_ref()])
+            .output()
+            .expect("straight build"),
+    );
+    // No claim file is left, and the shared build equals a single one.
+    let claims = std::fs::read_dir(root.join("store/train/runs"))
+        .expect("runs")
+        .filter_map(Result::ok)
+        .filter(|e| e.path().extension().is_some_and(|x| x == "claim"))
+        .count();
+    assert_eq!(claims, 0);
+    assert_same_export(&root.join("export"), &root.join("straight/export"));
+}

@@ -92,3 +92,113 @@ fn missing_file_is_named() {
     assert_eq!(out.status.code(), Some(1));
     assert!(text(&out.stderr).starts_with("error: /no/such/study.toml: cannot read study file"));
 }
+
+/// `check` refuses what a stage refuses, with the stage's own message.
+#[test]
+fn check_gives_the_stage_message_for_what_a_stage_refuses() {
+    let material = "[material]\nmodel = \"neo-hookean-prony\"\nG0 = \"1 kPa\"\n\n\
+                    [material.prony]\ng = [0.4, 0.3]\ntau = [\"0.5 s\", \"10 s\"]\n\n\
+                    [loading]\nmode = \"uniaxial\"\nhistory = \"ramp-hold\"\nstretch = 1.5\n\
+                    ramp = \"1 s\"\nhold = \"5 s\"\nmax_dt = \"10 ms\"\n";
+    let build = "[forward]\nmodel = \"hertz-prony\"\nprobe_radius = \"2.5 um\"\nrate = \"1 um/s\"\n\
+                 ramp = \"1 s\"\nhold = \"9 s\"\npoints = 50\n\n[design]\nn_train = 8\nn_check = 2\n\
+                 seed = 3\n\n[design.parameters]\nG0 = { range = [\"80 Pa\", \"4 kPa\"] }\n\
+                 g1 = { range = [0.01, 0.45] }\ng2 = { range = [0.01, 0.45] }\n\
+                 tau1 = { range = [\"0.01 s\", \"2 s\"] }\ntau2 = { range = [\"2 s\", \"40 s\"] }\n\n\
+                 [build]\nstore = \"store\"\nmin_peak_force = \"4 nN\"\n";
+    let cases: [(&str, &str, &str, &str, &str); 7] = [
+        (
+            "readme-unit.toml",
+            "material",
+            material,
+            "G0 = \"1 kPa\"",
+            "C1 = \"0.12 N/m\"",
+        ),
+        ("missing.toml", "material", material, "G0 = \"1 kPa\"\n", ""),
+        ("sum.toml", "material", material, "[0.4, 0.3]", "[0.7, 0.6]"),
+        ("dt.toml", "material", material, "\"10 ms\"", "\"-10 ms\""),
+        ("unknown.toml", "material", material, "stretch", "strech"),
+        ("typo.toml", "build", build, "n_train", "n_trian"),
+        ("units.toml", "build", build, "\"4 nN\"", "\"4 nm\""),
+    ];
+    for (name, stage, base, old, new) in cases {
+        assert!(base.contains(old), "{name}");
+        let p = write(name, &base.replace(old, new));
+        let s = p.to_str().unwrap();
+        let checked = nlvid(&["check", s]);
+        let staged = if stage == "build" {
+            nlvid(&["build", s, "--quiet"])
+        } else {
+            let o = p.with_extension("csv");
+            nlvid(&[stage, s, "--output", o.to_str().unwrap()])
+        };
+        assert_eq!(
+            checked.status.code(),
+            Some(1),
+            "{name}: {}",
+            text(&checked.stdout)
+        );
+        assert_eq!(staged.status.code(), Some(1), "{name}");
+        assert_eq!(text(&checked.stderr), text(&staged.stderr), "{name}");
+    }
+    // The typo is named, and the README's wrong unit reads as the README says.
+    let e = text(
+        &nlvid(&[
+            "check",
+            write("t2.toml", &build.replace("n_train", "n_trian"))
+                .to_str()
+                .unwrap(),
+        ])
+        .stderr,
+    );
+    assert!(
+        e.contains("`design.n_train`") && e.contains("`n_trian`"),
+        "{e}"
+    );
+    let e = text(
+        &nlvid(&[
+            "check",
+            write(
+                "u2.toml",
+                &material.replace("G0 = \"1 kPa\"", "C1 = \"0.12 N/m\""),
+            )
+            .to_str()
+            .unwrap(),
+        ])
+        .stderr,
+    );
+    assert!(
+        e.contains("key `material.C1`: `0.12 N/m` is a force per length (N/m), expected a pressure or stress (Pa)"),
+        "{e}"
+    );
+}
+
+/// A missing file's OS error is printed once.
+#[test]
+fn os_errors_are_printed_once() {
+    let out = nlvid(&["check", "/no/such/study.toml"]);
+    let e = text(&out.stderr);
+    assert_eq!(e.matches("os error 2").count(), 1, "{e}");
+}
+
+/// `nlvid material --json | head -0`: a closed stdout ends the command
+/// quietly with status 0 (no `error: Broken pipe`).
+#[test]
+fn a_closed_stdout_pipe_is_quiet() {
+    let study = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/material/pipkin-rogers-ramp-hold.toml"
+    );
+    let out = common::temp_dir("check").join("pipe.csv");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_nlvid"))
+        .args(["material", "--json", study, "--output"])
+        .arg(&out)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // the reader goes away before anything is read
+    let done = child.wait_with_output().unwrap();
+    assert!(done.status.success(), "{}", text(&done.stderr));
+    assert_eq!(text(&done.stderr), "");
+}

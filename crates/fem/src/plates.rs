@@ -174,7 +174,7 @@ impl PlateRun {
     /// # Errors
     /// [`FemError::Io`] naming the file.
     pub fn write_csv(&self, path: &Path) -> Result<()> {
-        std::fs::write(path, self.to_csv()).map_err(|source| FemError::Io {
+        nlvid_study::write_atomic(path, self.to_csv().as_bytes()).map_err(|source| FemError::Io {
             file: path.to_path_buf(),
             source,
         })

@@ -153,7 +153,7 @@ impl VtuGrid {
     /// As [`VtuGrid::to_xml`]; [`FemError::Io`] naming the file.
     pub fn write(&self, path: &Path) -> Result<()> {
         let text = self.to_xml()?;
-        std::fs::write(path, text).map_err(|source| FemError::Io {
+        nlvid_study::write_atomic(path, text.as_bytes()).map_err(|source| FemError::Io {
             file: path.to_path_buf(),
             source,
         })
@@ -173,7 +173,7 @@ pub fn write_pvd(path: &Path, entries: &[(f64, String)]) -> Result<()> {
         let _ = writeln!(s, r#"    <DataSet timestep="{t:e}" part="0" file="{f}"/>"#);
     }
     s.push_str("  </Collection>\n</VTKFile>\n");
-    std::fs::write(path, s).map_err(|source| FemError::Io {
+    nlvid_study::write_atomic(path, s.as_bytes()).map_err(|source| FemError::Io {
         file: path.to_path_buf(),
         source,
     })

@@ -313,7 +313,7 @@ impl Chart {
     /// As [`Chart::svg`]; [`FigureError::Io`] when the file cannot be written.
     pub fn write(&self, path: &Path) -> Result<()> {
         let svg = self.svg()?;
-        std::fs::write(path, svg).map_err(|e| FigureError::Io {
+        nlvid_study::write_atomic(path, svg.as_bytes()).map_err(|e| FigureError::Io {
             path: path.to_path_buf(),
             message: e.to_string(),
         })

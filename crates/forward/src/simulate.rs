@@ -115,6 +115,14 @@ impl SimulateStudy {
             };
             values.push(v);
         }
+        // Models parametrised by G(t) of eq. 5.1 (G0, g_k, tau_k): the
+        // weights must leave a non-negative long-term modulus — refused
+        // here, before any run, with the key.
+        if names.iter().any(|n| n == nlvid_model::names::G0)
+            && let Err(e) = nlvid_model::Relaxation::from_named(&names, &values)
+        {
+            return Err(p.invalid("g1", e.to_string()).into());
+        }
         p.finish()?;
         for other in OTHER_STAGES {
             study.root().skip(other);

@@ -72,6 +72,7 @@ mod measured;
 mod misfit;
 mod model;
 mod optimise;
+mod plausible;
 mod plot;
 pub mod posterior;
 mod prony;
@@ -92,6 +93,7 @@ pub use measured::{
 pub use misfit::{Experiment, Misfit, Objective, Segment, range_normalised_rmse, segment_weights};
 pub use model::{FD_STEP_UNIT, Model, check_finite, check_jacobian, check_len, fd_jacobian};
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
+pub use plausible::{Implausible, MAX_FORCE, MAX_LENGTH};
 pub use plot::{FigureCurve, FitFigure};
 pub use posterior::{Posterior, PosteriorSettings, sample_posterior};
 pub use prony::{ParameterTable, relaxation};

@@ -130,11 +130,11 @@ impl Table {
             .position(|h| h.0 == name || suffixed(h))
             .ok_or_else(|| {
                 let available: Vec<String> = self.headers.iter().map(|(n, _)| n.clone()).collect();
-                self.err(
-                    1,
-                    name,
-                    format!("column not found; the header has {available:?}"),
-                )
+                let message = match nlvid_study::delimiter_hint(&available) {
+                    Some(hint) => format!("column not found; {hint}"),
+                    None => format!("column not found; the header has {available:?}"),
+                };
+                self.err(1, name, message)
             })?;
         let from_suffix = self.headers[i]
             .0

@@ -91,6 +91,47 @@ pub enum History {
     Table(Vec<(f64, f64)>),
 }
 
+/// The most time steps one drive may take (about 110 MB of samples and
+/// 150 MB of CSV); a history and `max_dt` needing more are refused before
+/// any step with [`check_step_count`].
+pub const MAX_STEPS: f64 = 1e6;
+
+/// Time steps a drive through `knots` takes with steps no longer than
+/// `max_dt` (each linear piece split evenly, a jump one step).
+pub fn step_count(knots: &[(f64, f64)], max_dt: f64) -> f64 {
+    knots
+        .windows(2)
+        .map(|w| {
+            let len = w[1].0 - w[0].0;
+            if len > 0.0 {
+                (len / max_dt).ceil().max(1.0)
+            } else {
+                1.0
+            }
+        })
+        .sum()
+}
+
+/// Refuses a drive of more than [`MAX_STEPS`] steps, with the estimate,
+/// the memory it would need and the `max_dt` that fits.
+///
+/// # Errors
+/// [`MaterialError::Loading`] naming the estimate and the setting.
+pub fn check_step_count(knots: &[(f64, f64)], max_dt: f64) -> Result<()> {
+    let n = step_count(knots, max_dt);
+    if n <= MAX_STEPS {
+        return Ok(());
+    }
+    let total = knots.last().map_or(0.0, |k| k.0) - knots.first().map_or(0.0, |k| k.0);
+    let bytes = n * std::mem::size_of::<Sample>() as f64;
+    Err(MaterialError::Loading(format!(
+        "max_dt = {max_dt:e} s needs {n:.3e} time steps (≈ {:.1} GB of samples); the limit is \
+         {MAX_STEPS:.0e}: raise max_dt to at least {:.3e} s",
+        bytes / 1e9,
+        total / (MAX_STEPS - knots.len() as f64).max(1.0)
+    )))
+}
+
 fn positive(name: &str, x: f64) -> Result<()> {
     if x.is_finite() && x > 0.0 {
         Ok(())
@@ -207,6 +248,7 @@ pub fn drive<M: Incompressible>(
 ) -> Result<Vec<Sample>> {
     positive("max_dt", max_dt)?;
     let knots = history.knots(mode)?;
+    check_step_count(&knots, max_dt)?;
     let mut state = material.initial_state();
     let mut trial = state.clone();
     let mut out = Vec::new();
@@ -294,6 +336,7 @@ pub fn drive_uniaxial_3d<M: crate::Material3>(
 ) -> Result<Vec<[f64; 4]>> {
     positive("max_dt", max_dt)?;
     let knots = history.knots(Mode::Uniaxial)?;
+    check_step_count(&knots, max_dt)?;
     let mut state = material.initial_state();
     let mut trial = state.clone();
     let mut out = vec![[0.0, knots[0].1, 1.0, 0.0]];

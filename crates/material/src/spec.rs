@@ -329,6 +329,8 @@ impl FromSection for LoadingSpec {
             None if total > 0.0 => total / 2000.0,
             None => 1.0,
         };
+        crate::homogeneous::check_step_count(&knots, max_dt)
+            .map_err(|e| at(s, if s.has("max_dt") { "max_dt" } else { "hold" }, e))?;
         Ok(LoadingSpec {
             mode,
             history,
@@ -354,6 +356,10 @@ pub fn read_table(path: &Path, value_column: &str) -> Result<Vec<(f64, f64)>, St
         .headers()
         .map_err(|e| format!("{name}: row 1: {e}"))?
         .clone();
+    let fields: Vec<&str> = headers.iter().collect();
+    if let Some(hint) = nlvid_study::delimiter_hint(&fields) {
+        return Err(format!("{name}: row 1: {hint}"));
+    }
     let mut time = None;
     for (i, h) in headers.iter().enumerate() {
         if let Some(unit) = h.strip_prefix("time_") {

@@ -273,6 +273,11 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
         Ok(c) => c,
         Err(e) => return fail(format!("cannot read the curve: {e}")),
     };
+    let implausible = curve.implausible();
+    if !implausible.is_empty() {
+        let all: Vec<String> = implausible.iter().map(ToString::to_string).collect();
+        return fail(format!("implausible data: {}", all.join("; ")));
+    }
     let Some(indentation) = curve.indentation.clone() else {
         return fail("no indentation in the curve".into());
     };

@@ -1,14 +1,23 @@
-//! Atomic result files: every stage that writes a result a later run may
-//! resume from (per-run, per-cell, CSV outputs) writes it through here.
+//! Atomic result files: every file nlvid writes (per-run and per-cell
+//! results, exported tables and arrays, model files, plots, reports) goes
+//! through [`write_atomic`], the one write path of the workspace.
 
+use std::collections::HashSet;
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
-/// Writes `bytes` to `path` atomically: a temporary file in the same
-/// directory, flushed to disk (`fsync`), then renamed over `path`. A reader,
-/// or a run resumed after `kill -9`, sees either the old file or the whole
-/// new one, never a part. The temporary file is removed on failure.
+/// Directories whose stale temporaries this process already removed.
+static CLEANED: Mutex<Option<HashSet<PathBuf>>> = Mutex::new(None);
+
+/// Writes `bytes` to `path` atomically: a temporary file
+/// `.<name>.<pid>.tmp` in the same directory, flushed to disk (`fsync`),
+/// then renamed over `path`. A reader, or a run resumed after `kill -9` or
+/// a full disk, sees either the old file or the whole new one, never a
+/// part. The temporary file is removed on failure; temporaries left by a
+/// killed process are removed by the first write into the same directory
+/// of the next run ([`clean_stale_temps`]).
 ///
 /// # Errors
 /// The directory does not exist or is not writable, the disk is full, or the
@@ -21,6 +30,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let name = path
         .file_name()
         .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file path"))?;
+    clean_once(&dir);
     let tmp = dir.join(format!(
         ".{}.{}.tmp",
         name.to_string_lossy(),
@@ -38,6 +48,70 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     result
 }
 
+fn clean_once(dir: &Path) {
+    let Ok(mut guard) = CLEANED.lock() else {
+        return;
+    };
+    let set = guard.get_or_insert_with(HashSet::new);
+    if set.insert(dir.to_path_buf()) {
+        drop(guard);
+        let _ = clean_stale_temps(dir);
+    }
+}
+
+/// The process id in a temporary name `.<name>.<pid>.tmp`, if it is one.
+fn temp_pid(file_name: &str) -> Option<u32> {
+    let stem = file_name.strip_prefix('.')?.strip_suffix(".tmp")?;
+    let (_, pid) = stem.rsplit_once('.')?;
+    pid.parse().ok()
+}
+
+/// Whether process `pid` (which wrote the file `path`) is running: on
+/// systems with `/proc`, whether `/proc/<pid>` exists; elsewhere, whether
+/// `path` is younger than an hour. Stale temporaries and stale work claims
+/// (a build's `runs/<i>.claim`) are told apart from live ones with it.
+pub fn process_alive(pid: u32, path: &Path) -> bool {
+    alive(pid, path)
+}
+
+fn alive(pid: u32, path: &Path) -> bool {
+    if pid == std::process::id() {
+        return true;
+    }
+    let proc_root = Path::new("/proc/self");
+    if proc_root.exists() {
+        return Path::new("/proc").join(pid.to_string()).exists();
+    }
+    fs::metadata(path)
+        .and_then(|m| m.modified())
+        .ok()
+        .and_then(|t| t.elapsed().ok())
+        .is_none_or(|age| age.as_secs() < 3600)
+}
+
+/// Removes the temporaries [`write_atomic`] left in `dir` when its process
+/// was killed (its pid no longer runs); a temporary of a running process
+/// (a concurrent build into the same store) is kept. Returns how many were
+/// removed.
+///
+/// # Errors
+/// `dir` cannot be listed.
+pub fn clean_stale_temps(dir: &Path) -> std::io::Result<usize> {
+    let mut removed = 0;
+    for entry in fs::read_dir(dir)? {
+        let Ok(entry) = entry else { continue };
+        let name = entry.file_name();
+        let Some(pid) = name.to_str().and_then(temp_pid) else {
+            continue;
+        };
+        let p = entry.path();
+        if !alive(pid, &p) && fs::remove_file(&p).is_ok() {
+            removed += 1;
+        }
+    }
+    Ok(removed)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -53,6 +127,28 @@ mod tests {
         let left: Vec<_> = fs::read_dir(&dir).unwrap().collect();
         assert_eq!(left.len(), 1, "{left:?}");
         assert!(write_atomic(&dir.join("missing/out.csv"), b"x").is_err());
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn stale_temporaries_of_dead_processes_are_removed_live_ones_kept() {
+        let dir = std::env::temp_dir().join(format!("nlvid-atomic-stale-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        // pid 4194304 is above Linux's pid_max limit: never a running process.
+        let dead = dir.join(".cohort.json.4194304.tmp");
+        fs::write(&dead, b"half").unwrap();
+        let mine = dir.join(format!(".x.csv.{}.tmp", std::process::id()));
+        fs::write(&mine, b"in flight").unwrap();
+        let other = dir.join("notes.tmp");
+        fs::write(&other, b"user file").unwrap();
+        write_atomic(&dir.join("out.csv"), b"x").unwrap();
+        if Path::new("/proc/self").exists() {
+            assert!(!dead.exists(), "stale temporary survived");
+        }
+        assert!(mine.exists() && other.exists());
+        assert_eq!(temp_pid(".a.b.csv.12.tmp"), Some(12));
+        assert_eq!(temp_pid("a.12.tmp"), None);
         fs::remove_dir_all(&dir).unwrap();
     }
 }

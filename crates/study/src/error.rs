@@ -87,16 +87,21 @@ impl StudyError {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ErrorKind {
     /// The key is not read by any stage: a typo or a misplaced key.
-    #[error("unknown key{}", expected_hint(.expected))]
+    #[error("unknown key{}", unknown_hint(.key, .expected))]
     UnknownKey {
+        /// The unknown key as written.
+        key: String,
         /// Keys the reader asked for in this table (may be empty).
         expected: Vec<String>,
     },
     /// A required key is absent.
-    #[error("missing required key ({expected})")]
+    #[error("missing required key ({expected}){}", near_hint(.near))]
     MissingKey {
         /// What the key should hold.
         expected: String,
+        /// An unread key of the same table that looks like a typo of this
+        /// one (`n_trian` for `n_train`).
+        near: Option<String>,
     },
     /// A value of the wrong TOML type.
     #[error("expected {expected}, found {found}")]
@@ -159,10 +164,78 @@ pub enum ErrorKind {
     Invalid(String),
 }
 
+fn near_hint(near: &Option<String>) -> String {
+    near.as_ref().map_or_else(String::new, |k| {
+        format!("; the table has the unknown key `{k}`: a typo?")
+    })
+}
+
+fn unknown_hint(key: &str, expected: &[String]) -> String {
+    match closest(key, expected) {
+        Some(k) => format!(": did you mean `{k}`?{}", expected_hint(expected)),
+        None => expected_hint(expected),
+    }
+}
+
+/// The candidate closest to `key` when it is a likely typo of it: at most
+/// two edits (insertions, deletions, substitutions, adjacent swaps) for
+/// keys of five or more characters, one for shorter ones; ties go to the
+/// first candidate.
+pub fn closest<'a>(key: &str, candidates: &'a [String]) -> Option<&'a str> {
+    let limit = if key.chars().count() >= 5 { 2 } else { 1 };
+    candidates
+        .iter()
+        .map(|c| (edit_distance(&key.to_lowercase(), &c.to_lowercase()), c))
+        .filter(|(d, c)| *d <= limit && c.as_str() != key)
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, c)| c.as_str())
+}
+
+/// Optimal string alignment distance (Damerau–Levenshtein without
+/// repeated edits of one substring).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    let w = b.len() + 1;
+    let mut d = vec![0usize; (a.len() + 1) * w];
+    for i in 0..=a.len() {
+        for j in 0..=b.len() {
+            d[i * w + j] = if i == 0 || j == 0 {
+                i + j
+            } else {
+                let cost = usize::from(a[i - 1] != b[j - 1]);
+                let mut v = (d[(i - 1) * w + j] + 1)
+                    .min(d[i * w + j - 1] + 1)
+                    .min(d[(i - 1) * w + j - 1] + cost);
+                if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                    v = v.min(d[(i - 2) * w + j - 2] + 1);
+                }
+                v
+            };
+        }
+    }
+    d[a.len() * w + b.len()]
+}
+
 fn expected_hint(expected: &[String]) -> String {
     if expected.is_empty() {
         String::new()
     } else {
         format!(" (expected one of: {})", expected.join(", "))
+    }
+}
+
+#[cfg(test)]
+mod typo_tests {
+    use super::*;
+
+    #[test]
+    fn typos_are_matched_unrelated_keys_are_not() {
+        let keys: Vec<String> = ["n_train", "n_check", "seed"].map(String::from).to_vec();
+        assert_eq!(closest("n_trian", &keys), Some("n_train"));
+        assert_eq!(closest("n_chek", &keys), Some("n_check"));
+        assert_eq!(closest("sede", &keys), Some("seed"));
+        assert_eq!(closest("points", &keys), None);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+        assert_eq!(edit_distance("ab", "ba"), 1);
     }
 }

@@ -40,6 +40,7 @@
 
 mod atomic;
 mod bounds;
+mod delimiter;
 mod error;
 mod section;
 mod source;
@@ -47,9 +48,10 @@ mod study;
 mod tree;
 mod units;
 
-pub use atomic::write_atomic;
+pub use atomic::{clean_stale_temps, process_alive, write_atomic};
 pub use bounds::Bounds;
-pub use error::{ErrorKind, Location, Result, StudyError};
+pub use delimiter::delimiter_hint;
+pub use error::{ErrorKind, Location, Result, StudyError, closest};
 pub use section::{FromSection, Section};
 pub use study::{Leaf, LeafValue, Lint, Study, StudyHash};
 pub use units::{Dimension, Quantity, UnitError, fmt_number, parse_unit};

@@ -115,10 +115,30 @@ impl Section {
     /// radius must be below outer radius"), located at the key's value, or
     /// at the table if the key is absent.
     pub fn invalid(&self, key: &str, message: impl Into<String>) -> StudyError {
-        let at = self
-            .index(key)
-            .map_or(self.at, |i| self.entries[i].node.span.start);
-        self.err(at, key, ErrorKind::Invalid(message.into()))
+        let mut message = message.into();
+        let at = match self.index(key) {
+            Some(i) => self.entries[i].node.span.start,
+            None => match self.near_typo(key) {
+                Some(k) => {
+                    message.push_str(&format!("; the table has the unknown key `{k}`: a typo?"));
+                    self.index(&k)
+                        .map_or(self.at, |i| self.entries[i].key_span.start)
+                }
+                None => self.at,
+            },
+        };
+        self.err(at, key, ErrorKind::Invalid(message))
+    }
+
+    /// An unread key of this table that looks like a typo of `key`.
+    fn near_typo(&self, key: &str) -> Option<String> {
+        let wanted = [key.to_string()];
+        self.entries
+            .iter()
+            .zip(&self.used)
+            .filter(|(e, u)| !**u && crate::error::closest(&e.key, &wanted).is_some())
+            .map(|(e, _)| e.key.clone())
+            .next()
     }
 
     /// Refuses a key whose meaning moved to another key (an old study file):
@@ -531,6 +551,7 @@ impl Section {
                     e.key_span.start,
                     &e.key,
                     ErrorKind::UnknownKey {
+                        key: e.key.clone(),
                         expected: self.asked.clone(),
                     },
                 ))
@@ -555,11 +576,18 @@ impl Section {
 
     fn require(&mut self, key: &str, expected: &str) -> Result<usize> {
         self.take(key).ok_or_else(|| {
+            // An unread key that looks like a typo of this one: point at it.
+            let near = self.near_typo(key);
+            let at = near
+                .as_ref()
+                .and_then(|k| self.index(k))
+                .map_or(self.at, |i| self.entries[i].key_span.start);
             self.err(
-                self.at,
+                at,
                 key,
                 ErrorKind::MissingKey {
                     expected: expected.to_string(),
+                    near,
                 },
             )
         })

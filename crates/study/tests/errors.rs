@@ -23,7 +23,7 @@ fn unknown_key_is_reported_with_its_line_and_the_expected_keys() {
         .unwrap();
     assert_eq!(
         msg(s.finish()),
-        "bad.toml:3:1: key `geometry.radisu`: unknown key (expected one of: radius)"
+        "bad.toml:3:1: key `geometry.radisu`: unknown key: did you mean `radius`? (expected one of: radius)"
     );
 }
 
@@ -37,7 +37,7 @@ fn unknown_top_level_section_is_reported() {
     let _ = study.opt_section("protocol").unwrap();
     assert_eq!(
         msg(study.finish()),
-        "bad.toml:4:2: key `protocl`: unknown key (expected one of: geometry, protocol)"
+        "bad.toml:4:2: key `protocl`: unknown key: did you mean `protocol`? (expected one of: geometry, protocol)"
     );
 }
 
@@ -257,7 +257,7 @@ fn unknown_keys_in_nested_tables_are_reported_on_finish() {
         .unwrap();
     assert_eq!(
         msg(p.finish()),
-        "bad.toml:6:1: key `material.prony.tua`: unknown key (expected one of: g, tau)"
+        "bad.toml:6:1: key `material.prony.tua`: unknown key: did you mean `tau`? (expected one of: g, tau)"
     );
 }
 

@@ -77,6 +77,10 @@ pub struct BuildSummary {
     pub failed: usize,
     /// Not run because of cancellation.
     pub remaining: usize,
+    /// Run meanwhile by another build into the same store (work shared
+    /// through [`RunStore::claim`]).
+    #[serde(default)]
+    pub by_others: usize,
 }
 
 /// Run the model at every design point of the shard not yet in the store.
@@ -130,9 +134,19 @@ pub(crate) fn build_into(
     let ran = AtomicUsize::new(0);
     let failed = AtomicUsize::new(0);
     let m = model.time_grid().len();
-    todo.par_iter().try_for_each(|&i| -> Result<()> {
-        if opts.cancel.is_some_and(|c| c.load(Ordering::SeqCst)) {
-            return Ok(());
+    // Runs another build into the same store holds: waited for at the end.
+    let deferred = std::sync::Mutex::new(Vec::new());
+    let others = AtomicUsize::new(0);
+    let cancelled = || opts.cancel.is_some_and(|c| c.load(Ordering::SeqCst));
+    let run_one = |i: usize| -> Result<bool> {
+        let Some(_claim) = store.claim(i)? else {
+            return Ok(false);
+        };
+        if store.get(i).is_some() {
+            // Finished by another build just before.
+            others.fetch_add(1, Ordering::Relaxed);
+            bar.inc(1);
+            return Ok(true);
         }
         let t0 = Instant::now();
         let outcome = match model.run(&design[i]) {
@@ -168,17 +182,47 @@ pub(crate) fn build_into(
         store.put(&rec)?;
         ran.fetch_add(1, Ordering::Relaxed);
         bar.inc(1);
+        Ok(true)
+    };
+    todo.par_iter().try_for_each(|&i| -> Result<()> {
+        if !cancelled() && !run_one(i)? {
+            deferred.lock().map_err(|_| poisoned())?.push(i);
+        }
         Ok(())
     })?;
+    // Wait for the runs other builds claimed; take over those whose
+    // builder was killed.
+    let mut waiting = deferred.into_inner().map_err(|_| poisoned())?;
+    while !waiting.is_empty() && !cancelled() {
+        let before = waiting.len();
+        let mut still = Vec::new();
+        for i in waiting {
+            if store.get(i).is_some() {
+                others.fetch_add(1, Ordering::Relaxed);
+                bar.inc(1);
+            } else if !run_one(i)? {
+                still.push(i);
+            }
+        }
+        if still.len() == before {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        waiting = still;
+    }
     bar.finish_and_clear();
-    let ran = ran.into_inner();
+    let (ran, by_others) = (ran.into_inner(), others.into_inner());
     Ok(BuildSummary {
         in_shard,
         skipped,
         ran,
         failed: failed.into_inner(),
-        remaining: in_shard - skipped - ran,
+        remaining: in_shard - skipped - ran - by_others,
+        by_others,
     })
+}
+
+fn poisoned() -> SurrogateError {
+    SurrogateError::InvalidInput("a build thread panicked".into())
 }
 
 /// Admissibility filters of the thesis (§5.4.1, App. A.2).
@@ -325,6 +369,28 @@ pub fn write_npy(path: &Path, rows: &[Vec<f64>], ncols: usize) -> Result<()> {
     write_atomic(path, &bytes)
 }
 
+/// Writes a CSV table (header, rows) through [`write_atomic`]: the file is
+/// absent or complete, never cut by a kill or a full disk.
+fn write_csv(
+    path: &Path,
+    head: Vec<String>,
+    rows: impl Iterator<Item = Vec<String>>,
+) -> Result<()> {
+    let err = |e: csv::Error| SurrogateError::Parse {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    };
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(&head).map_err(err)?;
+    for r in rows {
+        w.write_record(&r).map_err(err)?;
+    }
+    let bytes = w
+        .into_inner()
+        .map_err(|e| SurrogateError::InvalidInput(format!("CSV buffer: {e}")))?;
+    write_atomic(path, &bytes)
+}
+
 /// Export a filtered meta-model to `dir`: `X.csv`, `Y.csv`, `X.npy`,
 /// `Y.npy`, `t.npy`, `status.csv` (index, status, reason), `timing.csv`
 /// (index, status, wall seconds) and `meta.json` (names, units, time,
@@ -351,59 +417,45 @@ pub fn export(mm: &MetaModel, dir: &Path, domain: Option<&Domain>) -> Result<()>
         }
     }
     std::fs::create_dir_all(dir).map_err(io_err(dir))?;
-    let csv_err = |p: &Path| {
-        let p = p.to_path_buf();
-        move |e: csv::Error| SurrogateError::Parse {
-            path: p.clone(),
-            message: e.to_string(),
-        }
-    };
-    let xp = dir.join("X.csv");
-    let mut w = csv::Writer::from_path(&xp).map_err(csv_err(&xp))?;
-    let mut head = vec!["index".to_string()];
-    head.extend(
+    let x_rows = mm.index.iter().zip(&mm.x).map(|(i, x)| {
+        std::iter::once(i.to_string())
+            .chain(x.iter().map(|v| format!("{v:e}")))
+            .collect::<Vec<_>>()
+    });
+    let head = std::iter::once("index".to_string()).chain(
         mm.meta
             .parameter_names
             .iter()
             .zip(&mm.meta.parameter_units)
             .map(|(n, u)| format!("{n} [{u}]")),
     );
-    w.write_record(&head).map_err(csv_err(&xp))?;
-    for (i, x) in mm.index.iter().zip(&mm.x) {
-        let mut r = vec![i.to_string()];
-        r.extend(x.iter().map(|v| format!("{v:e}")));
-        w.write_record(&r).map_err(csv_err(&xp))?;
-    }
-    w.flush().map_err(io_err(&xp))?;
-    let yp = dir.join("Y.csv");
-    let mut w = csv::Writer::from_path(&yp).map_err(csv_err(&yp))?;
-    w.write_record(mm.meta.time.iter().map(|t| format!("F(t={t:e} s) [N]")))
-        .map_err(csv_err(&yp))?;
-    for y in &mm.y {
-        w.write_record(y.iter().map(|v| format!("{v:e}")))
-            .map_err(csv_err(&yp))?;
-    }
-    w.flush().map_err(io_err(&yp))?;
+    write_csv(&dir.join("X.csv"), head.collect(), x_rows)?;
+    write_csv(
+        &dir.join("Y.csv"),
+        mm.meta
+            .time
+            .iter()
+            .map(|t| format!("F(t={t:e} s) [N]"))
+            .collect(),
+        mm.y.iter()
+            .map(|y| y.iter().map(|v| format!("{v:e}")).collect()),
+    )?;
     // status.csv is deterministic (merged shards and resumed builds
     // reproduce it byte for byte); wall times go to timing.csv.
-    let sp = dir.join("status.csv");
-    let mut w = csv::Writer::from_path(&sp).map_err(csv_err(&sp))?;
-    w.write_record(["index", "status", "reason"])
-        .map_err(csv_err(&sp))?;
-    for (i, s, r, _) in &mm.status {
-        w.write_record([i.to_string(), s.clone(), r.clone()])
-            .map_err(csv_err(&sp))?;
-    }
-    w.flush().map_err(io_err(&sp))?;
-    let tp = dir.join("timing.csv");
-    let mut w = csv::Writer::from_path(&tp).map_err(csv_err(&tp))?;
-    w.write_record(["index", "status", "seconds"])
-        .map_err(csv_err(&tp))?;
-    for (i, s, _, sec) in &mm.status {
-        w.write_record([i.to_string(), s.clone(), format!("{sec:e}")])
-            .map_err(csv_err(&tp))?;
-    }
-    w.flush().map_err(io_err(&tp))?;
+    write_csv(
+        &dir.join("status.csv"),
+        vec!["index".into(), "status".into(), "reason".into()],
+        mm.status
+            .iter()
+            .map(|(i, s, r, _)| vec![i.to_string(), s.clone(), r.clone()]),
+    )?;
+    write_csv(
+        &dir.join("timing.csv"),
+        vec!["index".into(), "status".into(), "seconds".into()],
+        mm.status
+            .iter()
+            .map(|(i, s, _, sec)| vec![i.to_string(), s.clone(), format!("{sec:e}")]),
+    )?;
     write_npy(&dir.join("X.npy"), &mm.x, mm.meta.parameter_names.len())?;
     write_npy(&dir.join("Y.npy"), &mm.y, mm.meta.time.len())?;
     write_npy(

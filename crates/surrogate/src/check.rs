@@ -267,7 +267,7 @@ pub fn plot_svg(
         w - mr - 120.0,
         mt + 36.0,
     );
-    std::fs::write(path, svg).map_err(io_err(path))
+    nlvid_study::write_atomic(path, svg.as_bytes()).map_err(io_err(path))
 }
 
 fn xml_escape(s: &str) -> String {

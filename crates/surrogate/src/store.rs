@@ -226,6 +226,69 @@ impl RunStore {
             .filter(|r| r.index == index)
     }
 
+    fn claim_path(&self, index: usize) -> PathBuf {
+        self.dir.join("runs").join(format!("{index:06}.claim"))
+    }
+
+    /// Claims run `index` for this process, so that concurrent builds into
+    /// one store share the work: the claim file `runs/<index>.claim` is
+    /// created exclusively and holds the process id. `None` when a running
+    /// process holds the claim; a claim of a process that no longer runs
+    /// (killed) is taken over. The claim is released when dropped.
+    ///
+    /// # Errors
+    /// The claim file cannot be created for another reason than existing.
+    pub fn claim(&self, index: usize) -> Result<Option<Claim>> {
+        let path = self.claim_path(index);
+        for _ in 0..2 {
+            match fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&path)
+            {
+                Ok(mut f) => {
+                    use std::io::Write as _;
+                    f.write_all(std::process::id().to_string().as_bytes())
+                        .map_err(io_err(&path))?;
+                    return Ok(Some(Claim { path }));
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    let owner = fs::read_to_string(&path)
+                        .ok()
+                        .and_then(|t| t.trim().parse::<u32>().ok());
+                    match owner {
+                        Some(pid)
+                            if pid != std::process::id()
+                                && nlvid_study::process_alive(pid, &path) =>
+                        {
+                            return Ok(None);
+                        }
+                        // Ours from an earlier store in this process, or
+                        // written by a process killed since: stale.
+                        Some(_) => {
+                            let _ = fs::remove_file(&path);
+                        }
+                        // Empty: being written right now, or its writer
+                        // was killed between creating and writing it.
+                        None => {
+                            let age = fs::metadata(&path)
+                                .and_then(|m| m.modified())
+                                .ok()
+                                .and_then(|t| t.elapsed().ok());
+                            if age.is_some_and(|a| a.as_secs() >= 10) {
+                                let _ = fs::remove_file(&path);
+                            } else {
+                                return Ok(None);
+                            }
+                        }
+                    }
+                }
+                Err(e) => return Err(io_err(&path)(e)),
+            }
+        }
+        Ok(None)
+    }
+
     /// Store a run atomically.
     pub fn put(&self, rec: &RunRecord) -> Result<()> {
         let bytes =
@@ -237,6 +300,18 @@ impl RunStore {
     pub fn all(&self) -> Result<Vec<RunRecord>> {
         let n = self.meta()?.design.len();
         Ok((0..n).filter_map(|i| self.get(i)).collect())
+    }
+}
+
+/// A claim on one run of a store ([`RunStore::claim`]); removed on drop.
+#[derive(Debug)]
+pub struct Claim {
+    path: PathBuf,
+}
+
+impl Drop for Claim {
+    fn drop(&mut self) {
+        let _ = fs::remove_file(&self.path);
     }
 }
 

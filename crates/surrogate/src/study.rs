@@ -23,6 +23,27 @@ pub struct BuildStudy {
     pub settings: BuildSettings,
 }
 
+/// The largest store plus export one build may write, bytes (each run
+/// file holds its response as JSON text, ≈ 24 bytes a value; the export
+/// holds it twice more, as CSV text and as f64).
+pub const MAX_OUTPUT_BYTES: f64 = 50e9;
+
+/// Refuses a build whose store and export would exceed
+/// [`MAX_OUTPUT_BYTES`], with the estimate and the settings to change.
+fn check_output_size(path: &Path, runs: usize, points: usize) -> Result<()> {
+    let bytes = runs as f64 * (points as f64 * (24.0 + 14.0 + 8.0) + 300.0);
+    if bytes <= MAX_OUTPUT_BYTES {
+        return Ok(());
+    }
+    Err(SurrogateError::InvalidSettings(format!(
+        "{}: {runs} runs × {points} time points need ≈ {:.0} GB of store and export \
+         (limit {:.0} GB): lower design.n_train / n_check or the model's `points`",
+        path.display(),
+        bytes / 1e9,
+        MAX_OUTPUT_BYTES / 1e9
+    )))
+}
+
 impl BuildStudy {
     /// Reads the study at `path`; sections of other stages are left alone,
     /// unknown ones are errors.
@@ -38,6 +59,11 @@ impl BuildStudy {
         let (names, units) = (model.parameter_names(), model.parameter_units());
         let settings = BuildSettings::from_study(study, &names, &units, model.contact_index())
             .map_err(|e| bad(&e))?;
+        check_output_size(
+            path,
+            settings.design.n_train + settings.design.n_check,
+            model.time_grid().len(),
+        )?;
         Ok(Self { model, settings })
     }
 
@@ -295,6 +321,12 @@ pub fn build_report(
         "{name}: {} runs in shard: {} already done, {} run now ({} failed) in {secs:.2} s{per_run}\n",
         s.in_shard, s.skipped, s.ran, s.failed
     );
+    if s.by_others > 0 {
+        text.push_str(&format!(
+            "{name}: {} runs done meanwhile by another build into this store\n",
+            s.by_others
+        ));
+    }
     if s.failed > 0 {
         for (i, status, reason, secs) in &load(store, &Admissibility::default())?.status {
             if status == "failed" {

@@ -59,6 +59,9 @@ pub fn read_table(path: &Path) -> Result<Table> {
         .iter()
         .map(String::from)
         .collect();
+    if let Some(hint) = nlvid_study::delimiter_hint(&head) {
+        return Err(parse_err(path, format!("line 1: {hint}")));
+    }
     let keep: Vec<usize> = (0..head.len()).filter(|&j| head[j] != "index").collect();
     let mut rows = Vec::new();
     for (r, rec) in rdr.records().enumerate() {

@@ -47,7 +47,8 @@ pub struct BuildArgs {
     #[arg(long)]
     pub store: Option<PathBuf>,
     /// Build only slice i/n (1-based), e.g. `--shard $((SLURM_ARRAY_TASK_ID+1))/$SLURM_ARRAY_TASK_COUNT`.
-    #[arg(long)]
+    /// A malformed slice is a usage error (exit status 2).
+    #[arg(long, value_parser = |s: &str| Shard::parse(s).map(|_| s.to_string()).map_err(|e| e.to_string()))]
     pub shard: Option<String>,
     /// Export X, Y (npy + CSV) and a JSON sidecar to this directory when
     /// done. Overrides `[build] export`.
@@ -131,6 +132,10 @@ impl BuildArgs {
                 Some(_) => self.export.clone(),
                 None => self.export.clone().or(st.settings.export.clone()),
             };
+            crate::output::check_output_dir(&store)?;
+            if let Some(d) = &export_dir {
+                crate::output::check_output_dir(d)?;
+            }
             let opts = options(shard, self.quiet);
             st.build_all(&store, export_dir.as_deref(), &opts, &mut |t| {
                 std::io::Write::write_all(&mut std::io::stdout(), t.as_bytes())
@@ -147,6 +152,10 @@ impl BuildArgs {
                  afm-fe and membrane are set up in a study file's [forward] section)"
             ),
         };
+        crate::output::check_output_dir(store)?;
+        if let Some(d) = &self.export {
+            crate::output::check_output_dir(d)?;
+        }
         let design = read_table(design_path)?;
         if design.header.len() != 5 {
             bail!(

@@ -24,13 +24,13 @@ pub struct Args {
     #[arg(long, value_delimiter = ',')]
     pub groups: Option<Vec<String>>,
     /// End of the uniform time grid, with a unit (the thesis compares up to 52 s).
-    #[arg(long, default_value = "52 s", value_parser = |s: &str| quantity(s, Dimension::TIME))]
+    #[arg(long, default_value = "52 s", allow_hyphen_values = true, value_parser = |s: &str| quantity(s, Dimension::TIME))]
     pub t_end: f64,
     /// Number of points of the uniform time grid from 0 to --t-end.
     #[arg(long, default_value_t = 53)]
     pub points: usize,
     /// Any increasing time grid instead, e.g. `--times "0 s,0.1 s,1 s,10 s,52 s"`.
-    #[arg(long, value_delimiter = ',', conflicts_with_all = ["t_end", "points"],
+    #[arg(long, value_delimiter = ',', conflicts_with_all = ["t_end", "points"], allow_hyphen_values = true,
           value_parser = |s: &str| quantity(s.trim(), Dimension::TIME))]
     pub times: Option<Vec<f64>>,
     /// p-value method: matlab (the thesis's ranksum), scipy (mannwhitneyu
@@ -70,6 +70,7 @@ impl Run for Args {
                 .map(Path::to_path_buf)
                 .unwrap_or_default()
         });
+        crate::output::check_output_dir(&out_dir)?;
         Ok(Config {
             table: read_results(&self.results)?,
             results: self.results,

@@ -14,10 +14,17 @@ use nlvid_study::Dimension;
 use crate::output::{print_json, print_text, write_atomic};
 
 /// A quantity with a unit, or a bare number in SI.
+/// A positive quantity in SI (a bare number is taken as SI); negative
+/// values reach here (`allow_hyphen_values`) and are refused by name.
 fn si(text: &str, dim: Dimension) -> Result<f64, String> {
-    match nlvid_study::Quantity::parse(text) {
-        Ok(q) if q.dim == Dimension::NONE => Ok(q.value),
-        _ => crate::args::quantity(text, dim),
+    let v = match nlvid_study::Quantity::parse(text) {
+        Ok(q) if q.dim == Dimension::NONE => q.value,
+        _ => crate::args::quantity(text, dim)?,
+    };
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("`{text}` must be positive"))
     }
 }
 
@@ -36,10 +43,10 @@ pub struct Args {
     #[arg(long)]
     pub samples: bool,
     /// Spring constant replacing the file's, e.g. "0.12 N/m" (needed if the file has none).
-    #[arg(long, value_name = "K", value_parser = |s: &str| si(s, Dimension::STIFFNESS))]
+    #[arg(long, value_name = "K", allow_hyphen_values = true, value_parser = |s: &str| si(s, Dimension::STIFFNESS))]
     pub spring_constant: Option<f64>,
     /// Deflection sensitivity replacing the file's, e.g. "110.28 nm/V".
-    #[arg(long, value_name = "S", value_parser = |s: &str| si(s, Dimension::LENGTH_PER_VOLTAGE))]
+    #[arg(long, value_name = "S", allow_hyphen_values = true, value_parser = |s: &str| si(s, Dimension::LENGTH_PER_VOLTAGE))]
     pub sensitivity: Option<f64>,
     /// Curve of a force map to inspect (0-based).
     #[arg(long, default_value_t = 0)]
@@ -48,7 +55,7 @@ pub struct Args {
     #[arg(long, value_enum)]
     pub fit: Option<Fit>,
     /// Probe radius for --fit, e.g. "40 nm" or "5 um" (not stored in JPK files).
-    #[arg(long, value_name = "R", value_parser = |s: &str| si(s, Dimension::LENGTH))]
+    #[arg(long, value_name = "R", allow_hyphen_values = true, value_parser = |s: &str| si(s, Dimension::LENGTH))]
     pub tip_radius: Option<f64>,
     /// Poisson ratio of the sample for --fit hertz.
     #[arg(long, default_value_t = 0.5)]
@@ -85,6 +92,9 @@ impl Args {
     /// # Errors
     /// Unreadable file, a missing calibration, a fit that fails, unwritable outputs.
     pub fn run(self, json: bool) -> anyhow::Result<ExitCode> {
+        for p in [&self.csv, &self.plot].into_iter().flatten() {
+            crate::output::check_output_file(p)?;
+        }
         let options = ReadOptions {
             spring_constant: self.spring_constant,
             sensitivity: self.sensitivity,

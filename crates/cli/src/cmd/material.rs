@@ -39,11 +39,13 @@ impl Run for Args {
 
     fn validate(self, _ctx: &Context) -> anyhow::Result<Config> {
         let mut study = Study::load(&self.study)?;
+        super::check::section_typos(&mut study)?;
         let material: MaterialSpec = study.read("material")?;
         let loading: LoadingSpec = study.read("loading")?;
         let output = self
             .output
             .unwrap_or_else(|| next_to(&self.study, "material.csv"));
+        crate::output::check_output_file(&output)?;
         Ok(Config {
             study,
             material,

@@ -33,7 +33,7 @@ pub struct MembraneArgs {
     pub out: Option<PathBuf>,
     /// Times at which profiles are written, e.g. `--profile-times "0 s,10 s"`
     /// (default: the last solve time).
-    #[arg(long, value_delimiter = ',', value_parser = |s: &str| quantity(s.trim(), Dimension::TIME))]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_parser = |s: &str| quantity(s.trim(), Dimension::TIME))]
     pub profile_times: Option<Vec<f64>>,
 }
 
@@ -63,6 +63,7 @@ fn run_study(args: &MembraneArgs, path: &Path, json: bool) -> anyhow::Result<Exi
         .out
         .clone()
         .unwrap_or_else(|| next_to(path, "membrane"));
+    crate::output::check_output_dir(&out)?;
     let profile_times = args.profile_times.clone();
     let run = sim
         .run(&profile_times.unwrap_or_else(|| vec![spec.program.end()]))
@@ -85,6 +86,7 @@ fn run_reproduce(args: &MembraneArgs, json: bool) -> anyhow::Result<ExitCode> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("membrane-thesis"));
+    crate::output::check_output_dir(&out)?;
     let (figs, rows, notes) = nlvid_membrane::thesis::reproduce().context("reproducing ch. II")?;
     create(&out)?;
     let mut files = Vec::new();

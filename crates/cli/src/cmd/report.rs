@@ -33,6 +33,9 @@ impl Run for Args {
                 self.dir.display()
             );
         }
+        if let Some(o) = &self.out {
+            crate::output::check_output_dir(o)?;
+        }
         if let Some(p) = &self.surrogate_check
             && !p.is_file()
         {

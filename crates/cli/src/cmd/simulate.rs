@@ -183,10 +183,15 @@ impl Run for Args {
         if self.mesh_output.is_some() && sim.model() != "afm-fe" {
             anyhow::bail!("--mesh-output: only the afm-fe model has a mesh");
         }
+        let output = self
+            .output
+            .unwrap_or_else(|| next_to(&self.study, "simulate.csv"));
+        crate::output::check_output_file(&output)?;
+        if let Some(m) = &self.mesh_output {
+            crate::output::check_output_file(m)?;
+        }
         Ok(Config {
-            output: self
-                .output
-                .unwrap_or_else(|| next_to(&self.study, "simulate.csv")),
+            output,
             name,
             provenance,
             sim,
