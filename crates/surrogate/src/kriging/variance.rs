@@ -141,8 +141,6 @@ impl KrigingModel {
     }
 }
 
-
-
 /// The process covariance K of the outputs (m × m), `Cov[ŷ(x)] = v(x)·K`
 /// with v of [`KrigingModel::mse_scale`].
 #[derive(Debug, Clone, PartialEq)]
@@ -283,7 +281,6 @@ fn psd_cholesky(a: &[f64], k: usize) -> Result<Vec<f64>> {
     }
     Ok(l)
 }
-
 
 #[cfg(test)]
 mod tests {
