@@ -179,6 +179,29 @@ pub struct Parts {
     pub cavity: Option<Cavity>,
 }
 
+impl Parts {
+    /// The eighth of a fluid-filled capsule compressed by a plate
+    /// (§4.3): symmetry rollers on the planes x = 0, y = 0, z = 0 (node
+    /// sets `x0`, `y0`, `z0` of [`crate::ellipsoidal_shell`]), a rigid
+    /// plate above the outer surface (`outer`) and the fluid in the
+    /// cavity bounded by `inner`.
+    pub fn eighth_capsule(fluid: Fluid) -> Self {
+        Self {
+            supports: vec![
+                Support::fixed("x0", Component::X),
+                Support::fixed("y0", Component::Y),
+                Support::fixed("z0", Component::Z),
+            ],
+            planes: vec![RigidPlane::above("outer")],
+            cavity: Some(Cavity {
+                boundary: "inner".into(),
+                fluid,
+            }),
+            ..Self::default()
+        }
+    }
+}
+
 /// How the probe's vertical displacement w is driven.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum ProbeDrive {
@@ -1910,19 +1933,7 @@ mod tests {
             ShellPart::Eighth,
         ))
         .unwrap();
-        let parts = Parts {
-            supports: vec![
-                Support::fixed("x0", Component::X),
-                Support::fixed("y0", Component::Y),
-                Support::fixed("z0", Component::Z),
-            ],
-            planes: vec![RigidPlane::above("outer")],
-            cavity: Some(Cavity {
-                boundary: "inner".into(),
-                fluid,
-            }),
-            ..Parts::default()
-        };
+        let parts = Parts::eighth_capsule(fluid);
         let material = nlvid_material::MooneyRivlin::with_ratio(1e6, 0.3, 1e8).unwrap();
         let settings = Settings {
             symmetric,

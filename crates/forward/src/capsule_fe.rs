@@ -25,8 +25,8 @@
 
 use nlvid_fem::shell::{ShellPart, ShellSpec, ellipsoidal_shell};
 use nlvid_fem::{
-    Cavity, Component, Fluid, LiftOff, Mesh3, Model, Parts, PatchSpec, PlateProgram, PlateRun,
-    RigidPlane, Settings, Solid, Support, Symmetry, run_plate_program,
+    Fluid, LiftOff, Mesh3, Model, Parts, PatchSpec, PlateProgram, PlateRun, Settings, Solid,
+    Symmetry, run_plate_program,
 };
 use nlvid_material::PronyViscoelastic;
 use nlvid_model::{Curve, FailureKind, ForwardModel, RunFailure, names};
@@ -303,22 +303,10 @@ impl CapsuleFeModel {
     /// time and, for a collapsing element, the element).
     pub fn run_plates(&self, p: &[f64]) -> std::result::Result<PlateRun, RunFailure> {
         let material = self.material(p)?;
-        let parts = Parts {
-            supports: vec![
-                Support::fixed("x0", Component::X),
-                Support::fixed("y0", Component::Y),
-                Support::fixed("z0", Component::Z),
-            ],
-            planes: vec![RigidPlane::above("outer")],
-            cavity: Some(Cavity {
-                boundary: "inner".into(),
-                fluid: match self.spec.fluid_bulk_modulus {
-                    None => Fluid::Incompressible,
-                    Some(bulk_modulus) => Fluid::Compressible { bulk_modulus },
-                },
-            }),
-            ..Parts::default()
-        };
+        let parts = Parts::eighth_capsule(match self.spec.fluid_bulk_modulus {
+            None => Fluid::Incompressible,
+            Some(bulk_modulus) => Fluid::Compressible { bulk_modulus },
+        });
         // Full Newton steps may land inside the plate while the load passes
         // through zero (RR, separation); `atol` replaces rtol × a vanishing
         // force (docs/theory/fem.md, "Planes, supports, tolerance").
