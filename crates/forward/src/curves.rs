@@ -197,6 +197,12 @@ pub fn afm_curve(
              run by `nlvid membrane`"
                 .into(),
         )),
+        ForwardSpec::CapsuleFe(_) => Err(setting(
+            "capsule-fe",
+            "the curve writer writes AFM curves (afm-fe, hertz-prony); capsule curves are \
+             written by `nlvid simulate` (examples/capsule/regenerate.sh)"
+                .into(),
+        )),
     }
 }
 

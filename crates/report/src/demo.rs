@@ -176,11 +176,12 @@ fn load_forward(path: &Path) -> Result<(ForwardSettings, f64, f64, f64)> {
             let end = piezo.last().map_or(0.0, |p| p.0);
             (a.probe_radius, ramp, end)
         }
-        ForwardSpec::Membrane(_) => {
+        ForwardSpec::Membrane(_) | ForwardSpec::CapsuleFe(_) => {
             return Err(ReportError::InvalidSetting(format!(
-                "{}: [forward] membrane: the demo data generator writes AFM curves \
+                "{}: [forward] {}: the demo data generator writes AFM curves \
                  (afm-fe, hertz-prony)",
-                path.display()
+                path.display(),
+                fwd.spec.name()
             )));
         }
     };
