@@ -37,6 +37,10 @@ if [ -z "${NLVID_BIN:-}" ]; then
     export NLVID_BIN="${CARGO_TARGET_DIR:-$root/target}/debug/nlvid"
 fi
 
+# Absolute: pytest runs from crates/py/tests.
+NLVID_BIN="$(cd "$(dirname "$NLVID_BIN")" && pwd)/$(basename "$NLVID_BIN")"
+export NLVID_BIN
+
 echo "== pytest"
 cd "$root/crates/py/tests"   # not the source tree's python/ (the installed package is tested)
 rc=0

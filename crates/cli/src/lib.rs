@@ -63,20 +63,10 @@ pub fn report(err: &anyhow::Error) -> ExitCode {
     ExitCode::FAILURE
 }
 
-/// The error and its causes, `: `-joined, each cause text once.
+/// The error and its causes, `: `-joined, each cause text once
+/// ([`nlvid_study::error_message`], also the Python exceptions' text).
 pub fn message(err: &anyhow::Error) -> String {
-    let mut msg = String::new();
-    for e in err.chain() {
-        let t = e.to_string();
-        if t.is_empty() || msg.contains(&t) {
-            continue;
-        }
-        if !msg.is_empty() {
-            msg.push_str(": ");
-        }
-        msg.push_str(&t);
-    }
-    msg
+    nlvid_study::error_message(err.as_ref())
 }
 
 /// Logs to stderr; `-v` raises the level, `NLVID_LOG` (an `EnvFilter`

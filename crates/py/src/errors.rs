@@ -50,17 +50,9 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// The message the CLI prints for `err`: the error and each of its causes
-/// joined by `: ` (anyhow's `{:#}`, which the CLI prints after `error: `).
+/// The message the CLI prints for `err` ([`nlvid_study::error_message`]).
 pub(crate) fn message(err: &(dyn std::error::Error + 'static)) -> String {
-    let mut text = err.to_string();
-    let mut source = err.source();
-    while let Some(s) = source {
-        text.push_str(": ");
-        text.push_str(&s.to_string());
-        source = s.source();
-    }
-    text
+    nlvid_study::error_message(err)
 }
 
 /// The study error `e` is, or wraps transparently (a transparent variant

@@ -1,9 +1,10 @@
-//! Study files: load and validate (`nlvid check`: `Study::load`, the
-//! registered section schemas, `Study::lint`), every value in SI.
+//! Study files: load and validate (a file: exactly `nlvid check`,
+//! `nlvid_report::check::check_study`), every value in SI.
 
 use std::path::PathBuf;
 
-use nlvid_study::{LeafValue, Study as RStudy};
+use nlvid_report::check::leaf_json;
+use nlvid_study::Study as RStudy;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use serde_json::json;
@@ -75,17 +76,6 @@ fn lint_error(study: &RStudy, message: &str) -> PyErr {
     e
 }
 
-fn leaf_json(l: &nlvid_study::Leaf) -> serde_json::Value {
-    let (value, unit, written) = match &l.value {
-        LeafValue::Quantity { text, si } => (json!(si.value), si.dim.si_unit(), json!(text)),
-        LeafValue::Number(x) => (json!(x), String::new(), json!(null)),
-        LeafValue::Integer(i) => (json!(i), String::new(), json!(null)),
-        LeafValue::Bool(b) => (json!(b), String::new(), json!(null)),
-        LeafValue::Text(t) | LeafValue::Datetime(t) => (json!(t), String::new(), json!(null)),
-    };
-    json!({ "key": l.key, "line": l.line, "value": value, "unit": unit, "written": written })
-}
-
 /// A validated study file: its values in SI, hash and warnings.
 ///
 /// Made by `load_study(path)` or `parse_study(text)`; pass it (or a path)
@@ -104,6 +94,33 @@ pub(crate) struct Study {
 
 impl Study {
     fn validate(source: Source) -> PyResult<Self> {
+        if let Source::File(path) = &source {
+            // A file: exactly `nlvid check` (every stage's validation).
+            let c = match nlvid_report::check::check_study(path) {
+                Ok(c) => c,
+                Err(e) => {
+                    let message = crate::errors::message(e.as_ref());
+                    if let Ok(study) = RStudy::load(path)
+                        && study.lint().errors.first() == Some(&message)
+                    {
+                        return Err(lint_error(&study, &message));
+                    }
+                    return Err(crate::errors::to_py(e.as_ref(), None));
+                }
+            };
+            let name = RStudy::load(path).py()?.name().to_string();
+            return Ok(Study {
+                name,
+                sha256: c.hash,
+                values: c.leaves.iter().map(leaf_json).collect(),
+                schema_checked: c.schema_checked,
+                warnings: c.warnings,
+                table: c.table,
+                source,
+            });
+        }
+        // Text: syntax, units, numbers and the [protocol] schema (the stages'
+        // validations read files named relative to a study file).
         let mut study = source.load()?;
         let schema_checked = check_schemas(&mut study)?;
         let lint = study.lint();

@@ -14,6 +14,7 @@ height = "12.22 um"
 diameter = "28.88 um"
 probe_radius = "2.5 um"
 spring_constant = "0.12 N/m"
+mesh = "coons"
 elements_per_side = 6
 mesh_bias = 4.0
 bulk_ratio = 1000

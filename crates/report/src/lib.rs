@@ -52,6 +52,7 @@
 #![warn(missing_docs)]
 
 pub mod cell;
+pub mod check;
 pub mod cohort;
 pub mod compare;
 pub mod demo;

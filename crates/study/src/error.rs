@@ -239,3 +239,23 @@ mod typo_tests {
         assert_eq!(edit_distance("ab", "ba"), 1);
     }
 }
+
+/// The message nlvid prints for `err` (after `error: ` on the command line,
+/// as the exception text in Python): the error and each of its causes,
+/// `: `-joined, a cause whose text is already in the message left out (an
+/// I/O error wrapped with its own text is printed once).
+pub fn error_message(err: &(dyn std::error::Error + 'static)) -> String {
+    let mut msg = String::new();
+    let mut next = Some(err);
+    while let Some(e) = next {
+        let t = e.to_string();
+        if !t.is_empty() && !msg.contains(&t) {
+            if !msg.is_empty() {
+                msg.push_str(": ");
+            }
+            msg.push_str(&t);
+        }
+        next = e.source();
+    }
+    msg
+}

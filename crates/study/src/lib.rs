@@ -51,7 +51,7 @@ mod units;
 pub use atomic::{clean_stale_temps, process_alive, write_atomic};
 pub use bounds::Bounds;
 pub use delimiter::delimiter_hint;
-pub use error::{ErrorKind, Location, Result, StudyError, closest};
+pub use error::{ErrorKind, Location, Result, StudyError, closest, error_message};
 pub use section::{FromSection, Section};
 pub use study::{Leaf, LeafValue, Lint, Study, StudyHash};
 pub use units::{Dimension, Quantity, UnitError, fmt_number, parse_unit};
