@@ -224,22 +224,6 @@ fn expected_hint(expected: &[String]) -> String {
     }
 }
 
-#[cfg(test)]
-mod typo_tests {
-    use super::*;
-
-    #[test]
-    fn typos_are_matched_unrelated_keys_are_not() {
-        let keys: Vec<String> = ["n_train", "n_check", "seed"].map(String::from).to_vec();
-        assert_eq!(closest("n_trian", &keys), Some("n_train"));
-        assert_eq!(closest("n_chek", &keys), Some("n_check"));
-        assert_eq!(closest("sede", &keys), Some("seed"));
-        assert_eq!(closest("points", &keys), None);
-        assert_eq!(edit_distance("kitten", "sitting"), 3);
-        assert_eq!(edit_distance("ab", "ba"), 1);
-    }
-}
-
 /// The message nlvid prints for `err` (after `error: ` on the command line,
 /// as the exception text in Python): the error and each of its causes,
 /// `: `-joined, a cause whose text is already in the message left out (an
@@ -258,4 +242,20 @@ pub fn error_message(err: &(dyn std::error::Error + 'static)) -> String {
         next = e.source();
     }
     msg
+}
+
+#[cfg(test)]
+mod typo_tests {
+    use super::*;
+
+    #[test]
+    fn typos_are_matched_unrelated_keys_are_not() {
+        let keys: Vec<String> = ["n_train", "n_check", "seed"].map(String::from).to_vec();
+        assert_eq!(closest("n_trian", &keys), Some("n_train"));
+        assert_eq!(closest("n_chek", &keys), Some("n_check"));
+        assert_eq!(closest("sede", &keys), Some("seed"));
+        assert_eq!(closest("points", &keys), None);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+        assert_eq!(edit_distance("ab", "ba"), 1);
+    }
 }
