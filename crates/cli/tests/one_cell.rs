@@ -427,3 +427,56 @@ fn modulus_of_cohort(csv: &Path) -> Vec<f64> {
         })
         .collect()
 }
+
+/// `nlvid simulate --parameters` (the curve writer) writes the cell as a
+/// measured AFM curve: without noise, deflection × k is the Lee–Radok
+/// force of G(t) and piezo − deflection the indentation, to the digits
+/// the CSV keeps.
+#[test]
+fn curve_writer_writes_the_cells_lee_radok_curve() {
+    let dir = scratch("one-cell-curves");
+    std::fs::write(
+        dir.join("cell.toml"),
+        format!("title = \"one cell: curves\"\n{FORWARD}"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("sets.csv"),
+        "name,G0,g1,g2,tau1,tau2\ncell,1000,0.4,0.3,0.5,10\n",
+    )
+    .unwrap();
+    run_in(
+        &dir,
+        &[
+            "simulate",
+            "cell.toml",
+            "--parameters",
+            "sets.csv",
+            "--out-dir",
+            "curves",
+            "--noise",
+            "0",
+            "--spring-constant",
+            "0.12",
+        ],
+    );
+    let table = std::fs::read_to_string(dir.join("curves/cell.csv")).unwrap();
+    let peak = lee_radok_force(RAMP);
+    let (mut worst_force, mut worst_depth, mut rows): (f64, f64, usize) = (0.0, 0.0, 0);
+    for line in table.lines().skip(1) {
+        let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        let (t, piezo, deflection) = (v[0], v[1] * 1e-6, v[2] * 1e-9);
+        worst_force = worst_force.max((deflection * SPRING - lee_radok_force(t)).abs() / peak);
+        worst_depth = worst_depth.max((piezo - deflection - indentation(t)).abs());
+        rows += 1;
+    }
+    eprintln!(
+        "curve writer: {rows} rows, force worst {worst_force:.1e} of peak, depth worst {worst_depth:.1e} m"
+    );
+    assert_eq!(rows, 520);
+    assert!(worst_force < 1e-5, "force off by {worst_force:.2e} of peak");
+    assert!(
+        worst_depth < 1e-11,
+        "indentation off by {worst_depth:.2e} m"
+    );
+}

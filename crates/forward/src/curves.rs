@@ -474,3 +474,121 @@ mod tests {
         assert!(mean.abs() < 4.0 * sigma / (n as f64).sqrt(), "mean {mean}");
     }
 }
+
+/// `nlvid simulate --parameters`: a study's forward model (`[forward]`,
+/// `[protocol]`) and a table of parameter sets, written as one measured
+/// curve per set.
+#[derive(Debug)]
+pub struct CurveJob {
+    /// The forward model's settings.
+    pub forward: ForwardSettings,
+    /// `(file stem, parameters in model order)` per curve.
+    pub sets: Vec<(String, Vec<f64>)>,
+    /// Noise on the deflection.
+    pub noise: Noise,
+    /// Cantilever spring constant of the deflection column (N/m).
+    pub spring_constant: f64,
+}
+
+impl CurveJob {
+    /// Reads the study's `[forward]` (other stages' sections are left to
+    /// them) and the parameter table. `spring_constant` (N/m) is required
+    /// for rigid-indenter models and refused for `afm-fe`, which deflects
+    /// its own `[forward] spring_constant`.
+    ///
+    /// # Errors
+    /// Study errors (file, line, key); a missing or refused spring
+    /// constant; an unreadable or malformed table (file, line).
+    pub fn load(
+        study: &std::path::Path,
+        table: &std::path::Path,
+        spring_constant: Option<f64>,
+        noise: Noise,
+    ) -> Result<Self> {
+        let mut s = nlvid_study::Study::load(study)?;
+        let forward = ForwardSettings::from_study(&mut s)?;
+        for other in [
+            "parameters",
+            "design",
+            "build",
+            "fit",
+            "probe",
+            "material",
+            "loading",
+        ] {
+            s.root().skip(other);
+        }
+        let _ = s.root().opt_str("title")?;
+        s.finish()?;
+        let spring_constant = match (&forward.spec, spring_constant) {
+            (ForwardSpec::AfmFe(spec), None) => spec.spring_constant.ok_or_else(|| {
+                setting(
+                    "curve writer",
+                    format!(
+                        "{}: the curve writer needs a spring cantilever ([forward] spring_constant)",
+                        study.display()
+                    ),
+                )
+            })?,
+            (ForwardSpec::AfmFe(_), Some(_)) => {
+                return Err(setting(
+                    "curve writer",
+                    "--spring-constant: afm-fe deflects its own [forward] spring_constant".into(),
+                ));
+            }
+            (_, Some(k)) => k,
+            (_, None) => {
+                return Err(setting(
+                    "curve writer",
+                    "--spring-constant (N/m) is needed for the deflection column of a \
+                     rigid-indenter model"
+                        .into(),
+                ));
+            }
+        };
+        let names = forward.build()?.parameter_names();
+        let text = std::fs::read_to_string(table).map_err(|e| {
+            setting(
+                "curve writer",
+                format!("cannot read {}: {e}", table.display()),
+            )
+        })?;
+        let sets = read_parameter_sets(&text, &table.display().to_string(), &names)?;
+        Ok(Self {
+            forward,
+            sets,
+            noise,
+            spring_constant,
+        })
+    }
+
+    /// Runs every set (in parallel) and writes `<stem>.csv` into `out_dir`
+    /// atomically; returns the files and the number of samples per curve.
+    ///
+    /// # Errors
+    /// A failed run (its model's message); a file that cannot be written.
+    pub fn write(&self, out_dir: &std::path::Path) -> Result<(Vec<std::path::PathBuf>, usize)> {
+        let model = self.forward.build()?;
+        let times = model.time_grid().to_vec();
+        let xs: Vec<Vec<f64>> = self.sets.iter().map(|s| s.1.clone()).collect();
+        let curves = afm_curves(&self.forward, &xs, &times, self.spring_constant, self.noise)?;
+        std::fs::create_dir_all(out_dir).map_err(|e| {
+            setting(
+                "curve writer",
+                format!("cannot create {}: {e}", out_dir.display()),
+            )
+        })?;
+        let mut files = Vec::with_capacity(curves.len());
+        for ((name, _), c) in self.sets.iter().zip(&curves) {
+            let path = out_dir.join(format!("{name}.csv"));
+            nlvid_study::write_atomic(&path, c.to_csv().as_bytes()).map_err(|e| {
+                setting(
+                    "curve writer",
+                    format!("cannot write {}: {e}", path.display()),
+                )
+            })?;
+            files.push(path);
+        }
+        Ok((files, times.len()))
+    }
+}

@@ -47,14 +47,12 @@ pub struct Args {
     pub spring_constant: Option<f64>,
 }
 
-/// The curve writer's job (`--parameters`).
+/// The curve writer's job (`--parameters`): [`nlvid_forward::CurveJob`]
+/// and where its curves go.
 #[derive(Debug)]
 pub struct Curves {
-    forward: nlvid_forward::ForwardSettings,
-    sets: Vec<(String, Vec<f64>)>,
+    job: nlvid_forward::CurveJob,
     out_dir: PathBuf,
-    noise: nlvid_forward::Noise,
-    spring_constant: f64,
 }
 
 impl Curves {
@@ -62,83 +60,29 @@ impl Curves {
         let (Some(table), Some(out_dir)) = (&a.parameters, &a.out_dir) else {
             return Ok(None);
         };
-        let mut study = Study::load(&a.study)?;
-        let forward = nlvid_forward::ForwardSettings::from_study(&mut study)?;
-        for other in [
-            "parameters",
-            "design",
-            "build",
-            "fit",
-            "probe",
-            "material",
-            "loading",
-        ] {
-            study.root().skip(other);
-        }
-        let _ = study.root().opt_str("title")?;
-        study.finish()?;
-        let spring_constant = match (&forward.spec, a.spring_constant) {
-            (nlvid_forward::ForwardSpec::AfmFe(s), None) => s.spring_constant.ok_or_else(|| {
-                anyhow::anyhow!(
-                    "{}: the curve writer needs a spring cantilever ([forward] spring_constant)",
-                    a.study.display()
-                )
-            })?,
-            (nlvid_forward::ForwardSpec::AfmFe(_), Some(_)) => anyhow::bail!(
-                "--spring-constant: afm-fe deflects its own [forward] spring_constant"
-            ),
-            (_, Some(k)) => k,
-            (_, None) => anyhow::bail!(
-                "--spring-constant (N/m) is needed for the deflection column of a rigid-indenter model"
-            ),
+        let noise = nlvid_forward::Noise {
+            relative: a.noise,
+            seed: a.seed,
         };
-        let names = forward.build()?.parameter_names();
-        let text = std::fs::read_to_string(table)
-            .with_context(|| format!("cannot read {}", table.display()))?;
-        let sets = nlvid_forward::curves::read_parameter_sets(
-            &text,
-            &table.display().to_string(),
-            &names,
-        )?;
+        let job = nlvid_forward::CurveJob::load(&a.study, table, a.spring_constant, noise)?;
         Ok(Some(Curves {
-            forward,
-            sets,
+            job,
             out_dir: out_dir.clone(),
-            noise: nlvid_forward::Noise {
-                relative: a.noise,
-                seed: a.seed,
-            },
-            spring_constant,
         }))
     }
 
     fn execute(self, ctx: &Context) -> anyhow::Result<ExitCode> {
-        let model = self.forward.build()?;
-        let times = model.time_grid().to_vec();
-        let xs: Vec<Vec<f64>> = self.sets.iter().map(|s| s.1.clone()).collect();
-        let curves = nlvid_forward::afm_curves(
-            &self.forward,
-            &xs,
-            &times,
-            self.spring_constant,
-            self.noise,
-        )?;
-        let mut files = Vec::new();
-        for ((name, _), c) in self.sets.iter().zip(&curves) {
-            let path = self.out_dir.join(format!("{name}.csv"));
-            write_atomic(&path, c.to_csv().as_bytes())?;
-            files.push(path);
-        }
+        let (files, samples) = self.job.write(&self.out_dir)?;
         if ctx.json {
             print_json(&json!({ "curves": files }))?;
             return Ok(ExitCode::SUCCESS);
         }
+        let noise = self.job.noise;
         say!(
-            "wrote {} curves ({} samples each, noise {} of the peak force, seed {}) into {}",
+            "wrote {} curves ({samples} samples each, noise {} of the peak force, seed {}) into {}",
             files.len(),
-            times.len(),
-            self.noise.relative,
-            self.noise.seed,
+            noise.relative,
+            noise.seed,
             self.out_dir.display()
         )?;
         Ok(ExitCode::SUCCESS)
@@ -163,7 +107,7 @@ impl Run for Args {
         if let Some(curves) = Curves::validate(&self)? {
             let study = Study::load(&self.study)?;
             let sim = SimulateStudy {
-                forward: curves.forward.clone(),
+                forward: curves.job.forward.clone(),
                 names: Vec::new(),
                 units: Vec::new(),
                 values: Vec::new(),
