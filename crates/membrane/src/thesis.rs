@@ -537,7 +537,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
             .collect()
     };
     figs.push(fig(
-        "table2_1",
+        "table2_1_ratio",
         "Table 2.1: our slope / 2 over the thesis value, per row (see table2_1.csv)",
         "row of table2_1.csv (thesis entries only)",
         "slope/2 ÷ thesis",
