@@ -91,13 +91,21 @@ impl Curves {
 
 /// A validated simulation.
 #[derive(Debug)]
-pub struct Config {
+pub enum Config {
+    /// One run at the study's `[parameters]`.
+    Run(Box<OneRun>),
+    /// The curve writer (`--parameters`).
+    Curves(Box<Curves>),
+}
+
+/// One run: the study, its name and provenance, and where the files go.
+#[derive(Debug)]
+pub struct OneRun {
     name: String,
     provenance: serde_json::Value,
     sim: SimulateStudy,
     output: PathBuf,
     mesh_output: Option<PathBuf>,
-    curves: Option<Curves>,
 }
 
 impl Run for Args {
@@ -105,21 +113,7 @@ impl Run for Args {
 
     fn validate(self, _ctx: &Context) -> anyhow::Result<Config> {
         if let Some(curves) = Curves::validate(&self)? {
-            let study = Study::load(&self.study)?;
-            let sim = SimulateStudy {
-                forward: curves.job.forward.clone(),
-                names: Vec::new(),
-                units: Vec::new(),
-                values: Vec::new(),
-            };
-            return Ok(Config {
-                name: study.name().to_string(),
-                provenance: provenance(&study),
-                sim,
-                output: PathBuf::new(),
-                mesh_output: None,
-                curves: Some(curves),
-            });
+            return Ok(Config::Curves(Box::new(curves)));
         }
         let study = Study::load(&self.study)?;
         let (name, provenance) = (study.name().to_string(), provenance(&study));
@@ -134,20 +128,20 @@ impl Run for Args {
         if let Some(m) = &self.mesh_output {
             crate::output::check_output_file(m)?;
         }
-        Ok(Config {
+        Ok(Config::Run(Box::new(OneRun {
             output,
             name,
             provenance,
             sim,
             mesh_output: self.mesh_output,
-            curves: None,
-        })
+        })))
     }
 
     fn execute(c: Config, ctx: &Context) -> anyhow::Result<ExitCode> {
-        if let Some(curves) = c.curves {
-            return curves.execute(ctx);
-        }
+        let c = match c {
+            Config::Curves(curves) => return curves.execute(ctx),
+            Config::Run(run) => *run,
+        };
         let run = c
             .sim
             .run(&[])
