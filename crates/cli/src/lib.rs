@@ -6,21 +6,16 @@
 //!   then one call into a library crate, then output;
 //! - `--json`: stdout carries exactly one JSON document ([`output::print_json`]);
 //! - curves as CSV and JSON with unit-suffixed headers (`force_N`), written
-//!   atomically ([`output::curve_json`], [`output::write_atomic`]);
+//!   atomically (`nlvid_model::Curve::to_json`, [`output::write_atomic`]);
 //! - stdout written with [`say!`] / [`output::print_text`]: a closed pipe
 //!   (`nlvid … | head`) ends the command quietly, never a panic;
 //! - progress bars on stderr, hidden off-terminal and in CI ([`progress::bar`]);
 //! - logs on stderr via `tracing` (`-v`, `NLVID_LOG`);
 //! - `--shard i/n` for batches split over a cluster (`nlvid_surrogate::Shard`);
-//! - outputs record the study hash ([`output::provenance`]).
+//! - outputs record the study hash (`nlvid_study::Study::provenance`).
 //!
 //! Cost: negligible; the work is in the pipeline crates.
-//!
-//! ```
-//! use nlvid_cli::output::parameters_json;
-//! let p = parameters_json(&[("G0".into(), 1e3, "Pa".into()), ("g1".into(), 0.3, "1".into())]);
-//! assert_eq!(p.to_string(), r#"{"G0_Pa":1000.0,"g1":0.3}"#);
-//! ```
+
 #![warn(missing_docs)]
 
 use std::process::ExitCode;

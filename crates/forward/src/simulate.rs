@@ -316,6 +316,33 @@ impl Simulation {
         Ok(v)
     }
 
+    /// The run as one JSON document (`nlvid simulate --json`, `nlvid
+    /// membrane --json`): `provenance`, `model`, `parameters` (unit-suffixed
+    /// keys), `curve`, the [`Simulation::summary_json`] keys, then the keys
+    /// of `extra` (where the files went).
+    ///
+    /// # Errors
+    /// As [`Simulation::curve`].
+    pub fn to_json(
+        &self,
+        sim: &SimulateStudy,
+        provenance: serde_json::Value,
+        extra: serde_json::Value,
+    ) -> Result<serde_json::Value> {
+        let mut doc = serde_json::json!({
+            "provenance": provenance,
+            "model": sim.model(),
+            "parameters": nlvid_model::parameters_json(&sim.parameters()),
+            "curve": self.curve()?.to_json(),
+        });
+        for more in [self.summary_json()?, extra] {
+            for (k, v) in more.as_object().into_iter().flatten() {
+                doc[k] = v.clone();
+            }
+        }
+        Ok(doc)
+    }
+
     /// The summary for people: for afm-fe the solver's counts, then the
     /// peak, final and smallest force.
     ///

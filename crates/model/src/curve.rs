@@ -22,12 +22,34 @@ pub struct Channel {
 impl Channel {
     /// Column header with the unit as suffix: `force_N`, `strain` (for "1").
     pub fn header(&self) -> String {
-        if self.unit == "1" || self.unit.is_empty() {
-            self.name.clone()
-        } else {
-            format!("{}_{}", self.name, self.unit.replace('/', "_per_"))
-        }
+        unit_suffixed(&self.name, &self.unit)
     }
+}
+
+/// The one naming rule for a quantity in CSV headers and JSON keys: the
+/// name with its SI unit as suffix (`force_N`, `G0_Pa`, `k_N_per_m`); a
+/// dimensionless quantity (unit `1` or none) keeps its bare name.
+pub fn unit_suffixed(name: &str, unit: &str) -> String {
+    if unit == "1" || unit.is_empty() {
+        name.to_string()
+    } else {
+        format!("{name}_{}", unit.replace('/', "_per_"))
+    }
+}
+
+/// Named parameters `(name, value, unit)` as a JSON object with
+/// [`unit_suffixed`] keys: `{"G0_Pa": 1000, "g1": 0.3, "tau1_s": 0.5}`.
+///
+/// ```
+/// let p = nlvid_model::parameters_json(&[("G0".into(), 1e3, "Pa".into()), ("g1".into(), 0.3, "1".into())]);
+/// assert_eq!(p.to_string(), r#"{"G0_Pa":1000.0,"g1":0.3}"#);
+/// ```
+pub fn parameters_json(params: &[(String, f64, String)]) -> serde_json::Value {
+    params
+        .iter()
+        .map(|(n, v, u)| (unit_suffixed(n, u), serde_json::Value::from(*v)))
+        .collect::<serde_json::Map<_, _>>()
+        .into()
 }
 
 /// Sample times (s, strictly increasing, finite) and channels of equal
@@ -128,6 +150,17 @@ impl Curve {
     /// A channel's values by name.
     pub fn values(&self, name: &str) -> Option<&[f64]> {
         self.channel(name).map(|c| c.values.as_slice())
+    }
+
+    /// The curve as JSON: `{"time_s": [...], "<header>": [...], ...}`, the
+    /// headers of [`Curve::to_csv`].
+    pub fn to_json(&self) -> serde_json::Value {
+        let mut m = serde_json::Map::new();
+        m.insert("time_s".into(), serde_json::Value::from(self.time.clone()));
+        for c in &self.channels {
+            m.insert(c.header(), serde_json::Value::from(c.values.clone()));
+        }
+        serde_json::Value::Object(m)
     }
 
     /// CSV text: `time_s` then one column per channel, unit-suffixed

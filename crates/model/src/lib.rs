@@ -39,7 +39,7 @@ mod forward;
 pub mod names;
 mod prony;
 
-pub use curve::{Channel, Curve};
+pub use curve::{Channel, Curve, parameters_json, unit_suffixed};
 pub use domain::{BoundHit, BoundSide, Domain, LinearConstraint, Parameter, Scale};
 pub use error::{ModelError, Result};
 pub use forward::{FailureKind, ForwardModel, RunFailure};

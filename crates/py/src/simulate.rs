@@ -42,7 +42,7 @@ fn simulate<'py>(
         })
         .transpose()?;
     let st = source.load()?;
-    let (name, provenance) = (st.name().to_string(), provenance(&st));
+    let (name, provenance) = (st.name().to_string(), st.provenance());
     let sim = nlvid_forward::SimulateStudy::from_study(st).py()?;
     let profile_at = match (&sim.forward.spec, times) {
         (nlvid_forward::ForwardSpec::Membrane(spec), None) => vec![spec.program.end()],
@@ -53,19 +53,7 @@ fn simulate<'py>(
         .detach(|| sim.run(&profile_at))
         .py_ctx(|| format!("{name}: simulation failed"))?;
     let curve = run.curve().py()?;
-    let params: serde_json::Value = sim
-        .parameters()
-        .iter()
-        .map(|(n, v, u)| {
-            let key = if u.is_empty() || u == "1" {
-                n.clone()
-            } else {
-                format!("{n}_{}", u.replace('/', "_per_"))
-            };
-            (key, serde_json::Value::from(*v))
-        })
-        .collect::<serde_json::Map<_, _>>()
-        .into();
+    let params = nlvid_model::parameters_json(&sim.parameters());
     let d = PyDict::new(py);
     d.set_item("provenance", crate::pyjson::to_py(py, &provenance)?)?;
     d.set_item("model", sim.model())?;
@@ -83,15 +71,6 @@ fn simulate<'py>(
         d.set_item("profiles", profiles)?;
     }
     Ok(d)
-}
-
-/// The provenance block of every CLI output (crates/cli/src/output.rs).
-pub(crate) fn provenance(study: &nlvid_study::Study) -> serde_json::Value {
-    serde_json::json!({
-        "study": study.name(),
-        "study_sha256": study.hash().to_string(),
-        "nlvid_version": env!("CARGO_PKG_VERSION"),
-    })
 }
 
 /// A numeric CSV text (header row; `#` lines skipped) as column arrays.

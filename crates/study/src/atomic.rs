@@ -152,3 +152,69 @@ mod tests {
         fs::remove_dir_all(&dir).unwrap();
     }
 }
+
+/// Checks, before any computation, that the directory `dir` exists and is
+/// writable or can be created: its nearest existing ancestor is a
+/// directory a file can be written into. Creates nothing.
+///
+/// # Errors
+/// An ancestor is a file, `dir` is a file, or the directory is not
+/// writable — naming the path and the OS error once.
+pub fn check_output_dir(dir: &Path) -> std::io::Result<()> {
+    let fail = |m: String| {
+        Err(std::io::Error::other(format!(
+            "output directory {}: {m}",
+            dir.display()
+        )))
+    };
+    let mut at = dir;
+    loop {
+        if at.as_os_str().is_empty() {
+            at = Path::new(".");
+        }
+        match fs::metadata(at) {
+            Ok(m) if m.is_dir() => break,
+            Ok(_) => return fail(format!("{} is a file, not a directory", at.display())),
+            Err(_) => match at.parent() {
+                Some(p) => at = p,
+                None => return fail("no existing parent".into()),
+            },
+        }
+    }
+    let probe = at.join(format!(".nlvid-probe.{}.tmp", std::process::id()));
+    match fs::File::create(&probe) {
+        Ok(_) => {
+            let _ = fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => fail(format!("cannot write into {}: {e}", at.display())),
+    }
+}
+
+/// As [`check_output_dir`] for an output file: `file` is not a directory
+/// and its directory is writable or can be created.
+///
+/// # Errors
+/// As [`check_output_dir`]; `file` is a directory.
+pub fn check_output_file(file: &Path) -> std::io::Result<()> {
+    let fail = |m: String| {
+        Err(std::io::Error::other(format!(
+            "output file {}: {m}",
+            file.display()
+        )))
+    };
+    if file.is_dir() {
+        return fail("is a directory".into());
+    }
+    let dir = file.parent().unwrap_or(Path::new("."));
+    check_output_dir(dir).or_else(|e| fail(e.to_string()))
+}
+
+/// `<stem>.<suffix>` next to `study` (`cell.toml` → `cell.simulate.csv`):
+/// where commands write their outputs by default.
+pub fn next_to(study: &Path, suffix: &str) -> PathBuf {
+    let stem = study
+        .file_stem()
+        .map_or_else(|| "study".into(), |s| s.to_string_lossy().into_owned());
+    study.with_file_name(format!("{stem}.{suffix}"))
+}

@@ -48,7 +48,9 @@ mod study;
 mod tree;
 mod units;
 
-pub use atomic::{clean_stale_temps, process_alive, write_atomic};
+pub use atomic::{
+    check_output_dir, check_output_file, clean_stale_temps, next_to, process_alive, write_atomic,
+};
 pub use bounds::Bounds;
 pub use delimiter::delimiter_hint;
 pub use error::{ErrorKind, Location, Result, StudyError, closest, error_message};

@@ -72,6 +72,16 @@ impl Study {
         &self.hash
     }
 
+    /// Provenance embedded in every JSON result: the study file, its
+    /// SHA-256 hash ([`StudyHash`]) and the program version.
+    pub fn provenance(&self) -> serde_json::Value {
+        serde_json::json!({
+            "study": self.name(),
+            "study_sha256": self.hash().to_string(),
+            "nlvid_version": env!("CARGO_PKG_VERSION"),
+        })
+    }
+
     /// The file name used in messages.
     pub fn name(&self) -> &str {
         &self.root.source().name

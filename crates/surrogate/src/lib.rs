@@ -48,6 +48,7 @@ pub mod check;
 mod correlation;
 pub mod doe;
 mod error;
+mod flag_build;
 pub mod infill;
 mod kriging;
 mod likelihood;
@@ -68,6 +69,7 @@ pub use build::{
 pub use correlation::Correlation;
 pub use error::{Result, SurrogateError};
 pub use faer;
+pub use flag_build::FlagBuild;
 pub use kriging::{
     FitReport, KrigingModel, KrigingSettings, OutputCovariance, OutputScale, Pca, PointPrediction,
     ThetaSearch, VariancePoint, likelihood_psi,

@@ -15,12 +15,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 use clap::Args;
-use nlvid_forward::HertzPronySpec;
-use nlvid_model::ForwardModel;
-use nlvid_surrogate::{
-    Admissibility, BuildOptions, BuildStudy, Shard, build_report, export_report, merge_report,
-    read_domain, read_table,
-};
+use nlvid_surrogate::{Admissibility, BuildOptions, BuildStudy, Shard, merge_report};
 
 use crate::output::print_text;
 
@@ -132,9 +127,9 @@ impl BuildArgs {
                 Some(_) => self.export.clone(),
                 None => self.export.clone().or(st.settings.export.clone()),
             };
-            crate::output::check_output_dir(&store)?;
+            nlvid_study::check_output_dir(&store)?;
             if let Some(d) = &export_dir {
-                crate::output::check_output_dir(d)?;
+                nlvid_study::check_output_dir(d)?;
             }
             let opts = options(shard, self.quiet);
             st.build_all(&store, export_dir.as_deref(), &opts, &mut |t| {
@@ -142,39 +137,25 @@ impl BuildArgs {
             })?;
             return Ok(ExitCode::SUCCESS);
         }
-        let (Some(design_path), Some(store)) = (&self.design, &self.store) else {
+        let (Some(design), Some(store)) = (&self.design, &self.store) else {
             bail!("give a study file, or --design X.csv and --store DIR");
         };
-        let model = match self.model.as_str() {
-            "hertz-prony" => HertzPronySpec::flag_defaults(self.points).build()?,
-            other => bail!(
-                "--model {other}: unknown forward model for flag-only use (available: hertz-prony; \
-                 afm-fe and membrane are set up in a study file's [forward] section)"
-            ),
-        };
-        crate::output::check_output_dir(store)?;
+        nlvid_study::check_output_dir(store)?;
         if let Some(d) = &self.export {
-            crate::output::check_output_dir(d)?;
+            nlvid_study::check_output_dir(d)?;
         }
-        let design = read_table(design_path)?;
-        if design.header.len() != 5 {
-            bail!(
-                "{}: hertz-prony needs 5 columns (G0, g1, g2, tau1, tau2), found {}",
-                design_path.display(),
-                design.header.len()
-            );
-        }
-        let names = model.parameter_names();
-        let domain = (self.domain.as_deref())
-            .map(|p| read_domain(p, &names, &design.rows))
-            .transpose()
-            .with_context(|| format!("--domain for --design {}", design_path.display()))?;
-        let opts = options(shard, self.quiet);
-        print_text(&build_report("design", &model, &design.rows, store, &opts)?)?;
-        if let Some(dir) = &self.export {
-            let filters = self.filters.admissibility();
-            print_text(&export_report(store, dir, &filters, domain.as_ref())?)?;
-        }
+        let build = nlvid_surrogate::FlagBuild {
+            design,
+            domain: self.domain.as_deref(),
+            model: &self.model,
+            points: self.points,
+            store,
+            export: self.export.as_deref(),
+            filters: self.filters.admissibility(),
+        };
+        build.run(&options(shard, self.quiet), &mut |t| {
+            std::io::Write::write_all(&mut std::io::stdout(), t.as_bytes())
+        })?;
         Ok(ExitCode::SUCCESS)
     }
 }

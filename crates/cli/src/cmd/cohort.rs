@@ -49,7 +49,7 @@ impl Run for Args {
                 .map_or_else(|| "study".into(), |s| s.to_string_lossy().into_owned());
             PathBuf::from(format!("{stem}-cohort"))
         });
-        crate::output::check_output_dir(&out)?;
+        nlvid_study::check_output_dir(&out)?;
         Ok(Config {
             study: self.study,
             input: self.input,

@@ -70,7 +70,7 @@ impl Run for Args {
                 .map(Path::to_path_buf)
                 .unwrap_or_default()
         });
-        crate::output::check_output_dir(&out_dir)?;
+        nlvid_study::check_output_dir(&out_dir)?;
         Ok(Config {
             table: read_results(&self.results)?,
             results: self.results,

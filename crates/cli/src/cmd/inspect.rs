@@ -93,7 +93,7 @@ impl Args {
     /// Unreadable file, a missing calibration, a fit that fails, unwritable outputs.
     pub fn run(self, json: bool) -> anyhow::Result<ExitCode> {
         for p in [&self.csv, &self.plot].into_iter().flatten() {
-            crate::output::check_output_file(p)?;
+            nlvid_study::check_output_file(p)?;
         }
         let options = ReadOptions {
             spring_constant: self.spring_constant,

@@ -13,7 +13,7 @@ use nlvid_study::Study;
 use serde_json::json;
 
 use super::{Context, Run};
-use crate::output::{curve_json, next_to, parameters_json, print_json, provenance, write_atomic};
+use crate::output::{print_json, write_atomic};
 
 /// Raw arguments of `nlvid material`.
 #[derive(Debug, clap::Args)]
@@ -44,8 +44,8 @@ impl Run for Args {
         let loading: LoadingSpec = study.read("loading")?;
         let output = self
             .output
-            .unwrap_or_else(|| next_to(&self.study, "material.csv"));
-        crate::output::check_output_file(&output)?;
+            .unwrap_or_else(|| nlvid_study::next_to(&self.study, "material.csv"));
+        nlvid_study::check_output_file(&output)?;
         Ok(Config {
             study,
             material,
@@ -69,13 +69,13 @@ impl Run for Args {
                 .map(|(n, v, u)| (n.to_string(), *v, u.to_string()))
                 .collect();
             print_json(&json!({
-                "provenance": provenance(&c.study),
+                "provenance": c.study.provenance(),
                 "model": model,
-                "parameters": parameters_json(&p),
+                "parameters": nlvid_model::parameters_json(&p),
                 "mode": c.loading.mode.name(),
                 "max_dt_s": c.loading.max_dt,
                 "csv": c.output.display().to_string(),
-                "curve": curve_json(&curve),
+                "curve": curve.to_json(),
             }))?;
         } else {
             let last = samples.last().context("no samples")?;

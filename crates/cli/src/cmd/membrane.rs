@@ -15,7 +15,7 @@ use nlvid_study::{Dimension, Study};
 use serde_json::json;
 
 use crate::args::quantity;
-use crate::output::{next_to, print_json, print_text, provenance, write_atomic};
+use crate::output::{print_json, print_text, write_atomic};
 
 /// Arguments of `nlvid membrane`.
 #[derive(Debug, Args)]
@@ -50,7 +50,7 @@ fn create(dir: &Path) -> anyhow::Result<()> {
 
 fn run_study(args: &MembraneArgs, path: &Path, json: bool) -> anyhow::Result<ExitCode> {
     let study = Study::load(path)?;
-    let (name, prov) = (study.name().to_string(), provenance(&study));
+    let (name, prov) = (study.name().to_string(), study.provenance());
     let sim = SimulateStudy::from_study(study)?;
     let ForwardSpec::Membrane(spec) = &sim.forward.spec else {
         bail!(
@@ -62,8 +62,8 @@ fn run_study(args: &MembraneArgs, path: &Path, json: bool) -> anyhow::Result<Exi
     let out = args
         .out
         .clone()
-        .unwrap_or_else(|| next_to(path, "membrane"));
-    crate::output::check_output_dir(&out)?;
+        .unwrap_or_else(|| nlvid_study::next_to(path, "membrane"));
+    nlvid_study::check_output_dir(&out)?;
     let profile_times = args.profile_times.clone();
     let run = sim
         .run(&profile_times.unwrap_or_else(|| vec![spec.program.end()]))
@@ -77,7 +77,7 @@ fn run_study(args: &MembraneArgs, path: &Path, json: bool) -> anyhow::Result<Exi
     }
     let wrote = format!("{} files in {}", files.len(), out.display());
     let files = json!({ "files": files, "out": out });
-    super::simulate::report(json, &name, &prov, &sim, &run, files, &wrote)?;
+    super::simulate::report(json, (&name, &prov), &sim, &run, files, &wrote)?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -86,7 +86,7 @@ fn run_reproduce(args: &MembraneArgs, json: bool) -> anyhow::Result<ExitCode> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("membrane-thesis"));
-    crate::output::check_output_dir(&out)?;
+    nlvid_study::check_output_dir(&out)?;
     let (figs, rows, notes) = nlvid_membrane::thesis::reproduce().context("reproducing ch. II")?;
     create(&out)?;
     let mut files = Vec::new();

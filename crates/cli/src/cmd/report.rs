@@ -34,7 +34,7 @@ impl Run for Args {
             );
         }
         if let Some(o) = &self.out {
-            crate::output::check_output_dir(o)?;
+            nlvid_study::check_output_dir(o)?;
         }
         if let Some(p) = &self.surrogate_check
             && !p.is_file()

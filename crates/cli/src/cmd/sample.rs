@@ -56,7 +56,7 @@ impl SampleArgs {
             let check = if self.check > 0 { check } else { Vec::new() };
             (domain, train, check)
         };
-        crate::output::check_output_dir(&self.out)?;
+        nlvid_study::check_output_dir(&self.out)?;
         std::fs::create_dir_all(&self.out)
             .with_context(|| format!("cannot create {}", self.out.display()))?;
         let header = domain.names();

@@ -12,7 +12,7 @@ use nlvid_study::Study;
 use serde_json::json;
 
 use super::{Context, Run};
-use crate::output::{curve_json, next_to, parameters_json, print_json, provenance, write_atomic};
+use crate::output::{print_json, write_atomic};
 
 /// Raw arguments of `nlvid simulate`.
 #[derive(Debug, clap::Args)]
@@ -116,17 +116,17 @@ impl Run for Args {
             return Ok(Config::Curves(Box::new(curves)));
         }
         let study = Study::load(&self.study)?;
-        let (name, provenance) = (study.name().to_string(), provenance(&study));
+        let (name, provenance) = (study.name().to_string(), study.provenance());
         let sim = SimulateStudy::from_study(study)?;
         if self.mesh_output.is_some() && sim.model() != "afm-fe" {
             anyhow::bail!("--mesh-output: only the afm-fe model has a mesh");
         }
         let output = self
             .output
-            .unwrap_or_else(|| next_to(&self.study, "simulate.csv"));
-        crate::output::check_output_file(&output)?;
+            .unwrap_or_else(|| nlvid_study::next_to(&self.study, "simulate.csv"));
+        nlvid_study::check_output_file(&output)?;
         if let Some(m) = &self.mesh_output {
-            crate::output::check_output_file(m)?;
+            nlvid_study::check_output_file(m)?;
         }
         Ok(Config::Run(Box::new(OneRun {
             output,
@@ -155,8 +155,7 @@ impl Run for Args {
         let wrote = c.output.display().to_string();
         report(
             ctx.json,
-            &c.name,
-            &c.provenance,
+            (&c.name, &c.provenance),
             &c.sim,
             &run,
             files,
@@ -166,34 +165,21 @@ impl Run for Args {
     }
 }
 
-/// Prints one run: with `json`, provenance, model, parameters (unit
-/// suffixed), the curve, the summary and `files`; else the summary and
-/// `wrote` (where the files went).
+/// Prints one run: with `json`, [`Simulation::to_json`] with `files`;
+/// else the summary and `wrote` (where the files went).
 ///
 /// # Errors
 /// A non-finite value in the run; stdout cannot be written.
 pub fn report(
     json: bool,
-    name: &str,
-    provenance: &serde_json::Value,
+    (name, provenance): (&str, &serde_json::Value),
     sim: &SimulateStudy,
     run: &Simulation,
     files: serde_json::Value,
     wrote: &str,
 ) -> anyhow::Result<()> {
     if json {
-        let mut doc = json!({
-            "provenance": provenance,
-            "model": sim.model(),
-            "parameters": parameters_json(&sim.parameters()),
-            "curve": curve_json(&run.curve()?),
-        });
-        for extra in [run.summary_json()?, files] {
-            for (k, v) in extra.as_object().into_iter().flatten() {
-                doc[k] = v.clone();
-            }
-        }
-        return print_json(&doc);
+        return print_json(&run.to_json(sim, provenance.clone(), files)?);
     }
     say!("{} → {wrote}", run.summary_text(name)?)?;
     Ok(())

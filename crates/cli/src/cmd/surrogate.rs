@@ -135,7 +135,7 @@ impl SurrogateCmd {
 }
 
 fn fit(a: FitArgs, json: bool) -> anyhow::Result<ExitCode> {
-    crate::output::check_output_file(&a.out)?;
+    nlvid_study::check_output_file(&a.out)?;
     let (x, y) = (read_table(&a.x)?, read_table(&a.y)?);
     let options = FitOptions {
         regression: a.regression,
