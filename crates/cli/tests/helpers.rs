@@ -1,4 +1,5 @@
-//! The binary's shared helpers (`nlvid_cli::output`, `nlvid_cli::args`):
+//! The binary's shared helpers (`nlvid_cli::output`, `nlvid_cli::args`) and
+//! the library ones it prints with (`nlvid_model`, `nlvid_study`):
 //! unit-suffixed JSON keys, outputs next to the study, atomic writes,
 //! command-line quantities.
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers
@@ -7,7 +8,9 @@ use std::fs;
 use std::path::Path;
 
 use nlvid_cli::args::quantity;
-use nlvid_cli::output::{curve_json, next_to, parameters_json, write_atomic};
+use nlvid_cli::output::write_atomic;
+use nlvid_model::parameters_json;
+use nlvid_study::next_to;
 
 #[test]
 fn json_keys_carry_units() {
@@ -16,7 +19,7 @@ fn json_keys_carry_units() {
         .and_then(|c| c.with("tension", "N/m", vec![1.0, 3.0]))
         .and_then(|c| c.with("stretch", "1", vec![1.0, 1.5]))
         .unwrap();
-    let v = curve_json(&c);
+    let v = c.to_json();
     let keys: Vec<&String> = v.as_object().unwrap().keys().collect();
     assert_eq!(keys, ["time_s", "force_N", "tension_N_per_m", "stretch"]);
     let p = parameters_json(&[
