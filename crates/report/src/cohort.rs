@@ -121,6 +121,31 @@ impl CohortOutcome {
         })
     }
 
+    /// When cells failed: their summary for stderr (`n of m cells failed`,
+    /// then the first ten as `group/cell: reason`); `None` when all were
+    /// fitted.
+    pub fn failures_text(&self) -> Option<String> {
+        use std::fmt::Write as _;
+        let failed: Vec<&CellResult> = (self.cells.iter())
+            .filter(|c| c.status == CellStatus::Failed)
+            .collect();
+        if failed.is_empty() {
+            return None;
+        }
+        let mut t = format!(
+            "error: {} of {} cells failed (status `failed` in results.csv):\n",
+            failed.len(),
+            self.cells.len()
+        );
+        for c in failed.iter().take(10) {
+            let _ = writeln!(t, "  {}/{}: {}", c.group, c.cell, c.reason);
+        }
+        if failed.len() > 10 {
+            let _ = writeln!(t, "  … and {} more", failed.len() - 10);
+        }
+        Some(t)
+    }
+
     /// What the run did, for people: counts, cells not ok with the reason.
     pub fn text(&self) -> String {
         use std::fmt::Write as _;

@@ -67,6 +67,33 @@ impl BuildStudy {
         Ok(Self { model, settings })
     }
 
+    /// Where a build of this study (file `path`) writes: the store (`store`
+    /// from the command line, else `[build] store`) and the export
+    /// directory (`export`, else `[build] export`; a shard exports only
+    /// when asked, since every task of an array would write it at once).
+    ///
+    /// # Errors
+    /// No store directory anywhere.
+    pub fn outputs(
+        &self,
+        path: &Path,
+        store: Option<PathBuf>,
+        export: Option<PathBuf>,
+        shard: bool,
+    ) -> Result<(PathBuf, Option<PathBuf>)> {
+        let Some(store) = store.or_else(|| self.settings.store.clone()) else {
+            return Err(SurrogateError::InvalidSettings(format!(
+                "{}: no store directory: give --store DIR or `store = \"DIR\"` in [build]",
+                path.display()
+            )));
+        };
+        let export = match shard {
+            true => export,
+            false => export.or_else(|| self.settings.export.clone()),
+        };
+        Ok((store, export))
+    }
+
     /// Builds the training design into `store/train` and the checking
     /// design into `store/check` ([`build_report`]), then exports each to
     /// `export/train`, `export/check` with the study's filters and domain

@@ -115,18 +115,12 @@ impl BuildArgs {
         let shard = self.shard.as_deref().map(Shard::parse).transpose()?;
         if let Some(path) = &self.study {
             let st = BuildStudy::load(path)?;
-            let Some(store) = self.store.clone().or(st.settings.store.clone()) else {
-                bail!(
-                    "{}: no store directory: give --store DIR or `store = \"DIR\"` in [build]",
-                    path.display()
-                );
-            };
-            // The tasks of an array would all write `[build] export` at
-            // once: a shard exports only when asked with --export.
-            let export_dir = match shard {
-                Some(_) => self.export.clone(),
-                None => self.export.clone().or(st.settings.export.clone()),
-            };
+            let (store, export_dir) = st.outputs(
+                path,
+                self.store.clone(),
+                self.export.clone(),
+                shard.is_some(),
+            )?;
             nlvid_study::check_output_dir(&store)?;
             if let Some(d) = &export_dir {
                 nlvid_study::check_output_dir(d)?;

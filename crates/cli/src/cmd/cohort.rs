@@ -73,32 +73,16 @@ impl Run for Args {
         } else {
             crate::output::print_text(&run.text())?;
         }
-        Ok(failed_summary(&run.cells))
+        // Exit status CELLS_FAILED with a summary on stderr when any cell
+        // failed (the table and report list them).
+        match run.failures_text() {
+            None => Ok(ExitCode::SUCCESS),
+            Some(t) => {
+                eprint!("{t}");
+                Ok(ExitCode::from(CELLS_FAILED))
+            }
+        }
     }
-}
-
-/// Exit status [`CELLS_FAILED`] with a summary on stderr when any cell
-/// failed (the table and report list them); success when all were fitted.
-fn failed_summary(cells: &[CellResult]) -> ExitCode {
-    let failed: Vec<&CellResult> = cells
-        .iter()
-        .filter(|c| c.status == nlvid_report::cell::CellStatus::Failed)
-        .collect();
-    if failed.is_empty() {
-        return ExitCode::SUCCESS;
-    }
-    eprintln!(
-        "error: {} of {} cells failed (status `failed` in results.csv):",
-        failed.len(),
-        cells.len()
-    );
-    for c in failed.iter().take(10) {
-        eprintln!("  {}/{}: {}", c.group, c.cell, c.reason);
-    }
-    if failed.len() > 10 {
-        eprintln!("  … and {} more", failed.len() - 10);
-    }
-    ExitCode::from(CELLS_FAILED)
 }
 
 /// Exit status of a cohort run that finished with failed cells
