@@ -21,41 +21,19 @@
 
 use std::path::Path;
 
-use anyhow::{Context, bail};
+use anyhow::bail;
 use nlvid_inverse::{
-    Coordinates, Experiment, KrigingSurrogate, Misfit, Model, MultiStart, Objective, Precomputed,
-    SensitivityScaling, SurrogateCurve, SurrogateMisfit, identifiability, range_normalised_rmse,
-    read_meta,
+    Experiment, Misfit, Model, MultiStart, Objective, Precomputed, SensitivityScaling,
+    SurrogateCurve, SurrogateMisfit, identifiability, range_normalised_rmse,
 };
-use nlvid_surrogate::KrigingModel;
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+mod recovery;
+
+use recovery::normal;
+
 const CASES: usize = 10;
-
-fn read_csv(path: &Path) -> anyhow::Result<(Vec<String>, Vec<Vec<f64>>)> {
-    let mut rdr =
-        csv::Reader::from_path(path).with_context(|| format!("cannot open {}", path.display()))?;
-    let head = rdr.headers()?.iter().map(str::to_owned).collect();
-    let mut rows = Vec::new();
-    for (i, rec) in rdr.records().enumerate() {
-        let rec = rec.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
-        let row = rec
-            .iter()
-            .map(|v| v.trim().parse::<f64>())
-            .collect::<Result<Vec<_>, _>>()
-            .with_context(|| format!("{}: row {}", path.display(), i + 2))?;
-        rows.push(row);
-    }
-    Ok((head, rows))
-}
-
-/// Standard normal by Box–Muller (seeded, deterministic).
-fn normal(rng: &mut ChaCha8Rng) -> f64 {
-    let u1: f64 = rng.random::<f64>().max(1e-300);
-    let u2: f64 = rng.random::<f64>();
-    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-}
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -64,41 +42,18 @@ fn main() -> anyhow::Result<()> {
     }
     let (study_path, model_path, export) = (&args[1], &args[2], Path::new(&args[3]));
     let rerun = !args.iter().any(|a| a == "--no-rerun");
-    let mut study = nlvid_study::Study::load(study_path)?;
-    let fe = nlvid_forward::from_study(&mut study)?;
-    let meta = read_meta(&export.join("train/meta.json"))?;
-    let domain = meta.domain.clone();
-    domain.check_names(&fe.parameter_names())?;
+    let recovery::Setup {
+        fe,
+        domain,
+        sur,
+        xs,
+        ys,
+    } = recovery::setup(study_path, model_path, export, CASES)?;
     let names = domain.names();
-    let kriging: KrigingModel = serde_json::from_slice(&std::fs::read(model_path)?)?;
-    let sur = KrigingSurrogate::new(
-        kriging,
-        domain.clone(),
-        meta.time_s.clone(),
-        Coordinates::Physical,
-    )?;
     let pre = Precomputed::new(&sur, None)?;
-
-    let (xhead, xs) = read_csv(&export.join("check/X.csv"))?;
-    let (_, ys) = read_csv(&export.join("check/Y.csv"))?;
-    if xs.len() < CASES {
-        bail!("only {} checking runs, need {CASES}", xs.len());
-    }
-    let column = |name: &str| {
-        xhead
-            .iter()
-            .position(|h| h == name || h.starts_with(&format!("{name} [")))
-            .with_context(|| format!("column {name} not in {xhead:?}"))
-    };
-    let cols = domain
-        .params()
-        .iter()
-        .map(|p| column(&p.name))
-        .collect::<anyhow::Result<Vec<_>>>()?;
     let mut errors: Vec<f64> = Vec::new();
     for (x, y) in xs.iter().zip(&ys) {
-        let xd: Vec<f64> = cols.iter().map(|&c| x[c]).collect();
-        errors.push(range_normalised_rmse(&sur.response(&xd)?, y, None)?);
+        errors.push(range_normalised_rmse(&sur.response(x)?, y, None)?);
     }
     let mut sorted = errors.clone();
     sorted.sort_by(f64::total_cmp);
@@ -114,7 +69,7 @@ fn main() -> anyhow::Result<()> {
     let (mut passed, mut agree) = (0, 0);
     let mut per_param = vec![Vec::new(); names.len()];
     for (case, (x, clean)) in xs.iter().zip(&ys).take(CASES).enumerate() {
-        let x_true: Vec<f64> = cols.iter().map(|&c| x[c]).collect();
+        let x_true = x.clone();
         let peak = clean.iter().copied().fold(0.0, f64::max);
         let data: Vec<f64> = clean
             .iter()

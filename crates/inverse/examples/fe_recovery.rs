@@ -22,40 +22,19 @@
 
 use std::path::Path;
 
-use anyhow::{Context, bail};
+use anyhow::bail;
 use nlvid_inverse::{
-    BasisExperiment, BasisMisfit, Coordinates, KrigingSurrogate, Model, MultiStart, Objective,
-    Precomputed, SurrogateCurve, SurrogateMisfit, gram, range_normalised_rmse, read_meta,
+    BasisExperiment, BasisMisfit, Model, MultiStart, Objective, Precomputed, SurrogateCurve,
+    SurrogateMisfit, gram, range_normalised_rmse,
 };
-use nlvid_surrogate::KrigingModel;
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
+mod recovery;
+
+use recovery::normal;
+
 const CASES: usize = 10;
-
-fn read_csv(path: &Path) -> anyhow::Result<(Vec<String>, Vec<Vec<f64>>)> {
-    let mut rdr =
-        csv::Reader::from_path(path).with_context(|| format!("cannot open {}", path.display()))?;
-    let head = rdr.headers()?.iter().map(str::to_owned).collect();
-    let mut rows = Vec::new();
-    for (i, rec) in rdr.records().enumerate() {
-        let rec = rec.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
-        let row = rec
-            .iter()
-            .map(|v| v.trim().parse::<f64>())
-            .collect::<Result<Vec<_>, _>>()
-            .with_context(|| format!("{}: row {}", path.display(), i + 2))?;
-        rows.push(row);
-    }
-    Ok((head, rows))
-}
-
-/// Standard normal by Box–Muller (seeded, deterministic).
-fn normal(rng: &mut ChaCha8Rng) -> f64 {
-    let u1: f64 = rng.random::<f64>().max(1e-300);
-    let u2: f64 = rng.random::<f64>();
-    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-}
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();
@@ -64,50 +43,23 @@ fn main() -> anyhow::Result<()> {
     }
     let (study_path, model_path, export) = (&args[1], &args[2], Path::new(&args[3]));
 
-    let mut study = nlvid_study::Study::load(study_path)?;
-    let fe = nlvid_forward::from_study(&mut study)?;
-
-    // The domain the meta-model was designed on, as `nlvid build --export`
-    // stored it (the FE model's parameters, in its order).
-    let meta = read_meta(&export.join("train/meta.json"))?;
-    let domain = meta.domain.clone();
-    domain.check_names(&fe.parameter_names())?;
-    let kriging: KrigingModel = serde_json::from_slice(&std::fs::read(model_path)?)?;
-    let sur = KrigingSurrogate::new(
-        kriging,
-        domain.clone(),
-        meta.time_s.clone(),
-        Coordinates::Physical,
-    )?;
+    let recovery::Setup {
+        fe,
+        domain,
+        sur,
+        xs,
+        ys,
+    } = recovery::setup(study_path, model_path, export, CASES)?;
     // The fit uses the reduced (PCA) misfit when the surrogate is
     // PCA-reduced; the previous Gram-form path is run too, to compare optima.
     let pre = Precomputed::new(&sur, None)?;
     let g = gram(&sur, None)?;
 
-    let (xhead, xs) = read_csv(&export.join("check/X.csv"))?;
-    let (_, ys) = read_csv(&export.join("check/Y.csv"))?;
-    if xs.len() < CASES {
-        bail!("only {} checking runs, need {CASES}", xs.len());
-    }
-    // Export columns by name (the first one is the run index).
-    let column = |name: &str| {
-        xhead
-            .iter()
-            .position(|h| h == name || h.starts_with(&format!("{name} [")))
-            .with_context(|| format!("column {name} not in {xhead:?}"))
-    };
-    let cols = domain
-        .params()
-        .iter()
-        .map(|p| column(&p.name))
-        .collect::<anyhow::Result<Vec<_>>>()?;
-
     let mut noise_rng = ChaCha8Rng::seed_from_u64(6);
     let (mut passed, mut agree, mut reached) = (0, 0, 0);
     let mut max_check: f64 = 0.0;
     for (x, y) in xs.iter().zip(&ys) {
-        let xd: Vec<f64> = cols.iter().map(|&c| x[c]).collect();
-        let e = range_normalised_rmse(&sur.response(&xd)?, y, None)?;
+        let e = range_normalised_rmse(&sur.response(x)?, y, None)?;
         max_check = max_check.max(e);
     }
     println!(
@@ -116,7 +68,7 @@ fn main() -> anyhow::Result<()> {
         100.0 * max_check
     );
     for (case, (x, clean)) in xs.iter().zip(&ys).take(CASES).enumerate() {
-        let x_true: Vec<f64> = cols.iter().map(|&c| x[c]).collect();
+        let x_true = x.clone();
         let peak = clean.iter().copied().fold(0.0, f64::max);
         let data: Vec<f64> = clean
             .iter()
