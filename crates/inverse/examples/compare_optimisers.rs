@@ -32,7 +32,9 @@ struct Tally {
     seconds: f64,
 }
 
-fn run_slsqp(p: &Problem) -> Tally {
+/// Runs `minimize` (start, evaluation counter → end point) from every start
+/// of `p`: successes, evaluations and time.
+fn tally(p: &Problem, minimize: impl Fn(&[f64], &std::cell::Cell<usize>) -> Vec<f64>) -> Tally {
     let mut t = Tally {
         success: 0,
         evals: 0,
@@ -40,6 +42,17 @@ fn run_slsqp(p: &Problem) -> Tally {
     };
     for u0 in &p.starts {
         let count = std::cell::Cell::new(0usize);
+        let start = Instant::now();
+        let u = minimize(u0, &count);
+        t.seconds += start.elapsed().as_secs_f64();
+        t.evals += count.get();
+        t.success += usize::from(hit(p, &u));
+    }
+    t
+}
+
+fn run_slsqp(p: &Problem) -> Tally {
+    tally(p, |u0, count| {
         let f = |u: &[f64], g: Option<&mut [f64]>, _: &mut ()| {
             count.set(count.get() + 1);
             (p.f)(u, g)
@@ -51,26 +64,15 @@ fn run_slsqp(p: &Problem) -> Tally {
             xtol_abs: vec![1e-7; p.n],
             ..Default::default()
         };
-        let start = Instant::now();
         let out = slsqp::minimize(f, u0, &vec![(0.0, 1.0); p.n], &cons, (), 2000, Some(tols));
-        t.seconds += start.elapsed().as_secs_f64();
-        t.evals += count.get();
-        let u = match out {
+        match out {
             Ok((_, u, _)) | Err((_, u, _)) => u,
-        };
-        t.success += usize::from(hit(p, &u));
-    }
-    t
+        }
+    })
 }
 
 fn run_cobyla(p: &Problem) -> Tally {
-    let mut t = Tally {
-        success: 0,
-        evals: 0,
-        seconds: 0.0,
-    };
-    for u0 in &p.starts {
-        let count = std::cell::Cell::new(0usize);
+    tally(p, |u0, count| {
         let f = |u: &[f64], _: &mut ()| {
             count.set(count.get() + 1);
             (p.f)(u, None)
@@ -82,7 +84,6 @@ fn run_cobyla(p: &Problem) -> Tally {
             xtol_abs: vec![1e-7; p.n],
             ..Default::default()
         };
-        let start = Instant::now();
         let out = cobyla::minimize(
             f,
             u0,
@@ -93,14 +94,10 @@ fn run_cobyla(p: &Problem) -> Tally {
             cobyla::RhoBeg::All(0.1),
             Some(tols),
         );
-        t.seconds += start.elapsed().as_secs_f64();
-        t.evals += count.get();
-        let u = match out {
+        match out {
             Ok((_, u, _)) | Err((_, u, _)) => u,
-        };
-        t.success += usize::from(hit(p, &u));
-    }
-    t
+        }
+    })
 }
 
 fn hit(p: &Problem, u: &[f64]) -> bool {

@@ -22,7 +22,7 @@ use nalgebra::{DMatrix, DVector};
 use nlvid_model::Domain;
 
 use crate::error::{InverseError, Result};
-use crate::misfit::{Objective, check_shared_parameters};
+use crate::misfit::{Objective, shared, sum_with_gradient};
 use crate::model::{Model, check_jacobian, check_len};
 
 /// A model y(x) = μ + Bᵀ φ(x) on a fixed time grid.
@@ -270,11 +270,7 @@ impl<B: BasisModel> BasisMisfit<B> {
     /// # Errors
     /// [`InverseError::InvalidSetting`].
     pub fn new(experiments: Vec<BasisExperiment<B>>) -> Result<Self> {
-        check_shared_parameters(
-            experiments
-                .iter()
-                .map(|e| (e.label.as_str(), e.model.domain())),
-        )?;
+        let experiments = shared(experiments, |e| (e.label.as_str(), e.model.domain()))?;
         Ok(Self { experiments })
     }
 
@@ -294,16 +290,7 @@ impl<B: BasisModel> Objective for BasisMisfit<B> {
     }
 
     fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
-        let mut total = 0.0;
-        let mut grad = vec![0.0; x.len()];
-        for e in &self.experiments {
-            let (v, g) = e.eval(x, true)?;
-            total += v;
-            for (a, b) in grad.iter_mut().zip(g) {
-                *a += b;
-            }
-        }
-        Ok((total, grad))
+        sum_with_gradient(&self.experiments, x.len(), |e| e.eval(x, true))
     }
 
     fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>> {

@@ -295,6 +295,32 @@ impl<M: Model> Objective for Misfit<M> {
 ///
 /// # Errors
 /// [`InverseError::InvalidSetting`] for no experiments or differing domains.
+/// `experiments`, once [`check_shared_parameters`] has accepted their
+/// labels and domains (`id`): what every multi-experiment misfit holds.
+pub(crate) fn shared<E>(experiments: Vec<E>, id: impl Fn(&E) -> (&str, &Domain)) -> Result<Vec<E>> {
+    check_shared_parameters(experiments.iter().map(id))?;
+    Ok(experiments)
+}
+
+/// Σ_e of each experiment's value and gradient (`eval`), the gradient of
+/// length `n`: a misfit over several experiments (eq. 5.3 summed, §5.4.2).
+pub(crate) fn sum_with_gradient<E>(
+    experiments: &[E],
+    n: usize,
+    eval: impl Fn(&E) -> Result<(f64, Vec<f64>)>,
+) -> Result<(f64, Vec<f64>)> {
+    let mut total = 0.0;
+    let mut grad = vec![0.0; n];
+    for e in experiments {
+        let (v, g) = eval(e)?;
+        total += v;
+        for (a, b) in grad.iter_mut().zip(g) {
+            *a += b;
+        }
+    }
+    Ok((total, grad))
+}
+
 pub(crate) fn check_shared_parameters<'a>(
     mut experiments: impl Iterator<Item = (&'a str, &'a Domain)>,
 ) -> Result<()> {
@@ -334,11 +360,7 @@ impl<M: Model> Misfit<M> {
     /// # Errors
     /// [`InverseError::InvalidSetting`] for no experiments or differing domains.
     pub fn new(experiments: Vec<Experiment<M>>) -> Result<Self> {
-        check_shared_parameters(
-            experiments
-                .iter()
-                .map(|e| (e.label.as_str(), e.model.domain())),
-        )?;
+        let experiments = shared(experiments, |e| (e.label.as_str(), e.model.domain()))?;
         Ok(Self { experiments })
     }
 
@@ -373,16 +395,7 @@ impl<M: Model> Misfit<M> {
     /// # Errors
     /// As [`Experiment::misfit_and_gradient`].
     pub fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
-        let mut total = 0.0;
-        let mut grad = vec![0.0; x.len()];
-        for e in &self.experiments {
-            let (v, g) = e.misfit_and_gradient(x)?;
-            total += v;
-            for (a, b) in grad.iter_mut().zip(g) {
-                *a += b;
-            }
-        }
-        Ok((total, grad))
+        sum_with_gradient(&self.experiments, x.len(), |e| e.misfit_and_gradient(x))
     }
 }
 

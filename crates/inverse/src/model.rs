@@ -49,41 +49,29 @@ pub trait Model {
     }
 }
 
-impl<M: Model + ?Sized> Model for &M {
-    fn domain(&self) -> &Domain {
-        (**self).domain()
-    }
-    fn times(&self) -> &[f64] {
-        (**self).times()
-    }
-    fn response(&self, x: &[f64]) -> Result<Vec<f64>> {
-        (**self).response(x)
-    }
-    fn jacobian(&self, x: &[f64]) -> Result<DMatrix<f64>> {
-        (**self).jacobian(x)
-    }
-    fn response_and_jacobian(&self, x: &[f64]) -> Result<(Vec<f64>, DMatrix<f64>)> {
-        (**self).response_and_jacobian(x)
-    }
+/// `&M` and `Box<M>` are models: every method forwards to `M`.
+macro_rules! forward_model {
+    ($($t:ty),*) => {$(
+        impl<M: Model + ?Sized> Model for $t {
+            fn domain(&self) -> &Domain {
+                (**self).domain()
+            }
+            fn times(&self) -> &[f64] {
+                (**self).times()
+            }
+            fn response(&self, x: &[f64]) -> Result<Vec<f64>> {
+                (**self).response(x)
+            }
+            fn jacobian(&self, x: &[f64]) -> Result<DMatrix<f64>> {
+                (**self).jacobian(x)
+            }
+            fn response_and_jacobian(&self, x: &[f64]) -> Result<(Vec<f64>, DMatrix<f64>)> {
+                (**self).response_and_jacobian(x)
+            }
+        }
+    )*};
 }
-
-impl<M: Model + ?Sized> Model for Box<M> {
-    fn domain(&self) -> &Domain {
-        (**self).domain()
-    }
-    fn times(&self) -> &[f64] {
-        (**self).times()
-    }
-    fn response(&self, x: &[f64]) -> Result<Vec<f64>> {
-        (**self).response(x)
-    }
-    fn jacobian(&self, x: &[f64]) -> Result<DMatrix<f64>> {
-        (**self).jacobian(x)
-    }
-    fn response_and_jacobian(&self, x: &[f64]) -> Result<(Vec<f64>, DMatrix<f64>)> {
-        (**self).response_and_jacobian(x)
-    }
-}
+forward_model!(&M, Box<M>);
 
 /// Central finite-difference Jacobian of a model, stepping
 /// [`FD_STEP_UNIT`] in each scaled coordinate (so log-scaled parameters get

@@ -24,7 +24,7 @@ use nalgebra::{DMatrix, DVector};
 use nlvid_model::Domain;
 
 use crate::error::{InverseError, Result};
-use crate::misfit::{Objective, check_shared_parameters};
+use crate::misfit::{Objective, shared, sum_with_gradient};
 use crate::model::{check_jacobian, check_len};
 
 /// A model ŷ(x) = A c(x) on a fixed time grid with a fixed output map A
@@ -262,11 +262,7 @@ impl<R: ReducedModel> ReducedMisfit<R> {
     /// # Errors
     /// [`InverseError::InvalidSetting`].
     pub fn new(experiments: Vec<ReducedExperiment<R>>) -> Result<Self> {
-        check_shared_parameters(
-            experiments
-                .iter()
-                .map(|e| (e.label.as_str(), e.model.domain())),
-        )?;
+        let experiments = shared(experiments, |e| (e.label.as_str(), e.model.domain()))?;
         Ok(Self { experiments })
     }
 
@@ -290,16 +286,7 @@ impl<R: ReducedModel> Objective for ReducedMisfit<R> {
     }
 
     fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
-        let mut total = 0.0;
-        let mut grad = vec![0.0; x.len()];
-        for e in &self.experiments {
-            let (v, g) = e.eval(x, true)?;
-            total += v;
-            for (a, b) in grad.iter_mut().zip(g) {
-                *a += b;
-            }
-        }
-        Ok((total, grad))
+        sum_with_gradient(&self.experiments, x.len(), |e| e.eval(x, true))
     }
 
     fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>> {
