@@ -112,6 +112,26 @@ pub fn step_count(knots: &[(f64, f64)], max_dt: f64) -> f64 {
         .sum()
 }
 
+/// The time steps of a drive through `knots` (time, value): each linear
+/// piece split evenly into steps no longer than `max_dt`, a jump applied
+/// in one step of `dt = 0`; `(t, value)` at the end of each step.
+fn steps(knots: &[(f64, f64)], max_dt: f64) -> impl Iterator<Item = (f64, f64)> + '_ {
+    knots.windows(2).flat_map(move |w| {
+        let ((t0, v0), (t1, v1)) = (w[0], w[1]);
+        let len = t1 - t0;
+        let n = if len > 0.0 {
+            (len / max_dt).ceil().max(1.0) as usize
+        } else {
+            1
+        };
+        (1..=n).map(move |i| {
+            let s = i as f64 / n as f64;
+            let t = if i == n { t1 } else { t0 + s * len };
+            (t, v0 + s * (v1 - v0))
+        })
+    })
+}
+
 /// Refuses a drive of more than [`MAX_STEPS`] steps, with the estimate,
 /// the memory it would need and the `max_dt` that fits.
 ///
@@ -263,26 +283,14 @@ pub fn drive<M: Incompressible>(
     };
     push(0.0, knots[0].1, &Mat3::zeros());
     let mut t_n = 0.0;
-    for w in knots.windows(2) {
-        let ((t0, v0), (t1, v1)) = (w[0], w[1]);
-        let len = t1 - t0;
-        let n = if len > 0.0 {
-            (len / max_dt).ceil().max(1.0) as usize
-        } else {
-            1
-        };
-        for i in 1..=n {
-            let s = i as f64 / n as f64;
-            let t = if i == n { t1 } else { t0 + s * len };
-            let v = v0 + s * (v1 - v0);
-            let f = mode.deformation_gradient(v);
-            let extra = material
-                .extra_stress(&state, &f, t - t_n, &mut trial)
-                .map_err(|e| MaterialError::Loading(format!("at t = {t} s, value {v}: {e}")))?;
-            std::mem::swap(&mut state, &mut trial);
-            t_n = t;
-            push(t, v, &extra);
-        }
+    for (t, v) in steps(&knots, max_dt) {
+        let f = mode.deformation_gradient(v);
+        let extra = material
+            .extra_stress(&state, &f, t - t_n, &mut trial)
+            .map_err(|e| MaterialError::Loading(format!("at t = {t} s, value {v}: {e}")))?;
+        std::mem::swap(&mut state, &mut trial);
+        t_n = t;
+        push(t, v, &extra);
     }
     Ok(out)
 }
@@ -341,50 +349,38 @@ pub fn drive_uniaxial_3d<M: crate::Material3>(
     let mut trial = state.clone();
     let mut out = vec![[0.0, knots[0].1, 1.0, 0.0]];
     let (mut t_n, mut mu) = (0.0, 1.0);
-    for w in knots.windows(2) {
-        let ((t0, v0), (t1, v1)) = (w[0], w[1]);
-        let len = t1 - t0;
-        let n = if len > 0.0 {
-            (len / max_dt).ceil().max(1.0) as usize
-        } else {
-            1
-        };
-        for i in 1..=n {
-            let s = i as f64 / n as f64;
-            let t = if i == n { t1 } else { t0 + s * len };
-            let l = v0 + s * (v1 - v0);
-            let dt = t - t_n;
-            // Start from the incompressible guess when the stretch jumps.
-            if (mu * mu * l - 1.0).abs() > 0.1 {
-                mu = 1.0 / l.sqrt();
-            }
-            let mut converged = None;
-            for _ in 0..50 {
-                let f = Mat3::from_diagonal(&nalgebra::Vector3::new(l, mu, mu));
-                let r = material.update(&state, &f, dt, &mut trial)?;
-                let p22 = r.first_piola[(1, 1)];
-                if p22.abs() <= 1e-10 * r.first_piola[(0, 0)].abs().max(1.0) {
-                    converged = Some(r.cauchy[(0, 0)]);
-                    break;
-                }
-                let d = r.tangent[(4, 4)] + r.tangent[(4, 8)];
-                let step = p22 / d;
-                if !step.is_finite() {
-                    break;
-                }
-                // Keep μ positive: at most halve it per iteration.
-                mu = (mu - step).max(0.5 * mu);
-            }
-            let s11 = converged.ok_or_else(|| {
-                MaterialError::Loading(format!(
-                    "lateral traction did not vanish at t = {t} s (λ = {l}, μ = {mu}) \
-                     within 50 Newton iterations; reduce max_dt"
-                ))
-            })?;
-            std::mem::swap(&mut state, &mut trial);
-            t_n = t;
-            out.push([t, l, mu, s11]);
+    for (t, l) in steps(&knots, max_dt) {
+        let dt = t - t_n;
+        // Start from the incompressible guess when the stretch jumps.
+        if (mu * mu * l - 1.0).abs() > 0.1 {
+            mu = 1.0 / l.sqrt();
         }
+        let mut converged = None;
+        for _ in 0..50 {
+            let f = Mat3::from_diagonal(&nalgebra::Vector3::new(l, mu, mu));
+            let r = material.update(&state, &f, dt, &mut trial)?;
+            let p22 = r.first_piola[(1, 1)];
+            if p22.abs() <= 1e-10 * r.first_piola[(0, 0)].abs().max(1.0) {
+                converged = Some(r.cauchy[(0, 0)]);
+                break;
+            }
+            let d = r.tangent[(4, 4)] + r.tangent[(4, 8)];
+            let step = p22 / d;
+            if !step.is_finite() {
+                break;
+            }
+            // Keep μ positive: at most halve it per iteration.
+            mu = (mu - step).max(0.5 * mu);
+        }
+        let s11 = converged.ok_or_else(|| {
+            MaterialError::Loading(format!(
+                "lateral traction did not vanish at t = {t} s (λ = {l}, μ = {mu}) \
+                 within 50 Newton iterations; reduce max_dt"
+            ))
+        })?;
+        std::mem::swap(&mut state, &mut trial);
+        t_n = t;
+        out.push([t, l, mu, s11]);
     }
     Ok(out)
 }

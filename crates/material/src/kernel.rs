@@ -29,6 +29,13 @@ pub(crate) struct Kin {
     pub i2: f64,
 }
 
+/// `J^{-2/3}`, the factor of every isochoric term.
+#[inline]
+fn j_minus_two_thirds(j: f64) -> f64 {
+    let c = crate::cube_root(j);
+    1.0 / (c * c)
+}
+
 impl Kin {
     pub fn new(f: &Mat3) -> Result<Self> {
         if f.iter().any(|x| !x.is_finite()) {
@@ -55,10 +62,7 @@ impl Kin {
             fit: finv.transpose(),
             b: f * f.transpose(),
             j,
-            j23: {
-                let c = crate::cube_root(j);
-                1.0 / (c * c)
-            },
+            j23: j_minus_two_thirds(j),
             i1,
             i2: 0.5 * (i1 * i1 - trc2),
         })
@@ -104,10 +108,7 @@ impl Kin {
                 block(a * a + b * b, x01, x01, c * c + d * d, c22)
             },
             j,
-            j23: {
-                let c = crate::cube_root(j);
-                1.0 / (c * c)
-            },
+            j23: j_minus_two_thirds(j),
             i1,
             i2: 0.5 * (i1 * i1 - trc2),
         })
