@@ -57,19 +57,10 @@ pub struct Creep {
 /// [`AfmError::MissingSegment`] without a creep segment right after the extend; as
 /// [`prepare_approach`].
 pub fn prepare_creep(curve: &ForceCurve, method: ContactMethod) -> Result<Creep> {
-    let ext_i = curve
-        .segments
-        .iter()
-        .position(|s| s.kind == SegmentKind::Extend)
-        .ok_or_else(|| AfmError::MissingSegment {
-            kind: "extend".into(),
-        })?;
-    let pause = curve.segments[ext_i + 1..]
-        .first()
-        .filter(|s| s.kind == SegmentKind::Creep)
-        .ok_or_else(|| AfmError::MissingSegment {
-            kind: "creep (constant-force pause right after the extend)".into(),
-        })?;
+    let (ext_i, pause) = curve.extend_then(
+        SegmentKind::Creep,
+        "creep (constant-force pause right after the extend)",
+    )?;
     let approach = prepare_approach(curve, method)?;
     let ext = &curve.segments[ext_i];
     let k = curve.calibration.spring_constant;

@@ -193,6 +193,25 @@ pub struct ForceCurve {
 }
 
 impl ForceCurve {
+    /// The first extend segment's index and the segment right after it,
+    /// which must be of `kind` (`what` names it in the error).
+    ///
+    /// # Errors
+    /// [`AfmError::MissingSegment`] without an extend, or when the next
+    /// segment is not of `kind`.
+    pub fn extend_then(&self, kind: SegmentKind, what: &str) -> Result<(usize, &Segment)> {
+        let ext_i = (self.segments.iter())
+            .position(|s| s.kind == SegmentKind::Extend)
+            .ok_or_else(|| AfmError::MissingSegment {
+                kind: "extend".into(),
+            })?;
+        let next = self.segments[ext_i + 1..]
+            .first()
+            .filter(|s| s.kind == kind)
+            .ok_or_else(|| AfmError::MissingSegment { kind: what.into() })?;
+        Ok((ext_i, next))
+    }
+
     /// First segment of the given kind.
     ///
     /// # Errors

@@ -157,21 +157,15 @@ pub fn fit_lee_radok(
     settings: &LeeRadokSettings,
 ) -> Result<LeeRadokFit> {
     let c = check(time, delta, force, settings)?;
-    let column = |tau: f64| c.kernel.hereditary(tau);
-    let problem = Separable {
-        fixed: c.kernel.elastic(),
-        column: &column,
-        y: force,
-        ln_tau: c.ln_tau,
-    };
-    let starts = problem.starts(settings.n_terms, &settings.multistart, (c.dt_min, c.span));
-    let best = problem
-        .best_of(&starts, settings.max_iters)
-        .ok_or_else(|| AfmError::NotConverged {
-            fit: "Lee–Radok",
-            detail: "no start gave a finite misfit".into(),
-            hint: "check the ramp-hold data and the tip radius",
-        })?;
+    let best = c.solve(force, |problem| {
+        let starts = problem.starts(settings.n_terms, &settings.multistart, (c.dt_min, c.span));
+        problem.best_of(&starts, settings.max_iters)
+    });
+    let best = best.ok_or_else(|| AfmError::NotConverged {
+        fit: "Lee–Radok",
+        detail: "no start gave a finite misfit".into(),
+        hint: "check the ramp-hold data and the tip radius",
+    })?;
     finish(&c, force, best)
 }
 
@@ -200,14 +194,22 @@ pub fn fit_lee_radok_from(
             c.ln_tau.1.exp()
         )));
     }
-    let column = |tau: f64| c.kernel.hereditary(tau);
-    let problem = Separable {
-        fixed: c.kernel.elastic(),
-        column: &column,
-        y: force,
-        ln_tau: c.ln_tau,
-    };
-    finish(&c, force, problem.local(&ln, settings.max_iters))
+    let best = c.solve(force, |problem| problem.local(&ln, settings.max_iters));
+    finish(&c, force, best)
+}
+
+impl Checked {
+    /// Runs `search` on the separable Lee–Radok problem of `force`: the
+    /// elastic column and one hereditary column per relaxation time.
+    fn solve<T>(&self, force: &[f64], search: impl FnOnce(&Separable<'_>) -> T) -> T {
+        let column = |tau: f64| self.kernel.hereditary(tau);
+        search(&Separable {
+            fixed: self.kernel.elastic(),
+            column: &column,
+            y: force,
+            ln_tau: self.ln_tau,
+        })
+    }
 }
 
 /// The relaxation modulus of an optimum, collapsed terms dropped, and its misfit.
@@ -289,20 +291,11 @@ pub struct RampHold {
 /// Missing extend or hold segment or channels; no contact.
 pub fn prepare_ramp_hold(curve: &ForceCurve, method: ContactMethod) -> Result<RampHold> {
     let k = curve.calibration.spring_constant;
-    let ext_i = curve
-        .segments
-        .iter()
-        .position(|s| s.kind == SegmentKind::Extend)
-        .ok_or_else(|| AfmError::MissingSegment {
-            kind: "extend".into(),
-        })?;
+    let (ext_i, hold) = curve.extend_then(
+        SegmentKind::Hold,
+        "hold (constant-height pause right after the extend)",
+    )?;
     let ext = &curve.segments[ext_i];
-    let hold = curve.segments[ext_i + 1..]
-        .first()
-        .filter(|s| s.kind == SegmentKind::Hold)
-        .ok_or_else(|| AfmError::MissingSegment {
-            kind: "hold (constant-height pause right after the extend)".into(),
-        })?;
     let fe = ext.force()?;
     let se = tip_sample_separation(ext.height()?, fe, k)?;
     // A pause recorded just before the approach (the probe still free) is the better
