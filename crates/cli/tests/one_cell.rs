@@ -309,10 +309,10 @@ export = "export"
     );
     std::fs::create_dir_all(dir.join("cells/one")).unwrap();
     std::fs::write(dir.join("cells/one/cell.csv"), afm_csv()).unwrap();
-    // One [fit] for both commands; `nlvid fit` also checks the file against
-    // the nominal ramp-hold of [fit.protocol], which the cohort refuses
-    // (it cuts every cell at `ramp` and `hold_end` instead).
-    let cohort_study = r#"title = "one cell: fit"
+    // One study file for both commands: the same [fit], and both check the
+    // cell against the nominal ramp-hold of [fit.protocol] (the piezo's
+    // travel is δ + F/k: 2 µm + 0.16 µm at the end of the ramp).
+    let study = r#"title = "one cell: fit"
 
 [probe]
 radius = "2.5 um"
@@ -335,14 +335,12 @@ deflection = "deflection"
 
 [fit.calibration]
 spring_constant = "0.12 N/m"
+
+[fit.protocol]
+rate = "2.16 um/s"
+amplitude = "2.16 um"
 "#;
-    std::fs::write(dir.join("cohort.toml"), cohort_study).unwrap();
-    std::fs::write(
-        dir.join("fit.toml"),
-        // The piezo's travel is δ + F/k: 2 µm + 0.16 µm at the end of the ramp.
-        format!("{cohort_study}\n[fit.protocol]\nrate = \"2.16 um/s\"\namplitude = \"2.16 um\"\n"),
-    )
-    .unwrap();
+    std::fs::write(dir.join("fit.toml"), study).unwrap();
 
     let fitted: serde_json::Value = serde_json::from_str(&run_in(
         &dir,
@@ -350,7 +348,7 @@ spring_constant = "0.12 N/m"
     ))
     .unwrap();
     let fit_modulus = modulus_of_fit(&fitted);
-    run_in(&dir, &["cohort", "cohort.toml", "cells", "--out", "cohort"]);
+    run_in(&dir, &["cohort", "fit.toml", "cells", "--out", "cohort"]);
     let cohort_modulus = modulus_of_cohort(&dir.join("cohort/results.csv"));
 
     for (k, t) in MODULUS_TIMES.iter().enumerate() {

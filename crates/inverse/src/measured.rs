@@ -17,7 +17,7 @@
 use std::path::{Path, PathBuf};
 
 use nlvid_study::{Dimension, parse_unit};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{InverseError, Result};
 
@@ -322,7 +322,7 @@ pub fn read_compression_csv(path: &Path, cols: &CompressionColumns) -> Result<Me
 }
 
 /// Tolerances of [`MeasuredCurve::check_protocol`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ProtocolTolerance {
     /// Allowed duration difference, as a fraction of the expected duration.
     pub duration: f64,

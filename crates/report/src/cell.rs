@@ -288,6 +288,14 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
         Ok(g) => g,
         Err(e) => return fail(format!("model grid: {e}")),
     };
+    if let Some(p) = &settings.protocol {
+        let t_end = grid.last().copied().unwrap_or(0.0);
+        let checked =
+            crate::fit::check_protocol(&curve, p, t_end, &input.path, "model's time grid");
+        if let Err(e) = checked {
+            return fail(format!("protocol: {e}"));
+        }
+    }
     let needed = settings.hold_end.max(grid.last().copied().unwrap_or(0.0));
     if t_last - t_first < needed * (1.0 - 1e-9) {
         return fail(format!(

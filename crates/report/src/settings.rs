@@ -30,8 +30,10 @@
 //! deflection_sensitivity = "50 nm/V"  # only if the deflection is in volts
 //! ```
 //!
-//! `nlvid fit` also reads `[fit.protocol]`, `[[fit.segment]]`,
-//! `[fit.real_model]`, `[[fit.experiment]]` and `modulus_times`; a cohort
+//! Both read `[fit.protocol]` the same way (required with a meta-model,
+//! checked against every data file: [`Protocol`]). `nlvid fit` also reads
+//! `[[fit.segment]]`, `[fit.real_model]`, `[[fit.experiment]]` and
+//! `modulus_times`; a cohort
 //! also `ramp_points`, `hold_points`, `first_hold_step` (Lee–Radok grid).
 //! Keys of the former second schema are errors naming the key to use.
 
@@ -85,8 +87,15 @@ pub enum DataColumns {
 }
 
 /// Expected controlled displacement: ramp at `rate` to `amplitude`, then
-/// hold to the end of the surrogate's time grid.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// hold to the end of the surrogate's time grid (`[fit.protocol]`).
+///
+/// One rule for `nlvid fit` and `nlvid cohort`: a meta-model predicts the
+/// nominal protocol it was built on, so `model = "surrogate"` requires
+/// `[fit.protocol]` (refused when missing, by both commands as they read
+/// the study); the analytic Lee–Radok model runs with each curve's own
+/// indentation, so there it is optional. Where given, both commands check
+/// every data file against it ([`crate::fit::check_protocol`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Protocol {
     /// Ramp rate (m/s).
     pub rate: f64,
@@ -426,6 +435,16 @@ fn read_experiment(s: &mut Section, model: FitModel, study: &Path) -> Result<Exp
         }
     };
     let protocol = match s.opt_subsection("protocol")? {
+        None if model == FitModel::Surrogate => {
+            return Err(s
+                .invalid(
+                    "protocol",
+                    "missing [fit.protocol] (rate, amplitude): a meta-model predicts the \
+                     nominal ramp-hold it was built on, and `nlvid fit` and `nlvid cohort` \
+                     check every data file against it",
+                )
+                .into());
+        }
         None => None,
         Some(mut p) => {
             let v = Protocol {
@@ -578,6 +597,10 @@ pub struct CohortSettings {
     /// Per-cell posteriors (`[posterior]`, opt-in; meta-model fits only).
     #[serde(default)]
     pub posterior: Option<PosteriorStudy>,
+    /// `[fit.protocol]`: every cell's curve is checked against it
+    /// (required with a meta-model, as for `nlvid fit`).
+    #[serde(default)]
+    pub protocol: Option<Protocol>,
 }
 
 /// The study's `[posterior]` section: sample each cell's posterior on the
@@ -739,9 +762,9 @@ impl CohortSettings {
                     .into(),
             ));
         };
-        if exp.real.is_some() || !exp.segments.is_empty() || exp.protocol.is_some() {
+        if exp.real.is_some() || !exp.segments.is_empty() {
             return Err(fail(
-                "[fit]: real_model, segment and protocol are read by `nlvid fit` only".into(),
+                "[fit]: real_model and segment are read by `nlvid fit` only".into(),
             ));
         }
         if ramp + fit.first_hold_step >= hold_end {
@@ -795,6 +818,7 @@ impl CohortSettings {
             constraint_epsilon: fit.constraint_epsilon,
             suspicious_misfit: fit.suspicious_misfit,
             posterior,
+            protocol: exp.protocol,
         })
     }
 }

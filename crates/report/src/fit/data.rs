@@ -13,7 +13,7 @@ use nlvid_inverse::{
 };
 
 use crate::error::{ReportError, Result};
-use crate::settings::{DataColumns, ExperimentSettings, FitSettings, RealModelSpec};
+use crate::settings::{DataColumns, ExperimentSettings, FitSettings, Protocol, RealModelSpec};
 
 /// A surrogate ready to fit with, and how good it is.
 pub struct Surrogate {
@@ -146,7 +146,15 @@ fn load_each<T>(
         }
         let times = surrogate.model.times().to_vec();
         let (default_label, curve) = read(item)?;
-        check_protocol(&curve, exp, &times, &settings.study)?;
+        if let Some(p) = &exp.protocol {
+            let grid = exp
+                .meta
+                .as_deref()
+                .map_or_else(String::new, |m| format!(", {}", m.display()));
+            let t_end = times.last().copied().unwrap_or(0.0);
+            let grid = format!("surrogate's time grid{grid}");
+            check_protocol(&curve, p, t_end, &settings.study, &grid)?;
+        }
         let force = curve.resample(&curve.force, &times)?;
         let weights =
             (!exp.segments.is_empty()).then(|| segment_weights(&times, &exp.segments, 1.0));
@@ -304,32 +312,29 @@ pub(crate) fn measured_from_ramp_hold(path: &Path, c: &nlvid_model::Curve) -> Me
     }
 }
 
-/// Ramp from 0 at `rate` to `amplitude`, then hold to the grid's end.
-fn check_protocol(
+/// Checks `curve` against `[fit.protocol]` (`p`): ramp from 0 at `rate`
+/// to `amplitude`, then hold to `t_end`, the end of the model's time grid
+/// (`grid` names it in the error). The one check of `nlvid fit` and
+/// `nlvid cohort`.
+///
+/// # Errors
+/// A ramp longer than the grid (naming `study`); the curve off the
+/// protocol beyond its tolerances.
+pub fn check_protocol(
     curve: &MeasuredCurve,
-    exp: &ExperimentSettings,
-    times: &[f64],
+    p: &Protocol,
+    t_end: f64,
     study: &Path,
+    grid: &str,
 ) -> Result<()> {
-    let Some(p) = &exp.protocol else {
-        return Err(ReportError::InvalidSetting(format!(
-            "{}: [fit]: missing [fit.protocol] (rate, amplitude): `nlvid fit` checks every \
-             data file against the expected ramp-hold",
-            study.display()
-        )));
-    };
-    let t_end = times.last().copied().unwrap_or(0.0);
     let t_ramp = p.amplitude / p.rate;
     if t_ramp >= t_end {
         return Err(ReportError::InvalidSetting(format!(
             "{}: [fit.protocol] ramp to {:e} m at {:e} m/s takes {t_ramp} s, \
-             longer than the surrogate's time grid ({t_end} s, {})",
+             longer than the {grid} ({t_end} s)",
             study.display(),
             p.amplitude,
             p.rate,
-            exp.meta
-                .as_deref()
-                .map_or_else(String::new, |m| m.display().to_string())
         )));
     }
     let expected_t = [0.0, t_ramp, t_end];
