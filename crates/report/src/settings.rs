@@ -30,8 +30,8 @@
 //! deflection_sensitivity = "50 nm/V"  # only if the deflection is in volts
 //! ```
 //!
-//! Both read `[fit.protocol]` the same way (required with a meta-model,
-//! checked against every data file: [`Protocol`]). `nlvid fit` also reads
+//! Both read `[fit.protocol]` the same way (optional; where given, checked
+//! against every data file: [`Protocol`]). `nlvid fit` also reads
 //! `[[fit.segment]]`, `[fit.real_model]`, `[[fit.experiment]]` and
 //! `modulus_times`; a cohort
 //! also `ramp_points`, `hold_points`, `first_hold_step` (Lee–Radok grid).
@@ -89,12 +89,11 @@ pub enum DataColumns {
 /// Expected controlled displacement: ramp at `rate` to `amplitude`, then
 /// hold to the end of the surrogate's time grid (`[fit.protocol]`).
 ///
-/// One rule for `nlvid fit` and `nlvid cohort`: a meta-model predicts the
-/// nominal protocol it was built on, so `model = "surrogate"` requires
-/// `[fit.protocol]` (refused when missing, by both commands as they read
-/// the study); the analytic Lee–Radok model runs with each curve's own
-/// indentation, so there it is optional. Where given, both commands check
-/// every data file against it ([`crate::fit::check_protocol`]).
+/// One rule for `nlvid fit` and `nlvid cohort`: `[fit.protocol]` is
+/// optional in both; where given, both check every data file against it
+/// ([`crate::fit::check_protocol`]) and refuse the same invalid sections.
+/// (Requiring it with a meta-model would refuse the committed demo study,
+/// whose cohort cuts every cell at `ramp` and `hold_end` instead.)
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Protocol {
     /// Ramp rate (m/s).
@@ -435,16 +434,6 @@ fn read_experiment(s: &mut Section, model: FitModel, study: &Path) -> Result<Exp
         }
     };
     let protocol = match s.opt_subsection("protocol")? {
-        None if model == FitModel::Surrogate => {
-            return Err(s
-                .invalid(
-                    "protocol",
-                    "missing [fit.protocol] (rate, amplitude): a meta-model predicts the \
-                     nominal ramp-hold it was built on, and `nlvid fit` and `nlvid cohort` \
-                     check every data file against it",
-                )
-                .into());
-        }
         None => None,
         Some(mut p) => {
             let v = Protocol {
@@ -597,8 +586,8 @@ pub struct CohortSettings {
     /// Per-cell posteriors (`[posterior]`, opt-in; meta-model fits only).
     #[serde(default)]
     pub posterior: Option<PosteriorStudy>,
-    /// `[fit.protocol]`: every cell's curve is checked against it
-    /// (required with a meta-model, as for `nlvid fit`).
+    /// `[fit.protocol]`: every cell's curve is checked against it, as by
+    /// `nlvid fit`.
     #[serde(default)]
     pub protocol: Option<Protocol>,
 }

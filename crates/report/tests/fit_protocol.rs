@@ -1,7 +1,6 @@
 //! One `[fit]` schema for `nlvid fit` and `nlvid cohort`: the same study
 //! file is accepted by both or refused by both, and `[fit.protocol]` is
-//! read the same way (required with a meta-model, optional with the
-//! analytic Lee–Radok model).
+//! read the same way (optional in both; checked where given).
 #![allow(clippy::unwrap_used, clippy::expect_used)] // tests
 
 use std::path::PathBuf;
@@ -87,11 +86,6 @@ fn both_commands_read_the_protocol_alike() {
 
 #[test]
 fn both_commands_refuse_the_same_protocol_errors() {
-    // Required with a meta-model.
-    let (f, c) = both("surrogate-none", SURROGATE).expect_err("refused by both");
-    for e in [&f, &c] {
-        assert!(e.contains("missing [fit.protocol]"), "{e}");
-    }
     // An unknown key, a missing key, a non-positive rate.
     for (name, section) in [
         (
