@@ -112,47 +112,6 @@ pub fn clean_stale_temps(dir: &Path) -> std::io::Result<usize> {
     Ok(removed)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn replaces_the_file_and_leaves_no_temporary() {
-        let dir = std::env::temp_dir().join(format!("nlvid-atomic-{}", std::process::id()));
-        fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("out.csv");
-        write_atomic(&path, b"old").unwrap();
-        write_atomic(&path, b"new").unwrap();
-        assert_eq!(fs::read(&path).unwrap(), b"new");
-        let left: Vec<_> = fs::read_dir(&dir).unwrap().collect();
-        assert_eq!(left.len(), 1, "{left:?}");
-        assert!(write_atomic(&dir.join("missing/out.csv"), b"x").is_err());
-        fs::remove_dir_all(&dir).unwrap();
-    }
-
-    #[test]
-    fn stale_temporaries_of_dead_processes_are_removed_live_ones_kept() {
-        let dir = std::env::temp_dir().join(format!("nlvid-atomic-stale-{}", std::process::id()));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap();
-        // pid 4194304 is above Linux's pid_max limit: never a running process.
-        let dead = dir.join(".cohort.json.4194304.tmp");
-        fs::write(&dead, b"half").unwrap();
-        let mine = dir.join(format!(".x.csv.{}.tmp", std::process::id()));
-        fs::write(&mine, b"in flight").unwrap();
-        let other = dir.join("notes.tmp");
-        fs::write(&other, b"user file").unwrap();
-        write_atomic(&dir.join("out.csv"), b"x").unwrap();
-        if Path::new("/proc/self").exists() {
-            assert!(!dead.exists(), "stale temporary survived");
-        }
-        assert!(mine.exists() && other.exists());
-        assert_eq!(temp_pid(".a.b.csv.12.tmp"), Some(12));
-        assert_eq!(temp_pid("a.12.tmp"), None);
-        fs::remove_dir_all(&dir).unwrap();
-    }
-}
-
 /// Checks, before any computation, that the directory `dir` exists and is
 /// writable or can be created: its nearest existing ancestor is a
 /// directory a file can be written into. Creates nothing.
@@ -217,4 +176,45 @@ pub fn next_to(study: &Path, suffix: &str) -> PathBuf {
         .file_stem()
         .map_or_else(|| "study".into(), |s| s.to_string_lossy().into_owned());
     study.with_file_name(format!("{stem}.{suffix}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn replaces_the_file_and_leaves_no_temporary() {
+        let dir = std::env::temp_dir().join(format!("nlvid-atomic-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("out.csv");
+        write_atomic(&path, b"old").unwrap();
+        write_atomic(&path, b"new").unwrap();
+        assert_eq!(fs::read(&path).unwrap(), b"new");
+        let left: Vec<_> = fs::read_dir(&dir).unwrap().collect();
+        assert_eq!(left.len(), 1, "{left:?}");
+        assert!(write_atomic(&dir.join("missing/out.csv"), b"x").is_err());
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn stale_temporaries_of_dead_processes_are_removed_live_ones_kept() {
+        let dir = std::env::temp_dir().join(format!("nlvid-atomic-stale-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        // pid 4194304 is above Linux's pid_max limit: never a running process.
+        let dead = dir.join(".cohort.json.4194304.tmp");
+        fs::write(&dead, b"half").unwrap();
+        let mine = dir.join(format!(".x.csv.{}.tmp", std::process::id()));
+        fs::write(&mine, b"in flight").unwrap();
+        let other = dir.join("notes.tmp");
+        fs::write(&other, b"user file").unwrap();
+        write_atomic(&dir.join("out.csv"), b"x").unwrap();
+        if Path::new("/proc/self").exists() {
+            assert!(!dead.exists(), "stale temporary survived");
+        }
+        assert!(mine.exists() && other.exists());
+        assert_eq!(temp_pid(".a.b.csv.12.tmp"), Some(12));
+        assert_eq!(temp_pid("a.12.tmp"), None);
+        fs::remove_dir_all(&dir).unwrap();
+    }
 }
