@@ -48,7 +48,7 @@ mod study;
 mod tree;
 mod units;
 
-pub use atomic::{clean_stale_temps, process_alive, write_atomic};
+pub use atomic::{clean_stale_temps, process_alive, write_atomic, write_atomic_with};
 pub use bounds::Bounds;
 pub use delimiter::delimiter_hint;
 pub use error::{ErrorKind, Location, Result, StudyError, closest, error_message};
