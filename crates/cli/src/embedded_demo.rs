@@ -52,7 +52,11 @@ mod tests {
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo");
         for rel in ["study.toml", "metamodel.toml", "ground_truth.csv"] {
             let (_, bytes) = FILES.iter().find(|(r, _)| *r == rel).unwrap();
-            assert_eq!(*bytes, std::fs::read(root.join(rel)).unwrap().as_slice(), "{rel}");
+            assert_eq!(
+                *bytes,
+                std::fs::read(root.join(rel)).unwrap().as_slice(),
+                "{rel}"
+            );
         }
         let data = FILES.iter().filter(|(r, _)| r.starts_with("data/")).count();
         assert!(data >= 2, "{data} curves embedded");

@@ -53,7 +53,11 @@ fn installed_binary_runs_the_demo_from_its_embedded_copy() {
     let n = |d: &Path| std::fs::read_dir(d).unwrap().count();
     for g in ["A-stiff", "B-soft"] {
         let d = Path::new("data").join(g);
-        assert_eq!(n(&work.join("out/example").join(&d)), n(&repo.join(&d)), "{g}");
+        assert_eq!(
+            n(&work.join("out/example").join(&d)),
+            n(&repo.join(&d)),
+            "{g}"
+        );
     }
     // A second run (resume) succeeds on the same copy.
     let again = run();

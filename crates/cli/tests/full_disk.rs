@@ -73,7 +73,16 @@ cp -a "$FS/." "$AFTER/"
         .map(|a| a.replace("{fs}", &fs.to_string_lossy()))
         .collect();
     let o = Command::new("unshare")
-        .args(["--user", "--map-root-user", "--mount", "sh", "-c", script, "sh", NLVID])
+        .args([
+            "--user",
+            "--map-root-user",
+            "--mount",
+            "sh",
+            "-c",
+            script,
+            "sh",
+            NLVID,
+        ])
         .args(&args)
         .env("FS", &fs)
         .env("SEED", &seed)
@@ -147,9 +156,17 @@ fn cli_output_on_a_full_disk_keeps_the_previous_file() {
     let jpk = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../afm/tests/data/fmt-jpk-fd_spot3-0192.jpk-force");
     let jpk = jpk.to_string_lossy().into_owned();
-    let o = run_on_tiny_fs(&case, 8, &case, &["inspect", &jpk, "--csv", "{fs}/curve.csv"]);
+    let o = run_on_tiny_fs(
+        &case,
+        8,
+        &case,
+        &["inspect", &jpk, "--csv", "{fs}/curve.csv"],
+    );
     assert_failed_for_space(&o, "inspect --csv");
-    assert_eq!(files(&o.after), [("curve.csv".to_string(), previous.to_vec())]);
+    assert_eq!(
+        files(&o.after),
+        [("curve.csv".to_string(), previous.to_vec())]
+    );
 }
 
 /// The report crate's writer (`nlvid_report::cohort::write_atomic`, here
@@ -183,7 +200,10 @@ fn report_writer_on_a_full_disk_leaves_complete_or_previous_files() {
             assert_eq!(bytes, std::fs::read(repo.join(r)).unwrap(), "{rel} is cut");
         }
     }
-    assert_eq!(kept, 1, "the curve that did not fit is the previous version");
+    assert_eq!(
+        kept, 1,
+        "the curve that did not fit is the previous version"
+    );
 }
 
 /// The surrogate store's writer (`nlvid_surrogate::store::write_atomic`):
@@ -217,6 +237,10 @@ g1 = { range = [0.01, 0.45] }
 g2 = { range = [0.01, 0.45] }
 tau1 = { range = ["0.01 s", "2 s"], log = true }
 tau2 = { range = ["2 s", "40 s"], log = true }
+
+[build]
+store = "store"
+export = "export"
 "#,
     )
     .unwrap();

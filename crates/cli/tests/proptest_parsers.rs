@@ -50,17 +50,31 @@ fn examples(rel: &str) -> PathBuf {
 /// arrays, tables.
 fn value() -> impl Strategy<Value = String> {
     prop_oneof![
-        (-1e6..1e6f64, prop::sample::select(vec![
-            "", "Pa", "kPa", "um", "nm", "mm", "s", "ms", "ns", "N/m", "%", "Hz", "um/s", "kPa/s",
-            "furlong",
-        ]))
+        (
+            -1e6..1e6f64,
+            prop::sample::select(vec![
+                "", "Pa", "kPa", "um", "nm", "mm", "s", "ms", "ns", "N/m", "%", "Hz", "um/s",
+                "kPa/s", "furlong",
+            ])
+        )
             .prop_map(|(v, u)| format!("\"{v} {u}\"")),
         any::<f64>().prop_map(|v| format!("{v:?}")),
         any::<i64>().prop_map(|v| v.to_string()),
         prop::sample::select(vec![
-            "nan", "inf", "-inf", "true", "\"\"", "[]", "{}", "\"1 ns\"", "[0.2, \"10 %\"]",
-            "[\"0.5 s\", \"12 s\"]", "{ range = [\"80 Pa\", \"4000 Pa\"], log = true }",
-            "\"-3 kPa\"", "1e308", "\"1e400 Pa\"",
+            "nan",
+            "inf",
+            "-inf",
+            "true",
+            "\"\"",
+            "[]",
+            "{}",
+            "\"1 ns\"",
+            "[0.2, \"10 %\"]",
+            "[\"0.5 s\", \"12 s\"]",
+            "{ range = [\"80 Pa\", \"4000 Pa\"], log = true }",
+            "\"-3 kPa\"",
+            "1e308",
+            "\"1e400 Pa\"",
         ])
         .prop_map(str::to_string),
         "[ -~]{0,12}".prop_map(|s| format!("{s:?}")),
@@ -88,7 +102,9 @@ fn study() -> impl Strategy<Value = String> {
         .prop_map(|(seed, edits)| {
             let mut lines: Vec<String> = seed.lines().map(str::to_string).collect();
             for (at, op, v) in edits {
-                let i = at.index(lines.len().max(1)).min(lines.len().saturating_sub(1));
+                let i = at
+                    .index(lines.len().max(1))
+                    .min(lines.len().saturating_sub(1));
                 match op {
                     0 => {
                         if let Some((k, _)) = lines[i].split_once('=') {
@@ -126,7 +142,7 @@ fn study_parser_and_stage_readers_never_panic_and_name_where() {
     let dir = common::scratch("proptest-study");
     let p = dir.join("s.toml");
     let (ok, err) = (std::cell::Cell::new(0u32), std::cell::Cell::new(0u32));
-    runner(300)
+    runner(1000)
         .run(&study(), |text| {
             std::fs::write(&p, &text).unwrap();
             let results: [Result<(), String>; 5] = [
@@ -183,18 +199,18 @@ fn csv(header: &'static str) -> impl Strategy<Value = String> {
             .prop_map(str::to_string),
     ];
     let row = prop::collection::vec(cell, 0..6).prop_map(|c| c.join(","));
-    (
-        prop::bool::weighted(0.9),
-        prop::collection::vec(row, 0..12),
-    )
-        .prop_map(move |(keep, rows)| {
-            let mut s = if keep { format!("{header}\n") } else { String::new() };
-            for r in rows {
-                s.push_str(&r);
-                s.push('\n');
-            }
-            s
-        })
+    (prop::bool::weighted(0.9), prop::collection::vec(row, 0..12)).prop_map(move |(keep, rows)| {
+        let mut s = if keep {
+            format!("{header}\n")
+        } else {
+            String::new()
+        };
+        for r in rows {
+            s.push_str(&r);
+            s.push('\n');
+        }
+        s
+    })
 }
 
 #[test]
@@ -211,14 +227,17 @@ fn csv_readers_never_panic_and_name_the_file() {
     };
     let readers: [(&'static str, &'static str); 5] = [
         ("curve.csv", "time,piezo,deflection"),
-        ("design.csv", "index,G0 [Pa],g1 [1],g2 [1],tau1 [s],tau2 [s]"),
+        (
+            "design.csv",
+            "index,G0 [Pa],g1 [1],g2 [1],tau1 [s],tau2 [s]",
+        ),
         ("loading.csv", "time_s,shear"),
         ("program.csv", "time_s,displacement_m"),
         ("results.csv", "cell,group,G0,g1,tau1,g2,tau2"),
     ];
     for (k, (name, header)) in readers.into_iter().enumerate() {
         let p = dir.join(name);
-        runner(120)
+        runner(300)
             .run(&csv(header), |text| {
                 std::fs::write(&p, &text).unwrap();
                 let r: Result<(), String> = match k {
@@ -231,13 +250,11 @@ fn csv_readers_never_panic_and_name_the_file() {
                         .map(|_| ())
                         .map_err(|e| e.to_string()),
                     2 => nlvid_material::read_table(&p, "shear").map(|_| ()),
-                    3 => nlvid_protocol::read_table(
-                        &p,
-                        nlvid_protocol::Quantity::Displacement,
-                        None,
-                    )
-                    .map(|_| ())
-                    .map_err(|e| e.to_string()),
+                    3 => {
+                        nlvid_protocol::read_table(&p, nlvid_protocol::Quantity::Displacement, None)
+                            .map(|_| ())
+                            .map_err(|e| e.to_string())
+                    }
                     _ => nlvid_stats::read_results(&p)
                         .map(|_| ())
                         .map_err(|e| e.to_string()),
@@ -261,7 +278,7 @@ fn jpk_reader_never_panics_and_names_the_source() {
         prop::collection::vec((0..n, any::<u8>()), 0..8),
         prop::option::weighted(0.3, 0..n),
     );
-    runner(150)
+    runner(400)
         .run(&damage, |(flips, cut)| {
             let mut b = src.clone();
             for (i, v) in flips {

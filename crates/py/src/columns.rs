@@ -197,17 +197,12 @@ pub(crate) fn force_curve(
                 .collect(),
         });
     }
-    let source = source.unwrap_or_else(|| {
-        match (meta_str(meta, "path"), meta_str(meta, "enum")) {
-            (Some(p), Some(e)) => format!("{p}:{e}"),
-            (Some(p), None) => p,
-            _ => "<columns>".to_string(),
-        }
+    let source = source.unwrap_or_else(|| match (meta_str(meta, "path"), meta_str(meta, "enum")) {
+        (Some(p), Some(e)) => format!("{p}:{e}"),
+        (Some(p), None) => p,
+        _ => "<columns>".to_string(),
     });
-    let position = match (
-        meta_f64(meta, "position x"),
-        meta_f64(meta, "position y"),
-    ) {
+    let position = match (meta_f64(meta, "position x"), meta_f64(meta, "position y")) {
         (Some(x), Some(y)) => Some((x, y)),
         _ => None,
     };
