@@ -26,6 +26,7 @@ pub mod args;
 #[macro_use]
 pub mod output;
 pub mod cmd;
+pub mod embedded_demo;
 pub mod progress;
 
 /// Parses the command line, sets up logging and runs the subcommand.

@@ -1,6 +1,7 @@
 //! Kill anywhere, resume: `nlvid build`, `cohort` and `report` are stopped
-//! (1) by a full disk — a file-size limit (`ulimit -f`) kills the process
-//! with SIGXFSZ in the middle of writing a file — and (2) by SIGKILL at
+//! (1) by a file-size limit (`ulimit -f`), which kills the process with
+//! SIGXFSZ in the middle of writing a file (a stand-in for a full disk; the
+//! real ENOSPC, which the process survives, is full_disk.rs) — and (2) by SIGKILL at
 //! seeded random times. After each stop every final-named output file is
 //! absent or complete and byte-identical to an uninterrupted run; after a
 //! resume the outputs equal the uninterrupted run and no temporary file is

@@ -2,7 +2,8 @@
 //! JPK force curves and maps read into numpy arrays with their metadata
 //! (`nlvid_afm::read_force_map`), the quick Hertz (eq. 1.1) and Lee–Radok
 //! Prony fits of a curve (`nlvid_afm::quick_fit`), and the same two fits
-//! on arrays (`nlvid_afm::fit_hertz`, `nlvid_afm::fit_lee_radok`).
+//! on arrays (`nlvid_afm::fit_hertz`, `nlvid_afm::fit_lee_radok`). The
+//! curve fits also take afmformats' data objects ([`crate::columns`]).
 
 use std::path::PathBuf;
 
@@ -93,6 +94,23 @@ impl ForceCurve {
         self.curve.write_csv(&mut buf).py()?;
         Ok(String::from_utf8_lossy(&buf).into_owned())
     }
+    /// A curve given as columns: an afmformats data object
+    /// (`afmformats.load_data(path)[i]`) or a dict of float64 arrays with
+    /// afmformats' column names (`force` [N], `height (measured)` and/or
+    /// `height (piezo)` [m], `time` [s], `segment`); `metadata` (default:
+    /// `data.metadata`) must give `spring constant` [N/m]. Segment kinds
+    /// are inferred from the piezo height (`crates/py/src/columns.rs`).
+    #[staticmethod]
+    #[pyo3(signature = (data, metadata = None, source = None))]
+    fn from_columns(
+        data: &Bound<'_, PyAny>,
+        metadata: Option<Bound<'_, PyAny>>,
+        source: Option<String>,
+    ) -> PyResult<Self> {
+        let meta = crate::columns::optional_mapping(metadata)?;
+        let curve = crate::columns::force_curve(data, meta.as_ref(), source)?;
+        Ok(Self { curve, n_curves: 1 })
+    }
     fn __len__(&self) -> usize {
         self.curve.len()
     }
@@ -151,9 +169,21 @@ fn contact_method(name: &str) -> PyResult<nlvid_afm::ContactMethod> {
     }
 }
 
+/// A `ForceCurve`, or anything [`ForceCurve::from_columns`] takes (an
+/// afmformats data object, a dict of columns), converted.
+fn with_curve<T>(
+    curve: &Bound<'_, PyAny>,
+    f: impl FnOnce(&nlvid_afm::ForceCurve) -> PyResult<T>,
+) -> PyResult<T> {
+    if let Ok(c) = curve.cast::<ForceCurve>() {
+        return f(&c.get().curve);
+    }
+    f(&crate::columns::force_curve(curve, None, None)?)
+}
+
 fn quick<'py>(
     py: Python<'py>,
-    curve: &ForceCurve,
+    curve: &nlvid_afm::ForceCurve,
     kind: nlvid_afm::QuickFitKind,
     tip_radius: &Bound<'py, PyAny>,
     contact: &str,
@@ -161,7 +191,7 @@ fn quick<'py>(
     let r = quantity(tip_radius, "tip_radius", Dimension::LENGTH)?;
     let method = contact_method(contact)?;
     let f = py
-        .detach(|| nlvid_afm::quick_fit(&curve.curve, kind, r, method))
+        .detach(|| nlvid_afm::quick_fit(curve, kind, r, method))
         .py()?;
     let d = crate::pyjson::dict(py, &f.to_json())?;
     let plot = PyDict::new(py);
@@ -175,7 +205,8 @@ fn quick<'py>(
 }
 
 /// Paraboloidal Hertz fit (eq. 1.1) of a curve's approach, E and contact
-/// point free (`nlvid inspect --fit hertz`). `tip_radius` with a unit
+/// point free (`nlvid inspect --fit hertz`). `curve`: a `ForceCurve`, an
+/// afmformats data object or a dict of columns (`ForceCurve.from_columns`). `tip_radius` with a unit
 /// ("5 um"); `contact`: "deviation" or "piecewise". Returns the values of
 /// `nlvid --json inspect` (`youngs_modulus_Pa`, `contact_point_m`, …) and
 /// `plot` arrays.
@@ -183,38 +214,43 @@ fn quick<'py>(
 #[pyo3(signature = (curve, tip_radius, poisson = 0.5, contact = "deviation"))]
 fn hertz<'py>(
     py: Python<'py>,
-    curve: PyRef<'py, ForceCurve>,
+    curve: &Bound<'py, PyAny>,
     tip_radius: Bound<'py, PyAny>,
     poisson: f64,
     contact: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    quick(
-        py,
-        &curve,
-        nlvid_afm::QuickFitKind::Hertz { poisson },
-        &tip_radius,
-        contact,
-    )
+    with_curve(curve, |c| {
+        quick(
+            py,
+            c,
+            nlvid_afm::QuickFitKind::Hertz { poisson },
+            &tip_radius,
+            contact,
+        )
+    })
 }
 
 /// Lee–Radok Prony fit of a curve's extend + hold segments
-/// (`nlvid inspect --fit lee-radok`), `terms` 1 to 3.
+/// (`nlvid inspect --fit lee-radok`), `terms` 1 to 3; `curve` as for
+/// [`hertz`].
 #[pyfunction]
 #[pyo3(signature = (curve, tip_radius, terms = 2, contact = "deviation"))]
 fn lee_radok<'py>(
     py: Python<'py>,
-    curve: PyRef<'py, ForceCurve>,
+    curve: &Bound<'py, PyAny>,
     tip_radius: Bound<'py, PyAny>,
     terms: usize,
     contact: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    quick(
-        py,
-        &curve,
-        nlvid_afm::QuickFitKind::LeeRadok { terms },
-        &tip_radius,
-        contact,
-    )
+    with_curve(curve, |c| {
+        quick(
+            py,
+            c,
+            nlvid_afm::QuickFitKind::LeeRadok { terms },
+            &tip_radius,
+            contact,
+        )
+    })
 }
 
 /// Hertz fit (eq. 1.1, paraboloid of radius `tip_radius`) of `force` (N)

@@ -15,6 +15,7 @@ mod afm;
 mod arrays;
 mod bench;
 mod cohort;
+mod columns;
 mod errors;
 mod fit;
 mod metamodel;

@@ -1,5 +1,5 @@
-"""simulate against `nlvid --json simulate` (cell FE) and `nlvid --json
-membrane` on the same study files."""
+"""simulate against `nlvid --json simulate` (cell FE, 3D capsule FE) and
+`nlvid --json membrane` on the same study files."""
 
 import numpy as np
 import pytest
@@ -62,6 +62,35 @@ tau1 = "0.1 s"
 tau2 = "2 s"
 """
 
+# The 3D capsule of thesis §4.3 on a coarse mesh (0.6 mm elements, 2 layers
+# through the wall) and a short ramp-hold, so the run takes seconds; the
+# parameters are §4.4.3's RH set (crates/forward/tests/capsule_fe.rs).
+CAPSULE_FE = """
+title = "coarse capsule-fe"
+[forward]
+model = "capsule-fe"
+axes = ["9.96 mm", "6.51 mm", "6.51 mm"]
+wall_thickness = ["0.62 mm", "0.4 mm", "0.4 mm"]
+element_size = "0.6 mm"
+layers = 2
+min_steps = 8
+points = 25
+
+[protocol]
+kind = "ramp-hold"
+target = "1 mm"
+rate = "5 mm/s"
+hold = "0.4 s"
+
+[parameters]
+C1 = "21.2546 MPa"
+alpha = 0.3720
+g1 = 0.7674
+g2 = 0.1546
+tau1 = "0.0623 s"
+tau2 = "1.3936 s"
+"""
+
 
 def curve_matches(py_curve, cli_curve):
     assert np.array_equal(py_curve["time"], np.array(cli_curve["time_s"]))
@@ -86,6 +115,29 @@ def test_cell_fe_run_is_the_cli_run(tmp_path, cli):
     assert r["solver"]["steps"] == c["solver"]["steps"]
     # Physics sanity independent of the CLI: the probe pushes (force > 0 at the peak).
     assert r["peak_force_N"] > 0 and r["curve"]["force"].dtype == np.float64
+
+
+def test_capsule_fe_run_is_the_cli_run(tmp_path, cli):
+    p = tmp_path / "capsule-fe.toml"
+    p.write_text(CAPSULE_FE)
+    r = nlvid.simulate(p)
+    c = cli.run("simulate", p, "-o", tmp_path / "capsule.csv")
+    assert r["model"] == c["model"] == "capsule-fe"
+    assert r["parameters"] == c["parameters"]
+    assert r["provenance"] == c["provenance"]
+    curve_matches(r["curve"], c["curve"])
+    for k in ("peak_force_N", "final_force_N", "min_force_N", "final"):
+        assert r[k] == c[k], k
+    curve = r["curve"]
+    t, f = curve["time"], curve["force"]
+    assert f.dtype == np.float64 and len(t) == 25
+    # Independent of the CLI: the grid spans the program (ramp 1 mm at
+    # 5 mm/s = 0.2 s, then 0.4 s), the capsule starts unloaded, the hold
+    # relaxes, and the incompressible oil keeps the capsule's volume.
+    assert t[0] == 0.0 and t[-1] == pytest.approx(0.6, rel=1e-12)
+    assert f[0] == 0.0 and f.max() > 0 and f[-1] < f.max()
+    v = curve["volume"]
+    assert np.all(np.abs(v / v[0] - 1) < 1e-9)
 
 
 def test_membrane_run_is_the_cli_run(tmp_path, cli):

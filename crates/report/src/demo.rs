@@ -338,11 +338,15 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
 }
 
 /// The bundled example: `given`, else `examples/demo` in the current
-/// directory, else `built` (the source tree the binary was built from).
+/// directory, else what `fallback` provides (the binary's embedded copy,
+/// written out; `crates/cli/src/embedded_demo.rs`).
 ///
 /// # Errors
-/// None of them holds a `study.toml`.
-pub fn demo_dir(given: Option<PathBuf>, built: &Path) -> Result<PathBuf> {
+/// `fallback`'s error.
+pub fn demo_dir(
+    given: Option<PathBuf>,
+    fallback: impl FnOnce() -> Result<PathBuf>,
+) -> Result<PathBuf> {
     if let Some(d) = given {
         return Ok(d);
     }
@@ -350,14 +354,7 @@ pub fn demo_dir(given: Option<PathBuf>, built: &Path) -> Result<PathBuf> {
     if here.join("study.toml").is_file() {
         return Ok(here);
     }
-    if built.join("study.toml").is_file() {
-        // Print `/…/examples/demo`, not `/…/crates/cli/../../examples/demo`.
-        return Ok(std::fs::canonicalize(built).unwrap_or_else(|_| built.to_path_buf()));
-    }
-    Err(ReportError::InvalidSetting(format!(
-        "no bundled example: neither ./examples/demo nor {} has a study.toml; give --demo DIR",
-        built.display()
-    )))
+    fallback()
 }
 
 /// Runs the bundled example in `demo` end to end into `out`: `nlvid cohort`

@@ -23,6 +23,24 @@ static CLEANED: Mutex<Option<HashSet<PathBuf>>> = Mutex::new(None);
 /// The directory does not exist or is not writable, the disk is full, or the
 /// rename fails.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    write_atomic_with(path, bytes, |f, b| f.write_all(b))
+}
+
+/// [`write_atomic`] with the step that writes the bytes into the temporary
+/// file given by the caller: the test-only seam through which the tests
+/// inject a failure in the middle of a file (a full disk, `ENOSPC`, after
+/// part of the bytes), where no small file system can be mounted. Every
+/// other step — temporary name, `fsync`, rename, removal on failure — is
+/// the one [`write_atomic`] runs.
+///
+/// # Errors
+/// As [`write_atomic`], and whatever `write` returns.
+#[doc(hidden)]
+pub fn write_atomic_with(
+    path: &Path,
+    bytes: &[u8],
+    write: impl FnOnce(&mut fs::File, &[u8]) -> std::io::Result<()>,
+) -> std::io::Result<()> {
     let dir = path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -38,7 +56,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     ));
     let result = (|| {
         let mut f = fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
+        write(&mut f, bytes)?;
         f.sync_all()?;
         fs::rename(&tmp, path)
     })();
@@ -193,6 +211,47 @@ mod tests {
         let left: Vec<_> = fs::read_dir(&dir).unwrap().collect();
         assert_eq!(left.len(), 1, "{left:?}");
         assert!(write_atomic(&dir.join("missing/out.csv"), b"x").is_err());
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A full disk in the middle of a file (injected: part of the bytes
+    /// reach the temporary file, then `ENOSPC`): the final name keeps the
+    /// previous complete version (or stays absent), no temporary is left,
+    /// and the error is the OS's "no space" error. The real thing (a tiny
+    /// tmpfs) is crates/cli/tests/full_disk.rs.
+    #[test]
+    fn a_full_disk_mid_file_keeps_the_previous_version_and_no_temporary() {
+        let dir = std::env::temp_dir().join(format!("nlvid-atomic-full-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        let full = |f: &mut fs::File, b: &[u8]| {
+            f.write_all(&b[..b.len() / 2])?;
+            Err(std::io::Error::from_raw_os_error(28)) // ENOSPC
+        };
+        let new: Vec<u8> = (0..100_000u32).flat_map(|i| i.to_le_bytes()).collect();
+        // A file that existed: still the previous complete version.
+        let old = dir.join("old.csv");
+        write_atomic(&old, b"previous,complete\n1,2\n").unwrap();
+        let e = write_atomic_with(&old, &new, full).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::StorageFull, "{e}");
+        assert_eq!(fs::read(&old).unwrap(), b"previous,complete\n1,2\n");
+        // A new file: absent.
+        let fresh = dir.join("fresh.json");
+        assert!(write_atomic_with(&fresh, &new, full).is_err());
+        assert!(!fresh.exists());
+        // A failure on the first byte: the same.
+        let none = |_: &mut fs::File, _: &[u8]| Err(std::io::Error::from_raw_os_error(28));
+        assert!(write_atomic_with(&fresh, &new, none).is_err());
+        assert!(!fresh.exists());
+        let mut left: Vec<_> = fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        left.sort();
+        assert_eq!(left, ["old.csv"], "a temporary was left");
+        // The seam writes what write_atomic writes when nothing fails.
+        write_atomic_with(&fresh, &new, |f, b| f.write_all(b)).unwrap();
+        assert_eq!(fs::read(&fresh).unwrap(), new);
         fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -50,6 +50,7 @@ mod units;
 
 pub use atomic::{
     check_output_dir, check_output_file, clean_stale_temps, next_to, process_alive, write_atomic,
+    write_atomic_with,
 };
 pub use bounds::Bounds;
 pub use delimiter::delimiter_hint;

@@ -1,7 +1,8 @@
 //! `nlvid demo [--out DIR]`: runs cohort → compare → report on the bundled
 //! synthetic study (`examples/demo`: two groups of 8 cells made by the
 //! forward model from known parameters with noise, and its pre-built
-//! meta-model) and prints where the report is. `--write-data` regenerates
+//! meta-model; embedded in the binary and written to `OUT/example/` when
+//! there is no `./examples/demo`) and prints where the report is. `--write-data` regenerates
 //! the cells' curves from the study instead. See docs/cli/demo.md.
 
 use std::path::PathBuf;
@@ -20,8 +21,8 @@ pub struct Args {
     #[arg(long, default_value = "nlvid-demo")]
     pub out: PathBuf,
     /// The bundled example (study.toml, data/, metamodel/); default
-    /// `examples/demo` in the current directory, else in the source tree
-    /// this binary was built from.
+    /// `examples/demo` in the current directory, else the copy embedded in
+    /// this binary, written to `OUT/example/`.
     #[arg(long)]
     pub demo: Option<PathBuf>,
     /// Only (re)write the demo's cell curves (data/, ground_truth.csv) with
@@ -45,8 +46,9 @@ impl Run for Args {
 
     fn execute(a: Args, _ctx: &Context) -> anyhow::Result<ExitCode> {
         let start = Instant::now();
-        let built = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/demo"));
-        let demo = nlvid_report::demo::demo_dir(a.demo, &built)?;
+        let demo = nlvid_report::demo::demo_dir(a.demo, || {
+            crate::embedded_demo::write_to(&a.out.join("example"))
+        })?;
         let study = demo.join("study.toml");
         if a.write_data {
             let spec = DemoSpec::default();

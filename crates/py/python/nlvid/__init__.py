@@ -4,7 +4,9 @@ JPK files, Hertz and Lee-Radok fits, cohort tables and group comparisons.
 The functions wrap the library calls of the ``nlvid`` command line (each
 docstring names its subcommand), so results are the CLI's. Arrays are numpy
 float64 in SI units (s, m, N, Pa); quantities given as scalars carry their
-unit in a string (``tip_radius="5 um"``). Errors raise ``NlvidError``
+unit in a string (``tip_radius="5 um"``). ``hertz`` and ``lee_radok`` also
+take afmformats' data objects (``afmformats.load_data(path)[0]``) or dicts of
+their columns, duck-typed (``ForceCurve.from_columns``). Errors raise ``NlvidError``
 (``StudyError`` with ``file``/``line``/``column``/``key`` for study files,
 ``InputError`` — also a ``ValueError`` — or ``TypeError`` for bad arguments).
 """

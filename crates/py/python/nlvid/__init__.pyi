@@ -1,7 +1,7 @@
 """Type stubs of nlvid (the extension module nlvid._nlvid, re-exported)."""
 
 import os
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union, overload
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -47,11 +47,15 @@ def parse_study(text: str, name: str = "<string>", strict: bool = False) -> Stud
 def simulate(
     study: Union[PathLike, Study], profile_times: Optional[Sequence[Quantity]] = None
 ) -> Dict[str, Any]:
-    """One forward run of the study's [forward] model (nlvid simulate / membrane).
+    """One forward run of the study's [forward] model (nlvid simulate / membrane):
+    the cell FE model (afm-fe), the 3D capsule FE model (capsule-fe), the
+    membrane, the analytic models; the GIL is released during the run.
 
     Keys: provenance, model, parameters, curve (time and channels as float64
     arrays + units), peak_force_N, final_force_N, min_force_N, final,
-    solver (afm-fe), profiles (membrane)."""
+    solver (afm-fe), profiles (membrane). capsule-fe channels: force, contact_area,
+    ellipse_area, pressure_area, lost_area, pressure, volume,
+    plate_displacement, in_contact, lost_contact."""
 
 class MetaModel:
     """A Kriging meta-model (nlvid surrogate predict / check)."""
@@ -96,7 +100,21 @@ class ForceCurve:
     def segments(self) -> List[Dict[str, Any]]: ...
     def summary(self, samples: bool = False) -> Dict[str, Any]: ...
     def to_csv(self) -> str: ...
+    @staticmethod
+    def from_columns(
+        data: Any, metadata: Optional[Mapping[str, Any]] = None, source: Optional[str] = None
+    ) -> "ForceCurve":
+        """A curve from an afmformats data object (``afmformats.load_data(p)[i]``)
+        or a dict of afmformats-named columns in SI: force [N], height (measured)
+        and/or height (piezo) [m], time [s], segment. ``metadata`` (default:
+        ``data.metadata``) needs ``spring constant`` [N/m]. Segment kinds are
+        inferred from the piezo height."""
     def __len__(self) -> int: ...
+
+# A curve argument of hertz / lee_radok: an nlvid ForceCurve, an afmformats
+# data object (AFMForceDistance, AFMStressRelaxation, AFMCreepCompliance) or
+# a dict of afmformats-named columns; duck-typed, afmformats is not required.
+CurveLike = Union[ForceCurve, Any]
 
 def read_jpk(
     path: PathLike,
@@ -106,12 +124,12 @@ def read_jpk(
     """Read a JPK force curve, force map or QI file (nlvid inspect)."""
 
 def hertz(
-    curve: ForceCurve, tip_radius: Quantity, poisson: float = 0.5, contact: str = "deviation"
+    curve: CurveLike, tip_radius: Quantity, poisson: float = 0.5, contact: str = "deviation"
 ) -> Dict[str, Any]:
     """Paraboloidal Hertz fit of the approach (nlvid inspect --fit hertz)."""
 
 def lee_radok(
-    curve: ForceCurve, tip_radius: Quantity, terms: int = 2, contact: str = "deviation"
+    curve: CurveLike, tip_radius: Quantity, terms: int = 2, contact: str = "deviation"
 ) -> Dict[str, Any]:
     """Lee-Radok Prony fit of extend + hold (nlvid inspect --fit lee-radok)."""
 
