@@ -70,7 +70,8 @@ fn posterior_of_g0_matches_the_laplace_approximation() {
         panic!("the demo meta-model is PCA-reduced");
     };
     let u = DMatrix::from_column_slice(m, k, &factor);
-    let mut sigma = &u * u.transpose() * s.mse_scale(&x0).expect("v");
+    let c = s.variance_calibration().expect("calibration");
+    let mut sigma = &u * u.transpose() * (c * s.mse_scale(&x0).expect("v"));
     for j in 0..m {
         sigma[(j, j)] += est * est;
     }
