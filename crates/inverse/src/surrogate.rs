@@ -47,6 +47,8 @@ pub struct KrigingSurrogate {
     a: OnceLock<DMatrix<f64>>,
     /// σ²_CV/σ²_ML of the Kriging model, computed on first use.
     cv_ratio: OnceLock<std::result::Result<f64, String>>,
+    /// The cross-validated output covariance, computed on first use.
+    cv_cov: OnceLock<std::result::Result<nlvid_surrogate::OutputCovariance, String>>,
 }
 
 fn model_err(x: &[f64], e: &SurrogateError) -> InverseError {
@@ -97,6 +99,7 @@ impl KrigingSurrogate {
             mu,
             a: OnceLock::new(),
             cv_ratio: OnceLock::new(),
+            cv_cov: OnceLock::new(),
         };
         s.check_basis_form()?;
         Ok(s)
@@ -171,6 +174,21 @@ impl KrigingSurrogate {
             .get_or_init(|| self.kriging.cv_variance_ratio().map_err(|e| e.to_string()))
             .clone()
             .map_err(|e| InverseError::InvalidSetting(format!("Kriging variance calibration: {e}")))
+    }
+
+    /// The process covariance K of the outputs with the kriged outputs'
+    /// covariance estimated by leave-one-out cross-validation
+    /// ([`KrigingModel::output_covariance_cv`]), computed once per
+    /// surrogate (O(N³/3)): the K of the posteriors' likelihood.
+    ///
+    /// # Errors
+    /// A model with ln outputs; a covariance that is not positive
+    /// semi-definite.
+    pub fn output_covariance_cv(&self) -> Result<nlvid_surrogate::OutputCovariance> {
+        self.cv_cov
+            .get_or_init(|| self.kriging.output_covariance_cv().map_err(|e| e.to_string()))
+            .clone()
+            .map_err(|e| InverseError::InvalidSetting(format!("Kriging variance: {e}")))
     }
 
     /// Surrogate inputs at physical x and d(input_i)/d(x_i).

@@ -65,13 +65,12 @@ fn posterior_of_g0_matches_the_laplace_approximation() {
     let noise_only: DMatrix<f64> = jac.transpose() * &jac / (est * est);
     let sd_noise_only = noise_only.try_inverse().expect("invertible")[(0, 0)].sqrt();
     let nlvid_surrogate::OutputCovariance::LowRank { m, k, factor } =
-        s.kriging().output_covariance().expect("cov")
+        s.kriging().output_covariance_cv().expect("cov")
     else {
         panic!("the demo meta-model is PCA-reduced");
     };
     let u = DMatrix::from_column_slice(m, k, &factor);
-    let c = s.variance_calibration().expect("calibration");
-    let mut sigma = &u * u.transpose() * (c * s.mse_scale(&x0).expect("v"));
+    let mut sigma = &u * u.transpose() * s.mse_scale(&x0).expect("v");
     for j in 0..m {
         sigma[(j, j)] += est * est;
     }

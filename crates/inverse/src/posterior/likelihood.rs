@@ -3,13 +3,13 @@
 //! error (its Kriging MSE, with the cross-time covariance) folded into the
 //! variance (issue 17; docs/theory/inverse.md, "Posteriors").
 //!
-//! d = ŷ(x) + e_s + e_n with the surrogate error e_s ~ N(0, c·v(x)·K)
+//! d = ŷ(x) + e_s + e_n with the surrogate error e_s ~ N(0, v(x)·K)
 //! (DACE report eq. 2.20 across outputs, `nlvid_surrogate::OutputCovariance`,
-//! with c = σ²_CV/σ²_ML its leave-one-out calibration,
-//! [`KrigingSurrogate::variance_calibration`]) and the measurement noise
-//! e_n ~ N(0, σ²I):
-//! ln L(x) = −½ [ln det Σ + rᵀΣ⁻¹r] + const, Σ = σ²I + c·v(x)K, r = d − ŷ(x).
-//! (Below, v stands for c·v(x).)
+//! with the kriged outputs' process covariance in K estimated by
+//! leave-one-out cross-validation, `KrigingModel::output_covariance_cv`:
+//! the ML estimate understates the demo meta-model's errors threefold,
+//! docs/theory/inverse.md) and the measurement noise e_n ~ N(0, σ²I):
+//! ln L(x) = −½ [ln det Σ + rᵀΣ⁻¹r] + const, Σ = σ²I + v(x)K, r = d − ŷ(x).
 //! For a PCA-reduced surrogate K = U Uᵀ (rank k) and ŷ = A c(x) (rank r,
 //! [`crate::ReducedModel`]), so by the Woodbury identity, with
 //! M = I_k + (v/σ²) UᵀU and w = Uᵀr:
@@ -93,8 +93,6 @@ pub struct CurveLikelihood<'a> {
     surrogate: &'a KrigingSurrogate,
     data: Vec<f64>,
     noise_var: f64,
-    /// σ²_CV/σ²_ML: the Kriging variance's leave-one-out calibration.
-    calibration: f64,
     form: Form,
 }
 
@@ -113,9 +111,7 @@ impl<'a> CurveLikelihood<'a> {
                 "likelihood: data must be finite and the noise sd > 0 (got {noise})"
             )));
         }
-        let cov = surrogate.kriging().output_covariance().map_err(|e| {
-            InverseError::InvalidSetting(format!("likelihood: Kriging variance: {e}"))
-        })?;
+        let cov = surrogate.output_covariance_cv()?;
         let d = DVector::from_column_slice(data);
         let form = match cov {
             OutputCovariance::LowRank { m: mm, k, factor } if surrogate.is_reduced() => {
@@ -138,7 +134,6 @@ impl<'a> CurveLikelihood<'a> {
             surrogate,
             data: data.to_vec(),
             noise_var: noise * noise,
-            calibration: surrogate.variance_calibration()?,
             form,
         })
     }
@@ -148,11 +143,6 @@ impl<'a> CurveLikelihood<'a> {
         self.noise_var
     }
 
-    /// The factor c of the Kriging variance in Σ = σ²I + c·v(x)K.
-    pub fn calibration(&self) -> f64 {
-        self.calibration
-    }
-
     /// ln L(x) up to the constant −(m/2) ln 2π, at physical x.
     ///
     /// # Errors
@@ -160,7 +150,7 @@ impl<'a> CurveLikelihood<'a> {
     /// σ² > 0 and v(x)·K ⪰ 0).
     pub fn value(&self, x: &[f64]) -> Result<f64> {
         let s2 = self.noise_var;
-        let v = self.calibration * self.surrogate.mse_scale(x)?;
+        let v = self.surrogate.mse_scale(x)?;
         let m = self.data.len() as f64;
         match &self.form {
             Form::LowRank {
@@ -235,7 +225,7 @@ mod tests {
             .map(|(j, y)| y + noise * ((j * 7919 % 101) as f64 / 50.0 - 1.0))
             .collect();
         let lik = CurveLikelihood::new(&s, &data, noise).expect("lik");
-        let OutputCovariance::LowRank { m, k, factor } = s.kriging().output_covariance().unwrap()
+        let OutputCovariance::LowRank { m, k, factor } = s.kriging().output_covariance_cv().unwrap()
         else {
             panic!("PCA model");
         };
@@ -245,7 +235,7 @@ mod tests {
             [1400.0, 0.35, 0.2, 0.3, 14.0],
             [3000.0, 0.1, 0.6, 1.5, 5.0],
         ] {
-            let v = lik.calibration() * s.mse_scale(&x).unwrap();
+            let v = s.mse_scale(&x).unwrap();
             let mut sigma = &u * u.transpose() * v;
             for j in 0..m {
                 sigma[(j, j)] += noise * noise;
