@@ -186,7 +186,11 @@ impl KrigingSurrogate {
     /// semi-definite.
     pub fn output_covariance_cv(&self) -> Result<nlvid_surrogate::OutputCovariance> {
         self.cv_cov
-            .get_or_init(|| self.kriging.output_covariance_cv().map_err(|e| e.to_string()))
+            .get_or_init(|| {
+                self.kriging
+                    .output_covariance_cv()
+                    .map_err(|e| e.to_string())
+            })
             .clone()
             .map_err(|e| InverseError::InvalidSetting(format!("Kriging variance: {e}")))
     }

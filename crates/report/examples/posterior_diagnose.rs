@@ -31,7 +31,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cells: usize = args.get(1).map_or(Ok(20), |s| s.parse())?;
     let noise: f64 = args.get(2).map_or(Ok(0.02), |s| s.parse())?;
     let seed: u64 = args.get(3).map_or(Ok(17), |s| s.parse())?;
-    let demo = std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
+    let demo =
+        std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
     let root = std::env::temp_dir().join(format!("nlvid-diagnose-{}", std::process::id()));
     let spec = |noise: f64| DemoSpec {
         groups: vec![
@@ -72,10 +73,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let u = DMatrix::from_column_slice(m, k, &factor);
     let cv = s.variance_calibration()?;
-    println!("LOO calibration of the Kriging variance sigma2_CV/sigma2_ML = {cv:.3} (k = {k}, N = {})", s.kriging().n_sites);
+    println!(
+        "LOO calibration of the Kriging variance sigma2_CV/sigma2_ML = {cv:.3} (k = {k}, N = {})",
+        s.kriging().n_sites
+    );
     let inputs = discover(&files.data)?;
     let clean_inputs = discover(&clean_files.data)?;
-    println!("cell  sigma_hat/sigma  |f-yhat|/(sigma sqrt m)  outside-span  chi2/m(Sigma)  chi2/m(sigma only)  v·tr(K)/(m sigma^2)  mahal/k");
+    println!(
+        "cell  sigma_hat/sigma  |f-yhat|/(sigma sqrt m)  outside-span  chi2/m(Sigma)  chi2/m(sigma only)  v·tr(K)/(m sigma^2)  mahal/k"
+    );
     let (mut ratios, mut chis, mut mahals) = (Vec::new(), Vec::new(), Vec::new());
     for (inp, cin) in inputs.iter().zip(&clean_inputs).take(cells) {
         let r = fit_cell(&settings, &model, inp);
@@ -93,7 +99,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let v = s.mse_scale(&truth.x)?;
         let rs = DVector::from_iterator(m, clean.iter().zip(&y).map(|(f, y)| f - y));
         // Part of the surrogate error outside the span of U.
-        let coef = (u.transpose() * &u).cholesky().ok_or("UtU")?.solve(&(u.transpose() * &rs));
+        let coef = (u.transpose() * &u)
+            .cholesky()
+            .ok_or("UtU")?
+            .solve(&(u.transpose() * &rs));
         let outside = (&rs - &u * &coef).norm() / rs.norm();
         // Mahalanobis norm of the surrogate error under v(x)K on K's span,
         // per dimension (1 when the Kriging variance is calibrated).
@@ -105,7 +114,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         let chi = rd.dot(&sig.cholesky().ok_or("spd")?.solve(&rd)) / m as f64;
         let chi0 = rd.dot(&rd) / (est * est) / m as f64;
-        let trk = (0..m).map(|j| (0..k).map(|i| u[(j, i)].powi(2)).sum::<f64>()).sum::<f64>();
+        let trk = (0..m)
+            .map(|j| (0..k).map(|i| u[(j, i)].powi(2)).sum::<f64>())
+            .sum::<f64>();
         println!(
             "{:10} {:6.3} {:8.3} {:6.3} {:8.3} {:8.3} {:8.4} {:8.3}  x {:?}",
             r.cell,

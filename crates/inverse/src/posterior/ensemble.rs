@@ -186,7 +186,10 @@ impl<F: Fn(&[f64]) -> f64> Ensemble<F> {
             return bad(format!(
                 "ensemble: stretch scale {} (must be > 1), {} kept steps (must be > 0), DE fraction \
                  {}, independence fraction {} (both in [0, 1])",
-                settings.stretch, settings.steps, settings.de_fraction, settings.independence_fraction
+                settings.stretch,
+                settings.steps,
+                settings.de_fraction,
+                settings.independence_fraction
             ));
         }
         let pos: Vec<Vec<f64>> = init.to_vec();

@@ -225,7 +225,8 @@ mod tests {
             .map(|(j, y)| y + noise * ((j * 7919 % 101) as f64 / 50.0 - 1.0))
             .collect();
         let lik = CurveLikelihood::new(&s, &data, noise).expect("lik");
-        let OutputCovariance::LowRank { m, k, factor } = s.kriging().output_covariance_cv().unwrap()
+        let OutputCovariance::LowRank { m, k, factor } =
+            s.kriging().output_covariance_cv().unwrap()
         else {
             panic!("PCA model");
         };

@@ -7,20 +7,22 @@
 //!   drawn), restricted to its linear constraints (g1 + g2 ≤ 1 − ε);
 //! - likelihood: [`CurveLikelihood`] — Gaussian, measurement noise σ
 //!   estimated from the curve ([`noise_sd`]), Kriging MSE with its
-//!   cross-time covariance folded into the variance;
-//! - sampler: the affine-invariant ensemble of [`ensemble`], in u, started
-//!   around the multistart optimum in a ball shaped by the Gauss–Newton
-//!   (Laplace) covariance;
+//!   cross-time covariance (process covariance estimated by leave-one-out)
+//!   folded into the variance;
+//! - sampler: independent affine-invariant ensembles ([`ensemble`]) in u,
+//!   started over-dispersed around the multistart optimum (Laplace shape),
+//!   run in rounds until the split R̂ across ensembles is ≤ [`RHAT_TARGET`]
+//!   or `max_steps`;
 //! - outputs ([`Posterior`]): equal-tailed credible intervals of every
 //!   parameter and of G(0), g1 + g2 and G(t_end) (eq. 5.1 through
 //!   `nlvid_model::Relaxation`), a credible band on G(t), split R̂ and
-//!   effective sample size per quantity ([`diagnostics`]), and a thinned
+//!   effective sample size per quantity ([`diagnostics`]; R̂ across
+//!   ensembles, not walkers: walkers of one ensemble are coupled), and a thinned
 //!   set of draws for group summaries.
 
 pub mod diagnostics;
 pub mod ensemble;
 mod likelihood;
-
 
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
@@ -289,8 +291,7 @@ pub fn sample_posterior(
         if !inside(u) {
             return f64::NEG_INFINITY;
         }
-        lik.value(&domain.from_unit(u))
-            .unwrap_or(f64::NEG_INFINITY)
+        lik.value(&domain.from_unit(u)).unwrap_or(f64::NEG_INFINITY)
     };
     let init = starts(
         surrogate,
@@ -306,7 +307,9 @@ pub fn sample_posterior(
             walkers: settings.walkers,
             burn: settings.burn,
             steps: settings.steps,
-            seed: settings.seed.wrapping_add(0x9e37_79b9_7f4a_7c15u64.wrapping_mul(e as u64)),
+            seed: settings
+                .seed
+                .wrapping_add(0x9e37_79b9_7f4a_7c15u64.wrapping_mul(e as u64)),
             ..EnsembleSettings::default()
         };
         let mut ens = Ensemble::new(&log_density, start, &es)?;
@@ -347,7 +350,11 @@ fn to_draws<'a, 'c>(
     let mut ensembles = Vec::new();
     let mut acc = Vec::new();
     for c in chains {
-        let xs = c.samples.chunks(c.dim).map(|u| domain.from_unit(u)).collect();
+        let xs = c
+            .samples
+            .chunks(c.dim)
+            .map(|u| domain.from_unit(u))
+            .collect();
         ensembles.push((c.walkers, c.steps, xs));
         acc.push(c.acceptance);
     }
@@ -410,7 +417,10 @@ fn summarise(draws: &Draws, noise: f64, settings: &PosteriorSettings) -> Result<
         &|x| rel(x).map_or(f64::NAN, |r| 1.0 - r.prony().long_term_weight()),
         settings.level,
     );
-    let g_end = draws.interval(&|x| rel(x).map_or(f64::NAN, |r| r.value(t_end)), settings.level);
+    let g_end = draws.interval(
+        &|x| rel(x).map_or(f64::NAN, |r| r.value(t_end)),
+        settings.level,
+    );
     let mut rhat_max = g0.rhat.max(g_sum.rhat).max(g_end.rhat);
     let mut ess_min = g0.ess.min(g_sum.ess).min(g_end.ess);
     for (_, iv) in &parameters {

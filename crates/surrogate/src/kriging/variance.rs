@@ -473,7 +473,9 @@ mod tests {
         let mut per_output = vec![0.0; q];
         for i in 0..n {
             let others: Vec<usize> = (0..n).filter(|&t| t != i).collect();
-            let r = DMatrix::from_fn(n - 1, n - 1, |a, b| corr(&site(others[a]), &site(others[b])));
+            let r = DMatrix::from_fn(n - 1, n - 1, |a, b| {
+                corr(&site(others[a]), &site(others[b]))
+            });
             let f = DMatrix::from_fn(n - 1, p, |a, k| freg(&site(others[a]))[k]);
             let rinv = r.try_inverse().unwrap();
             let ftrf = (f.transpose() * &rinv * &f).try_inverse().unwrap();
@@ -497,7 +499,11 @@ mod tests {
         let cv = m.cv_process_covariance().unwrap();
         for j in 0..q {
             let v = cv[j * q + j];
-            assert!((v / per_output[j] - 1.0).abs() < 1e-6, "output {j}: {v} vs {}", per_output[j]);
+            assert!(
+                (v / per_output[j] - 1.0).abs() < 1e-6,
+                "output {j}: {v} vs {}",
+                per_output[j]
+            );
         }
     }
 
