@@ -45,6 +45,10 @@ pub struct KrigingSurrogate {
     /// Output map A of the reduced form ŷ = A c(x) (m × (q + 1)), built
     /// on first use (without a PCA it is m × (m + 1) and rarely wanted).
     a: OnceLock<DMatrix<f64>>,
+    /// σ²_CV/σ²_ML of the Kriging model, computed on first use.
+    cv_ratio: OnceLock<std::result::Result<f64, String>>,
+    /// The cross-validated output covariance, computed on first use.
+    cv_cov: OnceLock<std::result::Result<nlvid_surrogate::OutputCovariance, String>>,
 }
 
 fn model_err(x: &[f64], e: &SurrogateError) -> InverseError {
@@ -94,6 +98,8 @@ impl KrigingSurrogate {
             b,
             mu,
             a: OnceLock::new(),
+            cv_ratio: OnceLock::new(),
+            cv_cov: OnceLock::new(),
         };
         s.check_basis_form()?;
         Ok(s)
@@ -153,6 +159,40 @@ impl KrigingSurrogate {
     pub fn mse_scale(&self, x: &[f64]) -> Result<f64> {
         let (xs, _) = self.inputs(x)?;
         self.kriging.mse_scale(&xs).map_err(|e| model_err(x, &e))
+    }
+
+    /// The leave-one-out calibration of the Kriging variance,
+    /// σ²_CV/σ²_ML ([`KrigingModel::cv_variance_ratio`], Bachoc 2013):
+    /// the factor by which the model's own MSE under- (> 1) or over-
+    /// (< 1) states the errors it makes at its left-out design sites.
+    /// Computed once per surrogate (O(N³/3)).
+    ///
+    /// # Errors
+    /// A process covariance that is not positive definite.
+    pub fn variance_calibration(&self) -> Result<f64> {
+        self.cv_ratio
+            .get_or_init(|| self.kriging.cv_variance_ratio().map_err(|e| e.to_string()))
+            .clone()
+            .map_err(|e| InverseError::InvalidSetting(format!("Kriging variance calibration: {e}")))
+    }
+
+    /// The process covariance K of the outputs with the kriged outputs'
+    /// covariance estimated by leave-one-out cross-validation
+    /// ([`KrigingModel::output_covariance_cv`]), computed once per
+    /// surrogate (O(N³/3)): the K of the posteriors' likelihood.
+    ///
+    /// # Errors
+    /// A model with ln outputs; a covariance that is not positive
+    /// semi-definite.
+    pub fn output_covariance_cv(&self) -> Result<nlvid_surrogate::OutputCovariance> {
+        self.cv_cov
+            .get_or_init(|| {
+                self.kriging
+                    .output_covariance_cv()
+                    .map_err(|e| e.to_string())
+            })
+            .clone()
+            .map_err(|e| InverseError::InvalidSetting(format!("Kriging variance: {e}")))
     }
 
     /// Surrogate inputs at physical x and d(input_i)/d(x_i).

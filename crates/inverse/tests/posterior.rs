@@ -65,7 +65,7 @@ fn posterior_of_g0_matches_the_laplace_approximation() {
     let noise_only: DMatrix<f64> = jac.transpose() * &jac / (est * est);
     let sd_noise_only = noise_only.try_inverse().expect("invertible")[(0, 0)].sqrt();
     let nlvid_surrogate::OutputCovariance::LowRank { m, k, factor } =
-        s.kriging().output_covariance().expect("cov")
+        s.kriging().output_covariance_cv().expect("cov")
     else {
         panic!("the demo meta-model is PCA-reduced");
     };

@@ -10,10 +10,13 @@
 //!
 //! ```text
 //! cargo run --release -p nlvid-report --example posterior_coverage \
-//!     [cells] [noise] [seed] [walkers] [burn] [steps]
+//!     [cells] [noise] [seed] [key=value ...]
 //! ```
-//! (defaults 100, 0.02, 17, 32, 300, 1000; see docs/theory/inverse.md,
-//! "Posteriors on the surrogate").
+//! (defaults 100, 0.02, 17; `key=value` pairs go into the study's
+//! `[posterior]` section, e.g. `walkers=16 max_steps=2000`, the section's
+//! own defaults otherwise; see docs/theory/inverse.md, "Posteriors on the
+//! surrogate"). Prints each coverage with its binomial standard error, R̂
+//! max, ESS min, wall and CPU time and the load average.
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -43,10 +46,11 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     let demo = std::fs::canonicalize(&demo)?;
     let dir = std::env::temp_dir().join(format!("nlvid-coverage-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
-    let walkers: usize = args.get(4).map_or(Ok(32), |s| s.parse())?;
-    let burn: usize = args.get(5).map_or(Ok(300), |s| s.parse())?;
-    let steps: usize = args.get(6).map_or(Ok(1000), |s| s.parse())?;
-    let study = write_study(&dir, &demo, (walkers, burn, steps))?;
+    let keys: Vec<String> = args.iter().skip(4).cloned().collect();
+    if let Some(bad) = keys.iter().find(|k| !k.contains('=')) {
+        return Err(format!("argument {bad}: expected key=value for [posterior]").into());
+    }
+    let study = write_study(&dir, &demo, &keys)?;
     // Two broad groups spanning much of the Table 5.3 domain.
     let spec = DemoSpec {
         groups: vec![
@@ -76,6 +80,7 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     let settings = CohortSettings::load(&study)?;
     let inputs = discover(&files.data)?;
     let t0 = Instant::now();
+    let cpu0 = cpu_seconds();
     let run = run_cohort(
         &settings,
         &study,
@@ -85,9 +90,12 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
         &RunOptions::default(),
     )?;
     let seconds = t0.elapsed().as_secs_f64();
+    let cpu = cpu_seconds() - cpu0;
     let domain = nlvid_inverse::read_meta(&demo.join("metamodel/meta.json"))?.domain;
     let (mut n, mut cover) = (0usize, [0usize; 3]);
     let mut rhat_max = 0.0f64;
+    let mut rhat3_max = 0.0f64;
+    let mut unconverged = 0usize;
     let mut ess_min = f64::INFINITY;
     let mut misses = Vec::new();
     for c in &run.cells {
@@ -131,6 +139,8 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
             );
         }
         rhat_max = rhat_max.max(p.rhat_max);
+        rhat3_max = rhat3_max.max(p.g0.rhat).max(p.g_sum.rhat).max(p.g_end.rhat);
+        unconverged += usize::from(!(p.rhat_max <= 1.01));
         ess_min = ess_min.min(p.ess_min);
     }
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
@@ -142,19 +152,26 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     let mut ok = n > 0;
     for (k, name) in ["G0", "g1 + g2", "G(t_end)"].iter().enumerate() {
         let frac = cover[k] as f64 / n.max(1) as f64;
+        let se = (frac * (1.0 - frac) / n.max(1) as f64).sqrt();
         println!(
-            "coverage of the 90 % interval of {name}: {} / {n} = {:.1} %",
+            "coverage of the 90 % interval of {name}: {} / {n} = {:.1} % ± {:.1} % (binomial se)",
             cover[k],
-            100.0 * frac
+            100.0 * frac,
+            100.0 * se
         );
         ok &= (0.85..=0.95).contains(&frac);
     }
-    println!("largest split R-hat {rhat_max:.4}, smallest ESS {ess_min:.0}");
+    println!(
+        "largest split R-hat {rhat_max:.4} over every parameter and summary ({unconverged} cells \
+         above 1.01), {rhat3_max:.4} over G0, g1 + g2, G(t_end); smallest ESS {ess_min:.0}"
+    );
     ok &= rhat_max <= 1.01;
     println!(
-        "cohort (fit + posterior) wall time {seconds:.1} s, {:.2} s per cell on {} threads; load average {}",
+        "cohort (fit + posterior) wall time {seconds:.1} s, {:.2} s per cell on {} threads; CPU \
+         {cpu:.1} s ({:.2} s per cell); load average at the end {}",
         seconds / run.cells.len().max(1) as f64,
         rayon::current_num_threads(),
+        cpu / run.cells.len().max(1) as f64,
         load.trim()
     );
     for m in misses.iter().take(20) {
@@ -164,11 +181,21 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     Ok(ok)
 }
 
+/// User + system CPU seconds of this process (Linux /proc; 0 elsewhere).
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // Fields after the command name "(…)": utime, stime are 14th, 15th.
+    let rest = stat.rsplit(')').next().unwrap_or("");
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    (ticks(11) + ticks(12)) / 100.0
+}
+
 /// The demo's cohort study with absolute meta-model paths and `[posterior]`.
 fn write_study(
     dir: &Path,
     demo: &Path,
-    (walkers, burn, steps): (usize, usize, usize),
+    keys: &[String],
 ) -> Result<PathBuf, Box<dyn std::error::Error>> {
     let text = std::fs::read_to_string(demo.join("study.toml"))?;
     let mm = demo.join("metamodel");
@@ -177,7 +204,11 @@ fn write_study(
     std::fs::write(
         &study,
         format!(
-            "{text}\n[posterior]\nwalkers = {walkers}\nburn = {burn}\nsteps = {steps}\nlevel = 0.9\n"
+            "{text}\n[posterior]\nlevel = 0.9\n{}\n",
+            keys.iter()
+                .map(|kv| kv.replacen('=', " = ", 1))
+                .collect::<Vec<_>>()
+                .join("\n")
         ),
     )?;
     Ok(study)

@@ -379,9 +379,11 @@ fn posterior(
     base: &mut CellResult,
 ) {
     let ps = PosteriorSettings {
+        ensembles: p.ensembles,
         walkers: p.walkers,
         burn: p.burn,
         steps: p.steps,
+        max_steps: p.max_steps,
         seed: p.seed.unwrap_or(settings.seed),
         level: p.level,
         keep: p.keep,
@@ -391,7 +393,7 @@ fn posterior(
         Ok(post) => {
             if !(post.rhat_max <= 1.01) {
                 base.flags.push(format!(
-                    "posterior not converged: R-hat {:.3} > 1.01 (raise posterior.steps)",
+                    "posterior not converged: R-hat {:.3} > 1.01 (raise posterior.max_steps)",
                     post.rhat_max
                 ));
             }

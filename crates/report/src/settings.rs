@@ -598,21 +598,29 @@ pub struct CohortSettings {
 ///
 /// ```toml
 /// [posterior]
-/// walkers = 32      # ensemble size (>= 12)
-/// burn = 300        # burn-in steps per walker
-/// steps = 1000      # kept steps per walker
+/// ensembles = 4     # independent ensembles (>= 2; R-hat compares them)
+/// walkers = 16      # walkers per ensemble (>= 12)
+/// burn = 200        # burn-in steps per walker
+/// steps = 250       # kept steps per walker per round; rounds are added
+/// max_steps = 1000  #   until R-hat <= 1.01 or max_steps kept steps
 /// level = 0.9       # credible level of intervals and bands
 /// keep = 200        # thinned draws kept per cell (group bands, p(t) over draws)
 /// seed = 1          # default: fit.seed
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PosteriorStudy {
-    /// Walkers of the ensemble.
+    /// Independent ensembles.
+    #[serde(default = "default_ensembles")]
+    pub ensembles: usize,
+    /// Walkers of each ensemble.
     pub walkers: usize,
     /// Burn-in steps.
     pub burn: usize,
-    /// Kept steps.
+    /// Kept steps per round.
     pub steps: usize,
+    /// Most kept steps.
+    #[serde(default)]
+    pub max_steps: usize,
     /// Credible level.
     pub level: f64,
     /// Thinned draws kept per cell.
@@ -621,21 +629,32 @@ pub struct PosteriorStudy {
     pub seed: Option<u64>,
 }
 
+fn default_ensembles() -> usize {
+    4
+}
+
 struct PosteriorSection(Option<PosteriorStudy>);
 
 impl FromSection for PosteriorSection {
     fn from_section(s: &mut Section) -> std::result::Result<Self, StudyError> {
         let enabled = s.opt_bool("enabled")?.unwrap_or(true);
+        let steps = s
+            .opt_usize("steps", Bounds::closed(20.0, 1e7))?
+            .unwrap_or(250);
         let p = PosteriorStudy {
+            ensembles: s
+                .opt_usize("ensembles", Bounds::closed(2.0, 64.0))?
+                .unwrap_or(4),
             walkers: s
                 .opt_usize("walkers", Bounds::closed(12.0, 10000.0))?
-                .unwrap_or(32),
+                .unwrap_or(16),
             burn: s
                 .opt_usize("burn", Bounds::closed(0.0, 1e6))?
-                .unwrap_or(300),
-            steps: s
-                .opt_usize("steps", Bounds::closed(20.0, 1e7))?
-                .unwrap_or(1000),
+                .unwrap_or(200),
+            steps,
+            max_steps: s
+                .opt_usize("max_steps", Bounds::closed(20.0, 1e8))?
+                .unwrap_or(4 * steps),
             level: s.f64_or("level", Bounds::closed(0.5, 0.999), 0.9)?,
             keep: s
                 .opt_usize("keep", Bounds::closed(10.0, 1e5))?

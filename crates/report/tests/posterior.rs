@@ -33,7 +33,7 @@ fn cohort_posteriors_cover_the_truth_and_reach_the_report() {
     let text = text.replace("\"metamodel/", &format!("\"{}/", mm.display()));
     std::fs::write(
         &study,
-        format!("{text}\n[posterior]\nwalkers = 16\nburn = 200\nsteps = 400\nlevel = 0.999\n"),
+        format!("{text}\n[posterior]\nwalkers = 16\nburn = 200\nsteps = 400\nmax_steps = 400\nlevel = 0.999\n"),
     )
     .expect("write study");
     let spec = DemoSpec {

@@ -126,7 +126,9 @@ fn other(rng: &mut ChaCha8Rng, n: usize, not: &[usize]) -> usize {
 }
 
 /// Samples `log_density` (−∞ outside the support) with an ensemble started
-/// at `init` (one position per walker, each with a finite log-density).
+/// at `init` (one position per walker, each with a finite log-density):
+/// [`Ensemble::new`], `burn` steps of [`Ensemble::burn_in`], then `steps`
+/// kept steps of [`Ensemble::sample`].
 ///
 /// Cost: W·(burn + steps) evaluations of `log_density`.
 ///
@@ -138,120 +140,185 @@ pub fn sample_ensemble(
     init: &[Vec<f64>],
     settings: &EnsembleSettings,
 ) -> Result<Chains> {
-    let w = init.len();
-    let d = init.first().map_or(0, Vec::len);
-    let bad = |m: String| Err(InverseError::InvalidSetting(m));
-    if d == 0 || w < 2 * d + 2 || w != settings.walkers {
-        return bad(format!(
-            "ensemble: {w} start positions of dimension {d} for {} walkers (need walkers >= 2·dim + 2)",
-            settings.walkers
-        ));
-    }
-    let fraction = 0.0..=1.0;
-    if !(settings.stretch > 1.0)
-        || settings.steps == 0
-        || !fraction.contains(&settings.de_fraction)
-        || !fraction.contains(&settings.independence_fraction)
-    {
-        return bad(format!(
-            "ensemble: stretch scale {} (must be > 1), {} kept steps (must be > 0), DE fraction \
-             {}, independence fraction {} (both in [0, 1])",
-            settings.stretch, settings.steps, settings.de_fraction, settings.independence_fraction
-        ));
-    }
-    let mut pos: Vec<Vec<f64>> = init.to_vec();
-    let mut lp: Vec<f64> = pos.iter().map(|x| log_density(x)).collect();
-    if let Some(k) = lp.iter().position(|v| !v.is_finite()) {
-        return bad(format!("ensemble: start {k} has log-density {}", lp[k]));
-    }
-    let mut rng = ChaCha8Rng::seed_from_u64(settings.seed);
-    let a = settings.stretch;
-    let gamma0 = 2.38 / (2.0 * d as f64).sqrt();
-    let total = settings.burn + settings.steps;
-    let mut samples = Vec::with_capacity(settings.steps * w * d);
-    let mut log_density_kept = Vec::with_capacity(settings.steps * w);
-    let (mut accepted, mut proposed) = (0usize, 0usize);
-    let mut y = vec![0.0; d];
-    let mut proposal: Option<TProposal> = None;
-    let mut burn_points: Vec<Vec<f64>> = Vec::new();
-    for step in 0..total {
-        if step == settings.burn && settings.burn > 0 {
-            prune_strays(&mut pos, &mut lp, d, &mut rng);
+    let mut e = Ensemble::new(log_density, init, settings)?;
+    e.burn_in();
+    let mut chains = e.empty_chains();
+    e.sample(settings.steps, &mut chains);
+    Ok(chains)
+}
+
+/// An ensemble in flight: positions, log-densities, random stream and the
+/// frozen independence proposal (module docs). Stepping it in several
+/// calls of [`Ensemble::sample`] gives the same draws as one call.
+pub struct Ensemble<F> {
+    log_density: F,
+    settings: EnsembleSettings,
+    pos: Vec<Vec<f64>>,
+    lp: Vec<f64>,
+    rng: ChaCha8Rng,
+    proposal: Option<TProposal>,
+    step: usize,
+    accepted: usize,
+    proposed: usize,
+}
+
+impl<F: Fn(&[f64]) -> f64> Ensemble<F> {
+    /// An ensemble at `init` (see [`sample_ensemble`] for the errors).
+    ///
+    /// # Errors
+    /// As [`sample_ensemble`].
+    pub fn new(log_density: F, init: &[Vec<f64>], settings: &EnsembleSettings) -> Result<Self> {
+        let w = init.len();
+        let d = init.first().map_or(0, Vec::len);
+        let bad = |m: String| Err(InverseError::InvalidSetting(m));
+        if d == 0 || w < 2 * d + 2 || w != settings.walkers {
+            return bad(format!(
+                "ensemble: {w} start positions of dimension {d} for {} walkers (need walkers >= 2·dim + 2)",
+                settings.walkers
+            ));
         }
-        if step == settings.burn && settings.independence_fraction > 0.0 {
-            burn_points.extend(pos.iter().cloned());
-            proposal = TProposal::fit(&burn_points, 1.2);
-            burn_points = Vec::new();
-        }
-        if step >= settings.burn / 2 && step < settings.burn && settings.independence_fraction > 0.0
+        let fraction = 0.0..=1.0;
+        if !(settings.stretch > 1.0)
+            || settings.steps == 0
+            || !fraction.contains(&settings.de_fraction)
+            || !fraction.contains(&settings.independence_fraction)
         {
-            burn_points.extend(pos.iter().cloned());
+            return bad(format!(
+                "ensemble: stretch scale {} (must be > 1), {} kept steps (must be > 0), DE fraction \
+                 {}, independence fraction {} (both in [0, 1])",
+                settings.stretch,
+                settings.steps,
+                settings.de_fraction,
+                settings.independence_fraction
+            ));
         }
-        if let Some(q) = proposal
+        let pos: Vec<Vec<f64>> = init.to_vec();
+        let lp: Vec<f64> = pos.iter().map(|x| log_density(x)).collect();
+        if let Some(k) = lp.iter().position(|v| !v.is_finite()) {
+            return bad(format!("ensemble: start {k} has log-density {}", lp[k]));
+        }
+        Ok(Self {
+            log_density,
+            settings: *settings,
+            pos,
+            lp,
+            rng: ChaCha8Rng::seed_from_u64(settings.seed),
+            proposal: None,
+            step: 0,
+            accepted: 0,
+            proposed: 0,
+        })
+    }
+
+    /// Kept draws with nothing in them yet, for [`Ensemble::sample`].
+    pub fn empty_chains(&self) -> Chains {
+        Chains {
+            dim: self.pos[0].len(),
+            walkers: self.pos.len(),
+            steps: 0,
+            samples: Vec::new(),
+            log_density: Vec::new(),
+            acceptance: 0.0,
+        }
+    }
+
+    /// `settings.burn` steps of stretch/DE moves; at their end stray
+    /// walkers are moved onto the bulk ([`prune_strays`]) and the
+    /// independence proposal is fitted to the second half of burn-in.
+    pub fn burn_in(&mut self) {
+        let burn = self.settings.burn;
+        let use_t = self.settings.independence_fraction > 0.0;
+        let mut burn_points: Vec<Vec<f64>> = Vec::new();
+        for s in 0..burn {
+            if s >= burn / 2 && use_t {
+                burn_points.extend(self.pos.iter().cloned());
+            }
+            self.move_walkers(false);
+        }
+        if burn > 0 {
+            let d = self.pos[0].len();
+            prune_strays(&mut self.pos, &mut self.lp, d, &mut self.rng);
+        }
+        if use_t {
+            burn_points.extend(self.pos.iter().cloned());
+            self.proposal = TProposal::fit(&burn_points, 1.2);
+        }
+    }
+
+    /// `steps` more steps, appended to `out` (from [`Ensemble::empty_chains`]).
+    pub fn sample(&mut self, steps: usize, out: &mut Chains) {
+        for _ in 0..steps {
+            self.move_walkers(true);
+            for k in 0..self.pos.len() {
+                out.samples.extend_from_slice(&self.pos[k]);
+                out.log_density.push(self.lp[k]);
+            }
+        }
+        out.steps += steps;
+        out.acceptance = self.accepted as f64 / self.proposed.max(1) as f64;
+    }
+
+    /// One step of every walker; `kept` allows the independence move.
+    fn move_walkers(&mut self, kept: bool) {
+        let w = self.pos.len();
+        let d = self.pos[0].len();
+        let f = &self.log_density;
+        let rng = &mut self.rng;
+        if let Some(q) = self
+            .proposal
             .as_ref()
-            .filter(|_| rng.random::<f64>() < settings.independence_fraction)
+            .filter(|_| kept && rng.random::<f64>() < self.settings.independence_fraction)
         {
             for k in 0..w {
-                let (yv, lqy) = q.draw(&mut rng);
-                let lqx = q.log_density(&pos[k]);
-                let lpy = log_density(&yv);
-                proposed += 1;
+                let (yv, lqy) = q.draw(rng);
+                let lqx = q.log_density(&self.pos[k]);
+                let lpy = f(&yv);
+                self.proposed += 1;
                 let u: f64 = rng.random();
-                if lpy.is_finite() && u.ln() < lpy - lp[k] + lqx - lqy {
-                    pos[k] = yv;
-                    lp[k] = lpy;
-                    accepted += 1;
+                if lpy.is_finite() && u.ln() < lpy - self.lp[k] + lqx - lqy {
+                    self.pos[k] = yv;
+                    self.lp[k] = lpy;
+                    self.accepted += 1;
                 }
             }
-            for k in 0..w {
-                samples.extend_from_slice(&pos[k]);
-                log_density_kept.push(lp[k]);
-            }
-            continue;
+            self.step += 1;
+            return;
         }
-        let de = rng.random::<f64>() < settings.de_fraction;
-        let gamma = if step % 10 == 9 { 1.0 } else { gamma0 };
+        let a = self.settings.stretch;
+        let gamma0 = 2.38 / (2.0 * d as f64).sqrt();
+        let de = rng.random::<f64>() < self.settings.de_fraction;
+        let gamma = if self.step % 10 == 9 { 1.0 } else { gamma0 };
+        let mut y = vec![0.0; d];
         for k in 0..w {
             let log_ratio_extra = if de {
-                let i = other(&mut rng, w, &[k]);
-                let j = other(&mut rng, w, &[k, i]);
+                let i = other(rng, w, &[k]);
+                let j = other(rng, w, &[k, i]);
                 for c in 0..d {
-                    y[c] = pos[k][c] + gamma * (pos[i][c] - pos[j][c]) + 1e-10 * normal(&mut rng);
+                    y[c] = self.pos[k][c]
+                        + gamma * (self.pos[i][c] - self.pos[j][c])
+                        + 1e-10 * normal(rng);
                 }
                 0.0
             } else {
-                let j = other(&mut rng, w, &[k]);
+                let j = other(rng, w, &[k]);
                 let u: f64 = rng.random();
                 let z = ((a - 1.0) * u + 1.0).powi(2) / a;
                 for c in 0..d {
-                    y[c] = pos[j][c] + z * (pos[k][c] - pos[j][c]);
+                    y[c] = self.pos[j][c] + z * (self.pos[k][c] - self.pos[j][c]);
                 }
                 (d as f64 - 1.0) * z.ln()
             };
-            let lpy = log_density(&y);
-            proposed += 1;
+            let lpy = f(&y);
+            self.proposed += 1;
             let u: f64 = rng.random();
-            if lpy.is_finite() && u.ln() < log_ratio_extra + lpy - lp[k] {
-                pos[k].copy_from_slice(&y);
-                lp[k] = lpy;
-                accepted += 1;
+            if lpy.is_finite() && u.ln() < log_ratio_extra + lpy - self.lp[k] {
+                self.pos[k].copy_from_slice(&y);
+                self.lp[k] = lpy;
+                self.accepted += 1;
             }
         }
-        if step >= settings.burn {
-            for k in 0..w {
-                samples.extend_from_slice(&pos[k]);
-                log_density_kept.push(lp[k]);
-            }
-        }
+        self.step += 1;
     }
-    Ok(Chains {
-        dim: d,
-        walkers: w,
-        steps: settings.steps,
-        samples,
-        log_density: log_density_kept,
-        acceptance: accepted as f64 / proposed as f64,
-    })
 }
 
 /// At the end of burn-in, walkers stranded far below the bulk (ln p more

@@ -3,9 +3,12 @@
 //! error (its Kriging MSE, with the cross-time covariance) folded into the
 //! variance (issue 17; docs/theory/inverse.md, "Posteriors").
 //!
-//! d = ŷ(x) + e_s + e_n with the surrogate error e_s ~ N(0, v(x)·K) (DACE
-//! report eq. 2.20 across outputs, `nlvid_surrogate::OutputCovariance`) and
-//! the measurement noise e_n ~ N(0, σ²I):
+//! d = ŷ(x) + e_s + e_n with the surrogate error e_s ~ N(0, v(x)·K)
+//! (DACE report eq. 2.20 across outputs, `nlvid_surrogate::OutputCovariance`,
+//! with the kriged outputs' process covariance in K estimated by
+//! leave-one-out cross-validation, `KrigingModel::output_covariance_cv`:
+//! the ML estimate understates the demo meta-model's errors threefold,
+//! docs/theory/inverse.md) and the measurement noise e_n ~ N(0, σ²I):
 //! ln L(x) = −½ [ln det Σ + rᵀΣ⁻¹r] + const, Σ = σ²I + v(x)K, r = d − ŷ(x).
 //! For a PCA-reduced surrogate K = U Uᵀ (rank k) and ŷ = A c(x) (rank r,
 //! [`crate::ReducedModel`]), so by the Woodbury identity, with
@@ -108,9 +111,7 @@ impl<'a> CurveLikelihood<'a> {
                 "likelihood: data must be finite and the noise sd > 0 (got {noise})"
             )));
         }
-        let cov = surrogate.kriging().output_covariance().map_err(|e| {
-            InverseError::InvalidSetting(format!("likelihood: Kriging variance: {e}"))
-        })?;
+        let cov = surrogate.output_covariance_cv()?;
         let d = DVector::from_column_slice(data);
         let form = match cov {
             OutputCovariance::LowRank { m: mm, k, factor } if surrogate.is_reduced() => {
@@ -224,7 +225,8 @@ mod tests {
             .map(|(j, y)| y + noise * ((j * 7919 % 101) as f64 / 50.0 - 1.0))
             .collect();
         let lik = CurveLikelihood::new(&s, &data, noise).expect("lik");
-        let OutputCovariance::LowRank { m, k, factor } = s.kriging().output_covariance().unwrap()
+        let OutputCovariance::LowRank { m, k, factor } =
+            s.kriging().output_covariance_cv().unwrap()
         else {
             panic!("PCA model");
         };

@@ -7,14 +7,17 @@
 //!   drawn), restricted to its linear constraints (g1 + g2 ≤ 1 − ε);
 //! - likelihood: [`CurveLikelihood`] — Gaussian, measurement noise σ
 //!   estimated from the curve ([`noise_sd`]), Kriging MSE with its
-//!   cross-time covariance folded into the variance;
-//! - sampler: the affine-invariant ensemble of [`ensemble`], in u, started
-//!   around the multistart optimum in a ball shaped by the Gauss–Newton
-//!   (Laplace) covariance;
+//!   cross-time covariance (process covariance estimated by leave-one-out)
+//!   folded into the variance;
+//! - sampler: independent affine-invariant ensembles ([`ensemble`]) in u,
+//!   started over-dispersed around the multistart optimum (Laplace shape),
+//!   run in rounds until the split R̂ across ensembles is ≤ [`RHAT_TARGET`]
+//!   or `max_steps`;
 //! - outputs ([`Posterior`]): equal-tailed credible intervals of every
 //!   parameter and of G(0), g1 + g2 and G(t_end) (eq. 5.1 through
 //!   `nlvid_model::Relaxation`), a credible band on G(t), split R̂ and
-//!   effective sample size per quantity ([`diagnostics`]), and a thinned
+//!   effective sample size per quantity ([`diagnostics`]; R̂ across
+//!   ensembles, not walkers: walkers of one ensemble are coupled), and a thinned
 //!   set of draws for group summaries.
 
 pub mod diagnostics;
@@ -24,7 +27,7 @@ mod likelihood;
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-pub use ensemble::{Chains, EnsembleSettings, sample_ensemble};
+pub use ensemble::{Chains, Ensemble, EnsembleSettings, sample_ensemble};
 pub use likelihood::{CurveLikelihood, noise_sd};
 
 use crate::error::{InverseError, Result};
@@ -35,12 +38,19 @@ use crate::surrogate::KrigingSurrogate;
 /// Settings of [`sample_posterior`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PosteriorSettings {
-    /// The ensemble (walkers, burn-in, kept steps, seed).
+    /// Walkers of each ensemble.
     pub walkers: usize,
     /// Burn-in steps.
     pub burn: usize,
-    /// Kept steps per walker.
+    /// Kept steps per walker in each round; rounds are added until R̂ ≤
+    /// [`RHAT_TARGET`] or `max_steps` is reached.
     pub steps: usize,
+    /// Independent ensembles (≥ 2: R̂ compares them).
+    #[serde(default = "default_ensembles")]
+    pub ensembles: usize,
+    /// Most kept steps per walker (a value below `steps`: one round).
+    #[serde(default)]
+    pub max_steps: usize,
     /// Seed of the sampler.
     pub seed: u64,
     /// Credible level of the intervals and bands (e.g. 0.9).
@@ -53,15 +63,21 @@ pub struct PosteriorSettings {
     pub band_times: Vec<f64>,
 }
 
+fn default_ensembles() -> usize {
+    4
+}
+
 impl PosteriorSettings {
-    /// Defaults for a fitted window ending at `t_end`: 32 walkers, 300
-    /// burn-in and 1000 kept steps, 90 % intervals, 200 kept draws, band on
-    /// 53 times from 0 to `t_end`.
+    /// Defaults for a fitted window ending at `t_end`: 4 ensembles of 16
+    /// walkers, 200 burn-in steps, rounds of 250 kept steps up to 1000,
+    /// 90 % intervals, 200 kept draws, band on 53 times from 0 to `t_end`.
     pub fn new(t_end: f64) -> Self {
         Self {
-            walkers: 32,
-            burn: 300,
-            steps: 1000,
+            walkers: 16,
+            burn: 200,
+            steps: 250,
+            ensembles: 4,
+            max_steps: 1000,
             seed: 1,
             level: 0.9,
             keep: 200,
@@ -147,19 +163,6 @@ pub fn quantile(sorted: &[f64], q: f64) -> f64 {
     sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
 }
 
-fn interval(chains: &[Vec<f64>], level: f64) -> Interval {
-    let mut all: Vec<f64> = chains.iter().flatten().copied().collect();
-    all.sort_by(f64::total_cmp);
-    let a = 0.5 * (1.0 - level);
-    Interval {
-        lower: quantile(&all, a),
-        median: quantile(&all, 0.5),
-        upper: quantile(&all, 1.0 - a),
-        rhat: diagnostics::split_rhat(chains),
-        ess: diagnostics::effective_sample_size(chains),
-    }
-}
-
 fn normal(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
     use rand::RngExt;
     let u1: f64 = 1.0 - rng.random::<f64>();
@@ -167,17 +170,29 @@ fn normal(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
     (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
 }
 
-/// Start positions in u: û + L ε with L Lᵀ the Gauss–Newton covariance
-/// (JᵤᵀJᵤ/σ²)⁻¹ at the optimum (eigenvalues floored so that no direction is
-/// wider than the domain), redrawn until inside the prior's support.
+/// Over-dispersion of the starts: the start ball is this many Laplace sd
+/// wide, so that R̂ compares ensembles that began apart (BDA3 §11.4).
+const OVERDISPERSION: f64 = 2.0;
+
+/// Largest start sd along any direction in u (before the
+/// over-dispersion): a quarter of the domain's width, so that a direction
+/// the data do not resolve starts spread over the middle half of the
+/// domain.
+const MAX_START_SD: f64 = 0.25;
+
+/// Start positions in u for `ensembles` ensembles of `walkers`: û + c·L ε
+/// with û the multistart optimum, c = [`OVERDISPERSION`] and L Lᵀ the
+/// Gauss–Newton (Laplace) covariance (JᵤᵀJᵤ/σ²)⁻¹, its sd capped at
+/// [`MAX_START_SD`]; each start redrawn (shrinking the ball every 40
+/// tries) until inside the prior's support.
 fn starts(
     surrogate: &KrigingSurrogate,
     x_hat: &[f64],
     noise_var: f64,
-    walkers: usize,
+    (walkers, ensembles): (usize, usize),
     seed: u64,
     inside: &dyn Fn(&[f64]) -> bool,
-) -> Result<Vec<Vec<f64>>> {
+) -> Result<Vec<Vec<Vec<f64>>>> {
     use rand::SeedableRng;
     let domain = Model::domain(surrogate);
     let d = domain.len();
@@ -192,51 +207,60 @@ fn starts(
     }
     let h: DMatrix<f64> = ju.transpose() * &ju / noise_var;
     let eig = h.symmetric_eigen();
-    // Covariance V diag(1/max(λ, 1)) Vᵀ: sd ≤ 1 (the domain's width) per direction.
+    let floor = 1.0 / (MAX_START_SD * MAX_START_SD);
     let mut l = DMatrix::zeros(d, d);
     for k in 0..d {
-        let sd = 1.0 / eig.eigenvalues[k].max(1.0).sqrt();
+        let sd = OVERDISPERSION / eig.eigenvalues[k].max(floor).sqrt();
         for i in 0..d {
             l[(i, k)] = eig.eigenvectors[(i, k)] * sd;
         }
     }
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_57a7);
-    let mut out = Vec::with_capacity(walkers);
     let center_ok = inside(&u_hat);
-    for _ in 0..walkers {
-        let mut shrink = 1.0;
-        let mut placed = None;
-        for attempt in 0..200 {
-            if attempt % 40 == 39 {
-                shrink *= 0.3;
+    let mut all = Vec::with_capacity(ensembles);
+    for e in 0..ensembles {
+        let mut rng =
+            rand_chacha::ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_57a7 ^ ((e as u64) << 32));
+        let mut out = Vec::with_capacity(walkers);
+        for _ in 0..walkers {
+            let mut shrink = 1.0;
+            let mut placed = None;
+            for attempt in 0..200 {
+                if attempt % 40 == 39 {
+                    shrink *= 0.3;
+                }
+                let eps: Vec<f64> = (0..d).map(|_| normal(&mut rng)).collect();
+                let u: Vec<f64> = (0..d)
+                    .map(|i| u_hat[i] + shrink * (0..d).map(|k| l[(i, k)] * eps[k]).sum::<f64>())
+                    .collect();
+                if inside(&u) {
+                    placed = Some(u);
+                    break;
+                }
             }
-            let e: Vec<f64> = (0..d).map(|_| normal(&mut rng)).collect();
-            let u: Vec<f64> = (0..d)
-                .map(|i| u_hat[i] + shrink * (0..d).map(|k| l[(i, k)] * e[k]).sum::<f64>())
-                .collect();
-            if inside(&u) {
-                placed = Some(u);
-                break;
+            match placed {
+                Some(u) => out.push(u),
+                None if center_ok => out.push(u_hat.clone()),
+                None => {
+                    return Err(InverseError::InvalidSetting(format!(
+                        "posterior: no start inside the domain near the optimum {x_hat:?}"
+                    )));
+                }
             }
         }
-        match placed {
-            Some(u) => out.push(u),
-            None if center_ok => out.push(u_hat.clone()),
-            None => {
-                return Err(InverseError::InvalidSetting(format!(
-                    "posterior: no start inside the domain near the optimum {x_hat:?}"
-                )));
-            }
-        }
+        all.push(out);
     }
-    Ok(out)
+    Ok(all)
 }
 
 /// Samples the posterior of the parameters of `data` (on the surrogate's
-/// grid) given the optimum `x_hat` of a fit (module docs).
+/// grid) given the optimum `x_hat` of a fit (module docs): `ensembles`
+/// independent ensembles in the domain's unit coordinates u, each burnt in and then run `steps` kept steps at a time
+/// until the split R̂ across ensembles of every reported quantity is
+/// ≤ [`RHAT_TARGET`] or `max_steps` kept steps are reached.
 ///
-/// Cost: walkers·(burn + steps) likelihood evaluations, each one reduced
-/// prediction O(N·q·d) and one Kriging variance O(N²) (N training runs).
+/// Cost: ensembles·walkers·(burn + kept steps) likelihood evaluations,
+/// each one reduced prediction O(N·q·d) and one Kriging variance O(N²)
+/// (N training runs).
 ///
 /// # Errors
 /// Bad settings, a curve without measurable noise, surrogate failures.
@@ -246,10 +270,15 @@ pub fn sample_posterior(
     x_hat: &[f64],
     settings: &PosteriorSettings,
 ) -> Result<Posterior> {
-    if !(settings.level > 0.0 && settings.level < 1.0) || settings.keep == 0 {
+    if !(settings.level > 0.0 && settings.level < 1.0)
+        || settings.keep == 0
+        || settings.ensembles < 2
+        || settings.steps < 4
+    {
         return Err(InverseError::InvalidSetting(format!(
-            "posterior: level {} must be in (0, 1) and keep {} > 0",
-            settings.level, settings.keep
+            "posterior: level {} must be in (0, 1), keep {} > 0, ensembles {} >= 2 and steps \
+             {} >= 4",
+            settings.level, settings.keep, settings.ensembles, settings.steps
         )));
     }
     let domain = Model::domain(surrogate).clone();
@@ -268,51 +297,128 @@ pub fn sample_posterior(
         surrogate,
         x_hat,
         lik.noise_var(),
-        settings.walkers,
+        (settings.walkers, settings.ensembles),
         settings.seed,
         &inside,
     )?;
-    let es = EnsembleSettings {
-        walkers: settings.walkers,
-        burn: settings.burn,
-        steps: settings.steps,
-        seed: settings.seed,
-        ..EnsembleSettings::default()
-    };
-    let chains = sample_ensemble(log_density, &init, &es)?;
-    summarise(&domain, &chains, noise, settings)
+    let mut ensembles = Vec::with_capacity(init.len());
+    for (e, start) in init.iter().enumerate() {
+        let es = EnsembleSettings {
+            walkers: settings.walkers,
+            burn: settings.burn,
+            steps: settings.steps,
+            seed: settings
+                .seed
+                .wrapping_add(0x9e37_79b9_7f4a_7c15u64.wrapping_mul(e as u64)),
+            ..EnsembleSettings::default()
+        };
+        let mut ens = Ensemble::new(&log_density, start, &es)?;
+        ens.burn_in();
+        let chains = ens.empty_chains();
+        ensembles.push((ens, chains));
+    }
+    let max_steps = settings.max_steps.max(settings.steps);
+    loop {
+        for (ens, chains) in &mut ensembles {
+            ens.sample(settings.steps, chains);
+        }
+        let kept = ensembles[0].1.steps;
+        let draws = to_draws(&domain, ensembles.iter().map(|(_, c)| c));
+        let post = summarise(&draws, noise, settings)?;
+        if post.rhat_max <= RHAT_TARGET || kept + settings.steps > max_steps {
+            return Ok(post);
+        }
+    }
 }
 
-/// Intervals, band, diagnostics and thinned draws of chains in u.
-fn summarise(
-    domain: &nlvid_model::Domain,
-    chains: &Chains,
-    noise: f64,
-    settings: &PosteriorSettings,
-) -> Result<Posterior> {
-    let d = domain.len();
-    let params = domain.params();
-    let mut parameters = Vec::with_capacity(d);
-    for (i, p) in params.iter().enumerate() {
-        let tr = chains.traces(|u| p.from_unit(u[i]));
-        parameters.push((p.name.clone(), interval(&tr, settings.level)));
+/// R̂ at or below which a posterior counts as converged (Vehtari et al.
+/// 2021, "Rank-normalization, folding, and localization", §4: 1.01).
+pub const RHAT_TARGET: f64 = 1.01;
+
+/// Kept draws of every ensemble in physical coordinates.
+struct Draws<'a> {
+    domain: &'a nlvid_model::Domain,
+    /// Per ensemble: walkers, steps, and x at index step·walkers + walker.
+    ensembles: Vec<(usize, usize, Vec<Vec<f64>>)>,
+    acceptance: f64,
+}
+
+fn to_draws<'a, 'c>(
+    domain: &'a nlvid_model::Domain,
+    chains: impl Iterator<Item = &'c Chains>,
+) -> Draws<'a> {
+    let mut ensembles = Vec::new();
+    let mut acc = Vec::new();
+    for c in chains {
+        let xs = c
+            .samples
+            .chunks(c.dim)
+            .map(|u| domain.from_unit(u))
+            .collect();
+        ensembles.push((c.walkers, c.steps, xs));
+        acc.push(c.acceptance);
     }
-    let g = |u: &[f64]| relaxation(domain, &domain.from_unit(u));
+    Draws {
+        domain,
+        ensembles,
+        acceptance: acc.iter().sum::<f64>() / acc.len().max(1) as f64,
+    }
+}
+
+impl Draws<'_> {
+    /// The interval of a scalar f(x): quantiles over all draws, split R̂
+    /// over the ensembles (each ensemble's walkers pooled step by step into
+    /// one chain: walkers of one ensemble are not independent chains), ESS
+    /// over the walkers' own chains (the autocorrelation averaged over
+    /// walkers, as emcee's estimator does).
+    fn interval(&self, f: &dyn Fn(&[f64]) -> f64, level: f64) -> Interval {
+        let mut pooled = Vec::with_capacity(self.ensembles.len());
+        let mut walkers = Vec::new();
+        for (w, n, xs) in &self.ensembles {
+            let v: Vec<f64> = xs.iter().map(|x| f(x)).collect();
+            for k in 0..*w {
+                walkers.push((0..*n).map(|s| v[s * w + k]).collect::<Vec<f64>>());
+            }
+            pooled.push(v);
+        }
+        let mut all: Vec<f64> = pooled.iter().flatten().copied().collect();
+        all.sort_by(f64::total_cmp);
+        let a = 0.5 * (1.0 - level);
+        Interval {
+            lower: quantile(&all, a),
+            median: quantile(&all, 0.5),
+            upper: quantile(&all, 1.0 - a),
+            rhat: diagnostics::split_rhat(&pooled),
+            ess: diagnostics::effective_sample_size(&walkers),
+        }
+    }
+
+    /// `n` draws spread evenly over the ensembles and steps.
+    fn pick(&self, n: usize) -> Vec<Vec<f64>> {
+        let all: Vec<&Vec<f64>> = self.ensembles.iter().flat_map(|e| e.2.iter()).collect();
+        let n = n.min(all.len());
+        (0..n).map(|k| all[k * all.len() / n].clone()).collect()
+    }
+}
+
+/// Intervals, band, diagnostics and thinned draws.
+fn summarise(draws: &Draws, noise: f64, settings: &PosteriorSettings) -> Result<Posterior> {
+    let domain = draws.domain;
+    let mut parameters = Vec::with_capacity(domain.len());
+    for (i, p) in domain.params().iter().enumerate() {
+        parameters.push((p.name.clone(), draws.interval(&|x| x[i], settings.level)));
+    }
     // Validate once (names G0, g_k, tau_k) before mapping every draw.
-    let first: Vec<f64> = (0..d).map(|i| chains.at(0, 0, i)).collect();
-    g(&first)?;
-    let rel = |u: &[f64]| g(u).ok();
+    relaxation(domain, &draws.ensembles[0].2[0])?;
+    let rel = |x: &[f64]| relaxation(domain, x).ok();
     let t_end = settings.t_end;
-    let g0 = interval(
-        &chains.traces(|u| rel(u).map_or(f64::NAN, |r| r.g0())),
+    let g0 = draws.interval(&|x| rel(x).map_or(f64::NAN, |r| r.g0()), settings.level);
+    let g_sum = draws.interval(
+        &|x| rel(x).map_or(f64::NAN, |r| 1.0 - r.prony().long_term_weight()),
         settings.level,
     );
-    let g_sum = interval(
-        &chains.traces(|u| rel(u).map_or(f64::NAN, |r| 1.0 - r.prony().long_term_weight())),
-        settings.level,
-    );
-    let g_end = interval(
-        &chains.traces(|u| rel(u).map_or(f64::NAN, |r| r.value(t_end))),
+    let g_end = draws.interval(
+        &|x| rel(x).map_or(f64::NAN, |r| r.value(t_end)),
         settings.level,
     );
     let mut rhat_max = g0.rhat.max(g_sum.rhat).max(g_end.rhat);
@@ -321,19 +427,6 @@ fn summarise(
         rhat_max = rhat_max.max(iv.rhat);
         ess_min = ess_min.min(iv.ess);
     }
-    // Draws in step-major order, thinned evenly.
-    let total = chains.steps * chains.walkers;
-    let pick = |n: usize| -> Vec<Vec<f64>> {
-        let n = n.min(total);
-        (0..n)
-            .map(|k| {
-                let idx = k * total / n;
-                let u = &chains.samples[idx * d..(idx + 1) * d];
-                domain.from_unit(u)
-            })
-            .collect()
-    };
-    let band_draws = pick(2000);
     let a = 0.5 * (1.0 - settings.level);
     let mut band = Band {
         times: settings.band_times.clone(),
@@ -341,7 +434,8 @@ fn summarise(
         median: Vec::new(),
         upper: Vec::new(),
     };
-    let curves: Vec<nlvid_model::Relaxation> = band_draws
+    let curves: Vec<nlvid_model::Relaxation> = draws
+        .pick(2000)
         .iter()
         .map(|x| relaxation(domain, x))
         .collect::<Result<_>>()?;
@@ -363,7 +457,7 @@ fn summarise(
         band,
         rhat_max,
         ess_min,
-        acceptance: chains.acceptance,
-        draws: pick(settings.keep),
+        acceptance: draws.acceptance,
+        draws: draws.pick(settings.keep),
     })
 }

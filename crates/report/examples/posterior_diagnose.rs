@@ -1,0 +1,163 @@
+//! Calibration diagnostics of the per-cell posteriors (issue 17), on the
+//! bundled demo meta-model: for `cells` synthetic cells (the coverage
+//! example's two broad groups), the curve is written twice by the demo's
+//! generator — with `noise` × peak force and without noise, same
+//! parameters — and per cell this prints:
+//! - σ̂/σ: the noise estimated from the noisy curve over the noise added;
+//! - the surrogate's own error at the truth, ‖f(x) − ŷ(x)‖/(σ√m) (f the
+//!   forward model, noise-free), and its part outside the Kriging
+//!   covariance's span;
+//! - χ²/m of the residual d − ŷ(x_true) under the likelihood's
+//!   Σ = σ̂²I + v(x)K (≈ 1 ± √(2/m) when the likelihood is calibrated) and
+//!   under σ̂²I alone.
+//!
+//! ```text
+//! cargo run --release -p nlvid-report --example posterior_diagnose [cells] [noise] [seed]
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::{DMatrix, DVector};
+use nlvid_inverse::Model;
+use nlvid_inverse::posterior::noise_sd;
+use nlvid_report::cell::{CellModel, fit_cell};
+use nlvid_report::cohort::discover;
+use nlvid_report::demo::{DemoSpec, GroupSpec, write_demo_data};
+use nlvid_report::settings::CohortSettings;
+use nlvid_surrogate::OutputCovariance;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let cells: usize = args.get(1).map_or(Ok(20), |s| s.parse())?;
+    let noise: f64 = args.get(2).map_or(Ok(0.02), |s| s.parse())?;
+    let seed: u64 = args.get(3).map_or(Ok(17), |s| s.parse())?;
+    let demo =
+        std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
+    let root = std::env::temp_dir().join(format!("nlvid-diagnose-{}", std::process::id()));
+    let spec = |noise: f64| DemoSpec {
+        groups: vec![
+            GroupSpec {
+                name: "wide-a".into(),
+                g0: (1500.0, 0.5),
+                g1: (0.30, 0.12),
+                g2: (0.30, 0.12),
+                tau1: (0.3, 0.7),
+                tau2: (10.0, 0.4),
+            },
+            GroupSpec {
+                name: "wide-b".into(),
+                g0: (600.0, 0.5),
+                g1: (0.40, 0.12),
+                g2: (0.25, 0.12),
+                tau1: (0.6, 0.7),
+                tau2: (8.0, 0.4),
+            },
+        ],
+        cells_per_group: cells.div_ceil(2),
+        seed,
+        noise,
+        ..DemoSpec::default()
+    };
+    let noisy_study = write_study(&root.join("noisy"), &demo)?;
+    let clean_study = write_study(&root.join("clean"), &demo)?;
+    let files = write_demo_data(&spec(noise), &noisy_study, &demo.join("metamodel.toml"))?;
+    let clean_files = write_demo_data(&spec(0.0), &clean_study, &demo.join("metamodel.toml"))?;
+    let settings = CohortSettings::load(&noisy_study)?;
+    let model = CellModel::load(&settings)?;
+    let CellModel::Surrogate(fitter) = &model else {
+        return Err("the demo study fits a meta-model".into());
+    };
+    let s = fitter.surrogate();
+    let OutputCovariance::LowRank { m, k, factor } = s.kriging().output_covariance()? else {
+        return Err("the demo meta-model is PCA-reduced".into());
+    };
+    let u = DMatrix::from_column_slice(m, k, &factor);
+    let cv = s.variance_calibration()?;
+    println!(
+        "LOO calibration of the Kriging variance sigma2_CV/sigma2_ML = {cv:.3} (k = {k}, N = {})",
+        s.kriging().n_sites
+    );
+    let inputs = discover(&files.data)?;
+    let clean_inputs = discover(&clean_files.data)?;
+    println!(
+        "cell  sigma_hat/sigma  |f-yhat|/(sigma sqrt m)  outside-span  chi2/m(Sigma)  chi2/m(sigma only)  v·tr(K)/(m sigma^2)  mahal/k"
+    );
+    let (mut ratios, mut chis, mut mahals) = (Vec::new(), Vec::new(), Vec::new());
+    for (inp, cin) in inputs.iter().zip(&clean_inputs).take(cells) {
+        let r = fit_cell(&settings, &model, inp);
+        let c = fit_cell(&settings, &model, cin);
+        let truth = files
+            .cells
+            .iter()
+            .find(|t| t.cell == r.cell && t.group == r.group)
+            .ok_or("truth")?;
+        let clean = &c.data;
+        let peak = clean.iter().fold(0.0f64, |a, &b| a.max(b));
+        let sigma = noise * peak;
+        let est = noise_sd(s.times(), &r.data)?;
+        let y = s.response(&truth.x)?;
+        let v = s.mse_scale(&truth.x)?;
+        let rs = DVector::from_iterator(m, clean.iter().zip(&y).map(|(f, y)| f - y));
+        // Part of the surrogate error outside the span of U.
+        let coef = (u.transpose() * &u)
+            .cholesky()
+            .ok_or("UtU")?
+            .solve(&(u.transpose() * &rs));
+        let outside = (&rs - &u * &coef).norm() / rs.norm();
+        // Mahalanobis norm of the surrogate error under v(x)K on K's span,
+        // per dimension (1 when the Kriging variance is calibrated).
+        let mahal = coef.dot(&coef) / v / k as f64;
+        let rd = DVector::from_iterator(m, r.data.iter().zip(&y).map(|(d, y)| d - y));
+        let mut sig = &u * u.transpose() * v;
+        for j in 0..m {
+            sig[(j, j)] += est * est;
+        }
+        let chi = rd.dot(&sig.cholesky().ok_or("spd")?.solve(&rd)) / m as f64;
+        let chi0 = rd.dot(&rd) / (est * est) / m as f64;
+        let trk = (0..m)
+            .map(|j| (0..k).map(|i| u[(j, i)].powi(2)).sum::<f64>())
+            .sum::<f64>();
+        println!(
+            "{:10} {:6.3} {:8.3} {:6.3} {:8.3} {:8.3} {:8.4} {:8.3}  x {:?}",
+            r.cell,
+            est / sigma,
+            rs.norm() / (sigma * (m as f64).sqrt()),
+            outside,
+            chi,
+            chi0,
+            v * trk / (m as f64 * sigma * sigma),
+            mahal,
+            truth.x
+        );
+        ratios.push(est / sigma);
+        chis.push(chi);
+        mahals.push(mahal);
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let mut sorted = mahals.clone();
+    sorted.sort_by(f64::total_cmp);
+    println!(
+        "Kriging calibration |a|^2/(v k): mean {:.3}, median {:.3} (k = {k})",
+        mean(&mahals),
+        sorted[sorted.len() / 2]
+    );
+    println!(
+        "mean sigma_hat/sigma {:.4}; mean chi2/m under Sigma {:.4} (expect 1 ± {:.3})",
+        mean(&ratios),
+        mean(&chis),
+        (2.0 / m as f64 / chis.len() as f64).sqrt()
+    );
+    std::fs::remove_dir_all(&root)?;
+    Ok(())
+}
+
+/// The demo's cohort study with absolute meta-model paths, in `dir`.
+fn write_study(dir: &Path, demo: &Path) -> Result<PathBuf, Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir)?;
+    let text = std::fs::read_to_string(demo.join("study.toml"))?;
+    let mm = demo.join("metamodel");
+    let text = text.replace("\"metamodel/", &format!("\"{}/", mm.display()));
+    let study = dir.join("study.toml");
+    std::fs::write(&study, text)?;
+    Ok(study)
+}
