@@ -395,3 +395,39 @@ fn cell_model_of_shear_modulus_g0_is_the_neo_hookean_solid_with_c1_half_of_g0() 
         "C1 = G0 would double the force: ratio {ratio}"
     );
 }
+
+/// Checking run 50 of `examples/metamodel/afm-fe-setup1.toml` (seed 5; a
+/// soft, fast-relaxing cell: G0 = 1.43 kPa, g1 = 0.62, τ1 = 0.093 s), one
+/// of the 5 of 100 that failed with det F ≤ 0 in the engagement ramp on the
+/// default graded mesh: the first-touch Hertz predictor also fired with the
+/// probe already pressed in (its gap test missed the small penalty
+/// penetration) and pushed it the full Hertz depth deeper at once. The
+/// engaged depth lies between the Hertz depths (eq. 1.1, incompressible
+/// half-space) of the instantaneous modulus G0 and the long-term modulus
+/// G0 (1 − g1 − g2), with 10 % for the finite, curved cell.
+#[test]
+fn soft_fast_relaxing_cell_engages_without_inverting_the_contact_elements() {
+    let shear = Relaxation::from_named(
+        &names::PRONY2,
+        &[
+            1.4333263000278043e3,
+            6.246748421751216e-1,
+            1.3151736920738247e-1,
+            9.308341447952007e-2,
+            5.386573105377965e0,
+        ],
+    )
+    .unwrap();
+    let mut setup = AfmSetup::thesis_setup1();
+    setup.piezo = vec![(0.0, 0.0), (0.05, 0.0)];
+    setup.output_times = vec![0.0, 0.05];
+    let run = afm::run(&shear, &setup).unwrap_or_else(|e| panic!("{e}"));
+    let hertz = |g: f64| (3.0 * 0.48e-9 / (16.0 * g * 2.5e-6f64.sqrt())).powf(2.0 / 3.0);
+    let g0 = shear.g0();
+    let (stiff, soft) = (hertz(g0), hertz(g0 * (1.0 - 0.6246748 - 0.1315174)));
+    let depth = run.indentation[0];
+    assert!(
+        0.9 * stiff < depth && depth < 1.1 * soft,
+        "engaged depth {depth:e} m outside the Hertz bracket [{stiff:e}, {soft:e}] m"
+    );
+}
