@@ -101,7 +101,10 @@ fn main() {
             .filter(|((d, _), _)| **d >= 0.1e-6 - 1e-12)
             .map(|((_, f), r)| (f / r - 1.0).abs())
             .fold(0.0, f64::max);
-        println!("largest difference from the reference curve (δ ≥ 0.1 µm): {:.3e}", worst);
+        println!(
+            "largest difference from the reference curve (δ ≥ 0.1 µm): {:.3e}",
+            worst
+        );
     }
     for depth in [0.1e-6, 0.25e-6, 0.5e-6, 1e-6, 2e-6] {
         let i = run
@@ -120,5 +123,12 @@ fn main() {
         run.assemblies,
         cpu[cpu.len() / 2],
         cpu
+    );
+    // Load-free speed figure (docs/theory/fem.md, "Speed"): assemblies are
+    // deterministic and track the CPU time.
+    println!(
+        "bench: assemblies {} / 1070 (session-5 default) = {:.3}",
+        run.assemblies,
+        run.assemblies as f64 / 1070.0
     );
 }
