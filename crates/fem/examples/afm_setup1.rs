@@ -146,6 +146,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             run.residual_only_assemblies,
             run.lu_fallbacks
         );
+        // The bench ratios (docs/theory/fem.md, "Speed"): assemblies are
+        // deterministic and track the CPU time (≈ 1.5 ms each), so their
+        // ratio to the session-5 default run is a load-free speed figure.
+        println!(
+            "bench: assemblies {} / 1132 (session-5 default) = {:.3}; peak {:+.1e}, final {:+.1e} relative to 2.137008e-8 / 9.750558e-9 N",
+            run.assemblies,
+            run.assemblies as f64 / 1132.0,
+            run.peak_force / 2.137008e-8 - 1.0,
+            run.final_force / 9.750558e-9 - 1.0
+        );
     }
     println!(
         "CPU time (thread): median of {repeats} = {:.3} s (all: {walls:.3?})",

@@ -40,6 +40,21 @@ fn main() {
     if let Ok(v) = std::env::var("NLVID_FEM_RAMP_STEPS") {
         setup.ramp_step_fraction = 1.0 / v.parse::<f64>().unwrap();
     }
+    if let Ok(v) = std::env::var("NLVID_FEM_EASY") {
+        setup.settings.easy_iterations = v.parse().unwrap();
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_GROWTH") {
+        setup.settings.growth = v.parse().unwrap();
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_RTOL") {
+        setup.settings.rtol = v.parse().unwrap();
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_LAZY") {
+        setup.settings.lazy_tangent = v.parse().unwrap();
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_THREADS") {
+        setup.settings.threads = v.parse().unwrap();
+    }
     if let Ok(v) = std::env::var("NLVID_FEM_REFINE")
         && let afm::MeshLayout::ContactGraded(spec) = setup.mesh_layout
     {
@@ -69,6 +84,28 @@ fn main() {
             .collect();
         std::fs::write(path, text).unwrap();
     }
+    // NLVID_FEM_COMPARE: a file of "δ F" lines (NLVID_FEM_DUMP of a reference
+    // run on the same output grid): the largest relative force difference
+    // from δ = 0.1 µm on.
+    if let Some(path) = std::env::var_os("NLVID_FEM_COMPARE") {
+        let text = std::fs::read_to_string(path).unwrap();
+        let reference: Vec<f64> = text
+            .lines()
+            .map(|l| l.split_whitespace().nth(1).unwrap().parse().unwrap())
+            .collect();
+        let worst = run
+            .indentation
+            .iter()
+            .zip(&run.force)
+            .zip(&reference)
+            .filter(|((d, _), _)| **d >= 0.1e-6 - 1e-12)
+            .map(|((_, f), r)| (f / r - 1.0).abs())
+            .fold(0.0, f64::max);
+        println!(
+            "largest difference from the reference curve (δ ≥ 0.1 µm): {:.3e}",
+            worst
+        );
+    }
     for depth in [0.1e-6, 0.25e-6, 0.5e-6, 1e-6, 2e-6] {
         let i = run
             .time
@@ -86,5 +123,12 @@ fn main() {
         run.assemblies,
         cpu[cpu.len() / 2],
         cpu
+    );
+    // Load-free speed figure (docs/theory/fem.md, "Speed"): assemblies are
+    // deterministic and track the CPU time.
+    println!(
+        "bench: assemblies {} / 1070 (session-5 default) = {:.3}",
+        run.assemblies,
+        run.assemblies as f64 / 1070.0
     );
 }
