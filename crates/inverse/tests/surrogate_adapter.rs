@@ -55,7 +55,10 @@ fn fitted(
         .map(|x| real.response(x).expect("run"))
         .collect();
     let xm = Mat::from_fn(xs.len(), 5, |i, k| xs[i][k]);
-    let ym = Mat::from_fn(ys.len(), ys[0].len(), |i, j| ys[i][j]);
+    // ln y needs y > 0: the curves start at F = 0, so a ln y model krige
+    // F + 1 nN (still a predictor that is not linear in its basis).
+    let offset = if log_outputs { 1e-9 } else { 0.0 };
+    let ym = Mat::from_fn(ys.len(), ys[0].len(), |i, j| ys[i][j] + offset);
     let mut s = KrigingSettings::new(Regression::Poly1, Correlation::Gauss, 5);
     s.theta = ThetaSearch::Fixed(vec![0.5; 5]);
     s.pca_energy = pca;

@@ -238,6 +238,7 @@ fn the_fit_and_the_results_table_give_one_g_of_t() {
 fn hertz_baseline_lies_between_the_true_instantaneous_and_ramp_end_moduli() {
     let dir = scratch("hertz-bound");
     std::fs::copy(repo_demo().join("study.toml"), dir.join("study.toml")).expect("study");
+    copy_dir(&repo_demo().join("metamodel"), &dir.join("metamodel"));
     std::fs::write(
         dir.join("lee-radok.toml"),
         "[forward]\nmodel = \"hertz-prony\"\nprobe_radius = \"2.5 um\"\nrate = \"2 um/s\"\n\
