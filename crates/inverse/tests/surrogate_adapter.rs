@@ -74,10 +74,12 @@ fn fitted(
 fn a_log_output_surrogate_is_refused_by_the_basis_form_check() {
     for pca in [None, Some(0.99999)] {
         let (k, domain, real) = fitted(Coordinates::Physical, pca, true);
-        let err = KrigingSurrogate::new(k, domain, real.times().to_vec(), Coordinates::Physical)
-            .err()
-            .expect("a ln y surrogate is refused")
-            .to_string();
+        let Err(err) =
+            KrigingSurrogate::new(k, domain, real.times().to_vec(), Coordinates::Physical)
+        else {
+            panic!("a ln y surrogate is refused");
+        };
+        let err = err.to_string();
         assert!(err.contains("not of the form"), "{err}");
         let (k, domain, real) = fitted(Coordinates::Physical, pca, false);
         assert!(

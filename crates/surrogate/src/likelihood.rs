@@ -57,6 +57,9 @@ pub(crate) struct Factors {
     pub psi: f64,
 }
 
+/// C, F̃, G of [`Problem::factor`].
+pub(crate) type RFactors = (Mat<f64>, Mat<f64>, Mat<f64>);
+
 /// Outcome of one objective evaluation.
 pub(crate) enum Eval {
     Ok(Box<Factors>),
@@ -142,7 +145,7 @@ impl<'a> Problem<'a> {
     /// positive definite, too ill conditioned (`max_cond`) or F̃ is.
     /// [`Problem::eval`] and the Kriging variance of a loaded model (which
     /// does not store them) share it.
-    pub fn factor(&self, theta: &[f64]) -> Result<Option<(Mat<f64>, Mat<f64>, Mat<f64>)>> {
+    pub fn factor(&self, theta: &[f64]) -> Result<Option<RFactors>> {
         let n = self.s.nrows();
         let r = self.corr_matrix(theta);
         let Ok(llt) = r.llt(Side::Lower) else {

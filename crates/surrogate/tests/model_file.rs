@@ -4,6 +4,8 @@
 //! gradient equal the fitted model's — the fitted model's factors come from
 //! the θ search's own factorisation, the loaded one's from a fresh one.
 
+#![allow(clippy::unwrap_used)]
+
 use nlvid_surrogate::faer::Mat;
 use nlvid_surrogate::{Correlation, KrigingModel, KrigingSettings, Regression, ThetaSearch};
 
