@@ -1,5 +1,6 @@
 //! Coverage of the per-cell posteriors (issue 17), on the bundled demo
-//! meta-model (analytic `hertz-prony`, examples/demo/metamodel):
+//! meta-model (the FE cell model `afm-fe`, examples/demo/metamodel; its
+//! coverage was measured when the demo was `hertz-prony`):
 //! `cells` synthetic cells with known parameters are written by the demo's
 //! curve generator (`nlvid_report::demo::write_demo_data`, the forward
 //! model itself, not the surrogate) with `noise` × peak force of Gaussian

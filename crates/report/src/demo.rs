@@ -384,9 +384,10 @@ pub fn run_demo(
     if let Some(f) = &settings.surrogate {
         let _ = writeln!(
             text,
-            "   fitted on the pre-built meta-model {} of `{}`",
+            "   fitted on the pre-built meta-model {} of `{}` (its full identity: `model` in {})",
             f.model.display(),
-            f.forward
+            f.forward_name(),
+            f.meta.display()
         );
     }
     let cohort_dir = out.join("cohort");

@@ -23,8 +23,8 @@
 //! - [`demo`]: the bundled example's curve writer: two groups of cells made
 //!   by the study's forward model from known distributions, with noise.
 //!
-//! The bundled demo fits on a meta-model of the analytic `hertz-prony`
-//! forward model for now; an FE meta-model is for later.
+//! The bundled demo fits on an N = 970 meta-model of the FE cell model
+//! (`afm-fe`, setup 1) and its cells' curves are made by that FE model.
 //!
 //! Cost: a cell costs one multistart fit (8 SLSQP starts; on a meta-model
 //! of N training runs each misfit evaluation is O(N²), tens of ms per cell

@@ -534,6 +534,15 @@ pub struct SurrogateFiles {
     pub forward: String,
 }
 
+impl SurrogateFiles {
+    /// The forward model's name: [`SurrogateFiles::forward`] up to its
+    /// first `(` (`afm-fe`, `HertzProny`). The full identity of an FE
+    /// model lists every setting and output time (pages of text).
+    pub fn forward_name(&self) -> &str {
+        self.forward.split('(').next().unwrap_or_default().trim()
+    }
+}
+
 /// Cohort settings, all in SI: the study's title, `[probe]` and `[fit]`
 /// ([`FitSettings`]) as one serialisable record (written to `cohort.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

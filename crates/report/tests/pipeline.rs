@@ -169,11 +169,12 @@ fn recovered_moduli_match_the_ground_truth_per_cell() {
         let shear = |x: &[f64], s: f64| {
             x[0] * (1.0 - x[1] - x[2] + x[1] * (-s / x[3]).exp() + x[2] * (-s / x[4]).exp())
         };
-        // 1 % force noise, fitted on the meta-model (checking error: median
-        // 0.3 %, max 7.6 %, metamodel/check.json): G(t) within 5 % at 1, 10
-        // and 52 s. G(0) is an extrapolation here — the 1 s ramp is longer
-        // than τ1 (0.6 s median), so the data never show the unrelaxed
-        // modulus — and gets 10 % (worst cell today: 8.7 %).
+        // 1 % force noise, FE curves fitted on the FE meta-model (checking
+        // error: median 0.26 %, max 12.6 % at G0 = 82 Pa, far from these
+        // cells; metamodel/check.json): G(t) within 5 % at 1, 10 and 52 s
+        // (worst cell today 2.1 %). G(0) is an extrapolation here — the 1 s
+        // ramp is longer than τ1 (0.6 s median), so the data never show the
+        // unrelaxed modulus — and gets 10 % (worst cell today: 4.5 %).
         for (s, tol) in [(0.0, 0.10), (1.0, 0.05), (10.0, 0.05), (52.0, 0.05)] {
             let (fit, truth) = (shear(&x, s), shear(&t.x, s));
             assert!(
@@ -224,17 +225,48 @@ fn the_fit_and_the_results_table_give_one_g_of_t() {
     assert_eq!(checked, 16);
 }
 
-/// The Hertz baseline of a viscoelastic cell: on the ramp the Lee–Radok
-/// force lies between the elastic forces of G(t) and G(0), so the fitted
-/// E (ν = 0.5) must lie between 3·G(t_ramp) and 3·G(0) of the true
+/// The Hertz baseline of a viscoelastic half-space: on the ramp the
+/// Lee–Radok force lies between the elastic forces of G(t) and G(0), so the
+/// fitted E (ν = 0.5) must lie between 3·G(t_ramp) and 3·G(0) of the true
 /// parameters (2 % margin for the noise and the fitted contact point).
+/// The bound is a theorem for the Lee–Radok curve, not for the demo's FE
+/// cell (finite height on a substrate, large strain: there E_Hertz/3G(1 s)
+/// is 0.96–1.19), so the demo's cells are written here with the analytic
+/// `hertz-prony` model (same truth, noise and sampling) and the baseline
+/// (`cell::hertz_baseline`, what the cohort runs) is fitted to each.
 #[test]
 fn hertz_baseline_lies_between_the_true_instantaneous_and_ramp_end_moduli() {
-    let f = fixture();
-    let cells = cohort::read_cells(&f.out).expect("cells");
-    for t in &f.truth {
-        let c = cells.iter().find(|c| c.cell == t.cell).expect("result");
-        let h = c.hertz.as_ref().expect("Hertz baseline fitted");
+    let dir = scratch("hertz-bound");
+    std::fs::copy(repo_demo().join("study.toml"), dir.join("study.toml")).expect("study");
+    copy_dir(&repo_demo().join("metamodel"), &dir.join("metamodel"));
+    std::fs::write(
+        dir.join("lee-radok.toml"),
+        "[forward]\nmodel = \"hertz-prony\"\nprobe_radius = \"2.5 um\"\nrate = \"2 um/s\"\n\
+         ramp = \"1 s\"\nhold = \"51 s\"\npoints = 520\n",
+    )
+    .expect("forward study");
+    let files = write_demo_data(
+        &DemoSpec::default(),
+        &dir.join("study.toml"),
+        &dir.join("lee-radok.toml"),
+    )
+    .expect("Lee–Radok curves");
+    let settings = CohortSettings::load(&files.study).expect("settings");
+    let cal = nlvid_inverse::Calibration {
+        deflection_sensitivity: None,
+        spring_constant: settings.spring_constant.expect("k"),
+    };
+    let cols = nlvid_inverse::AfmColumns {
+        time: settings.time_column.clone(),
+        piezo: settings.piezo_column.clone(),
+        deflection: settings.deflection_column.clone(),
+    };
+    for t in &files.cells {
+        let path = files.data.join(&t.group).join(format!("{}.csv", t.cell));
+        let curve = nlvid_inverse::read_afm_csv(&path, &cols, &cal).expect("demo curve");
+        let delta = curve.indentation.clone().expect("indentation");
+        let h = nlvid_report::cell::hertz_baseline(&settings, &curve, &delta)
+            .expect("Hertz baseline fitted");
         let x = t.x;
         let g = |s: f64| {
             x[0] * (1.0 - x[1] - x[2] + x[1] * (-s / x[3]).exp() + x[2] * (-s / x[4]).exp())
@@ -347,7 +379,7 @@ fn report_page_contains_every_figure_and_every_cell() {
     }
     assert!(html.contains("b-soft-short") && html.contains("failed"));
     assert!(
-        html.contains("Kriging meta-model") && html.contains("HertzProny("),
+        html.contains("Kriging meta-model") && html.contains("afm-fe("),
         "the meta-model and the forward model it stands for are stated"
     );
     assert!(
@@ -359,8 +391,8 @@ fn report_page_contains_every_figure_and_every_cell() {
 
 #[test]
 fn the_committed_demo_is_what_the_generator_writes() {
-    let dir = scratch("committed");
-    demo_in(&dir);
+    // The fixture's curves (16 FE runs) are the generator's output.
+    let dir = &fixture().demo;
     let repo = repo_demo();
     let mut checked = 0;
     let mut rels = vec!["ground_truth.csv".to_string()];

@@ -259,12 +259,14 @@ pub struct KrigingModel {
     gamma: Vec<f64>,
     /// σ² of the kriged outputs (normalised units / PC scores), q.
     pub sigma2: Vec<f64>,
-    /// Lower Cholesky factor C of R, n × n.
-    c: Vec<f64>,
-    /// F̃ = C⁻¹F, n × p.
-    ft: Vec<f64>,
-    /// G (upper, F̃ = QG), p × p.
-    g: Vec<f64>,
+    /// C, F̃, G of R = CCᵀ, F̃ = C⁻¹F = QG, for the MSE only: n² numbers,
+    /// so not written to the model file (a PCA model of n = 970 sites is
+    /// then well under a MB instead of 20) and rebuilt from the sites, θ
+    /// and the nugget on first use after loading (see
+    /// [`variance`](self::variance)). Files with `c`, `ft`, `g` still load
+    /// (the keys are ignored).
+    #[serde(skip)]
+    factors: std::sync::OnceLock<variance::MseFactors>,
     /// Output reduction, if any.
     pub pca: Option<Pca>,
     /// The model predicts ln y (see [`KrigingSettings::log_outputs`]).
@@ -589,9 +591,7 @@ impl KrigingModel {
                 beta: to_vec(beta.as_ref()),
                 gamma: to_vec(gamma.as_ref()),
                 sigma2,
-                c: to_vec(c.as_ref()),
-                ft: to_vec(ft.as_ref()),
-                g: to_vec(g.as_ref()),
+                factors: variance::MseFactors::new(c, ft, g).into(),
                 pca,
                 log_outputs: settings.log_outputs,
                 output_scale: settings.output_scale,
@@ -990,9 +990,8 @@ impl KrigingModel {
             }
         }
         // MSE factor φ = 1 + |v|² − |rt|², rt = C⁻¹r, v = G⁻ᵀ(F̃ᵀrt − f).
-        let c = view(&self.c, n, n);
-        let ft = view(&self.ft, n, p);
-        let gmat = view(&self.g, p, p);
+        let fac = self.mse_factors()?;
+        let (c, ft, gmat) = (fac.c(n), fac.ft(n, p), fac.g(p));
         let mut rt = r.clone();
         solve_lower_triangular_in_place(c, rt.as_mut(), Par::Seq);
         let mut v = ft.transpose() * &rt;

@@ -57,6 +57,9 @@ pub(crate) struct Factors {
     pub psi: f64,
 }
 
+/// C, F̃, G of [`Problem::factor`].
+pub(crate) type RFactors = (Mat<f64>, Mat<f64>, Mat<f64>);
+
 /// Outcome of one objective evaluation.
 pub(crate) enum Eval {
     Ok(Box<Factors>),
@@ -137,12 +140,16 @@ impl<'a> Problem<'a> {
         r
     }
 
-    /// DACE's `objfunc`: ψ(θ) and the factors at θ.
-    pub fn eval(&self, theta: &[f64]) -> Result<Eval> {
+    /// The factors of R(θ) and F that do not depend on the outputs:
+    /// `R = C Cᵀ`, `F̃ = C⁻¹F = QG` (C, F̃, G); `None` when R is not
+    /// positive definite, too ill conditioned (`max_cond`) or F̃ is.
+    /// [`Problem::eval`] and the Kriging variance of a loaded model (which
+    /// does not store them) share it.
+    pub fn factor(&self, theta: &[f64]) -> Result<Option<RFactors>> {
         let n = self.s.nrows();
         let r = self.corr_matrix(theta);
         let Ok(llt) = r.llt(Side::Lower) else {
-            return Ok(Eval::Infeasible);
+            return Ok(None);
         };
         let c = llt.L().to_owned();
         drop(r);
@@ -150,7 +157,7 @@ impl<'a> Problem<'a> {
             let d = (0..n).map(|i| c[(i, i)]);
             let (lo, hi) = d.fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)));
             if (hi / lo).powi(2) > self.max_cond {
-                return Ok(Eval::Infeasible);
+                return Ok(None);
             }
         }
         let mut ft = self.f.clone();
@@ -162,8 +169,17 @@ impl<'a> Problem<'a> {
             if rc < 1e-15 {
                 return Err(SurrogateError::IllConditionedRegression { rcond: rc });
             }
-            return Ok(Eval::Infeasible);
+            return Ok(None);
         }
+        Ok(Some((c, ft, g)))
+    }
+
+    /// DACE's `objfunc`: ψ(θ) and the factors at θ.
+    pub fn eval(&self, theta: &[f64]) -> Result<Eval> {
+        let n = self.s.nrows();
+        let Some((c, ft, g)) = self.factor(theta)? else {
+            return Ok(Eval::Infeasible);
+        };
         let mut yt = self.y.to_owned();
         solve_lower_triangular_in_place(c.as_ref(), yt.as_mut(), self.par);
         // β = G⁻¹ QᵀỸ with QᵀỸ = G⁻ᵀ F̃ᵀỸ (Q never formed).
