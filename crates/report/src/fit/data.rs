@@ -336,7 +336,9 @@ fn check_protocol(
     let expected_t = [0.0, t_ramp, t_end];
     let expected = match p.kind {
         ProtocolKind::RampHold => ramp_hold_indentation(&expected_t, p.rate, p.amplitude),
-        ProtocolKind::RampReverse => vec![0.0, p.amplitude, p.amplitude - p.rate * (t_end - t_ramp)],
+        ProtocolKind::RampReverse => {
+            vec![0.0, p.amplitude, p.amplitude - p.rate * (t_end - t_ramp)]
+        }
     };
     curve.check_protocol(&expected_t, &expected, p.tolerance)?;
     Ok(())
