@@ -14,9 +14,7 @@
 #![allow(clippy::unwrap_used)]
 
 use nlvid_fem::shell::{ShellSpec, ellipsoidal_shell};
-use nlvid_fem::{
-    Cavity, Component, Control, Fluid, Model, Parts, RigidPlane, Settings, Solid, Stage, Support,
-};
+use nlvid_fem::{Control, Fluid, Model, Parts, Settings, Solid, Stage};
 use nlvid_material::MooneyRivlin;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -37,19 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let c = spec.semi_axes[2];
         let mesh = ellipsoidal_shell(&spec)?;
         let (elements, nodes) = (mesh.elements.len(), mesh.nodes.len());
-        let parts = Parts {
-            supports: vec![
-                Support::fixed("x0", Component::X),
-                Support::fixed("y0", Component::Y),
-                Support::fixed("z0", Component::Z),
-            ],
-            planes: vec![RigidPlane::above("outer")],
-            cavity: Some(Cavity {
-                boundary: "inner".into(),
-                fluid: Fluid::Incompressible,
-            }),
-            ..Parts::default()
-        };
+        let parts = Parts::eighth_capsule(Fluid::Incompressible);
         let settings = Settings {
             residual_growth: 1e6,
             atol: 1e-9,

@@ -15,8 +15,8 @@
 
 use nlvid_fem::shell::{ShellSpec, ellipsoidal_shell};
 use nlvid_fem::{
-    Cavity, Component, Fluid, LiftOff, Model, Parts, PatchSpec, PlateProgram, RigidPlane, Settings,
-    Solid, Support, Symmetry, run_plate_program,
+    Fluid, LiftOff, Model, Parts, PatchSpec, PlateProgram, Settings, Solid, Symmetry,
+    run_plate_program,
 };
 use nlvid_material::PronyViscoelastic;
 use nlvid_protocol::{Quantity, grid, programs};
@@ -47,19 +47,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let mesh = ellipsoidal_shell(&spec)?;
         let elements = mesh.elements.len();
-        let parts = Parts {
-            supports: vec![
-                Support::fixed("x0", Component::X),
-                Support::fixed("y0", Component::Y),
-                Support::fixed("z0", Component::Z),
-            ],
-            planes: vec![RigidPlane::above("outer")],
-            cavity: Some(Cavity {
-                boundary: "inner".into(),
-                fluid: Fluid::Incompressible,
-            }),
-            ..Parts::default()
-        };
+        let parts = Parts::eighth_capsule(Fluid::Incompressible);
         let settings = Settings {
             residual_growth: 1e6,
             atol: 1e-9,

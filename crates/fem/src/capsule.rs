@@ -51,31 +51,22 @@ pub struct Symmetry {
 }
 
 impl Symmetry {
+    const fn copies(volume_copies: f64, patch_copies: f64, plate_share: f64) -> Self {
+        Self {
+            volume_copies,
+            patch_copies,
+            plate_share,
+        }
+    }
     /// The whole capsule.
-    pub const FULL: Self = Self {
-        volume_copies: 1.0,
-        patch_copies: 1.0,
-        plate_share: 1.0,
-    };
+    pub const FULL: Self = Self::copies(1.0, 1.0, 1.0);
     /// Cut by x = 0 and y = 0, both plates modelled.
-    pub const QUARTER: Self = Self {
-        volume_copies: 4.0,
-        patch_copies: 4.0,
-        plate_share: 1.0,
-    };
+    pub const QUARTER: Self = Self::copies(4.0, 4.0, 1.0);
     /// Cut by x = 0, y = 0 and z = 0 (symmetric load).
-    pub const EIGHTH: Self = Self {
-        volume_copies: 8.0,
-        patch_copies: 4.0,
-        plate_share: 0.5,
-    };
+    pub const EIGHTH: Self = Self::copies(8.0, 4.0, 0.5);
     /// Axisymmetric upper half (z ≥ 0): areas and forces of axisymmetric
     /// models are already those of the whole revolution.
-    pub const AXISYMMETRIC_HALF: Self = Self {
-        volume_copies: 2.0,
-        patch_copies: 1.0,
-        plate_share: 0.5,
-    };
+    pub const AXISYMMETRIC_HALF: Self = Self::copies(2.0, 1.0, 0.5);
 }
 
 /// Exponent e of the gap near the contact edge, g ∝ (s − a)^e (module

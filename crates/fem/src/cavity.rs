@@ -188,23 +188,12 @@ mod tests {
         // The six outward faces of a distorted hexahedron enclose exactly
         // the volume its own 2×2×2 quadrature integrates (the trilinear map's
         // Jacobian is integrated exactly), whatever the origin.
-        let mut x: Vec<[f64; 3]> = crate::hex::CORNERS
-            .iter()
-            .map(|c| [0.5 * (c[0] + 1.0), 0.5 * (c[1] + 1.0), 0.5 * (c[2] + 1.0)])
-            .collect();
+        let mut x = crate::hex::unit_cube();
         x[6] = [1.2, 1.1, 1.3];
         x[1] = [0.9, -0.1, 0.05];
         x[4] = [0.1, 0.05, 0.8];
-        let faces = [
-            [0, 3, 2, 1],
-            [4, 5, 6, 7],
-            [0, 1, 5, 4],
-            [1, 2, 6, 5],
-            [2, 3, 7, 6],
-            [3, 0, 4, 7],
-        ];
-        let hx: [[f64; 3]; 8] = std::array::from_fn(|a| x[a]);
-        let exact: f64 = crate::hex::element_geometry(&hx)
+        let faces = crate::hex::FACES;
+        let exact: f64 = crate::hex::element_geometry(&x)
             .unwrap()
             .iter()
             .map(|p| p.weight)
@@ -232,20 +221,10 @@ mod tests {
         // Faces of a distorted hexahedron: the gradient of the enclosed
         // volume w.r.t. a node is the sum of its area-weighted normals over
         // the faces around it; the normals of a closed surface sum to zero.
-        let mut x: Vec<[f64; 3]> = crate::hex::CORNERS
-            .iter()
-            .map(|c| [0.5 * (c[0] + 1.0), 0.5 * (c[1] + 1.0), 0.5 * (c[2] + 1.0)])
-            .collect();
+        let mut x = crate::hex::unit_cube();
         x[6] = [1.2, 1.1, 1.3];
         x[1] = [0.9, -0.1, 0.05];
-        let faces = [
-            [0, 3, 2, 1],
-            [4, 5, 6, 7],
-            [0, 1, 5, 4],
-            [1, 2, 6, 5],
-            [2, 3, 7, 6],
-            [3, 0, 4, 7],
-        ];
+        let faces = crate::hex::FACES;
         let mut grad = [[0.0; 3]; 8];
         let mut normal = [[0.0; 3]; 8];
         for f in faces {

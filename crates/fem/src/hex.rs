@@ -33,6 +33,25 @@ pub const CORNERS: [[f64; 3]; 8] = [
     [-1.0, 1.0, 1.0],
 ];
 
+/// The six faces of a hexahedron with the corner order of [`CORNERS`],
+/// each counter-clockwise seen from outside (outward normal by the right
+/// hand); tests of the element and of the cavity's face volumes use them.
+#[cfg(test)]
+pub(crate) const FACES: [[usize; 4]; 6] = [
+    [0, 3, 2, 1],
+    [4, 5, 6, 7],
+    [0, 1, 5, 4],
+    [1, 2, 6, 5],
+    [2, 3, 7, 6],
+    [3, 0, 4, 7],
+];
+
+/// The unit cube [0, 1]³ with the corner order of [`CORNERS`] (tests).
+#[cfg(test)]
+pub(crate) fn unit_cube() -> [[f64; 3]; 8] {
+    CORNERS.map(|c| [0.5 * (c[0] + 1.0), 0.5 * (c[1] + 1.0), 0.5 * (c[2] + 1.0)])
+}
+
 /// 2×2×2 Gauss points; all weights are 1.
 pub const GAUSS: [[f64; 3]; 8] = {
     const G: f64 = 0.577_350_269_189_625_8;
@@ -484,7 +503,7 @@ mod tests {
 
     /// A distorted, non-parallel hexahedron around the unit cube.
     fn distorted() -> [[f64; 3]; 8] {
-        let mut x = CORNERS.map(|c| [0.5 * (c[0] + 1.0), 0.5 * (c[1] + 1.0), 0.5 * (c[2] + 1.0)]);
+        let mut x = unit_cube();
         let shift = [
             [0.05, -0.02, 0.03],
             [0.1, 0.04, -0.05],
@@ -543,14 +562,7 @@ mod tests {
         // independent of the element's own quadrature: V = ⅓ ∮ X·n dA, each
         // face integrated exactly by 2×2 Gauss (cubic in each variable).
         let x = distorted();
-        let faces = [
-            [0, 3, 2, 1],
-            [4, 5, 6, 7],
-            [0, 1, 5, 4],
-            [1, 2, 6, 5],
-            [2, 3, 7, 6],
-            [3, 0, 4, 7],
-        ];
+        let faces = FACES;
         let g = 0.577_350_269_189_625_8;
         let mut v = 0.0;
         for face in faces {

@@ -53,7 +53,7 @@ fn same_sum(alpha: f64) -> [f64; 6] {
 
 fn run(program: &Program, size: f64, p: &[f64; 6]) -> (Curve, Vec<String>, f64) {
     let mut spec = CapsuleFeSpec::thesis(program.clone(), 1200);
-    spec.element_size = size;
+    spec.shell.element_size = size;
     let model = spec.build().unwrap();
     let clock = std::time::Instant::now();
     let (curve, notes) = model.run_curve(p).unwrap();

@@ -55,17 +55,12 @@ pub enum AreaKind {
 /// force mesh of docs/theory/fem.md.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CapsuleFeSpec {
-    /// Outer axes 2a, 2b, 2c (m); the plates press along the third.
-    pub axes: [f64; 3],
-    /// Wall thickness t1, t2, t3 at the ends of the three axes (m).
-    pub wall_thickness: [f64; 3],
-    /// Exponent q of the thickness law between them (`nlvid_fem::shell`).
-    pub thickness_exponent: f64,
-    /// Elements through the wall (thesis: 4).
-    pub layers: usize,
-    /// Element size along the outer surface (m); 0.3 mm is the default
-    /// force mesh (docs/theory/fem.md).
-    pub element_size: f64,
+    /// The capsule's eighth: outer semi-axes (half the study's `axes` 2a,
+    /// 2b, 2c; the plates press along the third), wall thickness t1, t2, t3
+    /// at the ends of the axes, the thickness law's exponent, elements
+    /// through the wall (thesis: 4) and element size (0.3 mm: the default
+    /// force mesh, docs/theory/fem.md).
+    pub shell: ShellSpec,
     /// Wall bulk modulus over G0 = 2(C1 + C2) (near-incompressibility).
     pub bulk_ratio: f64,
     /// Fluid bulk modulus (Pa); `None`: incompressible (the thesis's oil).
@@ -144,11 +139,14 @@ impl CapsuleFeSpec {
             AreaKind::Ellipse,
         )?;
         Ok(Self {
-            axes,
-            wall_thickness,
-            thickness_exponent,
-            layers,
-            element_size,
+            shell: ShellSpec {
+                semi_axes: axes.map(|a| 0.5 * a),
+                thickness: wall_thickness,
+                thickness_exponent,
+                layers,
+                element_size,
+                part: ShellPart::Eighth,
+            },
             bulk_ratio,
             fluid_bulk_modulus,
             program,
@@ -164,11 +162,7 @@ impl CapsuleFeSpec {
     /// `program` with `points` output times.
     pub fn thesis(program: Program, points: usize) -> Self {
         Self {
-            axes: [9.96e-3, 6.51e-3, 6.51e-3],
-            wall_thickness: [0.62e-3, 0.4e-3, 0.4e-3],
-            thickness_exponent: 2.0,
-            layers: 4,
-            element_size: 0.3e-3,
+            shell: ShellSpec::thesis_capsule(0.3e-3),
             bulk_ratio: 1e3,
             fluid_bulk_modulus: None,
             program,
@@ -176,18 +170,6 @@ impl CapsuleFeSpec {
             min_steps: 20,
             exact_outputs: false,
             contact_area: AreaKind::Ellipse,
-        }
-    }
-
-    /// The shell of one eighth of the capsule.
-    pub fn shell(&self) -> ShellSpec {
-        ShellSpec {
-            semi_axes: self.axes.map(|a| 0.5 * a),
-            thickness: self.wall_thickness,
-            thickness_exponent: self.thickness_exponent,
-            layers: self.layers,
-            element_size: self.element_size,
-            part: ShellPart::Eighth,
         }
     }
 
@@ -210,7 +192,7 @@ impl CapsuleFeSpec {
                 self.program.quantity()
             )));
         }
-        let mesh = ellipsoidal_shell(&self.shell()).map_err(|e| bad(e.to_string()))?;
+        let mesh = ellipsoidal_shell(&self.shell).map_err(|e| bad(e.to_string()))?;
         let times = self
             .program
             .uniform_grid(self.points)

@@ -244,7 +244,8 @@ impl ForwardModel for MembraneModel {
         PARAMETERS.map(String::from).to_vec()
     }
     fn parameter_units(&self) -> Vec<String> {
-        ["Pa", "1", "1", "1", "s", "s"].map(String::from).to_vec()
+        // modulus, ratio, two weights, two times: the units of ch. IV's six
+        nlvid_model::names::CAPSULE_UNITS.map(String::from).to_vec()
     }
     fn time_grid(&self) -> &[f64] {
         &self.loading.times

@@ -1,15 +1,23 @@
-//! Issue 16's recovery criterion on the `capsule-fe` meta-model (thesis
-//! §4.4.1–4.4.2): fit noisy FE capsule curves on a Kriging surrogate of FE
-//! runs, then re-run the FE model at each optimum.
+//! Issue 16's recovery criterion on `capsule-fe` meta-models (thesis
+//! §4.4.1–4.4.2): fit noisy FE capsule curves of one test or of several
+//! tests together (RH + RH at two depths, RH + RR, …) on Kriging
+//! surrogates of FE runs, then (optionally) re-run the FE model at each
+//! optimum.
 //!
-//! The "data" are the first `CASES` runs of the meta-model's *checking* set
-//! (FE runs at known parameters that the surrogate never saw) with 2 %
-//! Gaussian noise (σ = 0.02 · peak force, seed 16). A case is recovered when
-//! C1 + C2 = C1(1 + α) is within 5 % and g1 + g2 within 0.03 of the truth.
-//! Every parameter's error is printed, with the local identifiability at
-//! the optimum (singular values of the value-scaled sensitivity matrix of
-//! the surrogate and the parameter combination of the smallest one), so
-//! the parameters the force curve does not pin down can be named.
+//! The hidden parameters are the first `--cases` (default 10) runs of the
+//! first test's *checking* set (FE runs the surrogates never saw). Each
+//! test's data is its own checking run at those parameters when its export
+//! holds them (studies with the same `[design]` seed, sizes and domain have
+//! the same checking design), else a fresh FE run of its study there; then
+//! Gaussian noise σ = 0.02 · that curve's peak (seed 16). A case is
+//! recovered when C1 + C2 = C1(1 + α) is within 5 % and g1 + g2 within
+//! 0.03 of the truth. Every parameter's error is printed with the local
+//! identifiability at the optimum (`nlvid_inverse::identifiability`, all
+//! tests stacked): singular values of the value-scaled sensitivity matrix,
+//! the parameter combination of the smallest, and the Gauss–Newton 95 %
+//! half-widths as fractions of the Table 4.1 ranges. The summary calls a
+//! parameter pinned by the combination when the median of that half-width
+//! and the median error are both below 10 % of its range.
 //!
 //! ```sh
 //! nlvid build examples/metamodel/capsule-rh.toml --store S --export E
@@ -17,110 +25,267 @@
 //!     --log-inputs C1,tau1,tau2 --out capsule.model.json
 //! cargo run --release -p nlvid-inverse --example capsule_recovery -- \
 //!     examples/metamodel/capsule-rh.toml capsule.model.json E [--no-rerun]
+//! # several tests fitted together: one STUDY,MODEL,EXPORT per test
+//! cargo run --release -p nlvid-inverse --example capsule_recovery -- --no-rerun \
+//!     examples/metamodel/capsule-rh-64.toml,rh.model.json,RH_EXPORT \
+//!     examples/metamodel/capsule-rr-64.toml,rr.model.json,RR_EXPORT
 //! ```
 
 use std::path::Path;
 
-use anyhow::bail;
+use anyhow::{Context, bail};
 use nlvid_inverse::{
-    Experiment, Misfit, Model, MultiStart, Objective, Precomputed, SensitivityScaling,
-    SurrogateCurve, SurrogateMisfit, identifiability, range_normalised_rmse,
+    Coordinates, Experiment, KrigingSurrogate, Misfit, Model, MultiStart, Objective, Precomputed,
+    SensitivityScaling, SurrogateCurve, SurrogateMisfit, Z95, identifiability,
+    range_normalised_rmse, read_meta,
 };
-use rand::SeedableRng;
+use nlvid_model::ForwardModel;
+use nlvid_surrogate::KrigingModel;
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-mod recovery;
-
-use recovery::normal;
-
-const CASES: usize = 10;
-
-fn main() -> anyhow::Result<()> {
-    let args: Vec<String> = std::env::args().collect();
-    if args.len() < 4 {
-        bail!("usage: capsule_recovery STUDY.toml MODEL.json EXPORT_DIR [--no-rerun]");
+fn read_csv(path: &Path) -> anyhow::Result<(Vec<String>, Vec<Vec<f64>>)> {
+    let mut rdr =
+        csv::Reader::from_path(path).with_context(|| format!("cannot open {}", path.display()))?;
+    let head = rdr.headers()?.iter().map(str::to_owned).collect();
+    let mut rows = Vec::new();
+    for (i, rec) in rdr.records().enumerate() {
+        let rec = rec.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
+        let row = rec
+            .iter()
+            .map(|v| v.trim().parse::<f64>())
+            .collect::<Result<Vec<_>, _>>()
+            .with_context(|| format!("{}: row {}", path.display(), i + 2))?;
+        rows.push(row);
     }
-    let (study_path, model_path, export) = (&args[1], &args[2], Path::new(&args[3]));
-    let rerun = !args.iter().any(|a| a == "--no-rerun");
-    let recovery::Setup {
+    Ok((head, rows))
+}
+
+/// Standard normal by Box–Muller (seeded, deterministic).
+fn normal(rng: &mut ChaCha8Rng) -> f64 {
+    let u1: f64 = rng.random::<f64>().max(1e-300);
+    let u2: f64 = rng.random::<f64>();
+    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+}
+
+/// One test: its FE model, surrogate, and checking set.
+struct Test {
+    label: String,
+    fe: Box<dyn ForwardModel>,
+    sur: KrigingSurrogate,
+    pre: Precomputed,
+    /// Checking parameters (domain order) and FE curves.
+    xs: Vec<Vec<f64>>,
+    ys: Vec<Vec<f64>>,
+}
+
+fn load_test(spec: &str) -> anyhow::Result<Test> {
+    let parts: Vec<&str> = spec.split(',').collect();
+    let [study_path, model_path, export] = parts[..] else {
+        bail!("a test is STUDY.toml,MODEL.json,EXPORT_DIR, got `{spec}`");
+    };
+    let export = Path::new(export);
+    let mut study = nlvid_study::Study::load(study_path)?;
+    let fe = nlvid_forward::from_study(&mut study)?;
+    let meta = read_meta(&export.join("train/meta.json"))?;
+    let domain = meta.domain.clone();
+    domain.check_names(&fe.parameter_names())?;
+    let kriging: KrigingModel = serde_json::from_slice(&std::fs::read(model_path)?)?;
+    let sur = KrigingSurrogate::new(
+        kriging,
+        domain.clone(),
+        meta.time_s.clone(),
+        Coordinates::Physical,
+    )?;
+    let pre = Precomputed::new(&sur, None)?;
+    let (xhead, xs) = read_csv(&export.join("check/X.csv"))?;
+    let (_, ys) = read_csv(&export.join("check/Y.csv"))?;
+    let column = |name: &str| {
+        xhead
+            .iter()
+            .position(|h| h == name || h.starts_with(&format!("{name} [")))
+            .with_context(|| format!("column {name} not in {xhead:?}"))
+    };
+    let cols = domain
+        .params()
+        .iter()
+        .map(|p| column(&p.name))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let xs = xs
+        .iter()
+        .map(|x| cols.iter().map(|&c| x[c]).collect())
+        .collect();
+    let label = Path::new(study_path).file_stem().map_or_else(
+        || study_path.to_string(),
+        |s| s.to_string_lossy().into_owned(),
+    );
+    Ok(Test {
+        label,
         fe,
-        domain,
         sur,
+        pre,
         xs,
         ys,
-    } = recovery::setup(study_path, model_path, export, CASES)?;
-    let names = domain.names();
-    let pre = Precomputed::new(&sur, None)?;
-    let mut errors: Vec<f64> = Vec::new();
-    for (x, y) in xs.iter().zip(&ys) {
-        errors.push(range_normalised_rmse(&sur.response(x)?, y, None)?);
+    })
+}
+
+/// Eq. 4.4 checking error of the test's surrogate over its checking set:
+/// (max, median).
+fn checking_error(t: &Test) -> anyhow::Result<(f64, f64)> {
+    let mut errors = Vec::with_capacity(t.xs.len());
+    for (x, y) in t.xs.iter().zip(&t.ys) {
+        errors.push(range_normalised_rmse(&t.sur.response(x)?, y, None)?);
     }
-    let mut sorted = errors.clone();
-    sorted.sort_by(f64::total_cmp);
-    println!(
-        "checking set: {} runs, eq. 4.4 error max {:.3} %, median {:.3} % (thesis: 0.05 % to 4 %, N = 492, M = 92)",
-        xs.len(),
-        100.0 * sorted[sorted.len() - 1],
-        100.0 * sorted[sorted.len() / 2]
-    );
-    let max_check = sorted[sorted.len() - 1];
+    errors.sort_by(f64::total_cmp);
+    Ok((errors[errors.len() - 1], errors[errors.len() / 2]))
+}
+
+/// The test's noise-free curve at `x`: its checking run if it has one
+/// there, else an FE run interpolated onto the surrogate's grid.
+fn clean_curve(t: &Test, x: &[f64]) -> anyhow::Result<(Vec<f64>, &'static str)> {
+    let same = |a: &[f64]| {
+        a.iter()
+            .zip(x)
+            .all(|(p, q)| (p - q).abs() <= 1e-9 * q.abs().max(1e-30))
+    };
+    if let Some(i) = t.xs.iter().position(|a| same(a)) {
+        return Ok((t.ys[i].clone(), "checking run"));
+    }
+    Ok((t.fe.run(x)?, "FE run"))
+}
+
+fn main() -> anyhow::Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let rerun = !args.iter().any(|a| a == "--no-rerun");
+    let mut cases = 10;
+    let mut positional = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--no-rerun" => {}
+            "--cases" => cases = it.next().context("--cases N")?.parse()?,
+            _ => positional.push(a.clone()),
+        }
+    }
+    let specs = if positional.len() == 3 && positional.iter().all(|p| !p.contains(',')) {
+        vec![positional.join(",")]
+    } else {
+        positional
+    };
+    if specs.is_empty() {
+        bail!(
+            "usage: capsule_recovery [--no-rerun] [--cases N] STUDY.toml MODEL.json EXPORT_DIR \
+             | STUDY.toml,MODEL.json,EXPORT_DIR …"
+        );
+    }
+    let tests = specs
+        .iter()
+        .map(|s| load_test(s))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let domain = Model::domain(&tests[0].sur).clone();
+    let names = domain.names();
+    let mut max_check = Vec::new();
+    for t in &tests {
+        let (max, median) = checking_error(t)?;
+        println!(
+            "{}: checking set {} runs, eq. 4.4 error max {:.3} %, median {:.3} % (thesis: 0.05 % to 4 %, N = 492, M = 92)",
+            t.label,
+            t.xs.len(),
+            100.0 * max,
+            100.0 * median
+        );
+        max_check.push(max);
+    }
+    if tests[0].xs.len() < cases {
+        bail!("only {} checking runs, need {cases}", tests[0].xs.len());
+    }
+    let combination = tests
+        .iter()
+        .map(|t| t.label.as_str())
+        .collect::<Vec<_>>()
+        .join(" + ");
+    println!("fitting together: {combination}");
 
     let mut noise_rng = ChaCha8Rng::seed_from_u64(16);
     let (mut passed, mut agree) = (0, 0);
     let mut per_param = vec![Vec::new(); names.len()];
-    for (case, (x, clean)) in xs.iter().zip(&ys).take(CASES).enumerate() {
-        let x_true = x.clone();
-        let peak = clean.iter().copied().fold(0.0, f64::max);
-        let data: Vec<f64> = clean
+    let mut half_widths = vec![Vec::new(); names.len()];
+    for case in 0..cases {
+        let x_true = tests[0].xs[case].clone();
+        let mut data = Vec::with_capacity(tests.len());
+        let mut sources = Vec::with_capacity(tests.len());
+        for t in &tests {
+            let (clean, source) = clean_curve(t, &x_true)?;
+            let peak = clean.iter().copied().fold(0.0, f64::max);
+            data.push(
+                clean
+                    .iter()
+                    .map(|y| y + 0.02 * peak * normal(&mut noise_rng))
+                    .collect::<Vec<f64>>(),
+            );
+            sources.push(source);
+        }
+        let curves: Vec<SurrogateCurve> = tests
             .iter()
-            .map(|y| y + 0.02 * peak * normal(&mut noise_rng))
+            .zip(&data)
+            .map(|(t, d)| SurrogateCurve {
+                label: &t.label,
+                surrogate: &t.sur,
+                precomputed: &t.pre,
+                data: d,
+                weights: None,
+            })
             .collect();
-        let misfit = SurrogateMisfit::new(&[SurrogateCurve {
-            label: "RH 1.5 mm",
-            surrogate: &sur,
-            precomputed: &pre,
-            data: &data,
-            weights: None,
-        }])?;
+        let misfit = SurrogateMisfit::new(&curves)?;
         let ms = MultiStart::new().with_starts(8)?.with_seed(case as u64);
         let fit = ms.fit(&misfit)?;
         let xf = fit.best.x.clone();
         let at_truth = misfit.final_value(&x_true)?;
-        let real = if rerun {
-            match fe.run(&xf) {
-                Ok(y) => Some(range_normalised_rmse(&y, &data, None)?),
-                Err(e) => {
-                    println!("case {case}: FE re-run failed: {e}");
-                    None
+        let mut real: Option<f64> = None;
+        if rerun {
+            let mut total = 0.0;
+            for (t, d) in tests.iter().zip(&data) {
+                match t.fe.run(&xf) {
+                    Ok(y) => total += range_normalised_rmse(&y, d, None)?,
+                    Err(e) => {
+                        println!("case {case}: {} FE re-run failed: {e}", t.label);
+                        total = f64::NAN;
+                    }
                 }
             }
-        } else {
-            None
-        };
+            real = total.is_finite().then_some(total);
+        }
         let sum = |p: &[f64]| p[0] * (1.0 + p[1]);
         let e_sum_c = sum(&xf) / sum(&x_true) - 1.0;
         let e_sum_g = (xf[2] + xf[3]) - (x_true[2] + x_true[3]);
         let ok = e_sum_c.abs() <= 0.05 && e_sum_g.abs() <= 0.03;
         passed += usize::from(ok);
-        agree += usize::from(real.is_some_and(|r| (fit.best.misfit - r).abs() <= max_check));
+        let tol: f64 = max_check.iter().sum();
+        agree += usize::from(real.is_some_and(|r| (fit.best.misfit - r).abs() <= tol));
+        let experiments = tests
+            .iter()
+            .zip(&data)
+            .map(|(t, d)| Experiment::new(&t.label, &t.sur, d.clone(), None))
+            .collect::<Result<Vec<_>, _>>()?;
+        let id = identifiability(&Misfit::new(experiments)?, &xf, SensitivityScaling::Value)?;
+        let mut widths = Vec::with_capacity(names.len());
         for (k, errs) in per_param.iter_mut().enumerate() {
             let span = domain.params()[k].upper - domain.params()[k].lower;
             errs.push((xf[k] - x_true[k]).abs() / span);
+            let w = Z95 * id.std_errors[k] / span;
+            half_widths[k].push(w);
+            widths.push(w);
         }
-        let id = identifiability(
-            &Misfit::new(vec![Experiment::new("RH", &sur, data.clone(), None)?])?,
-            &xf,
-            SensitivityScaling::Value,
-        )?;
         let weakest = id.directions.last().cloned().unwrap_or_default();
-        let combination: Vec<String> = names
+        let weak: Vec<String> = names
             .iter()
             .zip(&weakest)
             .filter(|(_, w)| w.abs() > 0.3)
             .map(|(n, w)| format!("{w:+.2}·{n}"))
             .collect();
         println!(
-            "case {case}: true {x_true:.4?}\n        fit  {xf:.4?}\n        misfit surrogate {:.5} FE re-run {} (surrogate at truth {at_truth:.5}) | d(C1+C2) {:+.2} % d(g1+g2) {:+.4} {} | singular values {:.2e} … {:.2e}, weakest ln-combination {}",
+            "case {case} (data: {}): true {x_true:.4?}\n        fit  {xf:.4?}\n        misfit surrogate {:.5} FE re-run {} (surrogate at truth {at_truth:.5}) | d(C1+C2) {:+.2} % d(g1+g2) {:+.4} {} | singular values {:.2e} … {:.2e}, weakest ln-combination {} | 95 % half-width / range {widths:.3?}",
+            sources.join(", "),
             fit.best.misfit,
             real.map_or("–".into(), |r| format!("{r:.5}")),
             100.0 * e_sum_c,
@@ -128,17 +293,34 @@ fn main() -> anyhow::Result<()> {
             if ok { "ok" } else { "FAIL" },
             id.singular_values.first().copied().unwrap_or(f64::NAN),
             id.singular_values.last().copied().unwrap_or(f64::NAN),
-            combination.join(" ")
+            weak.join(" ")
         );
     }
-    println!("recovered {passed}/{CASES} (C1 + C2 within 5 %, g1 + g2 within 0.03)");
+    println!("{combination}: recovered {passed}/{cases} (C1 + C2 within 5 %, g1 + g2 within 0.03)");
     if rerun {
-        println!("surrogate vs FE re-run misfit within the checking error: {agree}/{CASES}");
+        println!(
+            "surrogate vs FE re-run misfit within the summed checking errors: {agree}/{cases}"
+        );
     }
-    println!("median / largest error of each parameter, as a fraction of its Table 4.1 range:");
-    for (n, mut e) in names.iter().zip(per_param) {
-        e.sort_by(f64::total_cmp);
-        println!("  {n:6} {:.3} / {:.3}", e[e.len() / 2], e[e.len() - 1]);
+    println!(
+        "per parameter, as fractions of its Table 4.1 range: median / largest error, median Gauss–Newton 95 % half-width"
+    );
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        (v[v.len() / 2], v[v.len() - 1])
+    };
+    let mut pinned = Vec::new();
+    for ((n, e), w) in names.iter().zip(per_param).zip(half_widths) {
+        let ((e_med, e_max), (w_med, _)) = (median(e), median(w));
+        let ok = e_med < 0.1 && w_med < 0.1;
+        if ok {
+            pinned.push(n.as_str());
+        }
+        println!(
+            "  {n:6} {e_med:.3} / {e_max:.3}  half-width {w_med:.3}  {}",
+            if ok { "pinned" } else { "NOT pinned" }
+        );
     }
+    println!("{combination}: pins down {}", pinned.join(", "));
     Ok(())
 }

@@ -5,7 +5,7 @@
 
 use std::fmt;
 
-use nlvid_model::{Domain, Relaxation};
+use nlvid_model::{Domain, Relaxation, names};
 use serde::Serialize;
 
 use crate::error::{InverseError, Result};
@@ -18,10 +18,24 @@ use crate::error::{InverseError, Result};
 /// [`InverseError::InvalidSetting`] when the domain has no `G0` (a `C1` is
 /// named as a different quantity, G0 = 2(C1 + C2)), a `g_k` without its
 /// `tau_k`, or weights that leave no long-term modulus.
+///
+/// A capsule vector (eq. 4.1–4.3: `C1`, `alpha`, no `G0`) gives the wall's
+/// shear relaxation with G0 = 2(C1 + C2) = 2 C1 (1 + α), the project's
+/// vocabulary; its Prony weights are those of eq. 4.2.
 pub fn relaxation(domain: &Domain, x: &[f64]) -> Result<Relaxation> {
     domain.check_len(x)?;
-    let names: Vec<&str> = domain.params().iter().map(|p| p.name.as_str()).collect();
-    Relaxation::from_named(&names, x)
+    let mut names: Vec<&str> = domain.params().iter().map(|p| p.name.as_str()).collect();
+    let mut x = x.to_vec();
+    let find = |names: &[&str], n: &str| names.iter().position(|m| *m == n);
+    if let (None, Some(i), Some(j)) = (
+        find(&names, names::G0),
+        find(&names, names::C1),
+        find(&names, names::ALPHA),
+    ) {
+        x[i] = 2.0 * x[i] * (1.0 + x[j]);
+        names[i] = names::G0;
+    }
+    Relaxation::from_named(&names, &x)
         .map_err(|e| InverseError::InvalidSetting(format!("G(t) of eq. 5.1: {e}")))
 }
 
@@ -66,6 +80,18 @@ impl fmt::Display for ParameterTable {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_capsule_vector_relaxes_from_g0_equal_to_twice_c1_plus_c2() {
+        let domain = Domain::table_4_1(0.01).expect("Table 4.1");
+        // C1, alpha, g1, g2, tau1, tau2 (§4.4.3's RH set)
+        let x = [21.2546e6, 0.372, 0.7674, 0.1546, 0.0623, 1.3936];
+        let g = relaxation(&domain, &x).expect("capsule");
+        let g0 = 2.0 * (21.2546e6 + 0.372 * 21.2546e6);
+        assert!((g.value(0.0) / g0 - 1.0).abs() < 1e-14);
+        let g_inf = g0 * (1.0 - 0.7674 - 0.1546);
+        assert!((g.value(1e6) / g_inf - 1.0).abs() < 1e-12);
+    }
 
     #[test]
     fn relaxation_follows_eq_5_1_by_name_and_young_is_three_times_it() {

@@ -69,7 +69,7 @@ impl FitModel {
             }
             FitModel::Surrogate => {
                 "Kriging meta-model (nlvid surrogate fit) of the forward model named in \
-                 the study, on the nominal ramp-hold protocol"
+                 the study, on the nominal protocol of each experiment"
             }
         }
     }
@@ -86,8 +86,21 @@ pub enum DataColumns {
     Compression(CompressionColumns),
 }
 
+/// Shape of the expected controlled displacement of [`Protocol`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ProtocolKind {
+    /// Ramp at `rate` to `amplitude`, then hold to the end of the time grid
+    /// (AFM relaxation, §5.2.2; capsule RH, §4.2).
+    RampHold,
+    /// Ramp at `rate` to `amplitude`, then back at the same rate to the end
+    /// of the time grid (capsule RR, §4.2).
+    RampReverse,
+}
+
 /// Expected controlled displacement: ramp at `rate` to `amplitude`, then
-/// hold to the end of the surrogate's time grid (`[fit.protocol]`).
+/// hold (`kind` ramp-hold) or go back at the same rate (ramp-reverse) to
+/// the end of the surrogate's time grid (`[fit.protocol]`).
 ///
 /// One rule for `nlvid fit` and `nlvid cohort`: `[fit.protocol]` is
 /// optional in both; where given, both check every data file against it
@@ -96,6 +109,8 @@ pub enum DataColumns {
 /// whose cohort cuts every cell at `ramp` and `hold_end` instead.)
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Protocol {
+    /// Ramp-hold or ramp-reverse.
+    pub kind: ProtocolKind,
     /// Ramp rate (m/s).
     pub rate: f64,
     /// Ramp amplitude (m).
@@ -437,6 +452,14 @@ fn read_experiment(s: &mut Section, model: FitModel, study: &Path) -> Result<Exp
         None => None,
         Some(mut p) => {
             let v = Protocol {
+                kind: p.enum_or(
+                    "kind",
+                    &[
+                        ("ramp-hold", ProtocolKind::RampHold),
+                        ("ramp-reverse", ProtocolKind::RampReverse),
+                    ],
+                    ProtocolKind::RampHold,
+                )?,
                 rate: p.req_quantity("rate", Dimension::VELOCITY, Bounds::positive())?,
                 amplitude: p.req_quantity("amplitude", Dimension::LENGTH, Bounds::positive())?,
                 tolerance: ProtocolTolerance {

@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use nlvid_report::settings::{CohortSettings, FitSettings, Protocol};
+use nlvid_report::settings::{CohortSettings, FitSettings, Protocol, ProtocolKind};
 
 const LEE_RADOK: &str = r#"title = "schema"
 [probe]
@@ -63,6 +63,7 @@ fn both(name: &str, text: &str) -> Result<(Option<Protocol>, Option<Protocol>), 
 #[test]
 fn both_commands_read_the_protocol_alike() {
     let expected = Protocol {
+        kind: ProtocolKind::RampHold,
         rate: 2.16e-6,
         amplitude: 2.16e-6,
         tolerance: nlvid_inverse::ProtocolTolerance::default(),

@@ -13,7 +13,9 @@ use nlvid_inverse::{
 };
 
 use crate::error::{ReportError, Result};
-use crate::settings::{DataColumns, ExperimentSettings, FitSettings, Protocol, RealModelSpec};
+use crate::settings::{
+    DataColumns, ExperimentSettings, FitSettings, Protocol, ProtocolKind, RealModelSpec,
+};
 
 /// A surrogate ready to fit with, and how good it is.
 pub struct Surrogate {
@@ -313,7 +315,8 @@ pub(crate) fn measured_from_ramp_hold(path: &Path, c: &nlvid_model::Curve) -> Me
 }
 
 /// Checks `curve` against `[fit.protocol]` (`p`): ramp from 0 at `rate`
-/// to `amplitude`, then hold to `t_end`, the end of the model's time grid
+/// to `amplitude`, then hold (`kind` ramp-hold) or come back at the same rate
+/// (ramp-reverse) to `t_end`, the end of the model's time grid
 /// (`grid` names it in the error). The one check of `nlvid fit` and
 /// `nlvid cohort`.
 ///
@@ -338,7 +341,77 @@ pub fn check_protocol(
         )));
     }
     let expected_t = [0.0, t_ramp, t_end];
-    let expected = ramp_hold_indentation(&expected_t, p.rate, p.amplitude);
+    let expected = match p.kind {
+        ProtocolKind::RampHold => ramp_hold_indentation(&expected_t, p.rate, p.amplitude),
+        ProtocolKind::RampReverse => {
+            vec![0.0, p.amplitude, p.amplitude - p.rate * (t_end - t_ramp)]
+        }
+    };
     curve.check_protocol(&expected_t, &expected, p.tolerance)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::settings::Protocol;
+    use nlvid_inverse::ProtocolTolerance;
+
+    /// A plate history sampled at 0.05 s over 15 s (the thesis's RR at
+    /// d = 1.5 mm, 0.2 mm/s down and up, §4.2) or the RH at the same
+    /// rate held from 7.5 s.
+    fn curve(reverse: bool) -> MeasuredCurve {
+        let (rate, d) = (0.2e-3, 1.5e-3);
+        let time: Vec<f64> = (0..=300).map(|i| 0.05 * f64::from(i)).collect();
+        let displacement = time
+            .iter()
+            .map(|&t| {
+                let down = (rate * t).min(d);
+                if reverse && t > d / rate {
+                    d - rate * (t - d / rate)
+                } else {
+                    down
+                }
+            })
+            .collect();
+        MeasuredCurve {
+            path: PathBuf::from("rr.csv"),
+            lines: (2..=302).collect(),
+            force: vec![0.0; time.len()],
+            time,
+            displacement,
+            indentation: None,
+            contact_area: None,
+        }
+    }
+
+    fn protocol(kind: ProtocolKind) -> Protocol {
+        Protocol {
+            kind,
+            rate: 0.2e-3,
+            amplitude: 1.5e-3,
+            tolerance: ProtocolTolerance::default(),
+        }
+    }
+
+    #[test]
+    fn a_ramp_reverse_protocol_accepts_rr_data_and_refuses_a_hold() {
+        let (t_end, grid) = (15.0, "model's time grid");
+        let study = Path::new("fit.toml");
+        let rr = protocol(ProtocolKind::RampReverse);
+        let rh = protocol(ProtocolKind::RampHold);
+        check_protocol(&curve(true), &rr, t_end, study, grid).expect("RR data, RR protocol");
+        check_protocol(&curve(false), &rh, t_end, study, grid).expect("RH data, RH protocol");
+        for (data, p) in [(curve(true), &rh), (curve(false), &rr)] {
+            let e = check_protocol(&data, p, t_end, study, grid)
+                .expect_err("the other protocol")
+                .to_string();
+            // the legs part at 7.5 s: 5 % of 1.5 mm is passed 0.375 s later,
+            // first at the sample t = 7.9 s (index 158, file line 160)
+            assert!(
+                e.contains("rr.csv: protocol mismatch at row 160 (t = 7.9 s)"),
+                "{e}"
+            );
+        }
+    }
 }

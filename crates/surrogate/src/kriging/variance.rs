@@ -350,7 +350,7 @@ impl KrigingModel {
     /// covariances).
     pub fn cv_process_covariance(&self) -> Result<Vec<f64>> {
         let (n, q) = (self.n_sites, self.n_kriged());
-        let qii = self.loo_precision_diagonal();
+        let qii = self.loo_precision_diagonal()?;
         let mut s = vec![0.0; q * q];
         for i in 0..n {
             for a in 0..q {
@@ -368,18 +368,19 @@ impl KrigingModel {
 
     /// Q_ii of Q = R⁻¹ − R⁻¹F(FᵀR⁻¹F)⁻¹FᵀR⁻¹ for every site:
     /// |C⁻¹e_i|² − |G⁻ᵀF̃ᵀC⁻¹e_i|².
-    fn loo_precision_diagonal(&self) -> Vec<f64> {
+    fn loo_precision_diagonal(&self) -> Result<Vec<f64>> {
         let (n, p) = (self.n_sites, self.p());
+        let fac = self.mse_factors()?;
         let mut w = Mat::<f64>::identity(n, n);
-        solve_lower_triangular_in_place(view(&self.c, n, n), w.as_mut(), Par::Seq);
-        let mut a = view(&self.ft, n, p).transpose() * &w;
-        solve_lower_triangular_in_place(view(&self.g, p, p).transpose(), a.as_mut(), Par::Seq);
-        (0..n)
+        solve_lower_triangular_in_place(fac.c(n), w.as_mut(), Par::Seq);
+        let mut a = fac.ft(n, p).transpose() * &w;
+        solve_lower_triangular_in_place(fac.g(p).transpose(), a.as_mut(), Par::Seq);
+        Ok((0..n)
             .map(|i| {
                 (0..n).map(|r| w[(r, i)].powi(2)).sum::<f64>()
                     - (0..p).map(|k| a[(k, i)].powi(2)).sum::<f64>()
             })
-            .collect()
+            .collect())
     }
 
     /// The leave-one-out (cross-validation) estimate of the process
@@ -400,7 +401,7 @@ impl KrigingModel {
     pub fn cv_variance_ratio(&self) -> Result<f64> {
         let (n, q) = (self.n_sites, self.n_kriged());
         let sigma = self.ml_process_covariance();
-        let qii = self.loo_precision_diagonal();
+        let qii = self.loo_precision_diagonal()?;
         // |L⁻¹γ_i|² with L Lᵀ = Σ (zero pivots: directions without variance
         // are left out, and so is their count).
         let l = psd_cholesky(&sigma, q)?;
