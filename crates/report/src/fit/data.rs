@@ -229,33 +229,31 @@ fn read_checking_error(path: &Path) -> Result<f64> {
     }
 }
 
-/// Data paths with each folder replaced by its curve files (`*.csv` and instrument
-/// files such as `.jpk-force`, not recursive, sorted by name).
+/// Data paths with each folder (searched recursively) and glob replaced by its curve
+/// files (`*.csv` and instrument files such as `.jpk-force`, sorted by path), through the
+/// one batch input reader [`nlvid_afm::expand_inputs`].
 ///
 /// # Errors
-/// An unreadable folder, or one without curve files (naming it).
+/// An unreadable folder, a glob matching nothing, or a folder without curve files
+/// (naming it).
 fn expand_folders(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let is_curve_file = |f: &Path| {
+        nlvid_afm::batch::is_afm_file(f)
+            || f.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+    };
     let mut out = Vec::new();
     for p in paths {
-        if !p.is_dir() {
-            out.push(p.clone());
-            continue;
+        let found = nlvid_afm::expand_inputs(std::slice::from_ref(p), is_curve_file);
+        if let Some(f) = found.failures.first() {
+            return Err(ReportError::io(&f.file, f.error.to_string()));
         }
-        let mut found: Vec<PathBuf> = crate::input::sorted_entries(p)?
-            .into_iter()
-            .filter(|f| {
-                f.is_file()
-                    && (nlvid_afm::batch::is_afm_file(f)
-                        || f.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")))
-            })
-            .collect();
-        if found.is_empty() {
+        if p.is_dir() && found.files.is_empty() {
             return Err(ReportError::io(
                 p,
                 "no curve files (*.csv, .jpk-force, .jpk-force-map, .ibw …) in this folder",
             ));
         }
-        out.append(&mut found);
+        out.extend(found.files);
     }
     Ok(out)
 }
