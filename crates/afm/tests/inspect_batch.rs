@@ -116,11 +116,17 @@ fn a_folder_gives_one_row_per_curve_and_lists_failures_and_other_files() {
     assert!(header.contains(&"spring_constant_N_per_m"));
     for l in &lines[1..] {
         // every row has every column (the reason of the failure has no comma here, or is quoted)
-        assert!(l.contains(",ok,,hertz-paraboloid,") || l.contains(",failed,"), "{l}");
+        assert!(
+            l.contains(",ok,,hertz-paraboloid,") || l.contains(",failed,"),
+            "{l}"
+        );
     }
     let failed = lines[6];
     assert!(failed.contains("c-truncated.jpk-force") && failed.contains(",failed,"));
-    let e_col = header.iter().position(|h| *h == "youngs_modulus_Pa").expect("col");
+    let e_col = header
+        .iter()
+        .position(|h| *h == "youngs_modulus_Pa")
+        .expect("col");
     let first: Vec<&str> = lines[1].split(',').collect();
     assert_eq!(first[e_col].parse::<f64>().expect("number"), e);
 
@@ -150,7 +156,11 @@ fn globs_select_files_and_a_glob_matching_nothing_is_a_failure() {
         [dir.join("x1.jpk-force"), dir.join("x2.jpk-force")]
     );
     assert_eq!(found.failures.len(), 1);
-    assert!(found.failures[0].to_string().contains("nothing-*.jpk-force"));
+    assert!(
+        found.failures[0]
+            .to_string()
+            .contains("nothing-*.jpk-force")
+    );
 
     // without a fit: one summary row per curve, the failure listed, the batch complete
     let batch = inspect_batch(

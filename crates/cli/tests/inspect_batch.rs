@@ -13,7 +13,10 @@ fn a_folder_gives_one_row_per_curve_and_failures_are_listed() {
     let dir = scratch("inspect-batch");
     for (from, to) in [
         ("fmt-jpk-fd_spot3-0192.jpk-force", "a.jpk-force"),
-        ("fmt-jpk-fd_map2x2_extracted.jpk-force-map", "b.jpk-force-map"),
+        (
+            "fmt-jpk-fd_map2x2_extracted.jpk-force-map",
+            "b.jpk-force-map",
+        ),
     ] {
         std::fs::copy(format!("{DATA}/{from}"), dir.join(to)).expect("copy");
     }
@@ -26,9 +29,18 @@ fn a_folder_gives_one_row_per_curve_and_failures_are_listed() {
     let lines: Vec<&str> = stdout.lines().collect();
     assert_eq!(lines.len(), 1 + 1 + 4 + 1, "{stdout}");
     assert!(lines[0].starts_with("file,curve,status,reason,model,"));
-    assert_eq!(lines.iter().filter(|l| l.contains(",ok,,hertz-paraboloid,")).count(), 5);
+    assert_eq!(
+        lines
+            .iter()
+            .filter(|l| l.contains(",ok,,hertz-paraboloid,"))
+            .count(),
+        5
+    );
     assert!(stderr.contains("c.jpk-force"), "{stderr}");
-    assert!(stderr.contains("1 curve(s) or file(s) failed (5 analysed)"), "{stderr}");
+    assert!(
+        stderr.contains("1 curve(s) or file(s) failed (5 analysed)"),
+        "{stderr}"
+    );
 
     // JSON, a glob, and --table
     let table = dir.join("t.csv");
@@ -124,7 +136,15 @@ fn thousand_public_curves_through_inspect_fit_hertz_in_10_s() {
     let files = bench_folder(&dir, 1000);
     let folder = dir.join("curves").to_string_lossy().into_owned();
     let t0 = std::time::Instant::now();
-    let out = nlvid(&["--json", "inspect", &folder, "--fit", "hertz", "--tip-radius", "5 um"]);
+    let out = nlvid(&[
+        "--json",
+        "inspect",
+        &folder,
+        "--fit",
+        "hertz",
+        "--tip-radius",
+        "5 um",
+    ]);
     let wall = t0.elapsed().as_secs_f64();
     assert!(out.status.success(), "{}", text(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");

@@ -357,12 +357,13 @@ impl ForwardModel for AfmFeModel {
         let end = s.output_times.last().copied().unwrap_or(0.0);
         // the piezo history's travel and the time it is reached (the ramp's end)
         let z0 = s.piezo.first().map_or(0.0, |p| p.1);
-        let (t_ramp, travel) = s
-            .piezo
-            .iter()
-            .fold((0.0, 0.0f64), |(t, a), &(ti, zi)| {
-                if (zi - z0).abs() > a { (ti, (zi - z0).abs()) } else { (t, a) }
-            });
+        let (t_ramp, travel) = s.piezo.iter().fold((0.0, 0.0f64), |(t, a), &(ti, zi)| {
+            if (zi - z0).abs() > a {
+                (ti, (zi - z0).abs())
+            } else {
+                (t, a)
+            }
+        });
         let key = |q: &str, k: &str| (q.to_string(), k.to_string());
         Some(nlvid_model::BuildConditions {
             model: "afm-fe".into(),

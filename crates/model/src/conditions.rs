@@ -33,9 +33,9 @@ pub struct BuildConditions {
 impl BuildConditions {
     /// The study key that sets `quantity` (a field name), or a generic hint.
     pub fn key(&self, quantity: &str) -> String {
-        self.keys
-            .iter()
-            .find(|(q, _)| q == quantity)
-            .map_or_else(|| format!("the {} study's settings", self.model), |(_, k)| k.clone())
+        self.keys.iter().find(|(q, _)| q == quantity).map_or_else(
+            || format!("the {} study's settings", self.model),
+            |(_, k)| k.clone(),
+        )
     }
 }

@@ -23,6 +23,10 @@ pub struct Surrogate {
     pub model: KrigingSurrogate,
     /// Max eq. 4.4 checking error and the file it came from.
     pub checking: Option<(f64, PathBuf)>,
+    /// What the meta-model was built for (its `meta.json`), if stored.
+    pub conditions: Option<nlvid_model::BuildConditions>,
+    /// Its `meta.json`.
+    pub meta: PathBuf,
 }
 
 /// One measured curve with everything it is fitted and checked with.
@@ -39,6 +43,9 @@ pub struct LoadedExperiment {
     pub weights: Option<Vec<f64>>,
     /// Real model for the re-check.
     pub real: Option<RealModel>,
+    /// The meta-model domain checks: what differs between the data and what the
+    /// meta-model was built for ([`super::domain::check`]).
+    pub domain_notes: Vec<String>,
 }
 
 /// A real model ready to re-run.
@@ -146,10 +153,33 @@ fn load_each<T>(
         }
         let times = surrogate.model.times().to_vec();
         let (default_label, curve) = read(item)?;
-        check_protocol(&curve, exp, &times, &settings.study)?;
-        let force = curve.resample(&curve.force, &times)?;
-        let weights =
+        let real = exp.real.as_ref().map(real_model).transpose()?;
+        let facts = data_facts(&curve, exp, real.as_ref());
+        let found = super::domain::check(
+            &facts,
+            surrogate.conditions.as_ref(),
+            &times,
+            &surrogate.meta.display().to_string(),
+        )
+        .map_err(|m| ReportError::Data {
+            path: curve.path.clone(),
+            line: 0,
+            message: m,
+        })?;
+        // data ending before the grid: fit the overlap (later grid points weigh 0)
+        let used = found
+            .overlap_end
+            .map_or(times.len(), |te| times.iter().filter(|t| **t <= te).count());
+        check_protocol(&curve, exp, &times[..used], &settings.study)?;
+        let mut force = curve.resample(&curve.force, &times[..used])?;
+        let last = force.last().copied().unwrap_or(0.0);
+        force.resize(times.len(), last);
+        let mut weights =
             (!exp.segments.is_empty()).then(|| segment_weights(&times, &exp.segments, 1.0));
+        if used < times.len() {
+            let w = weights.get_or_insert_with(|| vec![1.0; times.len()]);
+            w[used..].iter_mut().for_each(|x| *x = 0.0);
+        }
         let label = exp.label.clone().unwrap_or(default_label);
         out.push(LoadedExperiment {
             label,
@@ -157,7 +187,8 @@ fn load_each<T>(
             curve,
             force,
             weights,
-            real: exp.real.as_ref().map(real_model).transpose()?,
+            real,
+            domain_notes: found.notes,
         });
     }
     Ok(out)
@@ -192,6 +223,9 @@ fn load_surrogate(
             settings.study.display()
         )));
     };
+    let conditions = nlvid_inverse::read_meta(meta)
+        .map_err(|e| ReportError::InvalidSetting(format!("meta-model {}: {e}", meta.display())))?
+        .conditions;
     let model = load_kriging_surrogate(path, meta, inputs)
         .map_err(|e| ReportError::InvalidSetting(format!("surrogate {}: {e}", path.display())))?;
     let checking = match exp.check_file() {
@@ -202,6 +236,8 @@ fn load_surrogate(
         path: path.clone(),
         model,
         checking,
+        conditions,
+        meta: meta.clone(),
     })
 }
 
@@ -334,4 +370,37 @@ fn check_protocol(
     let expected = ramp_hold_indentation(&expected_t, p.rate, p.amplitude);
     curve.check_protocol(&expected_t, &expected, p.tolerance)?;
     Ok(())
+}
+
+/// The data's side of the meta-model domain checks: time span, the experiment's ramp
+/// time and depth (`[fit.protocol]`, the largest measured indentation where there is
+/// one), and the geometry the re-check model assumes.
+fn data_facts(
+    curve: &MeasuredCurve,
+    exp: &ExperimentSettings,
+    real: Option<&RealModel>,
+) -> super::domain::DataFacts {
+    let t0 = curve.time.first().copied().unwrap_or(0.0);
+    let end = curve.time.last().copied().unwrap_or(t0) - t0;
+    let peak = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let depth = match &curve.indentation {
+        Some(d) if !d.is_empty() => Some(peak(d)),
+        _ => exp.protocol.as_ref().map(|p| p.amplitude),
+    };
+    let built = match real {
+        Some(RealModel::Forward(m)) => m.conditions(),
+        _ => None,
+    };
+    let probe_radius_m = match real {
+        Some(RealModel::LeeRadok { radius, .. }) => Some(*radius),
+        _ => built.as_ref().and_then(|c| c.probe_radius_m),
+    };
+    super::domain::DataFacts {
+        end_time_s: end,
+        ramp_time_s: exp.protocol.as_ref().map(|p| p.amplitude / p.rate),
+        depth_m: depth,
+        probe_radius_m,
+        cell_height_m: built.as_ref().and_then(|c| c.cell_height_m),
+        cell_diameter_m: built.as_ref().and_then(|c| c.cell_diameter_m),
+    }
 }
