@@ -65,7 +65,7 @@ pub fn check(
         ));
         if data.end_time_s < grid_end * (1.0 - 1e-9) {
             return Err(format!(
-                "the data cover 0 … {:.6} s but the meta-model's grid ({meta}) runs to {grid_end:.6} s",
+                "the curve covers 0 … {:.6} s but the meta-model's grid ({meta}) runs to {grid_end:.6} s",
                 data.end_time_s
             ));
         }
@@ -90,7 +90,7 @@ pub fn check(
             ));
         } else {
             return Err(format!(
-                "time span: the data cover 0 … {:.6} s but the meta-model ({meta}) was built \
+                "time span: the curve covers 0 … {:.6} s but the meta-model ({meta}) was built \
                  for 0 … {grid_end:.6} s (ramp {ramp:.6} s); too little overlap to fit \
                  ({used} of {} grid points{}). Build a matching meta-model: change {} so \
                  that its grid ends by t = {:.6} s, rebuild (`nlvid build`) and refit the \
