@@ -38,6 +38,9 @@ pub struct DomainCheck {
     pub overlap_end: Option<f64>,
 }
 
+/// (quantity, [`BuildConditions`] field, data, meta-model, display scale, display unit).
+type Compared<'a> = (&'a str, &'a str, Option<f64>, Option<f64>, f64, &'a str);
+
 /// Signed relative difference of the data from the meta-model, in %.
 fn percent(data: f64, built: f64) -> f64 {
     100.0 * (data / built - 1.0)
@@ -114,7 +117,7 @@ pub fn check(
             c.key("end_time_s")
         ));
     }
-    let pairs: [(&str, &str, Option<f64>, Option<f64>, f64, &str); 5] = [
+    let pairs: [Compared<'_>; 5] = [
         (
             "ramp time",
             "ramp_time_s",
