@@ -84,57 +84,218 @@ fn is_ibw(path: &Path) -> bool {
         .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case("ibw"))
 }
 
-/// Expand `inputs`: files are kept as given (whatever their name); folders are searched
-/// recursively for AFM files (sorted by path). Returns (files, ignored, failures).
-fn expand<P: AsRef<Path>>(inputs: &[P]) -> (Vec<PathBuf>, Vec<PathBuf>, Vec<CurveFailure>) {
-    let mut files = Vec::new();
-    let mut ignored = Vec::new();
-    let mut failures = Vec::new();
+/// Reports the progress of a batch: first the number of files found, then one call per
+/// file read and analysed (from any thread). Both methods default to doing nothing.
+pub trait Progress: Sync {
+    /// The batch holds `files` files.
+    fn start(&self, _files: usize) {}
+    /// One more file is done (all its curves analysed or failed).
+    fn file_done(&self) {}
+}
+
+/// No progress reporting.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoProgress;
+
+impl Progress for NoProgress {}
+
+/// The files of a batch's inputs.
+#[derive(Debug, Default)]
+pub struct Inputs {
+    /// Files to read: given files as they are, then the accepted files of each folder
+    /// and glob (sorted within each).
+    pub files: Vec<PathBuf>,
+    /// Files found in folders and skipped because `accept` refused them.
+    pub ignored: Vec<PathBuf>,
+    /// Folders that could not be read and globs matching nothing.
+    pub failures: Vec<CurveFailure>,
+}
+
+/// True if `text` holds a glob wildcard (`*`, `?` or `[`).
+fn is_glob(text: &str) -> bool {
+    text.contains(['*', '?', '['])
+}
+
+/// Whether `name` matches the glob `pattern`: `*` any run of characters, `?` one
+/// character, `[abc]` / `[a-z]` / `[!a]` one character of (not of) a set.
+pub fn glob_match(pattern: &str, name: &str) -> bool {
+    let p: Vec<char> = pattern.chars().collect();
+    let n: Vec<char> = name.chars().collect();
+    // Iterative matcher with backtracking to the last `*`.
+    let (mut pi, mut ni) = (0, 0);
+    let mut star: Option<(usize, usize)> = None;
+    while ni < n.len() {
+        let step = match p.get(pi) {
+            Some('*') => {
+                star = Some((pi, ni));
+                pi += 1;
+                continue;
+            }
+            Some('?') => Some(pi + 1),
+            Some('[') => match class_match(&p[pi..], n[ni]) {
+                Some((true, len)) => Some(pi + len),
+                Some((false, _)) => None,
+                // an unclosed `[` is a literal
+                None => (n[ni] == '[').then_some(pi + 1),
+            },
+            Some(c) if *c == n[ni] => Some(pi + 1),
+            _ => None,
+        };
+        match (step, star) {
+            (Some(next), _) => {
+                pi = next;
+                ni += 1;
+            }
+            (None, Some((sp, sn))) => {
+                pi = sp + 1;
+                ni = sn + 1;
+                star = Some((sp, sn + 1));
+            }
+            (None, None) => return false,
+        }
+    }
+    p[pi..].iter().all(|c| *c == '*')
+}
+
+/// A `[...]` class at the start of `p` against `c`: (matches, length of the class), or
+/// `None` if the class is not closed (then `[` is compared literally).
+fn class_match(p: &[char], c: char) -> Option<(bool, usize)> {
+    let close = p.iter().skip(2).position(|x| *x == ']')? + 2;
+    let (negate, body) = match p[1] {
+        '!' | '^' => (true, &p[2..close]),
+        _ => (false, &p[1..close]),
+    };
+    let mut hit = false;
+    let mut i = 0;
+    while i < body.len() {
+        if i + 2 < body.len() && body[i + 1] == '-' {
+            hit |= (body[i]..=body[i + 2]).contains(&c);
+            i += 3;
+        } else {
+            hit |= body[i] == c;
+            i += 1;
+        }
+    }
+    Some((hit != negate, close + 1))
+}
+
+/// The paths matching a glob: wildcards may appear in any component; sorted.
+fn glob_paths(pattern: &Path) -> Vec<PathBuf> {
+    let mut at: Vec<PathBuf> = vec![PathBuf::new()];
+    for comp in pattern.components() {
+        let text = comp.as_os_str().to_string_lossy();
+        let mut next = Vec::new();
+        for base in &at {
+            if !is_glob(&text) {
+                next.push(base.join(comp));
+                continue;
+            }
+            let dir = if base.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                base.as_path()
+            };
+            let Ok(entries) = std::fs::read_dir(dir) else {
+                continue;
+            };
+            for e in entries.flatten() {
+                let name = e.file_name().to_string_lossy().into_owned();
+                // like a shell: a leading dot is matched only by a leading dot
+                if name.starts_with('.') && !text.starts_with('.') {
+                    continue;
+                }
+                if glob_match(&text, &name) {
+                    next.push(base.join(&name));
+                }
+            }
+        }
+        at = next;
+    }
+    at.retain(|p| p.exists());
+    at.sort();
+    at
+}
+
+/// Every file under `dir` (recursively, hidden entries skipped), sorted by path.
+fn files_under(dir: &Path, failures: &mut Vec<CurveFailure>) -> Vec<PathBuf> {
+    let mut stack = vec![dir.to_path_buf()];
+    let mut found = Vec::new();
+    while let Some(dir) = stack.pop() {
+        let entries = match std::fs::read_dir(&dir) {
+            Ok(e) => e,
+            Err(source) => {
+                failures.push(CurveFailure {
+                    file: dir.clone(),
+                    curve: None,
+                    error: AfmError::Io { path: dir, source },
+                });
+                continue;
+            }
+        };
+        for entry in entries.flatten() {
+            let path = entry.path();
+            let hidden = path
+                .file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with('.'));
+            if hidden {
+                continue;
+            }
+            if path.is_dir() {
+                stack.push(path);
+            } else {
+                found.push(path);
+            }
+        }
+    }
+    found.sort();
+    found
+}
+
+/// The one reader of batch inputs (`nlvid inspect`, `fit`, `cohort`): files are kept as
+/// given (whatever their name); folders are searched recursively for the files
+/// `accept` takes (sorted by path; others are listed as ignored); an input that does not
+/// exist and holds a wildcard (`*`, `?`, `[`) is a glob, its matches taken as given files
+/// or searched as folders. A glob matching nothing, and an unreadable folder, is a
+/// failure; the rest goes on.
+pub fn expand_inputs<P: AsRef<Path>>(inputs: &[P], accept: impl Fn(&Path) -> bool) -> Inputs {
+    let mut out = Inputs::default();
+    let folder = |dir: &Path, out: &mut Inputs| {
+        for path in files_under(dir, &mut out.failures) {
+            if accept(&path) {
+                out.files.push(path);
+            } else {
+                out.ignored.push(path);
+            }
+        }
+    };
     for input in inputs {
         let input = input.as_ref();
         if input.is_dir() {
-            let mut stack = vec![input.to_path_buf()];
-            let mut found = Vec::new();
-            while let Some(dir) = stack.pop() {
-                let entries = match std::fs::read_dir(&dir) {
-                    Ok(e) => e,
-                    Err(source) => {
-                        failures.push(CurveFailure {
-                            file: dir.clone(),
-                            curve: None,
-                            error: AfmError::Io { path: dir, source },
-                        });
-                        continue;
-                    }
-                };
-                for entry in entries.flatten() {
-                    let path = entry.path();
-                    let hidden = path
-                        .file_name()
-                        .is_some_and(|n| n.to_string_lossy().starts_with('.'));
-                    if hidden {
-                        continue;
-                    }
-                    if path.is_dir() {
-                        stack.push(path);
-                    } else {
-                        found.push(path);
-                    }
-                }
+            folder(input, &mut out);
+        } else if !input.exists() && is_glob(&input.to_string_lossy()) {
+            let matches = glob_paths(input);
+            if matches.is_empty() {
+                out.failures.push(CurveFailure {
+                    file: input.to_path_buf(),
+                    curve: None,
+                    error: AfmError::InvalidInput(format!(
+                        "no file matches the pattern `{}`",
+                        input.display()
+                    )),
+                });
             }
-            found.sort();
-            for path in found {
-                if is_afm_file(&path) {
-                    files.push(path);
+            for m in matches {
+                if m.is_dir() {
+                    folder(&m, &mut out);
                 } else {
-                    ignored.push(path);
+                    out.files.push(m);
                 }
             }
         } else {
-            files.push(input.to_path_buf());
+            out.files.push(input.to_path_buf());
         }
     }
-    (files, ignored, failures)
+    out
 }
 
 /// Read every curve of `inputs` (files, maps, folders) and apply `analyse` to each, in
@@ -149,56 +310,37 @@ where
     T: Send,
     F: Fn(&ForceCurve) -> Result<T> + Sync,
 {
+    for_each_curve_with(inputs, options, analyse, &NoProgress)
+}
+
+/// [`for_each_curve`] reporting to `progress` (the number of files, then each file done).
+///
+/// # Errors
+/// As [`for_each_curve`].
+pub fn for_each_curve_with<P, T, F>(
+    inputs: &[P],
+    options: &ReadOptions,
+    analyse: F,
+    progress: &dyn Progress,
+) -> Result<Batch<T>>
+where
+    P: AsRef<Path>,
+    T: Send,
+    F: Fn(&ForceCurve) -> Result<T> + Sync,
+{
     crate::jpk::check_override(options)?;
-    let (files, ignored, mut failures) = expand(inputs);
+    let Inputs {
+        files,
+        ignored,
+        mut failures,
+    } = expand_inputs(inputs, is_afm_file);
+    progress.start(files.len());
     let per_file: Vec<(Vec<BatchRow<T>>, Vec<CurveFailure>)> = files
         .par_iter()
         .map(|file| {
-            let fail = |curve, error| CurveFailure {
-                file: file.clone(),
-                curve,
-                error,
-            };
-            let bytes = match std::fs::read(file) {
-                Ok(b) => b,
-                Err(source) => {
-                    let error = AfmError::Io {
-                        path: file.clone(),
-                        source,
-                    };
-                    return (Vec::new(), vec![fail(None, error)]);
-                }
-            };
-            let name = file.display().to_string();
-            let results: Vec<(Option<usize>, Result<T>)> = if is_ibw(file) {
-                match read_ibw_bytes(&bytes, &name, options) {
-                    Ok(c) => vec![(None, analyse(&c))],
-                    Err(error) => return (Vec::new(), vec![fail(None, error)]),
-                }
-            } else {
-                let archive = match JpkArchive::open(&bytes, &name, options) {
-                    Ok(a) => a,
-                    Err(error) => return (Vec::new(), vec![fail(None, error)]),
-                };
-                // Curves of a map in parallel too; each is dropped once analysed.
-                (0..archive.len())
-                    .into_par_iter()
-                    .map(|i| (archive.index(i), archive.read(i).and_then(|c| analyse(&c))))
-                    .collect()
-            };
-            let mut rows = Vec::new();
-            let mut fails = Vec::new();
-            for (curve, r) in results {
-                match r {
-                    Ok(value) => rows.push(BatchRow {
-                        file: file.clone(),
-                        curve,
-                        value,
-                    }),
-                    Err(error) => fails.push(fail(curve, error)),
-                }
-            }
-            (rows, fails)
+            let out = read_and_analyse(file, options, &analyse);
+            progress.file_done();
+            out
         })
         .collect();
     let mut rows = Vec::new();
@@ -211,4 +353,61 @@ where
         failures,
         ignored,
     })
+}
+
+/// Read one file and analyse each of its curves: (rows, failures).
+fn read_and_analyse<T, F>(
+    file: &PathBuf,
+    options: &ReadOptions,
+    analyse: &F,
+) -> (Vec<BatchRow<T>>, Vec<CurveFailure>)
+where
+    T: Send,
+    F: Fn(&ForceCurve) -> Result<T> + Sync,
+{
+    let fail = |curve, error| CurveFailure {
+        file: file.clone(),
+        curve,
+        error,
+    };
+    let bytes = match std::fs::read(file) {
+        Ok(b) => b,
+        Err(source) => {
+            let error = AfmError::Io {
+                path: file.clone(),
+                source,
+            };
+            return (Vec::new(), vec![fail(None, error)]);
+        }
+    };
+    let name = file.display().to_string();
+    let results: Vec<(Option<usize>, Result<T>)> = if is_ibw(file) {
+        match read_ibw_bytes(&bytes, &name, options) {
+            Ok(c) => vec![(None, analyse(&c))],
+            Err(error) => return (Vec::new(), vec![fail(None, error)]),
+        }
+    } else {
+        let archive = match JpkArchive::open(&bytes, &name, options) {
+            Ok(a) => a,
+            Err(error) => return (Vec::new(), vec![fail(None, error)]),
+        };
+        // Curves of a map in parallel too; each is dropped once analysed.
+        (0..archive.len())
+            .into_par_iter()
+            .map(|i| (archive.index(i), archive.read(i).and_then(|c| analyse(&c))))
+            .collect()
+    };
+    let mut rows = Vec::new();
+    let mut fails = Vec::new();
+    for (curve, r) in results {
+        match r {
+            Ok(value) => rows.push(BatchRow {
+                file: file.clone(),
+                curve,
+                value,
+            }),
+            Err(error) => fails.push(fail(curve, error)),
+        }
+    }
+    (rows, fails)
 }

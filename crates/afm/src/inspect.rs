@@ -7,11 +7,12 @@ use std::path::Path;
 
 use serde_json::json;
 
+use crate::batch::{Batch, Progress, for_each_curve_with};
 use crate::error::Result;
 use crate::{
-    ContactMethod, CreepSettings, ForceCurve, HertzSettings, LeeRadokSettings, SegmentKind,
-    creep_indentation, fit_creep, fit_hertz, fit_lee_radok, hertz_force, plot, prepare_approach,
-    prepare_creep, prepare_ramp_hold,
+    ContactMethod, CreepSettings, ForceCurve, HertzSettings, LeeRadokSettings, ReadOptions,
+    SegmentKind, creep_indentation, fit_creep, fit_hertz, fit_lee_radok, hertz_force, plot,
+    prepare_approach, prepare_creep, prepare_ramp_hold,
 };
 
 /// The quick fits of `nlvid inspect`.
@@ -391,4 +392,178 @@ pub fn summary_json(c: &ForceCurve, n_curves: usize, samples: bool) -> serde_jso
             seg
         }).collect::<Vec<_>>(),
     })
+}
+
+/// One row of a batch `nlvid inspect`: the curve's calibration and segments, and the
+/// quick fit's values (unit-suffixed keys) if one was asked for.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InspectRow {
+    /// The quick fit's model (`hertz-paraboloid`, …), `None` without a fit.
+    pub model: Option<&'static str>,
+    /// `(key with unit suffix, value)`: `spring_constant_N_per_m`,
+    /// `sensitivity_m_per_V`, `segments`, `points`, `duration_s`, then the fit's values
+    /// and, for a Prony fit, `term<k>_g_Pa` (`term<k>_j_per_Pa` in creep) and
+    /// `term<k>_tau_s`.
+    pub values: Vec<(String, f64)>,
+}
+
+/// The row of one curve: its summary, and `fit` = (kind, probe radius m) run on it.
+///
+/// # Errors
+/// As [`quick_fit`].
+pub fn inspect_row(
+    curve: &ForceCurve,
+    fit: Option<(QuickFitKind, f64)>,
+    method: ContactMethod,
+) -> Result<InspectRow> {
+    let cal = &curve.calibration;
+    let mut values = vec![
+        ("spring_constant_N_per_m".to_string(), cal.spring_constant),
+        ("sensitivity_m_per_V".to_string(), cal.sensitivity),
+        ("segments".to_string(), curve.segments.len() as f64),
+        (
+            "points".to_string(),
+            curve.segments.iter().map(|s| s.len()).sum::<usize>() as f64,
+        ),
+        (
+            "duration_s".to_string(),
+            curve.segments.iter().map(|s| s.duration).sum(),
+        ),
+    ];
+    let Some((kind, r)) = fit else {
+        return Ok(InspectRow {
+            model: None,
+            values,
+        });
+    };
+    let f = quick_fit(curve, kind, r, method)?;
+    values.extend(f.values);
+    let g_key = if f.model == "lee-radok-creep" {
+        "j_per_Pa"
+    } else {
+        "g_Pa"
+    };
+    for (k, (g, tau)) in f.terms.iter().enumerate() {
+        values.push((format!("term{}_{g_key}", k + 1), *g));
+        values.push((format!("term{}_tau_s", k + 1), *tau));
+    }
+    Ok(InspectRow {
+        model: Some(f.model),
+        values,
+    })
+}
+
+/// `nlvid inspect` on many files: every curve of `inputs` (files, maps, folders, globs;
+/// [`crate::batch::for_each_curve_with`]) summarised and optionally fitted, one row per
+/// curve; curves that fail are listed with their reason and the batch goes on.
+///
+/// # Errors
+/// Only nonsensical calibration overrides in `options`.
+pub fn inspect_batch<P: AsRef<Path>>(
+    inputs: &[P],
+    options: &ReadOptions,
+    fit: Option<(QuickFitKind, f64)>,
+    method: ContactMethod,
+    progress: &dyn Progress,
+) -> Result<Batch<InspectRow>> {
+    for_each_curve_with(inputs, options, |c| inspect_row(c, fit, method), progress)
+}
+
+/// Quote a CSV field if it needs it (RFC 4180).
+fn csv_field(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
+}
+
+/// The column keys of a batch's rows, in first-seen order.
+fn batch_keys(batch: &Batch<InspectRow>) -> Vec<&str> {
+    let mut keys: Vec<&str> = Vec::new();
+    for row in &batch.rows {
+        for (k, _) in &row.value.values {
+            if !keys.contains(&k.as_str()) {
+                keys.push(k);
+            }
+        }
+    }
+    keys
+}
+
+/// A batch as CSV: `file,curve,status,reason,model,<keys…>`, one row per curve analysed
+/// (`status` `ok`) then one per failure (`status` `failed`, `reason` the message, values
+/// empty); `curve` is empty for a single-curve file or a file that failed as a whole.
+pub fn batch_csv(batch: &Batch<InspectRow>) -> String {
+    let keys = batch_keys(batch);
+    let mut out = String::from("file,curve,status,reason,model");
+    for k in &keys {
+        out.push(',');
+        out += &csv_field(k);
+    }
+    out.push('\n');
+    let curve = |c: Option<usize>| c.map(|i| i.to_string()).unwrap_or_default();
+    for row in &batch.rows {
+        let v = &row.value;
+        let _ = write!(
+            out,
+            "{},{},ok,,{}",
+            csv_field(&row.file.display().to_string()),
+            curve(row.curve),
+            v.model.unwrap_or("")
+        );
+        for k in &keys {
+            out.push(',');
+            if let Some((_, x)) = v.values.iter().find(|(key, _)| key == k) {
+                let _ = write!(out, "{x:e}");
+            }
+        }
+        out.push('\n');
+    }
+    for f in &batch.failures {
+        let _ = write!(
+            out,
+            "{},{},failed,{},",
+            csv_field(&f.file.display().to_string()),
+            curve(f.curve),
+            csv_field(&f.error.to_string())
+        );
+        out += &",".repeat(keys.len());
+        out.push('\n');
+    }
+    out
+}
+
+/// A batch as JSON: `rows` (`file`, `curve`, `model`, the values by key), `failures`
+/// (`file`, `curve`, `reason`) and `ignored` (files of folders that are not AFM files).
+pub fn batch_json(batch: &Batch<InspectRow>) -> serde_json::Value {
+    let rows: Vec<serde_json::Value> = batch
+        .rows
+        .iter()
+        .map(|r| {
+            let mut m = serde_json::Map::new();
+            m.insert("file".into(), json!(r.file.display().to_string()));
+            m.insert("curve".into(), json!(r.curve));
+            m.insert("model".into(), json!(r.value.model));
+            for (k, x) in &r.value.values {
+                m.insert(k.clone(), json!(x));
+            }
+            m.into()
+        })
+        .collect();
+    let failures: Vec<serde_json::Value> = batch
+        .failures
+        .iter()
+        .map(|f| {
+            json!({"file": f.file.display().to_string(), "curve": f.curve,
+                   "reason": f.error.to_string()})
+        })
+        .collect();
+    let ignored: Vec<String> = batch
+        .ignored
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
+    json!({"curves": batch.rows.len(), "failed": batch.failures.len(),
+           "rows": rows, "failures": failures, "ignored": ignored})
 }

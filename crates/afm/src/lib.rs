@@ -53,7 +53,10 @@ mod prepare;
 mod ramp_hold;
 mod varpro;
 
-pub use batch::{Batch, BatchRow, CurveFailure, for_each_curve};
+pub use batch::{
+    Batch, BatchRow, CurveFailure, NoProgress, Progress, expand_inputs, for_each_curve,
+    for_each_curve_with,
+};
 pub use creep::{
     Compliance, Creep, CreepFit, CreepSettings, creep_indentation, creep_objective, fit_creep,
     prepare_creep,
@@ -67,7 +70,8 @@ pub use hertz::{
 pub use ibw::read_ibw_bytes;
 pub use indenter::{Indenter, Validity, hertz_force};
 pub use inspect::{
-    QuickFit, QuickFitKind, quick_fit, range, summary_json, summary_text, write_plot,
+    InspectRow, QuickFit, QuickFitKind, batch_csv, batch_json, inspect_batch, inspect_row,
+    quick_fit, range, summary_json, summary_text, write_plot,
 };
 pub use jpk::{
     JpkArchive, ReadOptions, read_force_curve, read_force_curve_with, read_force_map,

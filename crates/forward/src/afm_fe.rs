@@ -352,6 +352,39 @@ impl ForwardModel for AfmFeModel {
     fn identity(&self) -> String {
         self.identity.clone()
     }
+    fn conditions(&self) -> Option<nlvid_model::BuildConditions> {
+        let s = &self.setup;
+        let end = s.output_times.last().copied().unwrap_or(0.0);
+        // the piezo history's travel and the time it is reached (the ramp's end)
+        let z0 = s.piezo.first().map_or(0.0, |p| p.1);
+        let (t_ramp, travel) = s.piezo.iter().fold((0.0, 0.0f64), |(t, a), &(ti, zi)| {
+            if (zi - z0).abs() > a {
+                (ti, (zi - z0).abs())
+            } else {
+                (t, a)
+            }
+        });
+        let key = |q: &str, k: &str| (q.to_string(), k.to_string());
+        Some(nlvid_model::BuildConditions {
+            model: "afm-fe".into(),
+            probe_radius_m: Some(s.probe_radius),
+            ramp_time_s: Some(t_ramp),
+            hold_time_s: Some((end - t_ramp).max(0.0)),
+            depth_m: Some(travel),
+            end_time_s: end,
+            cell_height_m: Some(s.height),
+            cell_diameter_m: Some(s.diameter),
+            keys: vec![
+                key("probe_radius_m", "[forward] probe_radius"),
+                key("ramp_time_s", "[protocol] (ramp duration)"),
+                key("hold_time_s", "[protocol] (hold duration)"),
+                key("depth_m", "[protocol] (piezo travel)"),
+                key("end_time_s", "[protocol] (hold duration: grid end)"),
+                key("cell_height_m", "[forward] height"),
+                key("cell_diameter_m", "[forward] diameter"),
+            ],
+        })
+    }
     fn run(&self, p: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
         // Parameters in `names::PRONY2` order (G0 the shear modulus).
         let params = Relaxation::from_named(&names::PRONY2, p).map_err(|e| RunFailure {

@@ -293,6 +293,27 @@ impl ForwardModel for HertzProny {
     fn identity(&self) -> String {
         self.identity.clone()
     }
+    fn conditions(&self) -> Option<nlvid_model::BuildConditions> {
+        let end = self.kernel.times().last().copied().unwrap_or(0.0);
+        let key = |q: &str, k: &str| (q.to_string(), format!("[forward] {k}"));
+        Some(nlvid_model::BuildConditions {
+            model: "hertz-prony".into(),
+            probe_radius_m: Some(self.radius),
+            ramp_time_s: Some(self.ramp_time),
+            hold_time_s: Some((end - self.ramp_time).max(0.0)),
+            depth_m: Some(self.rate * self.ramp_time),
+            end_time_s: end,
+            cell_height_m: None,
+            cell_diameter_m: None,
+            keys: vec![
+                key("probe_radius_m", "probe_radius"),
+                key("ramp_time_s", "ramp"),
+                key("hold_time_s", "hold"),
+                key("depth_m", "rate (depth = rate × ramp)"),
+                key("end_time_s", "hold (grid end = ramp + hold)"),
+            ],
+        })
+    }
     fn run(&self, p: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
         let g = Relaxation::from_named(&names::PRONY2, p)
             .map_err(|e| RunFailure::new(FailureKind::InvalidParameters, e.to_string()))?;

@@ -38,6 +38,9 @@ pub struct SurrogateMeta {
     /// The parameter domain of the design (its names are
     /// `parameter_names`, in order).
     pub domain: Domain,
+    /// What the forward model behind the meta-model was built for (protocol, time
+    /// span, geometry); `None` for meta-models exported before it was stored.
+    pub conditions: Option<nlvid_model::BuildConditions>,
 }
 
 fn io(path: &Path, message: impl std::fmt::Display) -> InverseError {
@@ -88,10 +91,20 @@ pub fn read_meta(path: &Path) -> Result<SurrogateMeta> {
     domain
         .check_names(&parameter_names)
         .map_err(|e| io(path, format!("keys `domain` and `parameter_names`: {e}")))?;
+    let conditions = match v.get("conditions") {
+        None | Some(serde_json::Value::Null) => None,
+        Some(c) => Some(serde_json::from_value(c.clone()).map_err(|e| {
+            io(
+                path,
+                format!("key `conditions` (what the meta-model was built for): {e}"),
+            )
+        })?),
+    };
     Ok(SurrogateMeta {
         parameter_names,
         time_s,
         domain,
+        conditions,
     })
 }
 

@@ -73,6 +73,11 @@ pub trait ForwardModel: Sync {
     }
     /// Identifier included in the study hash (model name and settings).
     fn identity(&self) -> String;
+    /// What the model is built for (protocol, time span, geometry), stored with a
+    /// meta-model so fits can check data against it; `None` if not described.
+    fn conditions(&self) -> Option<crate::BuildConditions> {
+        None
+    }
     /// Run at `params` (SI): the response at every time of the grid.
     fn run(&self, params: &[f64]) -> Result<Vec<f64>, RunFailure>;
 }

@@ -32,6 +32,7 @@
 //! - [`Curve`]: time plus named channels with units.
 #![warn(missing_docs)]
 
+mod conditions;
 mod curve;
 mod domain;
 mod error;
@@ -39,6 +40,7 @@ mod forward;
 pub mod names;
 mod prony;
 
+pub use conditions::BuildConditions;
 pub use curve::{Channel, Curve, parameters_json, unit_suffixed};
 pub use domain::{BoundHit, BoundSide, Domain, LinearConstraint, Parameter, Scale};
 pub use error::{ModelError, Result};

@@ -64,7 +64,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let clean_files = write_demo_data(&spec(0.0), &clean_study, &demo.join("metamodel.toml"))?;
     let settings = CohortSettings::load(&noisy_study)?;
     let model = CellModel::load(&settings)?;
-    let CellModel::Surrogate(fitter) = &model else {
+    let CellModel::Surrogate(fitter, _) = &model else {
         return Err("the demo study fits a meta-model".into());
     };
     let s = fitter.surrogate();

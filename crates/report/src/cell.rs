@@ -176,7 +176,17 @@ pub enum CellModel {
     LeeRadok(Domain),
     /// A pre-built Kriging meta-model on the nominal protocol, on the
     /// domain its `meta.json` stores.
-    Surrogate(Box<SurrogateFitter>),
+    Surrogate(Box<SurrogateFitter>, Box<BuiltFor>),
+}
+
+/// What a cohort's meta-model was built for ([`nlvid_model::BuildConditions`] from its
+/// `meta.json`), for the domain checks of [`crate::fit::domain`].
+#[derive(Debug, Clone)]
+pub struct BuiltFor {
+    /// The build conditions, if the meta-model stores them.
+    pub conditions: Option<nlvid_model::BuildConditions>,
+    /// Its `meta.json`.
+    pub meta: std::path::PathBuf,
 }
 
 impl CellModel {
@@ -189,7 +199,14 @@ impl CellModel {
             (FitModel::LeeRadok, _) => Ok(Self::LeeRadok(domain(settings)?)),
             (FitModel::Surrogate, Some(f)) => {
                 let s = load_kriging_surrogate(&f.model, &f.meta, Coordinates::Physical)?;
-                Ok(Self::Surrogate(Box::new(SurrogateFitter::new(s, None)?)))
+                let conditions = nlvid_inverse::read_meta(&f.meta)?.conditions;
+                Ok(Self::Surrogate(
+                    Box::new(SurrogateFitter::new(s, None)?),
+                    Box::new(BuiltFor {
+                        conditions,
+                        meta: f.meta.clone(),
+                    }),
+                ))
             }
             (FitModel::Surrogate, None) => Err(crate::ReportError::InvalidSetting(
                 "fit.model = \"surrogate\" needs fit.surrogate and fit.meta".into(),
@@ -204,7 +221,7 @@ impl CellModel {
     pub fn grid(&self, settings: &CohortSettings) -> nlvid_inverse::Result<Vec<f64>> {
         match self {
             Self::LeeRadok(_) => model_grid(settings),
-            Self::Surrogate(f) => Ok(f.times().to_vec()),
+            Self::Surrogate(f, _) => Ok(f.times().to_vec()),
         }
     }
 }
@@ -288,15 +305,52 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
         Ok(g) => g,
         Err(e) => return fail(format!("model grid: {e}")),
     };
+    let mut base = fail(String::new());
+    geometry(&input.geometry, &mut base);
+    // meta-model domain checks: protocol, time span, geometry (data ending before the
+    // grid are fitted on the overlap: the later grid points weigh 0)
+    let mut used = grid.len();
+    if let CellModel::Surrogate(_, built) = model {
+        let facts = crate::fit::domain::DataFacts {
+            end_time_s: t_last - t_first,
+            ramp_time_s: Some(settings.ramp),
+            depth_m: Some(indentation.iter().fold(0.0f64, |a, d| a.max(d.abs()))),
+            probe_radius_m: Some(settings.radius),
+            cell_height_m: base.cell_height,
+            cell_diameter_m: base.base_diameter,
+        };
+        let meta = built.meta.display().to_string();
+        match crate::fit::domain::check(&facts, built.conditions.as_ref(), &grid, &meta) {
+            Ok(found) => {
+                if let Some(te) = found.overlap_end {
+                    used = grid.iter().filter(|t| **t <= te).count();
+                }
+                base.flags.extend(
+                    found
+                        .notes
+                        .into_iter()
+                        .map(|n| format!("meta-model domain: {n}")),
+                );
+            }
+            Err(e) => {
+                base.reason = format!("meta-model domain: {e}");
+                return base;
+            }
+        }
+    }
     if let Some(p) = &settings.protocol {
-        let t_end = grid.last().copied().unwrap_or(0.0);
+        let t_end = grid[..used].last().copied().unwrap_or(0.0);
         let checked =
             crate::fit::check_protocol(&curve, p, t_end, &input.path, "model's time grid");
         if let Err(e) = checked {
             return fail(format!("protocol: {e}"));
         }
     }
-    let needed = settings.hold_end.max(grid.last().copied().unwrap_or(0.0));
+    let needed = if used < grid.len() {
+        grid[used - 1]
+    } else {
+        settings.hold_end.max(grid.last().copied().unwrap_or(0.0))
+    };
     if t_last - t_first < needed * (1.0 - 1e-9) {
         return fail(format!(
             "the curve covers {:.4} s but the fitted window needs {needed} s \
@@ -304,15 +358,19 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
             t_last - t_first,
         ));
     }
-    let (force, delta) = match (
-        curve.resample(&curve.force, &grid),
-        curve.resample(&indentation, &grid),
+    let (mut force, delta) = match (
+        curve.resample(&curve.force, &grid[..used]),
+        curve.resample(&indentation, &grid[..used]),
     ) {
         (Ok(f), Ok(d)) => (f, d),
-        (Err(e), _) | (_, Err(e)) => return fail(format!("resampling: {e}")),
+        (Err(e), _) | (_, Err(e)) => {
+            base.reason = format!("resampling: {e}");
+            return base;
+        }
     };
-    let mut base = fail(String::new());
-    geometry(&input.geometry, &mut base);
+    // past the data's end (overlap fit): held at the last value, with weight 0
+    let last = force.last().copied().unwrap_or(0.0);
+    force.resize(grid.len(), last);
     match hertz_baseline(settings, &curve, &indentation) {
         Ok(h) => base.hertz = Some(h),
         Err(e) => base.flags.push(format!("Hertz baseline not fitted: {e}")),
@@ -352,14 +410,22 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
             let y = misfit.experiments()[0].model.response(&fit.best.x)?;
             Ok((fit, y))
         }),
-        CellModel::Surrogate(f) => multistart
+        CellModel::Surrogate(f, _) if used < grid.len() => multistart
+            .and_then(|ms| {
+                let mut w = vec![1.0; grid.len()];
+                w[used..].iter_mut().for_each(|x| *x = 0.0);
+                let overlap = SurrogateFitter::new(f.surrogate().clone(), Some(w))?;
+                overlap.fit(&[(cell.as_str(), force.as_slice())], &ms)
+            })
+            .map(|r| (r.fit, r.response)),
+        CellModel::Surrogate(f, _) => multistart
             .and_then(|ms| f.fit(&[(cell.as_str(), force.as_slice())], &ms))
             .map(|r| (r.fit, r.response)),
     };
     match fitted {
         Ok((fit, y)) => {
             record_fit(settings, &mut base, &fit, y);
-            if let (CellModel::Surrogate(f), Some(p)) = (model, &settings.posterior) {
+            if let (CellModel::Surrogate(f, _), Some(p)) = (model, &settings.posterior) {
                 posterior(settings, p, f, &fit.best.x, &mut base);
             }
         }

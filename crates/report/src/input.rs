@@ -75,7 +75,7 @@ pub struct Geometry {
 }
 
 /// The cells of a cohort input: a folder whose sub-folders are the groups
-/// (each `*.csv` or instrument file in them a cell, each curve of a force map a
+/// (each `*.csv` or instrument file in them, searched recursively, a cell, each curve of a force map a
 /// cell), instrument files directly in the folder forming a group named after it,
 /// or a manifest CSV with columns `group` and `file` (relative to the manifest's
 /// directory) and optionally the geometry columns of [`Geometry`]. Other files are
@@ -149,16 +149,20 @@ fn from_folder(dir: &Path) -> Result<Vec<CellInput>> {
             continue;
         }
         let group = name_of(&sub);
-        for f in sorted_entries(&sub)? {
-            if f.is_file() && is_cell_file(&f) {
-                cells.extend(per_curve(CellInput {
-                    group: group.clone(),
-                    file: format!("{group}/{}", name_of(&f)),
-                    path: f,
-                    geometry: Geometry::default(),
-                    curve: None,
-                }));
-            }
+        // the one batch input reader (also of `nlvid inspect` and `nlvid fit`)
+        let found = nlvid_afm::expand_inputs(std::slice::from_ref(&sub), is_cell_file);
+        if let Some(f) = found.failures.first() {
+            return Err(ReportError::io(&f.file, f.error.to_string()));
+        }
+        for f in found.files {
+            let rel = f.strip_prefix(&sub).unwrap_or(&f).to_string_lossy();
+            cells.extend(per_curve(CellInput {
+                group: group.clone(),
+                file: format!("{group}/{rel}"),
+                path: f.clone(),
+                geometry: Geometry::default(),
+                curve: None,
+            }));
         }
     }
     Ok(cells)

@@ -99,7 +99,8 @@ pub fn build(
         model.time_grid().to_vec(),
         design.to_vec(),
         model.identity(),
-    );
+    )
+    .with_conditions(model.conditions());
     build_into(model, design, &RunStore::open(store_dir, &meta)?, opts)
 }
 
@@ -470,6 +471,7 @@ pub fn export(mm: &MetaModel, dir: &Path, domain: Option<&Domain>) -> Result<()>
         "study_hash": mm.meta.study_hash,
         "model": mm.meta.model,
         "domain": domain,
+        "conditions": mm.meta.conditions,
         "counts": mm.counts,
         "files": {"X": "X.npy / X.csv (rows: kept runs)", "Y": "Y.npy / Y.csv", "t": "t.npy", "status": "status.csv", "timing": "timing.csv (wall seconds per run; the only file that differs between identical builds)"},
     });

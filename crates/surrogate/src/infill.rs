@@ -361,6 +361,7 @@ pub fn run_infill(
             design.to_vec(),
             model.identity(),
         )
+        .with_conditions(model.conditions())
     };
     // The design so far: the stored one when it starts with `initial`.
     let mut design = initial.to_vec();

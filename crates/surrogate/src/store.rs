@@ -33,6 +33,12 @@ pub struct StoreMeta {
     pub model: String,
     /// Hash of everything above (FNV-1a 64, hex).
     pub study_hash: String,
+    /// What the forward model was built for ([`ForwardModel::conditions`]); not hashed
+    /// (the model identity already covers it), absent in stores written before it was kept.
+    ///
+    /// [`ForwardModel::conditions`]: nlvid_model::ForwardModel::conditions
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub conditions: Option<nlvid_model::BuildConditions>,
 }
 
 impl StoreMeta {
@@ -51,9 +57,16 @@ impl StoreMeta {
             design,
             model,
             study_hash: String::new(),
+            conditions: None,
         };
         m.study_hash = m.compute_hash();
         m
+    }
+
+    /// The same with the forward model's build conditions kept.
+    pub fn with_conditions(mut self, conditions: Option<nlvid_model::BuildConditions>) -> Self {
+        self.conditions = conditions;
+        self
     }
 
     fn compute_hash(&self) -> String {

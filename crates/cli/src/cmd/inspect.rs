@@ -1,6 +1,8 @@
 //! `nlvid inspect FILE`: what an AFM instrument file holds (segments,
 //! channels, calibration), optionally exported as CSV, plotted as SVG, and
-//! given a quick Hertz or Lee–Radok fit ([`nlvid_afm::quick_fit`]). See
+//! given a quick Hertz or Lee–Radok fit ([`nlvid_afm::quick_fit`]).
+//! `nlvid inspect FILES… | FOLDER | 'GLOB'`: one row per curve
+//! ([`nlvid_afm::inspect_batch`]), failures listed, a progress bar. See
 //! docs/cli/inspect.md.
 
 use std::path::PathBuf;
@@ -31,8 +33,14 @@ fn si(text: &str, dim: Dimension) -> Result<f64, String> {
 /// Arguments of `nlvid inspect`.
 #[derive(Debug, ClapArgs)]
 pub struct Args {
-    /// JPK force file (.jpk-force) or force map (.jpk-force-map).
-    pub file: PathBuf,
+    /// AFM file (.jpk-force, .jpk-force-map, .jpk-qi-data, .ibw); several files,
+    /// folders (searched recursively) or quoted globs ("data/*.jpk-force") run a batch:
+    /// one row per curve (CSV on stdout, or JSON), failures listed.
+    #[arg(required = true, value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+    /// Batch: write the per-curve table (CSV) to this file instead of stdout.
+    #[arg(long, value_name = "CSV")]
+    pub table: Option<PathBuf>,
     /// Write every segment and channel as CSV (unit-suffixed headers) to this file.
     #[arg(long, value_name = "CSV")]
     pub csv: Option<PathBuf>,
@@ -86,12 +94,60 @@ pub enum Contact {
     Piecewise,
 }
 
+/// A progress bar over the files of a batch ([`crate::progress::bar`]).
+struct Bar(indicatif::ProgressBar);
+
+impl nlvid_afm::Progress for Bar {
+    fn start(&self, files: usize) {
+        self.0.set_length(files as u64);
+    }
+    fn file_done(&self) {
+        self.0.inc(1);
+    }
+}
+
 impl Args {
+    /// True when the inputs are a batch: several, a folder, a glob, or `--table`.
+    fn is_batch(&self) -> bool {
+        let f = &self.files[0];
+        self.files.len() > 1
+            || self.table.is_some()
+            || f.is_dir()
+            || (!f.exists() && f.to_string_lossy().contains(['*', '?', '[']))
+    }
+
+    /// The fit asked for: (kind, probe radius).
+    fn fit_kind(&self) -> anyhow::Result<Option<(QuickFitKind, f64)>> {
+        let Some(kind) = self.fit else {
+            return Ok(None);
+        };
+        let r = self
+            .tip_radius
+            .context("--fit needs --tip-radius (the probe radius is not stored in JPK files)")?;
+        let kind = match kind {
+            Fit::Hertz => QuickFitKind::Hertz {
+                poisson: self.poisson,
+            },
+            Fit::LeeRadok => QuickFitKind::LeeRadok { terms: self.terms },
+        };
+        Ok(Some((kind, r)))
+    }
+
+    fn method(&self) -> ContactMethod {
+        match self.contact {
+            Contact::Deviation => ContactMethod::default(),
+            Contact::Piecewise => ContactMethod::PiecewiseLinear,
+        }
+    }
+
     /// Run the command.
     ///
     /// # Errors
     /// Unreadable file, a missing calibration, a fit that fails, unwritable outputs.
     pub fn run(self, json: bool) -> anyhow::Result<ExitCode> {
+        if self.is_batch() {
+            return self.run_batch(json);
+        }
         for p in [&self.csv, &self.plot].into_iter().flatten() {
             nlvid_study::check_output_file(p)?;
         }
@@ -99,30 +155,16 @@ impl Args {
             spring_constant: self.spring_constant,
             sensitivity: self.sensitivity,
         };
-        let curves = nlvid_afm::read_force_map(&self.file, &options)
-            .with_context(|| format!("reading {}", self.file.display()))?;
+        let file = &self.files[0];
+        let curves = nlvid_afm::read_force_map(file, &options)
+            .with_context(|| format!("reading {}", file.display()))?;
         let n_curves = curves.len();
         let curve = curves.into_iter().nth(self.curve).with_context(|| {
             format!("--curve {}: the file holds {n_curves} curve(s)", self.curve)
         })?;
-        let method = match self.contact {
-            Contact::Deviation => ContactMethod::default(),
-            Contact::Piecewise => ContactMethod::PiecewiseLinear,
-        };
-        let fit = match self.fit {
+        let fit = match self.fit_kind()? {
             None => None,
-            Some(kind) => {
-                let r = self.tip_radius.context(
-                    "--fit needs --tip-radius (the probe radius is not stored in JPK files)",
-                )?;
-                let kind = match kind {
-                    Fit::Hertz => QuickFitKind::Hertz {
-                        poisson: self.poisson,
-                    },
-                    Fit::LeeRadok => QuickFitKind::LeeRadok { terms: self.terms },
-                };
-                Some(quick_fit(&curve, kind, r, method)?)
-            }
+            Some((kind, r)) => Some(quick_fit(&curve, kind, r, self.method())?),
         };
         if let Some(path) = &self.csv {
             let mut buf = Vec::new();
@@ -151,5 +193,70 @@ impl Args {
         }
         print_text(&out)?;
         Ok(ExitCode::SUCCESS)
+    }
+
+    /// Batch mode: one row per curve, failures listed on stderr (and in the table);
+    /// exit status 3 when any curve failed, as `nlvid cohort`.
+    fn run_batch(self, json: bool) -> anyhow::Result<ExitCode> {
+        for (flag, used) in [
+            ("--csv", self.csv.is_some()),
+            ("--plot", self.plot.is_some()),
+            ("--samples", self.samples),
+            ("--curve", self.curve != 0),
+        ] {
+            if used {
+                anyhow::bail!(
+                    "{flag} applies to one curve of one file; with several files, a folder or \
+                     a glob, inspect writes one row per curve (use --table OUT.csv or --json)"
+                );
+            }
+        }
+        if let Some(p) = &self.table {
+            nlvid_study::check_output_file(p)?;
+        }
+        let options = ReadOptions {
+            spring_constant: self.spring_constant,
+            sensitivity: self.sensitivity,
+        };
+        let fit = self.fit_kind()?;
+        let bar = Bar(crate::progress::bar(0, "files"));
+        let batch = nlvid_afm::inspect_batch(&self.files, &options, fit, self.method(), &bar)?;
+        bar.0.finish_and_clear();
+        for f in &batch.failures {
+            eprintln!("failed: {f}");
+        }
+        if !batch.ignored.is_empty() {
+            eprintln!(
+                "skipped {} file(s) that are not AFM files (e.g. {})",
+                batch.ignored.len(),
+                batch.ignored[0].display()
+            );
+        }
+        let csv = nlvid_afm::batch_csv(&batch);
+        if let Some(p) = &self.table {
+            write_atomic(p, csv.as_bytes())?;
+        }
+        if json {
+            print_json(&nlvid_afm::batch_json(&batch))?;
+        } else if let Some(p) = &self.table {
+            print_text(&format!(
+                "{} curve(s) analysed, {} failed; table written to {}\n",
+                batch.rows.len(),
+                batch.failures.len(),
+                p.display()
+            ))?;
+        } else {
+            print_text(&csv)?;
+        }
+        if batch.failures.is_empty() {
+            Ok(ExitCode::SUCCESS)
+        } else {
+            eprintln!(
+                "error: {} curve(s) or file(s) failed ({} analysed)",
+                batch.failures.len(),
+                batch.rows.len()
+            );
+            Ok(ExitCode::from(super::cohort::CELLS_FAILED))
+        }
     }
 }

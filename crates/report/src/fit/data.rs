@@ -25,6 +25,10 @@ pub struct Surrogate {
     pub model: KrigingSurrogate,
     /// Max eq. 4.4 checking error and the file it came from.
     pub checking: Option<(f64, PathBuf)>,
+    /// What the meta-model was built for (its `meta.json`), if stored.
+    pub conditions: Option<nlvid_model::BuildConditions>,
+    /// Its `meta.json`.
+    pub meta: PathBuf,
 }
 
 /// One measured curve with everything it is fitted and checked with.
@@ -41,6 +45,9 @@ pub struct LoadedExperiment {
     pub weights: Option<Vec<f64>>,
     /// Real model for the re-check.
     pub real: Option<RealModel>,
+    /// The meta-model domain checks: what differs between the data and what the
+    /// meta-model was built for ([`super::domain::check`]).
+    pub domain_notes: Vec<String>,
 }
 
 /// A real model ready to re-run.
@@ -148,18 +155,41 @@ fn load_each<T>(
         }
         let times = surrogate.model.times().to_vec();
         let (default_label, curve) = read(item)?;
+        let real = exp.real.as_ref().map(real_model).transpose()?;
+        let facts = data_facts(&curve, exp, real.as_ref());
+        let found = super::domain::check(
+            &facts,
+            surrogate.conditions.as_ref(),
+            &times,
+            &surrogate.meta.display().to_string(),
+        )
+        .map_err(|m| ReportError::Data {
+            path: curve.path.clone(),
+            line: 0,
+            message: m,
+        })?;
+        // data ending before the grid: fit the overlap (later grid points weigh 0)
+        let used = found
+            .overlap_end
+            .map_or(times.len(), |te| times.iter().filter(|t| **t <= te).count());
         if let Some(p) = &exp.protocol {
             let grid = exp
                 .meta
                 .as_deref()
                 .map_or_else(String::new, |m| format!(", {}", m.display()));
-            let t_end = times.last().copied().unwrap_or(0.0);
+            let t_end = times[..used].last().copied().unwrap_or(0.0);
             let grid = format!("surrogate's time grid{grid}");
             check_protocol(&curve, p, t_end, &settings.study, &grid)?;
         }
-        let force = curve.resample(&curve.force, &times)?;
-        let weights =
+        let mut force = curve.resample(&curve.force, &times[..used])?;
+        let last = force.last().copied().unwrap_or(0.0);
+        force.resize(times.len(), last);
+        let mut weights =
             (!exp.segments.is_empty()).then(|| segment_weights(&times, &exp.segments, 1.0));
+        if used < times.len() {
+            let w = weights.get_or_insert_with(|| vec![1.0; times.len()]);
+            w[used..].iter_mut().for_each(|x| *x = 0.0);
+        }
         let label = exp.label.clone().unwrap_or(default_label);
         out.push(LoadedExperiment {
             label,
@@ -167,7 +197,8 @@ fn load_each<T>(
             curve,
             force,
             weights,
-            real: exp.real.as_ref().map(real_model).transpose()?,
+            real,
+            domain_notes: found.notes,
         });
     }
     Ok(out)
@@ -202,6 +233,9 @@ fn load_surrogate(
             settings.study.display()
         )));
     };
+    let conditions = nlvid_inverse::read_meta(meta)
+        .map_err(|e| ReportError::InvalidSetting(format!("meta-model {}: {e}", meta.display())))?
+        .conditions;
     let model = load_kriging_surrogate(path, meta, inputs)
         .map_err(|e| ReportError::InvalidSetting(format!("surrogate {}: {e}", path.display())))?;
     let checking = match exp.check_file() {
@@ -212,6 +246,8 @@ fn load_surrogate(
         path: path.clone(),
         model,
         checking,
+        conditions,
+        meta: meta.clone(),
     })
 }
 
@@ -239,33 +275,31 @@ fn read_checking_error(path: &Path) -> Result<f64> {
     }
 }
 
-/// Data paths with each folder replaced by its curve files (`*.csv` and instrument
-/// files such as `.jpk-force`, not recursive, sorted by name).
+/// Data paths with each folder (searched recursively) and glob replaced by its curve
+/// files (`*.csv` and instrument files such as `.jpk-force`, sorted by path), through the
+/// one batch input reader [`nlvid_afm::expand_inputs`].
 ///
 /// # Errors
-/// An unreadable folder, or one without curve files (naming it).
+/// An unreadable folder, a glob matching nothing, or a folder without curve files
+/// (naming it).
 fn expand_folders(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let is_curve_file = |f: &Path| {
+        nlvid_afm::batch::is_afm_file(f)
+            || f.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+    };
     let mut out = Vec::new();
     for p in paths {
-        if !p.is_dir() {
-            out.push(p.clone());
-            continue;
+        let found = nlvid_afm::expand_inputs(std::slice::from_ref(p), is_curve_file);
+        if let Some(f) = found.failures.first() {
+            return Err(ReportError::io(&f.file, f.error.to_string()));
         }
-        let mut found: Vec<PathBuf> = crate::input::sorted_entries(p)?
-            .into_iter()
-            .filter(|f| {
-                f.is_file()
-                    && (nlvid_afm::batch::is_afm_file(f)
-                        || f.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")))
-            })
-            .collect();
-        if found.is_empty() {
+        if p.is_dir() && found.files.is_empty() {
             return Err(ReportError::io(
                 p,
                 "no curve files (*.csv, .jpk-force, .jpk-force-map, .ibw …) in this folder",
             ));
         }
-        out.append(&mut found);
+        out.extend(found.files);
     }
     Ok(out)
 }
@@ -349,6 +383,39 @@ pub fn check_protocol(
     };
     curve.check_protocol(&expected_t, &expected, p.tolerance)?;
     Ok(())
+}
+
+/// The data's side of the meta-model domain checks: time span, the experiment's ramp
+/// time and depth (`[fit.protocol]`, the largest measured indentation where there is
+/// one), and the geometry the re-check model assumes.
+fn data_facts(
+    curve: &MeasuredCurve,
+    exp: &ExperimentSettings,
+    real: Option<&RealModel>,
+) -> super::domain::DataFacts {
+    let t0 = curve.time.first().copied().unwrap_or(0.0);
+    let end = curve.time.last().copied().unwrap_or(t0) - t0;
+    let peak = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let depth = match &curve.indentation {
+        Some(d) if !d.is_empty() => Some(peak(d)),
+        _ => exp.protocol.as_ref().map(|p| p.amplitude),
+    };
+    let built = match real {
+        Some(RealModel::Forward(m)) => m.conditions(),
+        _ => None,
+    };
+    let probe_radius_m = match real {
+        Some(RealModel::LeeRadok { radius, .. }) => Some(*radius),
+        _ => built.as_ref().and_then(|c| c.probe_radius_m),
+    };
+    super::domain::DataFacts {
+        end_time_s: end,
+        ramp_time_s: exp.protocol.as_ref().map(|p| p.amplitude / p.rate),
+        depth_m: depth,
+        probe_radius_m,
+        cell_height_m: built.as_ref().and_then(|c| c.cell_height_m),
+        cell_diameter_m: built.as_ref().and_then(|c| c.cell_diameter_m),
+    }
 }
 
 #[cfg(test)]

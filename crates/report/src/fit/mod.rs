@@ -21,6 +21,7 @@
 //! ```
 
 mod data;
+pub mod domain;
 mod outcome;
 mod recheck;
 

@@ -66,6 +66,9 @@ pub struct ExperimentOutcome {
     pub agree_note: Option<String>,
     /// SVG figure, if written.
     pub plot: Option<PathBuf>,
+    /// The meta-model domain checks of this curve (what differs from what the
+    /// meta-model was built for, and by how much).
+    pub domain_checks: Vec<String>,
     fitted: Vec<f64>,
     real: Option<Vec<f64>>,
 }
@@ -84,6 +87,7 @@ impl ExperimentOutcome {
             "misfit_difference": self.misfit_real.map(|r| (self.misfit_surrogate - r).abs()),
             "agree": self.agree.word(),
             "agree_note": self.agree_note,
+            "domain_checks": self.domain_checks,
             "plot": self.plot,
         })
     }
@@ -160,6 +164,7 @@ impl Outcome {
                 agree,
                 agree_note,
                 plot: None,
+                domain_checks: e.domain_notes.clone(),
                 fitted,
                 real: rerun.map(|r| r.response),
             });
@@ -225,6 +230,12 @@ impl Outcome {
         }
     }
 
+    /// The parameter-domain check: one note per parameter on a bound of the
+    /// meta-model's domain ([`super::domain::bound_notes`]).
+    pub fn bound_notes(&self) -> Vec<String> {
+        super::domain::bound_notes(&self.fit.domain, &self.fit.best.on_bounds, &self.fit.best.x)
+    }
+
     /// The `--json` document.
     ///
     /// # Errors
@@ -240,6 +251,7 @@ impl Outcome {
             "misfit_surrogate": self.experiments.iter().map(|e| e.misfit_surrogate).collect::<Vec<_>>(),
             "misfit_real": self.experiments.iter().map(|e| e.misfit_real).collect::<Vec<_>>(),
             "surrogate_and_real_agree": self.agreement().word(),
+            "domain_checks": self.bound_notes(),
             "flags": {
                 "on_bound": self.fit.best.on_bounds,
                 "active_constraints": self.fit.best.active_constraints,
@@ -319,6 +331,12 @@ impl Outcome {
                 ),
                 (a, None) => writeln!(s, "  agreement: {}", a.word()),
             };
+            for n in &e.domain_checks {
+                let _ = writeln!(s, "  meta-model domain: {n}");
+            }
+        }
+        for n in self.bound_notes() {
+            let _ = writeln!(s, "meta-model domain: {n}");
         }
         match &self.identifiability {
             Ok(i) => {
