@@ -812,15 +812,30 @@ fn malformed_data_fails_naming_the_file_row_and_column() {
 fn protocol_mismatches_fail_naming_the_file_row_and_time() {
     let study = study("e2e-proto.toml", "", SENSITIVITY, PROTOCOL);
 
-    // Duration: the file stops at 8 s (line 802) instead of 10 s.
+    // Duration: a file that stops at 8 s (line 802) of the 10-s grid holds the
+    // whole ramp and most of the grid: it is fitted on the overlap and says so
+    // (issue 14); one that stops at 4 s (line 402) is refused, naming the key.
     let good = afm_csv(&TRUTH, 6);
+    let dir = pipeline();
     let short: String = good.lines().take(802).map(|l| format!("{l}\n")).collect();
+    std::fs::write(dir.join("short-duration.csv"), &short).unwrap();
+    let out = nlvid(&["fit", study.to_str().unwrap(), "short-duration.csv"], dir);
+    let said = format!("{}{}", text(&out.stdout), text(&out.stderr));
+    assert!(out.status.success(), "{said}");
+    assert!(
+        said.contains("the data end at t = 8.000000 s")
+            && said.contains("fitting the overlap 0 … 8.000000 s"),
+        "{said}"
+    );
+    let shorter: String = good.lines().take(402).map(|l| format!("{l}\n")).collect();
     assert_fails(
         "bad-duration.csv",
-        &short,
+        &shorter,
         &study,
         &[
-            "bad-duration.csv: protocol mismatch at row 802 (t = 8 s): duration 8.0000 s, expected 10.0000 s (tolerance 2.0 %)",
+            "bad-duration.csv",
+            "the curve covers 0 … 4.000000 s",
+            "too little overlap to fit",
         ],
     );
 
@@ -1291,4 +1306,71 @@ study = "build.toml"
     println!("recovered (G0 5 %, sum 0.03, G(52 s) 5 %): {ok_issue}/10");
     let _ = std::fs::remove_dir_all(&dir); // ≈ 60 MB of runs and data
     assert!(ok_issue >= 9, "{ok_issue}/10 recovered");
+}
+
+/// `nlvid fit` on a folder of `.jpk-force` files (issue 14): no CSV conversion and
+/// no `[fit.columns]`/`[fit.calibration]` (the files carry theirs), every curve file
+/// of the folder an experiment of the one fit, a non-curve file skipped. Two copies
+/// of one relaxation curve fitted together have the optimum of the curve alone (the
+/// summed eq. 5.3 misfit is twice the single one), so the folder fit must give the
+/// single-file fit's parameters and two equal misfits.
+#[test]
+fn a_folder_of_jpk_files_is_fitted_without_conversion_or_calibration() {
+    const SR: &str = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../afm/tests/data/fmt-jpk-sr_cell1-0008.jpk-force"
+    );
+    let dir = pipeline();
+    let cells = dir.join("jpk-cells");
+    std::fs::create_dir_all(&cells).unwrap();
+    std::fs::copy(SR, cells.join("a.jpk-force")).unwrap();
+    std::fs::copy(SR, cells.join("b.jpk-force")).unwrap();
+    std::fs::write(cells.join("notes.txt"), "not a curve\n").unwrap();
+    let study = dir.join("e2e-jpk.toml");
+    std::fs::write(
+        &study,
+        format!(
+            "title = \"fit e2e: JPK folder\"\n[fit]\nsurrogate = \"{w}/model.json\"\n\
+             meta = \"{w}/export/meta.json\"\ninputs = \"physical\"\ndata = \"afm\"\n\
+             starts = 8\nseed = 1\n",
+            w = dir.join("work").display()
+        ),
+    )
+    .unwrap();
+    let fit = |data: &str| -> serde_json::Value {
+        let out = nlvid(&["--json", "fit", study.to_str().unwrap(), data], dir);
+        assert!(out.status.success(), "{data}: {}", text(&out.stderr));
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let parameter = |v: &serde_json::Value, name: &str| {
+        v["parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == name)
+            .and_then(|p| p["value"].as_f64())
+            .unwrap_or_else(|| panic!("{name} in {v}"))
+    };
+    let single = fit(SR);
+    let folder = fit("jpk-cells");
+    let files: Vec<&str> = folder["experiments"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["file"].as_str().unwrap())
+        .collect();
+    assert_eq!(files.len(), 2, "one experiment per curve file: {files:?}");
+    assert!(files[0].ends_with("a.jpk-force") && files[1].ends_with("b.jpk-force"));
+    let misfits = folder["misfit_surrogate"].as_array().unwrap();
+    assert_eq!(
+        misfits[0], misfits[1],
+        "identical curves, identical misfits"
+    );
+    for name in ["G0", "g1", "g2", "tau1", "tau2"] {
+        let (a, b) = (parameter(&single, name), parameter(&folder, name));
+        assert!(
+            a > 0.0 && ((a - b) / a).abs() < 1e-3,
+            "{name}: file {a}, folder {b}"
+        );
+    }
 }

@@ -459,6 +459,9 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
             (true, true, _) => Some(287.5),
         }
     };
+    // bound here: Rust 1.88 (the declared minimum) does not extend the
+    // lifetime of a temporary borrowed inside the array below
+    let nlv11 = PipkinRogersParams::chapter2(0.2, 0.6, 1.0);
     for (id, d_max) in [("fig2_13", 0.28), ("fig2_14", 0.78)] {
         let mut series = Vec::new();
         for su in [1.0, 0.2] {
@@ -466,10 +469,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
                 ("NLE", None),
                 ("QLV", Some(&qlv)),
                 ("NLV c=1/2", Some(&nlv13)),
-                (
-                    "NLV c=1",
-                    Some(&PipkinRogersParams::chapter2(0.2, 0.6, 1.0)),
-                ),
+                ("NLV c=1", Some(&nlv11)),
             ];
             for (m, p) in models {
                 if m == "NLE" && su < 0.5 {
