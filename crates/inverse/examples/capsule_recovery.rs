@@ -35,42 +35,23 @@ use std::path::Path;
 
 use anyhow::{Context, bail};
 use nlvid_inverse::{
-    Coordinates, Experiment, KrigingSurrogate, Misfit, Model, MultiStart, Objective, Precomputed,
+    Experiment, KrigingSurrogate, Misfit, Model, MultiStart, Objective, Precomputed,
     SensitivityScaling, SurrogateCurve, SurrogateMisfit, Z95, identifiability,
-    range_normalised_rmse, read_meta,
+    range_normalised_rmse,
 };
 use nlvid_model::ForwardModel;
-use nlvid_surrogate::KrigingModel;
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-fn read_csv(path: &Path) -> anyhow::Result<(Vec<String>, Vec<Vec<f64>>)> {
-    let mut rdr =
-        csv::Reader::from_path(path).with_context(|| format!("cannot open {}", path.display()))?;
-    let head = rdr.headers()?.iter().map(str::to_owned).collect();
-    let mut rows = Vec::new();
-    for (i, rec) in rdr.records().enumerate() {
-        let rec = rec.with_context(|| format!("{}: row {}", path.display(), i + 2))?;
-        let row = rec
-            .iter()
-            .map(|v| v.trim().parse::<f64>())
-            .collect::<Result<Vec<_>, _>>()
-            .with_context(|| format!("{}: row {}", path.display(), i + 2))?;
-        rows.push(row);
-    }
-    Ok((head, rows))
-}
+mod recovery;
 
-/// Standard normal by Box–Muller (seeded, deterministic).
-fn normal(rng: &mut ChaCha8Rng) -> f64 {
-    let u1: f64 = rng.random::<f64>().max(1e-300);
-    let u2: f64 = rng.random::<f64>();
-    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-}
+use recovery::normal;
 
 /// One test: its FE model, surrogate, and checking set.
 struct Test {
     label: String,
+    /// The domain its `meta.json` stores (the fit's, for every test).
+    domain: nlvid_model::Domain,
     fe: Box<dyn ForwardModel>,
     sur: KrigingSurrogate,
     pre: Precomputed,
@@ -84,43 +65,21 @@ fn load_test(spec: &str) -> anyhow::Result<Test> {
     let [study_path, model_path, export] = parts[..] else {
         bail!("a test is STUDY.toml,MODEL.json,EXPORT_DIR, got `{spec}`");
     };
-    let export = Path::new(export);
-    let mut study = nlvid_study::Study::load(study_path)?;
-    let fe = nlvid_forward::from_study(&mut study)?;
-    let meta = read_meta(&export.join("train/meta.json"))?;
-    let domain = meta.domain.clone();
-    domain.check_names(&fe.parameter_names())?;
-    let kriging: KrigingModel = serde_json::from_slice(&std::fs::read(model_path)?)?;
-    let sur = KrigingSurrogate::new(
-        kriging,
-        domain.clone(),
-        meta.time_s.clone(),
-        Coordinates::Physical,
-    )?;
+    let recovery::Setup {
+        fe,
+        domain,
+        sur,
+        xs,
+        ys,
+    } = recovery::setup(study_path, model_path, Path::new(export), 0)?;
     let pre = Precomputed::new(&sur, None)?;
-    let (xhead, xs) = read_csv(&export.join("check/X.csv"))?;
-    let (_, ys) = read_csv(&export.join("check/Y.csv"))?;
-    let column = |name: &str| {
-        xhead
-            .iter()
-            .position(|h| h == name || h.starts_with(&format!("{name} [")))
-            .with_context(|| format!("column {name} not in {xhead:?}"))
-    };
-    let cols = domain
-        .params()
-        .iter()
-        .map(|p| column(&p.name))
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    let xs = xs
-        .iter()
-        .map(|x| cols.iter().map(|&c| x[c]).collect())
-        .collect();
     let label = Path::new(study_path).file_stem().map_or_else(
         || study_path.to_string(),
         |s| s.to_string_lossy().into_owned(),
     );
     Ok(Test {
         label,
+        domain,
         fe,
         sur,
         pre,
@@ -182,7 +141,7 @@ fn main() -> anyhow::Result<()> {
         .iter()
         .map(|s| load_test(s))
         .collect::<anyhow::Result<Vec<_>>>()?;
-    let domain = Model::domain(&tests[0].sur).clone();
+    let domain = tests[0].domain.clone();
     let names = domain.names();
     let mut max_check = Vec::new();
     for t in &tests {
