@@ -24,9 +24,10 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use nlvid_report::cohort::{RunOptions, discover, run_cohort};
-use nlvid_report::demo::{DemoSpec, GroupSpec, write_demo_data};
+use nlvid_report::demo::write_demo_data;
 use nlvid_report::settings::CohortSettings;
 
+mod coverage_cohort;
 fn main() -> ExitCode {
     match run() {
         Ok(true) => ExitCode::SUCCESS,
@@ -52,31 +53,7 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
         return Err(format!("argument {bad}: expected key=value for [posterior]").into());
     }
     let study = write_study(&dir, &demo, &keys)?;
-    // Two broad groups spanning much of the Table 5.3 domain.
-    let spec = DemoSpec {
-        groups: vec![
-            GroupSpec {
-                name: "wide-a".into(),
-                g0: (1500.0, 0.5),
-                g1: (0.30, 0.12),
-                g2: (0.30, 0.12),
-                tau1: (0.3, 0.7),
-                tau2: (10.0, 0.4),
-            },
-            GroupSpec {
-                name: "wide-b".into(),
-                g0: (600.0, 0.5),
-                g1: (0.40, 0.12),
-                g2: (0.25, 0.12),
-                tau1: (0.6, 0.7),
-                tau2: (8.0, 0.4),
-            },
-        ],
-        cells_per_group: cells.div_ceil(2),
-        seed,
-        noise,
-        ..DemoSpec::default()
-    };
+    let spec = coverage_cohort::wide_groups(cells, seed, noise);
     let files = write_demo_data(&spec, &study, &demo.join("metamodel.toml"))?;
     let settings = CohortSettings::load(&study)?;
     let inputs = discover(&files.data)?;

@@ -22,10 +22,11 @@ use nlvid_inverse::Model;
 use nlvid_inverse::posterior::noise_sd;
 use nlvid_report::cell::{CellModel, fit_cell};
 use nlvid_report::cohort::discover;
-use nlvid_report::demo::{DemoSpec, GroupSpec, write_demo_data};
+use nlvid_report::demo::write_demo_data;
 use nlvid_report::settings::CohortSettings;
 use nlvid_surrogate::OutputCovariance;
 
+mod coverage_cohort;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let cells: usize = args.get(1).map_or(Ok(20), |s| s.parse())?;
@@ -34,30 +35,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let demo =
         std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
     let root = std::env::temp_dir().join(format!("nlvid-diagnose-{}", std::process::id()));
-    let spec = |noise: f64| DemoSpec {
-        groups: vec![
-            GroupSpec {
-                name: "wide-a".into(),
-                g0: (1500.0, 0.5),
-                g1: (0.30, 0.12),
-                g2: (0.30, 0.12),
-                tau1: (0.3, 0.7),
-                tau2: (10.0, 0.4),
-            },
-            GroupSpec {
-                name: "wide-b".into(),
-                g0: (600.0, 0.5),
-                g1: (0.40, 0.12),
-                g2: (0.25, 0.12),
-                tau1: (0.6, 0.7),
-                tau2: (8.0, 0.4),
-            },
-        ],
-        cells_per_group: cells.div_ceil(2),
-        seed,
-        noise,
-        ..DemoSpec::default()
-    };
+    let spec = |noise: f64| coverage_cohort::wide_groups(cells, seed, noise);
     let noisy_study = write_study(&root.join("noisy"), &demo)?;
     let clean_study = write_study(&root.join("clean"), &demo)?;
     let files = write_demo_data(&spec(noise), &noisy_study, &demo.join("metamodel.toml"))?;
