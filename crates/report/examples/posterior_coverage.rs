@@ -28,6 +28,7 @@ use nlvid_report::demo::write_demo_data;
 use nlvid_report::settings::CohortSettings;
 
 mod coverage_cohort;
+
 fn main() -> ExitCode {
     match run() {
         Ok(true) => ExitCode::SUCCESS,

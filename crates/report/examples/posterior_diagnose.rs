@@ -27,6 +27,7 @@ use nlvid_report::settings::CohortSettings;
 use nlvid_surrogate::OutputCovariance;
 
 mod coverage_cohort;
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let cells: usize = args.get(1).map_or(Ok(20), |s| s.parse())?;
