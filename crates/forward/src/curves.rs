@@ -378,14 +378,13 @@ mod tests {
         ForwardSettings::from_study(&mut study).expect("forward")
     }
 
-    const HERTZ: &str = "[forward]\nmodel = \"hertz-prony\"\nprobe_radius = \"2.5 um\"\n\
-        rate = \"2 um/s\"\nramp = \"1 s\"\nhold = \"3 s\"\npoints = 40\n";
-
     /// hertz-prony: Z − d is the nominal indentation 2 µm/s · min(t, 1 s)
     /// (closed form), d·k the model's force on its grid, 0 at t = 0.
     #[test]
     fn hertz_curve_piezo_minus_deflection_is_the_nominal_indentation() {
-        let fwd = forward(HERTZ);
+        let fwd = forward(&crate::hertz_forward_toml(
+            "2.5 um", "2 um/s", "1 s", "3 s", 40,
+        ));
         let x = [1000.0, 0.3, 0.2, 0.5, 10.0];
         let times: Vec<f64> = std::iter::once(0.0)
             .chain((1..=40).map(|i| 4.0 * i as f64 / 40.0))

@@ -256,6 +256,22 @@ pub fn from_study(study: &mut Study) -> Result<Box<dyn ForwardModel>> {
     ForwardSettings::from_study(study)?.build()
 }
 
+/// Test fixture: a `hertz-prony` `[forward]` section (probe radius, rate,
+/// ramp, hold with units; output points).
+#[cfg(test)]
+pub(crate) fn hertz_forward_toml(
+    radius: &str,
+    rate: &str,
+    ramp: &str,
+    hold: &str,
+    points: usize,
+) -> String {
+    format!(
+        "[forward]\nmodel = \"hertz-prony\"\nprobe_radius = \"{radius}\"\nrate = \"{rate}\"\n\
+         ramp = \"{ramp}\"\nhold = \"{hold}\"\npoints = {points}\n"
+    )
+}
+
 /// Test-only wrapper: sleeps before every run.
 struct Delayed {
     inner: Box<dyn ForwardModel>,

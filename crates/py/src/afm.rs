@@ -181,18 +181,20 @@ fn with_curve<T>(
     f(&crate::columns::force_curve(curve, None, None)?)
 }
 
+/// `nlvid_afm::quick_fit` of `curve` (as [`with_curve`] takes it) as the
+/// dict of `nlvid --json inspect` plus the `plot` arrays.
 fn quick<'py>(
     py: Python<'py>,
-    curve: &nlvid_afm::ForceCurve,
+    curve: &Bound<'py, PyAny>,
     kind: nlvid_afm::QuickFitKind,
     tip_radius: &Bound<'py, PyAny>,
     contact: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let r = quantity(tip_radius, "tip_radius", Dimension::LENGTH)?;
     let method = contact_method(contact)?;
-    let f = py
-        .detach(|| nlvid_afm::quick_fit(curve, kind, r, method))
-        .py()?;
+    let f = with_curve(curve, |c| {
+        py.detach(|| nlvid_afm::quick_fit(c, kind, r, method)).py()
+    })?;
     let d = crate::pyjson::dict(py, &f.to_json())?;
     let plot = PyDict::new(py);
     plot.set_item("x", PyArray1::from_slice(py, &f.x))?;
@@ -219,15 +221,13 @@ fn hertz<'py>(
     poisson: f64,
     contact: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    with_curve(curve, |c| {
-        quick(
-            py,
-            c,
-            nlvid_afm::QuickFitKind::Hertz { poisson },
-            &tip_radius,
-            contact,
-        )
-    })
+    quick(
+        py,
+        curve,
+        nlvid_afm::QuickFitKind::Hertz { poisson },
+        &tip_radius,
+        contact,
+    )
 }
 
 /// Lee–Radok Prony fit of a curve's extend + hold segments
@@ -242,15 +242,13 @@ fn lee_radok<'py>(
     terms: usize,
     contact: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    with_curve(curve, |c| {
-        quick(
-            py,
-            c,
-            nlvid_afm::QuickFitKind::LeeRadok { terms },
-            &tip_radius,
-            contact,
-        )
-    })
+    quick(
+        py,
+        curve,
+        nlvid_afm::QuickFitKind::LeeRadok { terms },
+        &tip_radius,
+        contact,
+    )
 }
 
 /// Hertz fit (eq. 1.1, paraboloid of radius `tip_radius`) of `force` (N)

@@ -124,7 +124,9 @@ pub struct HertzBaseline {
 }
 
 impl CellResult {
-    fn failed(group: &str, file: &str, cell: &str, hash: &str, reason: String) -> Self {
+    /// A failed cell: no parameters, no curves, `reason` (also the base of
+    /// test cells built with `..CellResult::failed(…)`).
+    pub(crate) fn failed(group: &str, file: &str, cell: &str, hash: &str, reason: String) -> Self {
         Self {
             group: group.into(),
             file: file.into(),

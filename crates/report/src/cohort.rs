@@ -516,18 +516,14 @@ mod tests {
             ("tau1", "s"),
             ("tau2", "s"),
         ];
+        let reason = if status == CellStatus::Ok {
+            String::new()
+        } else {
+            "misfit 0.2 above fit.suspicious_misfit = 0.05".into()
+        };
+        let cell = file.trim_end_matches(".csv");
         CellResult {
-            group: group.into(),
-            file: file.into(),
-            cell: file.trim_end_matches(".csv").into(),
-            study_hash: "h".into(),
             status,
-            reason: if status == CellStatus::Ok {
-                String::new()
-            } else {
-                "misfit 0.2 above fit.suspicious_misfit = 0.05".into()
-            },
-            flags: Vec::new(),
             parameters: names
                 .iter()
                 .zip(p)
@@ -538,16 +534,9 @@ mod tests {
                 })
                 .collect(),
             misfit: Some(0.01),
-            alternatives: 0,
             peak_force: Some(1e-9),
             relaxation: Some(0.4),
-            times: Vec::new(),
-            data: Vec::new(),
-            fit: Vec::new(),
-            hertz: None,
-            cell_height: None,
-            base_diameter: None,
-            posterior: None,
+            ..CellResult::failed(group, file, cell, "h", reason)
         }
     }
 

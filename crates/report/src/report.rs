@@ -123,6 +123,21 @@ struct Figure {
     svg: String,
 }
 
+impl Figure {
+    /// Appends the figure inline (SVG, caption, link to its file).
+    fn html(&self, h: &mut String) {
+        let _ = writeln!(
+            h,
+            "<figure id=\"{}\">{}<figcaption>{} (<a href=\"{}\">{}</a>)</figcaption></figure>",
+            self.id,
+            strip_xml_decl(&self.svg),
+            escape(&self.caption),
+            self.file,
+            self.file
+        );
+    }
+}
+
 fn strip_xml_decl(svg: &str) -> &str {
     match svg.find("<svg") {
         Some(i) => &svg[i..],
@@ -464,15 +479,7 @@ pub fn write_report_of(
     let section = |h: &mut String, id: &str, title: &str, figs: &[&str]| {
         let _ = writeln!(h, "<h2 id=\"{id}\">{title}</h2>");
         for f in figures.iter().filter(|f| figs.contains(&f.id.as_str())) {
-            let _ = writeln!(
-                h,
-                "<figure id=\"{}\">{}<figcaption>{} (<a href=\"{}\">{}</a>)</figcaption></figure>",
-                f.id,
-                strip_xml_decl(&f.svg),
-                escape(&f.caption),
-                f.file,
-                f.file
-            );
+            f.html(h);
         }
     };
     section(
@@ -814,15 +821,7 @@ fn uncertainty_section(
     for f in figures.iter().filter(|f| {
         ["fig-cell-posteriors", "fig-group-posterior", "fig-p-draws"].contains(&f.id.as_str())
     }) {
-        let _ = writeln!(
-            h,
-            "<figure id=\"{}\">{}<figcaption>{} (<a href=\"{}\">{}</a>)</figcaption></figure>",
-            f.id,
-            strip_xml_decl(&f.svg),
-            escape(&f.caption),
-            f.file,
-            f.file
-        );
+        f.html(h);
     }
     let head = [
         "group".to_string(),
