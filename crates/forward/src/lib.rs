@@ -74,7 +74,7 @@ pub use capsule_fe::{
     AreaKind, CapsuleFeModel, CapsuleFeSpec, PARAMETERS as CAPSULE_PARAMETERS, samples_curve,
 };
 
-pub use curves::{AfmCurve, CurveJob, Noise, afm_curve, afm_curves};
+pub use curves::{CurveJob, Noise, afm_curve, afm_curves, measured_csv};
 pub use error::{ForwardError, Result};
 pub use hertz::{HertzGrid, HertzProny, HertzPronySpec};
 pub use lee_radok::{LeeRadok, exp_convolution};
