@@ -568,6 +568,17 @@ impl CurveJob {
         })
     }
 
+    /// One line on what [`CurveJob::write`] wrote: `files` of `samples`
+    /// samples each into `out_dir`, with the noise.
+    pub fn summary(&self, files: usize, samples: usize, out_dir: &std::path::Path) -> String {
+        format!(
+            "wrote {files} curves ({samples} samples each, noise {} of the peak force, seed {}) into {}\n",
+            self.noise.relative,
+            self.noise.seed,
+            out_dir.display()
+        )
+    }
+
     /// Runs every set (in parallel) and writes `<stem>.csv` into `out_dir`
     /// atomically; returns the files and the number of samples per curve.
     ///

@@ -460,7 +460,7 @@ mod tests {
         );
         let e = spec("ramp_points = 10\n").unwrap_err();
         assert!(
-            e.contains("s.toml:9") && e.contains("forward.ramp_points"),
+            e.contains("s.toml:8") && e.contains("forward.ramp_points"),
             "{e}"
         );
         let e = spec("ramp_points = 9\nfirst_hold_step = \"1 ms\"\n").unwrap_err();

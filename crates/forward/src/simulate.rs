@@ -343,6 +343,31 @@ impl Simulation {
         Ok(doc)
     }
 
+    /// What `nlvid simulate` / `nlvid membrane` print for the run of study
+    /// `name`: with `json`, [`Simulation::to_json`] with `files` as one
+    /// pretty JSON document; else [`Simulation::summary_text`] and `wrote`
+    /// (where the files went). Ends with a newline.
+    ///
+    /// # Errors
+    /// As [`Simulation::curve`].
+    pub fn report(
+        &self,
+        json: bool,
+        sim: &SimulateStudy,
+        (name, provenance): (&str, &serde_json::Value),
+        (files, wrote): (serde_json::Value, &str),
+    ) -> Result<String> {
+        if json {
+            let doc = self.to_json(sim, provenance.clone(), files)?;
+            let text = serde_json::to_string_pretty(&doc).map_err(|e| ForwardError::Setting {
+                model: "simulate",
+                message: e.to_string(),
+            })?;
+            return Ok(text + "\n");
+        }
+        Ok(format!("{} → {wrote}\n", self.summary_text(name)?))
+    }
+
     /// The summary for people: for afm-fe the solver's counts, then the
     /// peak, final and smallest force.
     ///

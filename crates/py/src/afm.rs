@@ -160,13 +160,7 @@ fn read_jpk(
 }
 
 fn contact_method(name: &str) -> PyResult<nlvid_afm::ContactMethod> {
-    match name {
-        "deviation" => Ok(nlvid_afm::ContactMethod::default()),
-        "piecewise" => Ok(nlvid_afm::ContactMethod::PiecewiseLinear),
-        other => Err(input(format!(
-            "contact: `{other}`: expected \"deviation\" or \"piecewise\""
-        ))),
-    }
+    nlvid_afm::ContactMethod::from_name(name).map_err(|e| input(format!("contact: {e}")))
 }
 
 /// A `ForceCurve`, or anything [`ForceCurve::from_columns`] takes (an

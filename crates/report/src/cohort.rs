@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 use crate::cell::{CellModel, CellResult, CellStatus, fit_cell};
 use crate::error::{ReportError, Result};
 use crate::input::sorted_entries;
-pub use crate::input::{CellInput, Geometry, discover};
+pub use crate::input::{CellInput, Geometry, default_out, discover};
 use crate::settings::CohortSettings;
 
 /// Path of the per-cell result file of `cell` under `out_dir`.

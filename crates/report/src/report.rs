@@ -60,6 +60,54 @@ pub struct ReportFiles {
     pub svgs: Vec<PathBuf>,
 }
 
+impl ReportOptions {
+    /// Checks, before any work, that `dir` is an output directory of
+    /// `nlvid cohort`, that `out` can be written and that a given
+    /// `surrogate_check` file exists.
+    ///
+    /// # Errors
+    /// [`ReportError::InvalidSetting`] naming the path.
+    pub fn check(&self, dir: &Path) -> Result<()> {
+        if !dir.join("cohort.json").is_file() {
+            return Err(ReportError::InvalidSetting(format!(
+                "{}: not an output directory of `nlvid cohort` (no cohort.json)",
+                dir.display()
+            )));
+        }
+        if let Some(o) = &self.out {
+            nlvid_study::check_output_dir(o)
+                .map_err(|e| ReportError::InvalidSetting(e.to_string()))?;
+        }
+        match &self.surrogate_check {
+            Some(p) if !p.is_file() => Err(ReportError::InvalidSetting(format!(
+                "--surrogate-check {}: no such file",
+                p.display()
+            ))),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl ReportFiles {
+    /// `nlvid --json report`: `html`, `figures` (ids), `svgs`.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "html": self.html.display().to_string(),
+            "figures": self.figure_ids,
+            "svgs": self.svgs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+        })
+    }
+
+    /// One line: where the page is and how many figures it has.
+    pub fn text(&self) -> String {
+        format!(
+            "report: {} ({} figures)\n",
+            self.html.display(),
+            self.figure_ids.len()
+        )
+    }
+}
+
 /// HTML-escapes text.
 pub fn escape(s: &str) -> String {
     let mut o = String::with_capacity(s.len());
