@@ -13,6 +13,7 @@ use pyo3::types::{PyDict, PyList};
 
 use crate::arrays::{quantity, same_length, vector};
 use crate::errors::{IntoPy, input};
+use nlvid_afm::QuickFitKind;
 use nlvid_study::Dimension;
 
 /// One force curve of an instrument file, SI units.
@@ -180,7 +181,7 @@ fn with_curve<T>(
 fn quick<'py>(
     py: Python<'py>,
     curve: &Bound<'py, PyAny>,
-    kind: nlvid_afm::QuickFitKind,
+    kind: QuickFitKind,
     tip_radius: &Bound<'py, PyAny>,
     contact: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
@@ -218,7 +219,7 @@ fn hertz<'py>(
     quick(
         py,
         curve,
-        nlvid_afm::QuickFitKind::Hertz { poisson },
+        QuickFitKind::Hertz { poisson },
         &tip_radius,
         contact,
     )
@@ -239,7 +240,7 @@ fn lee_radok<'py>(
     quick(
         py,
         curve,
-        nlvid_afm::QuickFitKind::LeeRadok { terms },
+        QuickFitKind::LeeRadok { terms },
         &tip_radius,
         contact,
     )

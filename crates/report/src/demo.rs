@@ -126,6 +126,19 @@ pub struct DemoFiles {
     pub cells: Vec<TrueCell>,
 }
 
+impl DemoFiles {
+    /// One line on what was written for `spec` (`nlvid demo --write-data`).
+    pub fn text(&self, spec: &DemoSpec) -> String {
+        format!(
+            "wrote {} groups × {} cells from known parameters into {} (truth: {})\n",
+            spec.groups.len(),
+            spec.cells_per_group,
+            self.data.display(),
+            self.truth.display()
+        )
+    }
+}
+
 fn normal(rng: &mut ChaCha8Rng) -> f64 {
     nlvid_forward::curves::standard_normal(rng)
 }
