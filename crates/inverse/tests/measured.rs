@@ -245,14 +245,14 @@ fn resampling_is_linear_and_refuses_grids_beyond_the_data() {
     );
     let c = read_afm_csv(&p, &afm_cols(), &cal()).expect("read");
     let z = c
-        .resample(&c.displacement(), &[0.0, 0.5, 1.5, 2.0])
+        .resample(c.displacement(), &[0.0, 0.5, 1.5, 2.0])
         .expect("resample");
     let expect = [0.0, 0.5e-6, 2e-6, 3e-6];
     for (a, b) in z.iter().zip(expect) {
         assert!((a - b).abs() < 1e-18, "{z:?}");
     }
     let e = c
-        .resample(&c.displacement(), &[0.0, 2.5])
+        .resample(c.displacement(), &[0.0, 2.5])
         .expect_err("beyond");
     assert!(
         matches!(e, InverseError::ProtocolMismatch { row: 4, .. }),
