@@ -192,6 +192,14 @@ pub(crate) fn add_outer(out: &mut [[f64; 8]; 8], a: &[f64; 8], b: &[f64; 8], w: 
     }
 }
 
+/// A distorted element off the axis and a large displacement of it (tests).
+#[cfg(test)]
+pub(crate) fn distorted_element() -> ([PointGeometry; 4], [f64; 8]) {
+    let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
+    let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
+    (element_geometry(&x), u)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -202,9 +210,7 @@ mod tests {
             mu: 1.0,
             kappa: 30.0,
         };
-        let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
-        let geo = element_geometry(&x);
-        let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
+        let (geo, u) = distorted_element();
         let mut out = ElementOutput::zero();
         let sn = [(); 4];
         let mut tr = [(); 4];
@@ -274,9 +280,7 @@ mod tests {
     }
 
     fn compare_with_direct_form<M: nlvid_material::Material3>(mat: &M, fbar: bool) {
-        let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
-        let geo = element_geometry(&x);
-        let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
+        let (geo, u) = distorted_element();
         let sn: Vec<M::State> = (0..4).map(|_| mat.initial_state()).collect();
         let mut tr = sn.clone();
         let mut fast = ElementOutput::zero();
