@@ -203,61 +203,39 @@ pub(crate) fn distorted_element() -> ([PointGeometry; 4], [f64; 8]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fbar::fbar_kernel as fbar_element;
+    use crate::fbar::fbar_kernel;
+
+    /// The kernel on [`distorted_element`] at `u` from fresh history over
+    /// Δt = 0.1.
+    fn evaluate<M: Material3>(
+        mat: &M,
+        u: &[f64; 8],
+        fbar: bool,
+        part: TangentPart,
+    ) -> ElementOutput {
+        let (geo, _) = distorted_element();
+        let sn: Vec<M::State> = (0..4).map(|_| mat.initial_state()).collect();
+        let mut tr = sn.clone();
+        let mut out = ElementOutput::zero();
+        fbar_kernel(mat, &geo, u, &sn, &mut tr, 0.1, fbar, part, &mut out).unwrap();
+        out
+    }
 
     fn tangent_fd(fbar: bool) {
         let mat = crate::reference::NeoHookean {
             mu: 1.0,
             kappa: 30.0,
         };
-        let (geo, u) = distorted_element();
-        let mut out = ElementOutput::zero();
-        let sn = [(); 4];
-        let mut tr = [(); 4];
-        fbar_element(
-            &mat,
-            &geo,
-            &u,
-            &sn,
-            &mut tr,
-            0.1,
-            fbar,
-            TangentPart::Full,
-            &mut out,
-        )
-        .unwrap();
+        let (_, u) = distorted_element();
+        let out = evaluate(&mat, &u, fbar, TangentPart::Full);
         let h = 1e-7;
-        let mut op = ElementOutput::zero();
-        let mut om = ElementOutput::zero();
         for c in 0..8 {
             let mut up = u;
             let mut um = u;
             up[c] += h;
             um[c] -= h;
-            fbar_element(
-                &mat,
-                &geo,
-                &up,
-                &sn,
-                &mut tr,
-                0.1,
-                fbar,
-                TangentPart::None,
-                &mut op,
-            )
-            .unwrap();
-            fbar_element(
-                &mat,
-                &geo,
-                &um,
-                &sn,
-                &mut tr,
-                0.1,
-                fbar,
-                TangentPart::None,
-                &mut om,
-            )
-            .unwrap();
+            let op = evaluate(&mat, &up, fbar, TangentPart::None);
+            let om = evaluate(&mat, &um, fbar, TangentPart::None);
             for r in 0..8 {
                 let fd = (op.r[r] - om.r[r]) / (2.0 * h);
                 assert!(
@@ -283,20 +261,8 @@ mod tests {
         let (geo, u) = distorted_element();
         let sn: Vec<M::State> = (0..4).map(|_| mat.initial_state()).collect();
         let mut tr = sn.clone();
-        let mut fast = ElementOutput::zero();
+        let fast = evaluate(mat, &u, fbar, TangentPart::Full);
         let mut direct = ElementOutput::zero();
-        fbar_element(
-            mat,
-            &geo,
-            &u,
-            &sn,
-            &mut tr,
-            0.1,
-            fbar,
-            TangentPart::Full,
-            &mut fast,
-        )
-        .unwrap();
         fbar_element_reference(mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut direct).unwrap();
         let kmax = direct
             .k

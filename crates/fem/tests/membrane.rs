@@ -267,6 +267,7 @@ fn elastic_force_displacement_within_0_2_percent_of_the_semi_analytical_curve() 
             solver
                 .equilibrium(0.0, nlvid_membrane::Control::Displacement(d))
                 .unwrap()
+                .record
                 .force
         })
         .collect();
