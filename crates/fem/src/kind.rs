@@ -43,8 +43,7 @@ impl<const ND: usize> Default for LocalOutput<ND> {
     }
 }
 
-/// What the model reads of an element's output: [`LocalOutput`], also
-/// boxed (the hexahedron's 24×24 tangent).
+/// What the model reads of an element's output ([`LocalOutput`]).
 #[doc(hidden)]
 pub trait Local: Clone + Send + Default {
     /// The element residual.
@@ -54,17 +53,6 @@ pub trait Local: Clone + Send + Default {
 }
 
 impl<const ND: usize> Local for LocalOutput<ND> {
-    #[inline]
-    fn residual(&self) -> &[f64] {
-        &self.r
-    }
-    #[inline]
-    fn tangent_row(&self, a: usize) -> &[f64] {
-        &self.k[a]
-    }
-}
-
-impl<const ND: usize> Local for Box<LocalOutput<ND>> {
     #[inline]
     fn residual(&self) -> &[f64] {
         &self.r
@@ -355,7 +343,7 @@ impl<M: Material3> ElementKind<M> for Solid {
     const POINTS: usize = 8;
     type Mesh = Mesh3;
     type Geometry = [HexPoint; 8];
-    type Output = Box<HexOutput>;
+    type Output = HexOutput;
 
     fn geometry(mesh: &Mesh3) -> Result<Vec<[HexPoint; 8]>> {
         mesh.elements
@@ -380,7 +368,7 @@ impl<M: Material3> ElementKind<M> for Solid {
         dt: f64,
         fbar: bool,
         part: TangentPart,
-        out: &mut Box<HexOutput>,
+        out: &mut HexOutput,
     ) -> std::result::Result<(), PointFailure> {
         fbar_kernel(material, geometry, u, state_n, trial, dt, fbar, part, out)
     }
