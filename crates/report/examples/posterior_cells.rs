@@ -67,10 +67,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             keep: usize::MAX / 2,
             ..PosteriorSettings::new(settings.hold_end)
         };
+        // Without refresh=/refit=: the sampler before issue 17's second
+        // round (neither), refits only, and both.
+        let configs: Vec<(f64, bool)> = match (refresh, refit) {
+            (None, None) => vec![(0.0, false), (0.0, true), (ps.refresh_fraction, true)],
+            _ => vec![(
+                refresh.unwrap_or(ps.refresh_fraction),
+                refit.unwrap_or(ps.refit_proposal),
+            )],
+        };
+        for (refresh_fraction, refit_proposal) in configs {
+        println!("refresh {refresh_fraction}, refit {refit_proposal}:");
         let ps = PosteriorSettings {
-            refresh_fraction: refresh.unwrap_or(ps.refresh_fraction),
-            refit_proposal: refit.unwrap_or(ps.refit_proposal),
-            ..ps
+            refresh_fraction,
+            refit_proposal,
+            ..ps.clone()
         };
         let t0 = std::time::Instant::now();
         let p = sample_posterior(s, &r.data, &x_hat, &ps)?;
@@ -110,6 +121,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         for (name, iv) in [("G0", p.g0), ("gsum", p.g_sum), ("Gend", p.g_end)] {
             println!("   {name:5} R-hat {:.4} ESS {:6.0}", iv.rhat, iv.ess);
+        }
         }
     }
     std::fs::remove_dir_all(&root)?;
