@@ -27,7 +27,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let noise: f64 = args.get(2).map_or(Ok(0.02), |s| s.parse())?;
     let seed: u64 = args.get(3).map_or(Ok(17), |s| s.parse())?;
     let max_steps: usize = args.get(4).map_or(Ok(2000), |s| s.parse())?;
-    let names: Vec<String> = args.iter().skip(5).filter(|a| !a.contains('=')).cloned().collect();
+    let names: Vec<String> = args
+        .iter()
+        .skip(5)
+        .filter(|a| !a.contains('='))
+        .cloned()
+        .collect();
     let opt = |key: &str| {
         args.iter()
             .skip(5)
@@ -77,51 +82,51 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             )],
         };
         for (refresh_fraction, refit_proposal) in configs {
-        println!("refresh {refresh_fraction}, refit {refit_proposal}:");
-        let ps = PosteriorSettings {
-            refresh_fraction,
-            refit_proposal,
-            ..ps.clone()
-        };
-        let t0 = std::time::Instant::now();
-        let p = sample_posterior(s, &r.data, &x_hat, &ps)?;
-        let n_per = p.draws.len() / ps.ensembles;
-        println!(
-            "{} R-hat {:.4} ESS {:.0} acc {:.2} kept {} per walker, {:.2} s; truth u {:?}; fit u {:?}",
-            r.cell,
-            p.rhat_max,
-            p.ess_min,
-            p.acceptance,
-            n_per / ps.walkers,
-            t0.elapsed().as_secs_f64(),
-            round(&domain.to_unit(&truth.x)),
-            round(&domain.to_unit(&x_hat)),
-        );
-        for (i, (name, iv)) in p.parameters.iter().enumerate() {
-            let mut per = Vec::new();
-            for e in 0..ps.ensembles {
-                let mut v: Vec<f64> = p.draws[e * n_per..(e + 1) * n_per]
-                    .iter()
-                    .map(|x| domain.to_unit(x)[i])
-                    .collect();
-                v.sort_by(f64::total_cmp);
-                per.push(format!(
-                    "{:.3}[{:.3},{:.3}]",
-                    quantile(&v, 0.5),
-                    quantile(&v, 0.05),
-                    quantile(&v, 0.95)
-                ));
-            }
+            println!("refresh {refresh_fraction}, refit {refit_proposal}:");
+            let ps = PosteriorSettings {
+                refresh_fraction,
+                refit_proposal,
+                ..ps.clone()
+            };
+            let t0 = std::time::Instant::now();
+            let p = sample_posterior(s, &r.data, &x_hat, &ps)?;
+            let n_per = p.draws.len() / ps.ensembles;
             println!(
-                "   {name:5} R-hat {:.4} ESS {:6.0}  per ensemble (u) {}",
-                iv.rhat,
-                iv.ess,
-                per.join(" ")
+                "{} R-hat {:.4} ESS {:.0} acc {:.2} kept {} per walker, {:.2} s; truth u {:?}; fit u {:?}",
+                r.cell,
+                p.rhat_max,
+                p.ess_min,
+                p.acceptance,
+                n_per / ps.walkers,
+                t0.elapsed().as_secs_f64(),
+                round(&domain.to_unit(&truth.x)),
+                round(&domain.to_unit(&x_hat)),
             );
-        }
-        for (name, iv) in [("G0", p.g0), ("gsum", p.g_sum), ("Gend", p.g_end)] {
-            println!("   {name:5} R-hat {:.4} ESS {:6.0}", iv.rhat, iv.ess);
-        }
+            for (i, (name, iv)) in p.parameters.iter().enumerate() {
+                let mut per = Vec::new();
+                for e in 0..ps.ensembles {
+                    let mut v: Vec<f64> = p.draws[e * n_per..(e + 1) * n_per]
+                        .iter()
+                        .map(|x| domain.to_unit(x)[i])
+                        .collect();
+                    v.sort_by(f64::total_cmp);
+                    per.push(format!(
+                        "{:.3}[{:.3},{:.3}]",
+                        quantile(&v, 0.5),
+                        quantile(&v, 0.05),
+                        quantile(&v, 0.95)
+                    ));
+                }
+                println!(
+                    "   {name:5} R-hat {:.4} ESS {:6.0}  per ensemble (u) {}",
+                    iv.rhat,
+                    iv.ess,
+                    per.join(" ")
+                );
+            }
+            for (name, iv) in [("G0", p.g0), ("gsum", p.g_sum), ("Gend", p.g_end)] {
+                println!("   {name:5} R-hat {:.4} ESS {:6.0}", iv.rhat, iv.ess);
+            }
         }
     }
     std::fs::remove_dir_all(&root)?;

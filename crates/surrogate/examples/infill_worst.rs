@@ -12,10 +12,10 @@
 
 use std::path::PathBuf;
 
-use nlvid_surrogate::load;
+use nlvid_surrogate::BuildStudy;
 use nlvid_surrogate::check::summarise;
 use nlvid_surrogate::infill::{checking_set, fit_kept};
-use nlvid_surrogate::BuildStudy;
+use nlvid_surrogate::load;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -46,11 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect::<Result<_, _>>()?;
     let sm = summarise(&cy, &preds)?;
     let pv = model.process_variance();
-    let units: Vec<Vec<f64>> = design
-        .iter()
-        .take(n)
-        .map(|x| domain.to_unit(x))
-        .collect();
+    let units: Vec<Vec<f64>> = design.iter().take(n).map(|x| domain.to_unit(x)).collect();
     println!(
         "{} admissible training runs of the first {} design points; {} checking runs; max {:.3} %, median {:.3} %",
         mm.x.len(),
