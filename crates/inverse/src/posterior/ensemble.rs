@@ -20,7 +20,8 @@
 //!
 //! - independence (after burn-in only): y ~ t₅(μ̂, 1.2²·Σ̂) with μ̂, Σ̂ the
 //!   mean and covariance of the ensemble over the second half of burn-in
-//!   (then frozen, so the kept chain is a fixed mixture of valid kernels),
+//!   (fixed within a call of [`Ensemble::sample`]; refitted only between
+//!   calls, see below),
 //!   accepted with min(1, p(y) q(x_k) / (p(x_k) q(y))). Where the
 //!   posterior is close to Gaussian this cuts the autocorrelation time
 //!   from ≈ 25 steps (DE/stretch in 5-D) to a few; where it is not, the
