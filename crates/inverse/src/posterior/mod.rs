@@ -61,10 +61,26 @@ pub struct PosteriorSettings {
     pub t_end: f64,
     /// Times of the G(t) band, s.
     pub band_times: Vec<f64>,
+    /// Probability of an axis-refresh step (a coordinate redrawn from the
+    /// prior, [`ensemble`] module docs).
+    #[serde(default = "default_refresh")]
+    pub refresh_fraction: f64,
+    /// Refit each ensemble's independence proposal to its own last round
+    /// before the next round.
+    #[serde(default = "default_refit")]
+    pub refit_proposal: bool,
 }
 
 fn default_ensembles() -> usize {
     4
+}
+
+fn default_refresh() -> f64 {
+    0.1
+}
+
+fn default_refit() -> bool {
+    true
 }
 
 impl PosteriorSettings {
@@ -83,6 +99,8 @@ impl PosteriorSettings {
             keep: 200,
             t_end,
             band_times: (0..53).map(|i| t_end * i as f64 / 52.0).collect(),
+            refresh_fraction: default_refresh(),
+            refit_proposal: default_refit(),
         }
     }
 }
@@ -310,6 +328,7 @@ pub fn sample_posterior(
             seed: settings
                 .seed
                 .wrapping_add(0x9e37_79b9_7f4a_7c15u64.wrapping_mul(e as u64)),
+            refresh_fraction: settings.refresh_fraction,
             ..EnsembleSettings::default()
         };
         let mut ens = Ensemble::new(&log_density, start, &es)?;
@@ -327,6 +346,11 @@ pub fn sample_posterior(
         let post = summarise(&draws, noise, settings)?;
         if post.rhat_max <= RHAT_TARGET || kept + settings.steps > max_steps {
             return Ok(post);
+        }
+        if settings.refit_proposal {
+            for (ens, chains) in &mut ensembles {
+                ens.refit_proposal(chains, settings.steps);
+            }
         }
     }
 }

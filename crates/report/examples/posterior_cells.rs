@@ -1,0 +1,149 @@
+//! Convergence of the per-cell posteriors (issue 17) cell by cell: the
+//! coverage example's synthetic cohort is written and fitted, and for the
+//! named cells (all when none is named) the posterior is sampled with the
+//! given settings; per parameter this prints the split R̂ across
+//! ensembles, the ESS and each ensemble's median and 5/95 % quantiles in
+//! the domain's unit coordinates u (which ensemble is off, and where).
+//!
+//! ```text
+//! cargo run --release -p nlvid-report --example posterior_cells \
+//!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [cell ...]
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use nlvid_inverse::Model;
+use nlvid_inverse::posterior::{PosteriorSettings, quantile, sample_posterior};
+use nlvid_report::cell::{CellModel, fit_cell};
+use nlvid_report::cohort::discover;
+use nlvid_report::demo::write_demo_data;
+use nlvid_report::settings::CohortSettings;
+
+mod coverage_cohort;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let cells: usize = args.get(1).map_or(Ok(100), |s| s.parse())?;
+    let noise: f64 = args.get(2).map_or(Ok(0.02), |s| s.parse())?;
+    let seed: u64 = args.get(3).map_or(Ok(17), |s| s.parse())?;
+    let max_steps: usize = args.get(4).map_or(Ok(2000), |s| s.parse())?;
+    let names: Vec<String> = args
+        .iter()
+        .skip(5)
+        .filter(|a| !a.contains('='))
+        .cloned()
+        .collect();
+    let opt = |key: &str| {
+        args.iter()
+            .skip(5)
+            .find_map(|a| a.strip_prefix(&format!("{key}=")).map(str::to_string))
+    };
+    let refresh: Option<f64> = opt("refresh").map(|v| v.parse()).transpose()?;
+    let refit: Option<bool> = opt("refit").map(|v| v.parse()).transpose()?;
+    let demo =
+        std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
+    let root = std::env::temp_dir().join(format!("nlvid-cells-{}", std::process::id()));
+    let study = write_study(&root, &demo)?;
+    let spec = coverage_cohort::wide_groups(cells, seed, noise);
+    let files = write_demo_data(&spec, &study, &demo.join("metamodel.toml"))?;
+    let settings = CohortSettings::load(&study)?;
+    let model = CellModel::load(&settings)?;
+    let CellModel::Surrogate(fitter, _) = &model else {
+        return Err("the demo study fits a meta-model".into());
+    };
+    let s = fitter.surrogate();
+    let domain = Model::domain(s).clone();
+    for inp in discover(&files.data)? {
+        if !names.is_empty() && !names.iter().any(|n| inp.file.contains(&format!("{n}."))) {
+            continue;
+        }
+        let r = fit_cell(&settings, &model, &inp);
+        let Some(truth) = files
+            .cells
+            .iter()
+            .find(|t| t.cell == r.cell && t.group == r.group)
+        else {
+            continue;
+        };
+        let x_hat: Vec<f64> = r.parameters.iter().map(|p| p.value).collect();
+        let ps = PosteriorSettings {
+            max_steps,
+            seed: settings.seed,
+            keep: usize::MAX / 2,
+            ..PosteriorSettings::new(settings.hold_end)
+        };
+        // Without refresh=/refit=: the sampler before issue 17's second
+        // round (neither), refits only, and both.
+        let configs: Vec<(f64, bool)> = match (refresh, refit) {
+            (None, None) => vec![(0.0, false), (0.0, true), (ps.refresh_fraction, true)],
+            _ => vec![(
+                refresh.unwrap_or(ps.refresh_fraction),
+                refit.unwrap_or(ps.refit_proposal),
+            )],
+        };
+        for (refresh_fraction, refit_proposal) in configs {
+            println!("refresh {refresh_fraction}, refit {refit_proposal}:");
+            let ps = PosteriorSettings {
+                refresh_fraction,
+                refit_proposal,
+                ..ps.clone()
+            };
+            let t0 = std::time::Instant::now();
+            let p = sample_posterior(s, &r.data, &x_hat, &ps)?;
+            let n_per = p.draws.len() / ps.ensembles;
+            println!(
+                "{} R-hat {:.4} ESS {:.0} acc {:.2} kept {} per walker, {:.2} s; truth u {:?}; fit u {:?}",
+                r.cell,
+                p.rhat_max,
+                p.ess_min,
+                p.acceptance,
+                n_per / ps.walkers,
+                t0.elapsed().as_secs_f64(),
+                round(&domain.to_unit(&truth.x)),
+                round(&domain.to_unit(&x_hat)),
+            );
+            for (i, (name, iv)) in p.parameters.iter().enumerate() {
+                let mut per = Vec::new();
+                for e in 0..ps.ensembles {
+                    let mut v: Vec<f64> = p.draws[e * n_per..(e + 1) * n_per]
+                        .iter()
+                        .map(|x| domain.to_unit(x)[i])
+                        .collect();
+                    v.sort_by(f64::total_cmp);
+                    per.push(format!(
+                        "{:.3}[{:.3},{:.3}]",
+                        quantile(&v, 0.5),
+                        quantile(&v, 0.05),
+                        quantile(&v, 0.95)
+                    ));
+                }
+                println!(
+                    "   {name:5} R-hat {:.4} ESS {:6.0}  per ensemble (u) {}",
+                    iv.rhat,
+                    iv.ess,
+                    per.join(" ")
+                );
+            }
+            for (name, iv) in [("G0", p.g0), ("gsum", p.g_sum), ("Gend", p.g_end)] {
+                println!("   {name:5} R-hat {:.4} ESS {:6.0}", iv.rhat, iv.ess);
+            }
+        }
+    }
+    std::fs::remove_dir_all(&root)?;
+    Ok(())
+}
+
+fn round(u: &[f64]) -> Vec<f64> {
+    u.iter().map(|v| (v * 1000.0).round() / 1000.0).collect()
+}
+
+/// The demo's cohort study with absolute meta-model paths, in `dir`.
+fn write_study(dir: &Path, demo: &Path) -> Result<PathBuf, Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir)?;
+    let text = std::fs::read_to_string(demo.join("study.toml"))?;
+    let mm = demo.join("metamodel");
+    let text = text.replace("\"metamodel/", &format!("\"{}/", mm.display()));
+    let study = dir.join("study.toml");
+    std::fs::write(&study, text)?;
+    Ok(study)
+}
