@@ -382,6 +382,49 @@ impl AfmFeModel {
     pub fn setup(&self) -> &AfmSetup {
         &self.setup
     }
+
+    /// G(t) of eq. 5.1 and the finite-element setup of one run at `p`
+    /// (the model's parameter order): the setup itself, or with geometry
+    /// inputs a copy with height `p[5]` and diameter `p[6]`.
+    ///
+    /// # Errors
+    /// Wrong parameter count, invalid Prony parameters, a non-positive
+    /// shape ([`FailureKind::InvalidParameters`]).
+    pub fn at(
+        &self,
+        p: &[f64],
+    ) -> std::result::Result<(Relaxation, std::borrow::Cow<'_, AfmSetup>), RunFailure> {
+        let invalid = |message: String| RunFailure {
+            kind: FailureKind::InvalidParameters,
+            time: None,
+            message: format!("afm-fe: {message}"),
+        };
+        let n = names::PRONY2.len() + if self.geometry_inputs { 2 } else { 0 };
+        if p.len() != n {
+            return Err(invalid(format!(
+                "{} parameters given, the model has {n} ({})",
+                p.len(),
+                self.parameter_names().join(", ")
+            )));
+        }
+        // Parameters in `names::PRONY2` order (G0 the shear modulus).
+        let params = Relaxation::from_named(&names::PRONY2, &p[..names::PRONY2.len()])
+            .map_err(|e| invalid(e.to_string()))?;
+        if !self.geometry_inputs {
+            return Ok((params, std::borrow::Cow::Borrowed(&self.setup)));
+        }
+        let (height, diameter) = (p[5], p[6]);
+        if !(height > 0.0 && diameter > 0.0 && height.is_finite() && diameter.is_finite()) {
+            return Err(invalid(format!(
+                "cell height H = {height:e} m and base diameter D = {diameter:e} m must be \
+                 positive"
+            )));
+        }
+        let mut setup = self.setup.clone();
+        setup.height = height;
+        setup.diameter = diameter;
+        Ok((params, std::borrow::Cow::Owned(setup)))
+    }
 }
 
 /// A finite-element error as a run failure (non-convergence keeps its time).
@@ -467,37 +510,7 @@ impl ForwardModel for AfmFeModel {
         })
     }
     fn run(&self, p: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
-        let invalid = |message: String| RunFailure {
-            kind: FailureKind::InvalidParameters,
-            time: None,
-            message: format!("afm-fe: {message}"),
-        };
-        let n = names::PRONY2.len() + if self.geometry_inputs { 2 } else { 0 };
-        if p.len() != n {
-            return Err(invalid(format!(
-                "{} parameters given, the model has {n} ({})",
-                p.len(),
-                self.parameter_names().join(", ")
-            )));
-        }
-        // Parameters in `names::PRONY2` order (G0 the shear modulus).
-        let params = Relaxation::from_named(&names::PRONY2, &p[..names::PRONY2.len()])
-            .map_err(|e| invalid(e.to_string()))?;
-        if !self.geometry_inputs {
-            return nlvid_fem::afm::run(&params, &self.setup)
-                .map(|r| r.force)
-                .map_err(|e| fem_failure(&e));
-        }
-        let (height, diameter) = (p[5], p[6]);
-        if !(height > 0.0 && diameter > 0.0 && height.is_finite() && diameter.is_finite()) {
-            return Err(invalid(format!(
-                "cell height H = {height:e} m and base diameter D = {diameter:e} m must be \
-                 positive"
-            )));
-        }
-        let mut setup = self.setup.clone();
-        setup.height = height;
-        setup.diameter = diameter;
+        let (params, setup) = self.at(p)?;
         nlvid_fem::afm::run(&params, &setup)
             .map(|r| r.force)
             .map_err(|e| fem_failure(&e))

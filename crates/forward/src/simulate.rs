@@ -22,7 +22,7 @@
 use nlvid_fem::afm::AfmRun;
 use nlvid_membrane::MembraneRun;
 use nlvid_model::Curve;
-use nlvid_study::{Bounds, Dimension, Study};
+use nlvid_study::{Bounds, Study};
 
 use crate::error::{ForwardError, Result};
 use crate::{ForwardSettings, ForwardSpec, fem_failure};
@@ -108,10 +108,15 @@ impl SimulateStudy {
         let mut p = study.section("parameters")?;
         let mut values = Vec::with_capacity(names.len());
         for (name, unit) in names.iter().zip(&units) {
-            let v = match unit.as_str() {
-                "Pa" => p.req_quantity(name, Dimension::PRESSURE, Bounds::positive())?,
-                "s" => p.req_quantity(name, Dimension::TIME, Bounds::positive())?,
-                _ => p.req_f64(name, Bounds::non_negative())?,
+            // dimensionless values as numbers, the others with their unit
+            // (Pa, s, and the geometry inputs' m)
+            let v = if unit == "1" {
+                p.req_f64(name, Bounds::non_negative())?
+            } else {
+                let dim = nlvid_study::parse_unit(unit)
+                    .map_err(|e| p.invalid(name, format!("model unit `{unit}`: {e}")))?
+                    .1;
+                p.req_quantity(name, dim, Bounds::positive())?
             };
             values.push(v);
         }
@@ -189,14 +194,13 @@ impl SimulateStudy {
         };
         match &self.forward.spec {
             ForwardSpec::AfmFe(spec) => {
-                // Parameters in `names::PRONY2` order (G0 the shear modulus).
-                let params =
-                    nlvid_model::Relaxation::from_named(&nlvid_model::names::PRONY2, &self.values)
-                        .map_err(|e| failed(e.to_string()))?;
+                // G(t) and the shape of this run (H, D when they are inputs)
+                let model = spec.build()?;
+                let (params, setup) = model.at(&self.values).map_err(|e| failed(e.to_string()))?;
                 // A single run is all that is going on: its element loop
                 // uses both cores (bitwise the serial result, fem crate
                 // test `parallel_element_loop_is_bitwise_serial`).
-                let mut setup = spec.setup()?;
+                let mut setup = setup.into_owned();
                 setup.settings.threads = std::thread::available_parallelism()
                     .map_or(1, std::num::NonZeroUsize::get)
                     .min(2);

@@ -357,14 +357,20 @@ fn afm_fe_geometry_inputs_run_each_shape_and_name_h_and_d() {
     let inputs = AFM
         .replace("height = \"6 um\"\n", "")
         .replace("diameter = \"14 um\"\n", "")
-        .replace("model = \"afm-fe\"\n", "model = \"afm-fe\"\ngeometry = \"inputs\"\n");
+        .replace(
+            "model = \"afm-fe\"\n",
+            "model = \"afm-fe\"\ngeometry = \"inputs\"\n",
+        );
     assert_ne!(inputs, AFM);
     let model = from_study(&mut study(&inputs)).unwrap();
     assert_eq!(
         model.parameter_names(),
         ["G0", "g1", "g2", "tau1", "tau2", "H", "D"]
     );
-    assert_eq!(model.parameter_units(), ["Pa", "1", "1", "s", "s", "m", "m"]);
+    assert_eq!(
+        model.parameter_units(),
+        ["Pa", "1", "1", "s", "s", "m", "m"]
+    );
     let c = model.conditions().unwrap();
     assert_eq!((c.cell_height_m, c.cell_diameter_m), (None, None));
     let (g0, g1, g2, tau1, tau2) = (1000.0, 0.3, 0.2, 0.1, 5.0);
@@ -384,16 +390,28 @@ fn afm_fe_geometry_inputs_run_each_shape_and_name_h_and_d() {
     }
     let fixed = from_study(&mut study(AFM)).unwrap();
     let f6 = fixed.run(&[g0, g1, g2, tau1, tau2]).unwrap();
-    let diff = f.iter().zip(&f6).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    let diff = f
+        .iter()
+        .zip(&f6)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
     assert!(diff > 1e-3 * peak, "another shape, another curve: {diff}");
     assert_ne!(model.identity(), fixed.identity());
     // five parameters, or a bad shape: typed failures
     let e = model.run(&[g0, g1, g2, tau1, tau2]).unwrap_err();
     assert_eq!(e.kind, FailureKind::InvalidParameters, "{e}");
-    let e = model.run(&[g0, g1, g2, tau1, tau2, -5e-6, 16e-6]).unwrap_err();
+    let e = model
+        .run(&[g0, g1, g2, tau1, tau2, -5e-6, 16e-6])
+        .unwrap_err();
     assert_eq!(e.kind, FailureKind::InvalidParameters, "{e}");
     // a fixed height beside geometry = "inputs" is refused, naming the key
-    let both = AFM.replace("model = \"afm-fe\"\n", "model = \"afm-fe\"\ngeometry = \"inputs\"\n");
+    let both = AFM.replace(
+        "model = \"afm-fe\"\n",
+        "model = \"afm-fe\"\ngeometry = \"inputs\"\n",
+    );
     let e = err(&both);
-    assert!(e.contains("forward.height") && e.contains("design.parameters"), "{e}");
+    assert!(
+        e.contains("forward.height") && e.contains("design.parameters"),
+        "{e}"
+    );
 }
