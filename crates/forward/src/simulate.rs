@@ -463,6 +463,27 @@ points = 50
         assert!(e.to_string().contains("`parameters.g1`"), "{e}");
     }
 
+    /// `geometry = "inputs"`: H and D are read from `[parameters]` as
+    /// lengths (the model's unit m), a bare number is refused.
+    #[test]
+    fn geometry_inputs_are_lengths_in_parameters() {
+        let afm = "[forward]\nmodel = \"afm-fe\"\ngeometry = \"inputs\"\n\
+                   spring_constant = \"0.12 N/m\"\npoints = 10\n\
+                   [protocol]\nkind = \"afm\"\nengage_force = \"0.2 nN\"\n\
+                   engage_time = \"1 s\"\ncycle_rates = [\"10 um/s\"]\ndepth = \"0.5 um\"\n\
+                   retract = \"0.25 um\"\nfinal_rate = \"10 um/s\"\nhold = \"1 s\"\n";
+        let prony = "[parameters]\nG0 = \"1 kPa\"\ng1 = 0.3\ng2 = 0.2\ntau1 = \"0.1 s\"\n\
+                     tau2 = \"5 s\"\n";
+        let s = study(&format!("{afm}{prony}H = \"12.22 um\"\nD = \"28.88 um\"\n"));
+        let s = match s {
+            Ok(s) => s,
+            Err(e) => panic!("{e}"),
+        };
+        assert_eq!(s.values[5..], [12.22e-6, 28.88e-6]);
+        let e = study(&format!("{afm}{prony}H = 12.22\nD = \"28.88 um\"\n")).expect_err("unit");
+        assert!(e.to_string().contains("parameters.H"), "{e}");
+    }
+
     #[test]
     fn sections_of_the_former_schemas_name_the_keys_that_replace_them() {
         let e = study(&format!("{HERTZ}[cantilever]\nk = \"0.1 N/m\"\n")).expect_err("old");
