@@ -2,7 +2,10 @@
 //! thesis §5.3 (`nlvid_fem::afm::run`) driven by the two-step script of
 //! `nlvid-protocol` (force-controlled engagement, then the piezo program
 //! of Fig. 5.2) or by any continuous piezo program Z(t) without engagement,
-//! parameters `[G0, g1, g2, τ1, τ2]` of eq. 5.1 / Table 5.3.
+//! parameters `[G0, g1, g2, τ1, τ2]` of eq. 5.1 / Table 5.3 — and, with
+//! `geometry = "inputs"` (issue 17, beyond the thesis), the cell height and
+//! base diameter `[H, D]` (m) after them, so one meta-model covers cells of
+//! different shapes.
 //!
 //! `nlvid simulate`, `nlvid build` and `nlvid fit` (real model) read these
 //! same `[forward]` keys with the same defaults; the defaults are the fem
@@ -18,14 +21,29 @@ use nlvid_study::{Bounds, Dimension, Section};
 
 use crate::error::{ForwardError, Result};
 
+/// Where the cell's height and base diameter come from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AfmGeometry {
+    /// One shape for every run (`[forward] height`, `diameter`): the
+    /// thesis's mean geometry of a setup (§5.4.2).
+    Fixed {
+        /// Cell height H [m].
+        height: f64,
+        /// Cell base diameter D [m].
+        diameter: f64,
+    },
+    /// `geometry = "inputs"`: H and D are the 6th and 7th parameters
+    /// ([`names::GEOMETRY`], m), their ranges study parameters of
+    /// `[design.parameters]`.
+    Inputs,
+}
+
 /// Settings of the AFM finite-element forward model (everything but the
 /// five material parameters).
 #[derive(Debug, Clone, PartialEq)]
 pub struct AfmFeSpec {
-    /// Cell height H [m].
-    pub height: f64,
-    /// Cell base diameter D [m].
-    pub diameter: f64,
+    /// The cell's shape: fixed, or the inputs `H`, `D`.
+    pub geometry: AfmGeometry,
     /// Probe radius [m].
     pub probe_radius: f64,
     /// Cantilever spring constant k [N/m]; `None`: rigid (δ = Z).
@@ -48,7 +66,8 @@ pub struct AfmFeSpec {
 }
 
 impl AfmFeSpec {
-    /// Reads the `[forward]` keys (`height`, `diameter`, `probe_radius`,
+    /// Reads the `[forward]` keys (`height`, `diameter` or
+    /// `geometry = "inputs"`, `probe_radius`,
     /// `spring_constant` or `cantilever = "rigid"`, `points`, `mesh`
     /// (`"graded"` or `"coons"`), `mesh_refinement` (graded),
     /// `elements_per_side` and `mesh_bias` (coons), `bulk_ratio`,
@@ -71,8 +90,28 @@ impl AfmFeSpec {
                 return Err(s.invalid(old, format!("this key is now `{new}`")).into());
             }
         }
-        let height = s.req_quantity("height", Dimension::LENGTH, pos)?;
-        let diameter = s.req_quantity("diameter", Dimension::LENGTH, pos)?;
+        let inputs = s.opt_enum("geometry", &[("fixed", false), ("inputs", true)])?;
+        let geometry = if inputs == Some(true) {
+            for key in ["height", "diameter"] {
+                if s.has(key) {
+                    return Err(s
+                        .invalid(
+                            key,
+                            "with geometry = \"inputs\" the cell's height H and base diameter D \
+                             are parameters: give their ranges in [design.parameters] \
+                             (e.g. H = { range = [\"9.8 um\", \"14.7 um\"] }) and their values \
+                             in [parameters]",
+                        )
+                        .into());
+                }
+            }
+            AfmGeometry::Inputs
+        } else {
+            AfmGeometry::Fixed {
+                height: s.req_quantity("height", Dimension::LENGTH, pos)?,
+                diameter: s.req_quantity("diameter", Dimension::LENGTH, pos)?,
+            }
+        };
         let probe_radius = s.quantity_or("probe_radius", Dimension::LENGTH, pos, d.probe_radius)?;
         let rigid = match s.opt_str("cantilever")?.as_deref() {
             None | Some("spring") => false,
@@ -117,8 +156,7 @@ impl AfmFeSpec {
         let hold_step_max =
             s.quantity_or("hold_step_max", Dimension::TIME, pos, d.hold_step_max)?;
         Ok(Self {
-            height,
-            diameter,
+            geometry,
             probe_radius,
             spring_constant,
             loading,
@@ -132,7 +170,8 @@ impl AfmFeSpec {
 
     /// The finite-element setup: the thesis's setup 1 with every setting
     /// of this spec written over it (so solver settings not named here keep
-    /// the fem crate's defaults).
+    /// the fem crate's defaults). With `geometry = "inputs"` its height and
+    /// diameter are setup 1's until a run sets them from its parameters.
     ///
     /// # Errors
     /// The script is invalid.
@@ -179,8 +218,10 @@ impl AfmFeSpec {
             }
         };
         let mut setup = AfmSetup::thesis_setup1();
-        setup.height = self.height;
-        setup.diameter = self.diameter;
+        if let AfmGeometry::Fixed { height, diameter } = self.geometry {
+            setup.height = height;
+            setup.diameter = diameter;
+        }
         setup.probe_radius = self.probe_radius;
         setup.cantilever = match self.spring_constant {
             Some(stiffness) => Cantilever::Spring { stiffness },
@@ -217,7 +258,11 @@ impl AfmFeSpec {
     /// # Errors
     /// As [`AfmFeSpec::setup`].
     pub fn build(&self) -> Result<AfmFeModel> {
-        Ok(AfmFeModel::new(self.setup()?))
+        let model = AfmFeModel::new(self.setup()?);
+        Ok(match self.geometry {
+            AfmGeometry::Fixed { .. } => model,
+            AfmGeometry::Inputs => model.with_geometry_inputs(),
+        })
     }
 }
 
@@ -299,11 +344,14 @@ fn breakpoints(p: &Program) -> Vec<(f64, f64)> {
 
 /// The AFM finite-element model as a [`ForwardModel`]: parameters
 /// `[G0 (Pa), g1, g2, τ1 (s), τ2 (s)]` (Table 5.3 order of `nlvid build`),
-/// response F(t) [N] on the setup's output times (step-2 clock).
+/// followed by `[H (m), D (m)]` when the geometry is an input
+/// ([`AfmFeModel::with_geometry_inputs`]); response F(t) [N] on the setup's
+/// output times (step-2 clock).
 #[derive(Debug, Clone)]
 pub struct AfmFeModel {
     setup: AfmSetup,
     identity: String,
+    geometry_inputs: bool,
 }
 
 impl AfmFeModel {
@@ -313,12 +361,69 @@ impl AfmFeModel {
         // engagement, piezo points, mesh, grid, solver settings) enters the
         // study hash, including fields added to AfmSetup later.
         let identity = format!("afm-fe({setup:?})");
-        Self { setup, identity }
+        Self {
+            setup,
+            identity,
+            geometry_inputs: false,
+        }
+    }
+
+    /// The same model with the cell height H and base diameter D as the
+    /// 6th and 7th parameters (m): each run uses its own shape instead of
+    /// the setup's (issue 17, per-cell geometry).
+    #[must_use]
+    pub fn with_geometry_inputs(mut self) -> Self {
+        self.geometry_inputs = true;
+        self.identity = format!("afm-fe[geometry inputs H, D]({:?})", self.setup);
+        self
     }
 
     /// The finite-element setup.
     pub fn setup(&self) -> &AfmSetup {
         &self.setup
+    }
+
+    /// G(t) of eq. 5.1 and the finite-element setup of one run at `p`
+    /// (the model's parameter order): the setup itself, or with geometry
+    /// inputs a copy with height `p[5]` and diameter `p[6]`.
+    ///
+    /// # Errors
+    /// Wrong parameter count, invalid Prony parameters, a non-positive
+    /// shape ([`FailureKind::InvalidParameters`]).
+    pub fn at(
+        &self,
+        p: &[f64],
+    ) -> std::result::Result<(Relaxation, std::borrow::Cow<'_, AfmSetup>), RunFailure> {
+        let invalid = |message: String| RunFailure {
+            kind: FailureKind::InvalidParameters,
+            time: None,
+            message: format!("afm-fe: {message}"),
+        };
+        let n = names::PRONY2.len() + if self.geometry_inputs { 2 } else { 0 };
+        if p.len() != n {
+            return Err(invalid(format!(
+                "{} parameters given, the model has {n} ({})",
+                p.len(),
+                self.parameter_names().join(", ")
+            )));
+        }
+        // Parameters in `names::PRONY2` order (G0 the shear modulus).
+        let params = Relaxation::from_named(&names::PRONY2, &p[..names::PRONY2.len()])
+            .map_err(|e| invalid(e.to_string()))?;
+        if !self.geometry_inputs {
+            return Ok((params, std::borrow::Cow::Borrowed(&self.setup)));
+        }
+        let (height, diameter) = (p[5], p[6]);
+        if !(height > 0.0 && diameter > 0.0 && height.is_finite() && diameter.is_finite()) {
+            return Err(invalid(format!(
+                "cell height H = {height:e} m and base diameter D = {diameter:e} m must be \
+                 positive"
+            )));
+        }
+        let mut setup = self.setup.clone();
+        setup.height = height;
+        setup.diameter = diameter;
+        Ok((params, std::borrow::Cow::Owned(setup)))
     }
 }
 
@@ -341,10 +446,28 @@ pub fn fem_failure(e: &FemError) -> RunFailure {
 
 impl ForwardModel for AfmFeModel {
     fn parameter_names(&self) -> Vec<String> {
-        nlvid_model::names::PRONY2.map(String::from).to_vec()
+        let geometry: &[&str] = if self.geometry_inputs {
+            &names::GEOMETRY
+        } else {
+            &[]
+        };
+        names::PRONY2
+            .iter()
+            .chain(geometry)
+            .map(|s| s.to_string())
+            .collect()
     }
     fn parameter_units(&self) -> Vec<String> {
-        nlvid_model::names::PRONY2_UNITS.map(String::from).to_vec()
+        let geometry: &[&str] = if self.geometry_inputs {
+            &names::GEOMETRY_UNITS
+        } else {
+            &[]
+        };
+        names::PRONY2_UNITS
+            .iter()
+            .chain(geometry)
+            .map(|s| s.to_string())
+            .collect()
     }
     fn time_grid(&self) -> &[f64] {
         &self.setup.output_times
@@ -372,8 +495,9 @@ impl ForwardModel for AfmFeModel {
             hold_time_s: Some((end - t_ramp).max(0.0)),
             depth_m: Some(travel),
             end_time_s: end,
-            cell_height_m: Some(s.height),
-            cell_diameter_m: Some(s.diameter),
+            // an input shape is each run's own: no one geometry to check data against
+            cell_height_m: (!self.geometry_inputs).then_some(s.height),
+            cell_diameter_m: (!self.geometry_inputs).then_some(s.diameter),
             keys: vec![
                 key("probe_radius_m", "[forward] probe_radius"),
                 key("ramp_time_s", "[protocol] (ramp duration)"),
@@ -386,13 +510,8 @@ impl ForwardModel for AfmFeModel {
         })
     }
     fn run(&self, p: &[f64]) -> std::result::Result<Vec<f64>, RunFailure> {
-        // Parameters in `names::PRONY2` order (G0 the shear modulus).
-        let params = Relaxation::from_named(&names::PRONY2, p).map_err(|e| RunFailure {
-            kind: FailureKind::InvalidParameters,
-            time: None,
-            message: format!("afm-fe: {e}"),
-        })?;
-        nlvid_fem::afm::run(&params, &self.setup)
+        let (params, setup) = self.at(p)?;
+        nlvid_fem::afm::run(&params, &setup)
             .map(|r| r.force)
             .map_err(|e| fem_failure(&e))
     }

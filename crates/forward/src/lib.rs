@@ -69,7 +69,7 @@ use nlvid_protocol::{Loading as ProtocolLoading, ProtocolSettings};
 use nlvid_study::FromSection as _;
 use nlvid_study::{Bounds, Dimension, Section, Study};
 
-pub use afm_fe::{AfmFeModel, AfmFeSpec, fem_failure};
+pub use afm_fe::{AfmFeModel, AfmFeSpec, AfmGeometry, fem_failure};
 pub use capsule_fe::{
     AreaKind, CapsuleFeModel, CapsuleFeSpec, PARAMETERS as CAPSULE_PARAMETERS, samples_curve,
 };

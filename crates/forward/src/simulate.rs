@@ -22,7 +22,7 @@
 use nlvid_fem::afm::AfmRun;
 use nlvid_membrane::MembraneRun;
 use nlvid_model::Curve;
-use nlvid_study::{Bounds, Dimension, Study};
+use nlvid_study::{Bounds, Study};
 
 use crate::error::{ForwardError, Result};
 use crate::{ForwardSettings, ForwardSpec, fem_failure};
@@ -108,10 +108,15 @@ impl SimulateStudy {
         let mut p = study.section("parameters")?;
         let mut values = Vec::with_capacity(names.len());
         for (name, unit) in names.iter().zip(&units) {
-            let v = match unit.as_str() {
-                "Pa" => p.req_quantity(name, Dimension::PRESSURE, Bounds::positive())?,
-                "s" => p.req_quantity(name, Dimension::TIME, Bounds::positive())?,
-                _ => p.req_f64(name, Bounds::non_negative())?,
+            // dimensionless values as numbers, the others with their unit
+            // (Pa, s, and the geometry inputs' m)
+            let v = if unit == "1" {
+                p.req_f64(name, Bounds::non_negative())?
+            } else {
+                let dim = nlvid_study::parse_unit(unit)
+                    .map_err(|e| p.invalid(name, format!("model unit `{unit}`: {e}")))?
+                    .1;
+                p.req_quantity(name, dim, Bounds::positive())?
             };
             values.push(v);
         }
@@ -189,14 +194,13 @@ impl SimulateStudy {
         };
         match &self.forward.spec {
             ForwardSpec::AfmFe(spec) => {
-                // Parameters in `names::PRONY2` order (G0 the shear modulus).
-                let params =
-                    nlvid_model::Relaxation::from_named(&nlvid_model::names::PRONY2, &self.values)
-                        .map_err(|e| failed(e.to_string()))?;
+                // G(t) and the shape of this run (H, D when they are inputs)
+                let model = spec.build()?;
+                let (params, setup) = model.at(&self.values).map_err(|e| failed(e.to_string()))?;
                 // A single run is all that is going on: its element loop
                 // uses both cores (bitwise the serial result, fem crate
                 // test `parallel_element_loop_is_bitwise_serial`).
-                let mut setup = spec.setup()?;
+                let mut setup = setup.into_owned();
                 setup.settings.threads = std::thread::available_parallelism()
                     .map_or(1, std::num::NonZeroUsize::get)
                     .min(2);
@@ -477,6 +481,27 @@ mod tests {
         assert_eq!(c.len(), 50);
         let e = study(&format!("{}[parameters]\nG0 = \"1.2 kPa\"\n", hertz())).expect_err("g1");
         assert!(e.to_string().contains("`parameters.g1`"), "{e}");
+    }
+
+    /// `geometry = "inputs"`: H and D are read from `[parameters]` as
+    /// lengths (the model's unit m), a bare number is refused.
+    #[test]
+    fn geometry_inputs_are_lengths_in_parameters() {
+        let afm = "[forward]\nmodel = \"afm-fe\"\ngeometry = \"inputs\"\n\
+                   spring_constant = \"0.12 N/m\"\npoints = 10\n\
+                   [protocol]\nkind = \"afm\"\nengage_force = \"0.2 nN\"\n\
+                   engage_time = \"1 s\"\ncycle_rates = [\"10 um/s\"]\ndepth = \"0.5 um\"\n\
+                   retract = \"0.25 um\"\nfinal_rate = \"10 um/s\"\nhold = \"1 s\"\n";
+        let prony = "[parameters]\nG0 = \"1 kPa\"\ng1 = 0.3\ng2 = 0.2\ntau1 = \"0.1 s\"\n\
+                     tau2 = \"5 s\"\n";
+        let s = study(&format!("{afm}{prony}H = \"12.22 um\"\nD = \"28.88 um\"\n"));
+        let s = match s {
+            Ok(s) => s,
+            Err(e) => panic!("{e}"),
+        };
+        assert_eq!(s.values[5..], [12.22e-6, 28.88e-6]);
+        let e = study(&format!("{afm}{prony}H = 12.22\nD = \"28.88 um\"\n")).expect_err("unit");
+        assert!(e.to_string().contains("parameters.H"), "{e}");
     }
 
     #[test]

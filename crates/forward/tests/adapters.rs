@@ -348,3 +348,70 @@ fn coons_mesh_keys_need_mesh_coons_and_the_graded_mesh_refines() {
     assert_eq!(got.core, 2 * default.core);
     assert_eq!(got.spacing, default.spacing / 2.0);
 }
+
+/// `geometry = "inputs"`: H and D are parameters 6 and 7 (m); a run at
+/// (x, H, D) equals a direct fem call on the setup with that height and
+/// diameter written in (and differs from the study's fixed shape).
+#[test]
+fn afm_fe_geometry_inputs_run_each_shape_and_name_h_and_d() {
+    let inputs = AFM
+        .replace("height = \"6 um\"\n", "")
+        .replace("diameter = \"14 um\"\n", "")
+        .replace(
+            "model = \"afm-fe\"\n",
+            "model = \"afm-fe\"\ngeometry = \"inputs\"\n",
+        );
+    assert_ne!(inputs, AFM);
+    let model = from_study(&mut study(&inputs)).unwrap();
+    assert_eq!(
+        model.parameter_names(),
+        ["G0", "g1", "g2", "tau1", "tau2", "H", "D"]
+    );
+    assert_eq!(
+        model.parameter_units(),
+        ["Pa", "1", "1", "s", "s", "m", "m"]
+    );
+    let c = model.conditions().unwrap();
+    assert_eq!((c.cell_height_m, c.cell_diameter_m), (None, None));
+    let (g0, g1, g2, tau1, tau2) = (1000.0, 0.3, 0.2, 0.1, 5.0);
+    let shear = nlvid_model::Relaxation::new(
+        "G0",
+        g0,
+        nlvid_model::Prony::new("G", &[(g1, tau1), (g2, tau2)]).unwrap(),
+    )
+    .unwrap();
+    let mut setup = afm_setup_by_hand();
+    (setup.height, setup.diameter) = (5e-6, 16e-6);
+    let direct = nlvid_fem::afm::run(&shear, &setup).unwrap();
+    let f = model.run(&[g0, g1, g2, tau1, tau2, 5e-6, 16e-6]).unwrap();
+    let peak = direct.peak_force;
+    for (a, b) in f.iter().zip(&direct.force) {
+        assert!((a - b).abs() <= 1e-9 * peak, "{a} vs {b}");
+    }
+    let fixed = from_study(&mut study(AFM)).unwrap();
+    let f6 = fixed.run(&[g0, g1, g2, tau1, tau2]).unwrap();
+    let diff = f
+        .iter()
+        .zip(&f6)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(diff > 1e-3 * peak, "another shape, another curve: {diff}");
+    assert_ne!(model.identity(), fixed.identity());
+    // five parameters, or a bad shape: typed failures
+    let e = model.run(&[g0, g1, g2, tau1, tau2]).unwrap_err();
+    assert_eq!(e.kind, FailureKind::InvalidParameters, "{e}");
+    let e = model
+        .run(&[g0, g1, g2, tau1, tau2, -5e-6, 16e-6])
+        .unwrap_err();
+    assert_eq!(e.kind, FailureKind::InvalidParameters, "{e}");
+    // a fixed height beside geometry = "inputs" is refused, naming the key
+    let both = AFM.replace(
+        "model = \"afm-fe\"\n",
+        "model = \"afm-fe\"\ngeometry = \"inputs\"\n",
+    );
+    let e = err(&both);
+    assert!(
+        e.contains("forward.height") && e.contains("design.parameters"),
+        "{e}"
+    );
+}

@@ -23,6 +23,10 @@
 //!   (real) model, [`rerun`] with any `nlvid_model::ForwardModel` (same
 //!   parameters in the same order, response interpolated onto the data
 //!   grid);
+//! - [`FixedInputs`], [`Fixed`]: some model inputs held at known values
+//!   (a cell's measured height and diameter on a meta-model that has them
+//!   as inputs) while the others are fitted — the fit, the Gauss–Newton
+//!   intervals and the posterior see the free parameters only;
 //! - [`identifiability`]: scaled sensitivities, their singular values and
 //!   Gauss–Newton confidence intervals;
 //! - [`KrigingSurrogate`]: a `nlvid-surrogate` Kriging model as a [`Model`]
@@ -66,6 +70,7 @@
 
 mod basis;
 mod error;
+mod fixed;
 mod hertz;
 mod identifiability;
 mod measured;
@@ -84,6 +89,7 @@ mod surrogate_file;
 
 pub use basis::{AsModel, BasisExperiment, BasisMisfit, BasisModel, gram};
 pub use error::{InverseError, Result};
+pub use fixed::{Fixed, FixedInputs};
 pub use hertz::{LeeRadokHertz, ramp_hold_grid, ramp_hold_indentation};
 pub use identifiability::{Identifiability, SensitivityScaling, Z95, identifiability};
 pub use measured::{
@@ -98,7 +104,7 @@ pub use model::{FD_STEP_UNIT, Model, check_finite, check_jacobian, check_len, fd
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
 pub use plausible::{Implausible, MAX_FORCE, MAX_LENGTH};
 pub use plot::{FigureCurve, FitFigure};
-pub use posterior::{Posterior, PosteriorSettings, sample_posterior};
+pub use posterior::{Posterior, PosteriorSettings, sample_posterior, sample_posterior_fixed};
 pub use prony::{ParameterTable, relaxation};
 pub use reduced::{Projection, ReducedExperiment, ReducedMisfit, ReducedModel, projection};
 pub use rerun::{Rerun, rerun};

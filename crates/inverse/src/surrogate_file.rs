@@ -21,6 +21,7 @@ use nlvid_surrogate::KrigingModel;
 
 use crate::basis::{BasisExperiment, BasisModel, gram};
 use crate::error::{InverseError, Result};
+use crate::fixed::{Fixed, FixedInputs};
 use crate::misfit::{Objective, check_shared_parameters};
 use crate::model::Model;
 use crate::optimise::{FitResult, MultiStart};
@@ -324,6 +325,22 @@ impl SurrogateFitter {
     /// Bad data (length, non-finite, zero range) naming the curve; no start
     /// converged.
     pub fn fit(&self, curves: &[(&str, &[f64])], multistart: &MultiStart) -> Result<SurrogateFit> {
+        let none = FixedInputs::none(Model::domain(&self.surrogate));
+        self.fit_fixed(curves, multistart, &none)
+    }
+
+    /// As [`SurrogateFitter::fit`] with the inputs of `fixed` held at their
+    /// values (e.g. the cell's height and diameter): the fit, its
+    /// [`FitResult::domain`] and best point are the free parameters'.
+    ///
+    /// # Errors
+    /// As [`SurrogateFitter::fit`]; `fixed` made for another domain.
+    pub fn fit_fixed(
+        &self,
+        curves: &[(&str, &[f64])],
+        multistart: &MultiStart,
+        fixed: &FixedInputs,
+    ) -> Result<SurrogateFit> {
         let parts: Vec<SurrogateCurve<'_>> = curves
             .iter()
             .map(|(label, force)| SurrogateCurve {
@@ -334,10 +351,10 @@ impl SurrogateFitter {
                 weights: self.weights.as_deref(),
             })
             .collect();
-        let misfit = SurrogateMisfit::new(&parts)?;
+        let misfit = Fixed::objective(SurrogateMisfit::new(&parts)?, fixed.clone())?;
         let fit = multistart.fit(&misfit)?;
         let per_curve = misfit.per_experiment(&fit.best.x)?;
-        let response = self.surrogate.response(&fit.best.x)?;
+        let response = self.surrogate.response(&fixed.expand(&fit.best.x))?;
         Ok(SurrogateFit {
             fit,
             per_curve,

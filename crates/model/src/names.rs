@@ -24,6 +24,19 @@ pub const G10: &str = "G10";
 /// Ch. II's instantaneous Mooney–Rivlin parameter γ0 = G2(0)/G1(0).
 pub const GAMMA0: &str = "gamma0";
 
+/// Cell height H (m): the FE cell model's geometry as a meta-model input
+/// (`[forward] geometry = "inputs"`, issue 17); Table 5.2 / App. B.2 (setup 1
+/// mean 12.22 µm).
+pub const HEIGHT: &str = "H";
+/// Cell base diameter D (m), the second geometry input beside [`HEIGHT`]
+/// (setup 1 mean 28.88 µm).
+pub const DIAMETER: &str = "D";
+/// The geometry inputs [`HEIGHT`], [`DIAMETER`], in the order the FE cell
+/// model appends them after [`PRONY2`].
+pub const GEOMETRY: [&str; 2] = [HEIGHT, DIAMETER];
+/// SI units of [`GEOMETRY`].
+pub const GEOMETRY_UNITS: [&str; 2] = ["m", "m"];
+
 /// The five cell parameters of ch. V (eq. 5.1, Table 5.3) in nlvid's order.
 pub const PRONY2: [&str; 5] = [G0, "g1", "g2", "tau1", "tau2"];
 /// SI units of [`PRONY2`] (`"1"` for dimensionless).
@@ -53,6 +66,7 @@ pub fn unit(name: &str) -> Option<&'static str> {
     match name {
         G0 | C1 | C2 | G10 => Some("Pa"),
         ALPHA | GAMMA0 => Some("1"),
+        HEIGHT | DIAMETER => Some("m"),
         _ if indexed(name, "tau") => Some("s"),
         _ if indexed(name, "g") => Some("1"),
         _ => None,
@@ -69,6 +83,8 @@ pub fn describe(name: &str) -> Option<String> {
         ALPHA => "Mooney–Rivlin ratio C2/C1 of eq. 4.1".into(),
         G10 => "ch. II instantaneous modulus G1(0) of eqs. 2.53–2.56".into(),
         GAMMA0 => "ch. II Mooney–Rivlin parameter G2(0)/G1(0)".into(),
+        HEIGHT => "cell height H (Table 5.2, App. B.2)".into(),
+        DIAMETER => "cell base diameter D (Table 5.2, App. B.2)".into(),
         _ if indexed(name, "tau") => format!("relaxation time of Prony term {}", &name[3..]),
         _ if indexed(name, "g") => format!("weight of Prony term {} (eq. 4.2)", &name[1..]),
         _ => return None,
@@ -92,6 +108,7 @@ mod tests {
             .iter()
             .zip(PRONY2_UNITS)
             .chain(CAPSULE.iter().zip(CAPSULE_UNITS))
+            .chain(GEOMETRY.iter().zip(GEOMETRY_UNITS))
         {
             assert_eq!(unit(name), Some(u), "{name}");
             assert!(describe(name).is_some(), "{name}");

@@ -13,9 +13,9 @@
 use std::path::Path;
 
 use nlvid_inverse::{
-    AfmColumns, Calibration, Coordinates, Experiment, FitResult, LeeRadokHertz, MeasuredCurve,
-    Misfit, Model, MultiStart, Posterior, PosteriorSettings, SurrogateFitter,
-    load_kriging_surrogate, ramp_hold_grid, sample_posterior,
+    AfmColumns, Calibration, Coordinates, Experiment, FitResult, FixedInputs, LeeRadokHertz,
+    MeasuredCurve, Misfit, Model, MultiStart, Posterior, PosteriorSettings, SurrogateFitter,
+    load_kriging_surrogate, ramp_hold_grid, sample_posterior_fixed,
 };
 use nlvid_model::{BoundSide, Domain};
 use serde::{Deserialize, Serialize};
@@ -402,6 +402,22 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
     base.peak_force = Some(peak);
     base.relaxation = Some(1.0 - end_force / peak);
 
+    // a meta-model with the cell's shape as inputs: held at this cell's
+    let fixed = match model {
+        CellModel::Surrogate(f, _) => {
+            match shape_inputs(nlvid_inverse::Model::domain(f.surrogate()), &base) {
+                Ok((fixed, flag)) => {
+                    base.flags.extend(flag);
+                    fixed
+                }
+                Err(e) => {
+                    base.reason = e;
+                    return base;
+                }
+            }
+        }
+        CellModel::LeeRadok(d) => FixedInputs::none(d),
+    };
     let multistart = MultiStart::new()
         .with_starts(settings.starts)
         .map(|m| m.with_seed(settings.seed));
@@ -418,18 +434,18 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
                 let mut w = vec![1.0; grid.len()];
                 w[used..].iter_mut().for_each(|x| *x = 0.0);
                 let overlap = SurrogateFitter::new(f.surrogate().clone(), Some(w))?;
-                overlap.fit(&[(cell.as_str(), force.as_slice())], &ms)
+                overlap.fit_fixed(&[(cell.as_str(), force.as_slice())], &ms, &fixed)
             })
             .map(|r| (r.fit, r.response)),
         CellModel::Surrogate(f, _) => multistart
-            .and_then(|ms| f.fit(&[(cell.as_str(), force.as_slice())], &ms))
+            .and_then(|ms| f.fit_fixed(&[(cell.as_str(), force.as_slice())], &ms, &fixed))
             .map(|r| (r.fit, r.response)),
     };
     match fitted {
         Ok((fit, y)) => {
             record_fit(settings, &mut base, &fit, y);
             if let (CellModel::Surrogate(f, _), Some(p)) = (model, &settings.posterior) {
-                posterior(settings, p, f, &fit.best.x, &mut base);
+                posterior(settings, p, f, &fixed, &fit.best.x, &mut base);
             }
         }
         Err(e) => base.reason = format!("fit: {e}"),
@@ -444,6 +460,7 @@ fn posterior(
     settings: &CohortSettings,
     p: &PosteriorStudy,
     fitter: &SurrogateFitter,
+    fixed: &FixedInputs,
     x_hat: &[f64],
     base: &mut CellResult,
 ) {
@@ -458,7 +475,7 @@ fn posterior(
         keep: p.keep,
         ..PosteriorSettings::new(settings.hold_end)
     };
-    match sample_posterior(fitter.surrogate(), &base.data, x_hat, &ps) {
+    match sample_posterior_fixed(fitter.surrogate(), fixed, &base.data, x_hat, &ps) {
         Ok(post) => {
             if !(post.rhat_max <= 1.01) {
                 base.flags.push(format!(
@@ -559,8 +576,53 @@ pub fn hertz_baseline(
     })
 }
 
-/// Height (eq. B.1, from curves on the cell and on glass) and base diameter
-/// √(d1·d2) of a cell, when its manifest row gives them; a problem is a flag.
+/// The inputs a meta-model with the cell's shape as inputs (`H`, `D`,
+/// `[forward] geometry = "inputs"`) holds fixed while the cell's material
+/// parameters are fitted: the cell's measured height and diameter, or,
+/// where the manifest gives none, the centre of the meta-model's range
+/// (its mean shape — the thesis's one geometry per setup, §5.4.2), with a
+/// flag saying so. A meta-model without those inputs fixes nothing.
+///
+/// # Errors
+/// A measured shape outside the meta-model's range (the reason of a failed
+/// cell).
+fn shape_inputs(
+    domain: &Domain,
+    cell: &CellResult,
+) -> std::result::Result<(FixedInputs, Option<String>), String> {
+    use nlvid_model::names::{DIAMETER, HEIGHT};
+    let mut fixed = Vec::new();
+    let mut mean = Vec::new();
+    for (name, measured, what) in [
+        (HEIGHT, cell.cell_height, "height"),
+        (DIAMETER, cell.base_diameter, "diameter"),
+    ] {
+        let Some(i) = domain.index_of(name) else {
+            continue;
+        };
+        let p = &domain.params()[i];
+        let value = measured.unwrap_or_else(|| {
+            let centre = 0.5 * (p.lower + p.upper);
+            mean.push(format!("{what} {name} = {:.2} um", centre * 1e6));
+            centre
+        });
+        fixed.push((name, value));
+    }
+    let inputs = FixedInputs::new(domain, &fixed)
+        .map_err(|e| format!("cell shape vs the meta-model: {e}"))?;
+    let flag = (!mean.is_empty()).then(|| {
+        format!(
+            "shape not measured: fitted with the mean shape ({}, the centre of the \
+             meta-model's range; give the manifest columns height, diameter)",
+            mean.join(", ")
+        )
+    });
+    Ok((inputs, flag))
+}
+
+/// Height (eq. B.1, from curves on the cell and on glass, or the manifest's
+/// `height`) and base diameter (√(d1·d2), or the manifest's `diameter`) of
+/// a cell, when its manifest row gives them; a problem is a flag.
 fn geometry(g: &Geometry, out: &mut CellResult) {
     if let Some((cell, glass)) = &g.height_curves {
         let read =
@@ -577,6 +639,12 @@ fn geometry(g: &Geometry, out: &mut CellResult) {
             Ok(h) => out.cell_height = Some(h),
             Err(e) => out.flags.push(format!("cell height not measured: {e}")),
         }
+    }
+    if let Some(h) = g.height {
+        out.cell_height = Some(h);
+    }
+    if let Some(d) = g.diameter {
+        out.base_diameter = Some(d);
     }
     if let Some((d1, d2)) = g.image_distances {
         match nlvid_afm::geometry::base_diameter(d1, d2) {
@@ -640,6 +708,50 @@ mod tests {
         assert!(h.window.contains("0-1.000 s"), "{}", h.window);
     }
 
+    /// Table 5.3 with the shape inputs H, D over 12.22 µm, 28.88 µm ± 25 %.
+    fn shape_domain() -> Domain {
+        use nlvid_model::{Parameter, Scale};
+        let mut p = Domain::table_5_3(0.01).unwrap().params().to_vec();
+        p.push(Parameter::new("H", "m", 9.165e-6, 15.275e-6, Scale::Linear));
+        p.push(Parameter::new("D", "m", 21.66e-6, 36.1e-6, Scale::Linear));
+        Domain::new(p)
+            .unwrap()
+            .with_sum_constraint(&["g1", "g2"], 0.99)
+            .unwrap()
+    }
+
+    #[test]
+    fn a_shape_meta_model_fits_each_cell_with_its_own_shape_or_the_flagged_mean() {
+        let d = shape_domain();
+        let mut cell = CellResult::failed("g", "f", "c", "h", String::new());
+        cell.cell_height = Some(11e-6);
+        cell.base_diameter = Some(30e-6);
+        let (own, flag) = shape_inputs(&d, &cell).unwrap();
+        assert_eq!(flag, None);
+        assert_eq!(own.free_domain().names(), nlvid_model::names::PRONY2);
+        let x = own.expand(&[900.0, 0.3, 0.2, 0.1, 5.0]);
+        assert_eq!(&x[5..], &[11e-6, 30e-6]);
+        // no diameter: the centre of its range (the mean shape), flagged
+        cell.base_diameter = None;
+        let (mean, flag) = shape_inputs(&d, &cell).unwrap();
+        let x = mean.expand(&[900.0, 0.3, 0.2, 0.1, 5.0]);
+        assert!((x[6] - 28.88e-6).abs() < 1e-12, "{}", x[6]);
+        assert_eq!(x[5], 11e-6);
+        let flag = flag.unwrap();
+        assert!(
+            flag.contains("mean shape") && flag.contains("D = 28.88 um"),
+            "{flag}"
+        );
+        // a shape the meta-model does not cover fails the cell, saying why
+        cell.cell_height = Some(20e-6);
+        let e = shape_inputs(&d, &cell).unwrap_err();
+        assert!(e.contains("H = 2e-5") && e.contains("outside"), "{e}");
+        // a meta-model without shape inputs fixes nothing
+        let t = Domain::table_5_3(0.01).unwrap();
+        let (none, flag) = shape_inputs(&t, &cell).unwrap();
+        assert_eq!((none.free_domain(), flag), (&t, None));
+    }
+
     #[test]
     fn geometry_is_taken_from_the_manifest_values() {
         let mut out = CellResult::failed("g", "f", "c", "h", String::new());
@@ -647,16 +759,31 @@ mod tests {
             &Geometry {
                 height_curves: None,
                 image_distances: Some((12e-6, 27e-6)),
+                ..Geometry::default()
             },
             &mut out,
         );
         // √(12 · 27) = 18 µm.
         assert!((out.base_diameter.unwrap() - 18e-6).abs() < 1e-18);
+        let mut given = CellResult::failed("g", "f", "c", "h", String::new());
+        geometry(
+            &Geometry {
+                height: Some(11e-6),
+                diameter: Some(29e-6),
+                ..Geometry::default()
+            },
+            &mut given,
+        );
+        assert_eq!(
+            (given.cell_height, given.base_diameter),
+            (Some(11e-6), Some(29e-6))
+        );
         let mut bad = CellResult::failed("g", "f", "c", "h", String::new());
         geometry(
             &Geometry {
                 height_curves: None,
                 image_distances: Some((12e-6, -1e-6)),
+                ..Geometry::default()
             },
             &mut bad,
         );

@@ -1,5 +1,6 @@
 //! The cells of a cohort input: a folder of group sub-folders, or a
-//! manifest CSV (group, file, optional geometry columns of App. B.2).
+//! manifest CSV (group, file, optional geometry columns: App. B.2's
+//! measurements, or the height and diameter themselves with units).
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -72,6 +73,13 @@ pub struct Geometry {
     /// Two distances on an optical image, m: columns `d1_um`, `d2_um`
     /// (or `d1_m`, `d2_m`).
     pub image_distances: Option<(f64, f64)>,
+    /// Cell height H, m: column `height`, a length with its unit
+    /// (`12.1 um`); a meta-model with H as an input fits the cell with it.
+    #[serde(default)]
+    pub height: Option<f64>,
+    /// Cell base diameter D, m: column `diameter` (`28.9 um`).
+    #[serde(default)]
+    pub diameter: Option<f64>,
 }
 
 /// Where `nlvid cohort` writes when not told: `<study stem>-cohort` in
@@ -198,6 +206,7 @@ fn from_manifest(path: &Path) -> Result<Vec<CellInput>> {
     let (gi, fi) = (col("group")?, col("file")?);
     let find = |name: &str| headers.iter().position(|h| h == name);
     let curves = (find("height_cell_curve"), find("height_glass_curve"));
+    let lengths = (find("height"), find("diameter"));
     let (dist, dist_scale) = match (find("d1_um"), find("d2_um"), find("d1_m"), find("d2_m")) {
         (Some(a), Some(b), _, _) => (Some((a, b, "d1_um", "d2_um")), 1e-6),
         (_, _, Some(a), Some(b)) => (Some((a, b, "d1_m", "d2_m")), 1.0),
@@ -250,6 +259,45 @@ fn from_manifest(path: &Path) -> Result<Vec<CellInput>> {
                 geometry.height_curves = Some((cp, gp));
             }
         }
+        for (col, name) in [(lengths.0, "height"), (lengths.1, "diameter")] {
+            let Some(i) = col else { continue };
+            let v = rec.get(i).unwrap_or("");
+            if v.is_empty() {
+                continue;
+            }
+            let value = length(v).map_err(|message| ReportError::Data {
+                path: path.to_path_buf(),
+                line,
+                message: format!("column `{name}`: {message}"),
+            })?;
+            if name == "height" {
+                geometry.height = Some(value);
+            } else {
+                geometry.diameter = Some(value);
+            }
+        }
+        if geometry.height.is_some() && geometry.height_curves.is_some() {
+            return Err(ReportError::Data {
+                path: path.to_path_buf(),
+                line,
+                message: "the cell height is given twice (column `height` and the height \
+                          curves): keep one"
+                    .into(),
+            });
+        }
+        if geometry.diameter.is_some()
+            && rec
+                .get(dist.map_or(usize::MAX, |d| d.0))
+                .is_some_and(|v| !v.is_empty())
+        {
+            return Err(ReportError::Data {
+                path: path.to_path_buf(),
+                line,
+                message: "the base diameter is given twice (column `diameter` and the image \
+                          distances): keep one"
+                    .into(),
+            });
+        }
         if let Some((a, b, na, nb)) = dist {
             let num = |i: usize, name: &str| -> Result<Option<f64>> {
                 match rec.get(i).unwrap_or("") {
@@ -284,4 +332,70 @@ fn from_manifest(path: &Path) -> Result<Vec<CellInput>> {
         }));
     }
     Ok(cells)
+}
+
+/// A positive length with its unit (`12.1 um`, `1.2e-5 m`), in m.
+fn length(text: &str) -> std::result::Result<f64, String> {
+    let q = nlvid_study::Quantity::parse(text).map_err(|e| format!("`{text}`: {e}"))?;
+    if q.dim != nlvid_study::Dimension::LENGTH {
+        return Err(format!(
+            "`{text}`: expected a length with its unit (e.g. `12.2 um`)"
+        ));
+    }
+    if !(q.value > 0.0) {
+        return Err(format!("`{text}`: must be positive"));
+    }
+    Ok(q.value)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn manifest(name: &str, text: &str) -> Result<Vec<CellInput>> {
+        let dir =
+            std::env::temp_dir().join(format!("nlvid-report-shape-{}-{name}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        for f in ["a.csv", "b.csv"] {
+            fs::write(dir.join(f), "t\n").unwrap();
+        }
+        let m = dir.join("manifest.csv");
+        fs::write(&m, text).unwrap();
+        discover(&m)
+    }
+
+    #[test]
+    fn height_and_diameter_columns_are_lengths_with_units_per_cell() {
+        let cells = manifest(
+            "ok",
+            "group,file,height,diameter\nA,a.csv,12.1 um,2.9e-5 m\nA,b.csv,,\n",
+        )
+        .unwrap();
+        assert_eq!(cells[0].geometry.height, Some(12.1e-6));
+        assert_eq!(cells[0].geometry.diameter, Some(2.9e-5));
+        assert_eq!(cells[1].geometry, Geometry::default());
+        let e = manifest("bare", "group,file,height\nA,a.csv,12.1\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 2") || e.contains(":2"),
+            "names the line: {e}"
+        );
+        assert!(e.contains("`height`") && e.contains("length"), "{e}");
+        let e = manifest("time", "group,file,diameter\nA,a.csv,3 s\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`diameter`") && e.contains("length"), "{e}");
+        let e = manifest("neg", "group,file,height\nA,a.csv,-3 um\n")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("positive"), "{e}");
+        let e = manifest(
+            "twice",
+            "group,file,diameter,d1_um,d2_um\nA,a.csv,20 um,20,21\n",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("given twice"), "{e}");
+    }
 }

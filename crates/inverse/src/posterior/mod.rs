@@ -31,6 +31,7 @@ pub use ensemble::{Chains, Ensemble, EnsembleSettings, sample_ensemble};
 pub use likelihood::{CurveLikelihood, noise_sd};
 
 use crate::error::{InverseError, Result};
+use crate::fixed::FixedInputs;
 use crate::model::Model;
 use crate::prony::relaxation;
 use crate::surrogate::KrigingSurrogate;
@@ -205,6 +206,7 @@ const MAX_START_SD: f64 = 0.25;
 /// tries) until inside the prior's support.
 fn starts(
     surrogate: &KrigingSurrogate,
+    fixed: &FixedInputs,
     x_hat: &[f64],
     noise_var: f64,
     (walkers, ensembles): (usize, usize),
@@ -212,11 +214,11 @@ fn starts(
     inside: &dyn Fn(&[f64]) -> bool,
 ) -> Result<Vec<Vec<Vec<f64>>>> {
     use rand::SeedableRng;
-    let domain = Model::domain(surrogate);
+    let domain = fixed.free_domain();
     let d = domain.len();
     let u_hat = domain.to_unit(x_hat);
-    let (_, jac) = surrogate.response_and_jacobian(x_hat)?;
-    let mut ju = jac.clone();
+    let (_, jac) = surrogate.response_and_jacobian(&fixed.expand(x_hat))?;
+    let mut ju = fixed.columns(&jac);
     for (i, p) in domain.params().iter().enumerate() {
         let s = p.dx_du(u_hat[i]);
         for j in 0..ju.nrows() {
@@ -288,6 +290,24 @@ pub fn sample_posterior(
     x_hat: &[f64],
     settings: &PosteriorSettings,
 ) -> Result<Posterior> {
+    let none = FixedInputs::none(Model::domain(surrogate));
+    sample_posterior_fixed(surrogate, &none, data, x_hat, settings)
+}
+
+/// As [`sample_posterior`] with the inputs of `fixed` held at their values
+/// (known, not sampled: e.g. a cell's measured height and diameter): the
+/// prior is uniform on the free parameters' domain, `x_hat` and the draws
+/// are free parameters.
+///
+/// # Errors
+/// As [`sample_posterior`].
+pub fn sample_posterior_fixed(
+    surrogate: &KrigingSurrogate,
+    fixed: &FixedInputs,
+    data: &[f64],
+    x_hat: &[f64],
+    settings: &PosteriorSettings,
+) -> Result<Posterior> {
     if !(settings.level > 0.0 && settings.level < 1.0)
         || settings.keep == 0
         || settings.ensembles < 2
@@ -299,7 +319,12 @@ pub fn sample_posterior(
             settings.level, settings.keep, settings.ensembles, settings.steps
         )));
     }
-    let domain = Model::domain(surrogate).clone();
+    if fixed.full_domain() != Model::domain(surrogate) {
+        return Err(InverseError::InvalidSetting(
+            "posterior: the fixed inputs were made for another surrogate's domain".into(),
+        ));
+    }
+    let domain = fixed.free_domain().clone();
     let noise = noise_sd(Model::times(surrogate), data)?;
     let lik = CurveLikelihood::new(surrogate, data, noise)?;
     let inside = |u: &[f64]| {
@@ -309,10 +334,12 @@ pub fn sample_posterior(
         if !inside(u) {
             return f64::NEG_INFINITY;
         }
-        lik.value(&domain.from_unit(u)).unwrap_or(f64::NEG_INFINITY)
+        lik.value(&fixed.expand(&domain.from_unit(u)))
+            .unwrap_or(f64::NEG_INFINITY)
     };
     let init = starts(
         surrogate,
+        fixed,
         x_hat,
         lik.noise_var(),
         (settings.walkers, settings.ensembles),
