@@ -127,6 +127,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         last = Some(run);
     }
     walls.sort_by(f64::total_cmp);
+    // NLVID_FEM_DUMP=FILE: the written curve, "t F" per sample (to compare
+    // runs with different solver settings sample by sample).
+    if let (Some(path), Some(run)) = (std::env::var_os("NLVID_FEM_DUMP"), &last) {
+        let text: String = run
+            .time
+            .iter()
+            .zip(&run.force)
+            .map(|(t, f)| format!("{t:.9e} {f:.9e}\n"))
+            .collect();
+        std::fs::write(path, text)?;
+    }
     if let Some(run) = last {
         let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
         println!(

@@ -34,6 +34,10 @@ use crate::sparse::{NO_SLOT, SparseSystem};
 use crate::{FemError, NonConvergence, Result};
 use nlvid_material::{Mat3, Material3};
 
+/// Chord steps in a row before a Newton step gets its own tangent again
+/// (`Settings::chord_contraction`).
+const MAX_CHORD_STEPS: usize = 2;
+
 /// Displacement component of a support.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Component {
@@ -291,15 +295,17 @@ pub struct Settings {
     /// is within this factor of the tolerance, the Newton step is expected
     /// to converge (quadratic convergence), so its trial points are assembled
     /// without the tangent and the tangent is assembled only if the accepted
-    /// point turns out not converged. 0 disables. Default 1e4 (measured on
-    /// the thesis run: 105 tangent assemblies saved, 3 redone).
+    /// point turns out not converged (then, with `chord_contraction`, a
+    /// chord step may follow instead). 0 disables. Default 1e5 (session 3:
+    /// 1e4 without chord steps; with them 1e5 measured best on the thesis
+    /// run and the elastic dome, docs/theory/fem.md "Speed").
     pub lazy_tangent: f64,
     /// Chord steps near convergence: after a residual-only (lazy)
     /// assembly that is not converged but shows the residual contracted by
     /// at least this factor in the last step, the next correction reuses
     /// the last factors (no tangent assembly, no factorisation) and is kept
     /// only if it contracts the residual by this factor again; otherwise
-    /// the tangent is assembled at that point. 0 disables.
+    /// the tangent is assembled at that point. 0 disables. Default 0.1.
     pub chord_contraction: f64,
     /// Dense output: largest estimated interpolation error of the probe
     /// (or plane) force between steps, relative to the force (floor
@@ -330,8 +336,8 @@ impl Default for Settings {
             tangent_predictor: true,
             symmetric: true,
             residual_growth: 1.0,
-            lazy_tangent: 1e4,
-            chord_contraction: 0.0,
+            lazy_tangent: 1e5,
+            chord_contraction: 0.1,
             output_tolerance: 2e-4,
             threads: 1,
         }
@@ -1509,6 +1515,9 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         // near convergence): the next correction is a chord step with the
         // last factors.
         let mut chord = false;
+        // Chord steps in a row (at most `MAX_CHORD_STEPS`, then a tangent:
+        // a chord step converges only linearly).
+        let mut chords = 0;
         for it in 0..=self.settings.max_iterations {
             let tol = self.tolerance(&asm);
             if trace() {
@@ -1556,6 +1565,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                 self.counters.factorisations += 1;
                 self.system.solve(&mut du)
             };
+            chords = if chord_step { chords + 1 } else { 0 };
             chord = false;
             self.counters.solve_seconds += clock.elapsed().as_secs_f64();
             match solved {
@@ -1669,7 +1679,12 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                 return Err((norm, tol, it + 1, last_err));
             }
             if lazy && !self.converged(norm, previous_norm, &asm, true) {
-                if norm <= self.settings.chord_contraction * previous_norm {
+                if norm <= self.settings.chord_contraction * previous_norm
+                    && chords < MAX_CHORD_STEPS
+                    // Chord steps must not eat the iteration budget of a
+                    // step that converges only slowly.
+                    && it + 1 + MAX_CHORD_STEPS + 2 <= self.settings.max_iterations
+                {
                     // Still contracting fast: the tangent of the last
                     // factorisation is as good as a new one for the rest
                     // (chord steps, residual-only assemblies).
