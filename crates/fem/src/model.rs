@@ -280,7 +280,8 @@ pub struct Settings {
     /// Extrapolate the last increment as the Newton predictor.
     pub extrapolate: bool,
     /// Tangent (Euler) predictor for a step that moves the probe (a
-    /// prescribed displacement or the spring's free end): the increment
+    /// prescribed displacement, the spring's free end or the applied
+    /// force): the increment
     /// K Δu = −(∂R/∂λ) Δλ with the last factorised tangent (one
     /// back-substitution), instead of extrapolating the last increment.
     pub tangent_predictor: bool,
@@ -1411,7 +1412,8 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
 
     /// Tangent (Euler) predictor: u = u_c + Δu with K Δu = −(∂R/∂λ) Δλ, K
     /// the last factorised tangent and λ the probe's drive (the prescribed
-    /// probe displacement, or the spring's free end), from the loads of the
+    /// probe displacement, the spring's free end, or the applied force),
+    /// from the loads of the
     /// last converged step to `ctl`. Only for a probe step with the other
     /// loads unchanged; false (u untouched) otherwise.
     fn tangent_predictor(&mut self, ctl: &Control) -> bool {
@@ -1439,6 +1441,10 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             ) if k0 == k1 && z1 != z0 => {
                 // R_w = … + k (w − z): −∂R_w/∂z Δz = k Δz.
                 b[self.dof_eq[wdof]] = k1 * (z1 - z0);
+            }
+            (ProbeDrive::Force(f0), ProbeDrive::Force(f1), Some(_)) if f1 != f0 => {
+                // R_w = … + F: −∂R_w/∂F ΔF = −ΔF.
+                b[self.dof_eq[wdof]] = -(f1 - f0);
             }
             (
                 ProbeDrive::Displacement(w0),
