@@ -192,66 +192,50 @@ pub(crate) fn add_outer(out: &mut [[f64; 8]; 8], a: &[f64; 8], b: &[f64; 8], w: 
     }
 }
 
+/// A distorted element off the axis and a large displacement of it (tests).
+#[cfg(test)]
+pub(crate) fn distorted_element() -> ([PointGeometry; 4], [f64; 8]) {
+    let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
+    let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
+    (element_geometry(&x), u)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::fbar::fbar_kernel as fbar_element;
+    use crate::fbar::fbar_kernel;
+
+    /// The kernel on [`distorted_element`] at `u` from fresh history over
+    /// Δt = 0.1.
+    fn evaluate<M: Material3>(
+        mat: &M,
+        u: &[f64; 8],
+        fbar: bool,
+        part: TangentPart,
+    ) -> ElementOutput {
+        let (geo, _) = distorted_element();
+        let sn: Vec<M::State> = (0..4).map(|_| mat.initial_state()).collect();
+        let mut tr = sn.clone();
+        let mut out = ElementOutput::zero();
+        fbar_kernel(mat, &geo, u, &sn, &mut tr, 0.1, fbar, part, &mut out).unwrap();
+        out
+    }
 
     fn tangent_fd(fbar: bool) {
         let mat = crate::reference::NeoHookean {
             mu: 1.0,
             kappa: 30.0,
         };
-        let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
-        let geo = element_geometry(&x);
-        let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
-        let mut out = ElementOutput::zero();
-        let sn = [(); 4];
-        let mut tr = [(); 4];
-        fbar_element(
-            &mat,
-            &geo,
-            &u,
-            &sn,
-            &mut tr,
-            0.1,
-            fbar,
-            TangentPart::Full,
-            &mut out,
-        )
-        .unwrap();
+        let (_, u) = distorted_element();
+        let out = evaluate(&mat, &u, fbar, TangentPart::Full);
         let h = 1e-7;
-        let mut op = ElementOutput::zero();
-        let mut om = ElementOutput::zero();
         for c in 0..8 {
             let mut up = u;
             let mut um = u;
             up[c] += h;
             um[c] -= h;
-            fbar_element(
-                &mat,
-                &geo,
-                &up,
-                &sn,
-                &mut tr,
-                0.1,
-                fbar,
-                TangentPart::None,
-                &mut op,
-            )
-            .unwrap();
-            fbar_element(
-                &mat,
-                &geo,
-                &um,
-                &sn,
-                &mut tr,
-                0.1,
-                fbar,
-                TangentPart::None,
-                &mut om,
-            )
-            .unwrap();
+            let op = evaluate(&mat, &up, fbar, TangentPart::None);
+            let om = evaluate(&mat, &um, fbar, TangentPart::None);
             for r in 0..8 {
                 let fd = (op.r[r] - om.r[r]) / (2.0 * h);
                 assert!(
@@ -274,25 +258,11 @@ mod tests {
     }
 
     fn compare_with_direct_form<M: nlvid_material::Material3>(mat: &M, fbar: bool) {
-        let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
-        let geo = element_geometry(&x);
-        let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
+        let (geo, u) = distorted_element();
         let sn: Vec<M::State> = (0..4).map(|_| mat.initial_state()).collect();
         let mut tr = sn.clone();
-        let mut fast = ElementOutput::zero();
+        let fast = evaluate(mat, &u, fbar, TangentPart::Full);
         let mut direct = ElementOutput::zero();
-        fbar_element(
-            mat,
-            &geo,
-            &u,
-            &sn,
-            &mut tr,
-            0.1,
-            fbar,
-            TangentPart::Full,
-            &mut fast,
-        )
-        .unwrap();
         fbar_element_reference(mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut direct).unwrap();
         let kmax = direct
             .k

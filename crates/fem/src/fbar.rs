@@ -15,7 +15,7 @@
 //! [`crate::element`] and [`crate::hex`]).
 
 use crate::element::{PointFailure, TangentPart};
-use crate::kind::LocalOutput;
+use crate::kind::{LocalOutput, bad_length};
 use nlvid_material::{Mat3, Material3, MaterialError};
 
 /// One Gauss point of an element whose deformation gradient is stored as
@@ -87,12 +87,13 @@ pub(crate) fn positive_jacobian(q: usize, j: f64) -> Result<(), PointFailure> {
 /// element kinds against the residual.
 ///
 /// # Errors
-/// The failing Gauss point and the material's error (also for det F ≤ 0).
+/// The failing Gauss point and the material's error (also for det F ≤ 0
+/// and for a dof vector `u` without `ND` entries).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn fbar_kernel<M, P, const NF: usize, const ND: usize, const NQ: usize>(
     material: &M,
     geometry: &[P; NQ],
-    u: &[f64; ND],
+    u: &[f64],
     state_n: &[M::State],
     trial: &mut [M::State],
     dt: f64,
@@ -104,6 +105,7 @@ where
     M: Material3,
     P: FbarPoint<NF, ND>,
 {
+    let u: &[f64; ND] = u.try_into().map_err(|_| bad_length(u.len()))?;
     let tangent = part != TangentPart::None;
     let lower = part == TangentPart::Lower;
     out.r = [0.0; ND];
@@ -254,16 +256,20 @@ where
 
 /// The stored energy `Σ_q w_q ψ(F̄_q)` of one element for a strain-energy
 /// density `psi` (J; the full revolution for axisymmetric elements): the
-/// potential whose gradient [`fbar_kernel`] returns.
+/// potential whose gradient [`fbar_kernel`] returns. NaN if `u` does not
+/// have `ND` entries.
 pub(crate) fn fbar_energy<P, const NF: usize, const ND: usize, const NQ: usize>(
     geometry: &[P; NQ],
-    u: &[f64; ND],
+    u: &[f64],
     fbar: bool,
     psi: &dyn Fn(&Mat3) -> f64,
 ) -> f64
 where
     P: FbarPoint<NF, ND>,
 {
+    let Ok(u) = <&[f64; ND]>::try_from(u) else {
+        return f64::NAN;
+    };
     let mut f = [[0.0; NF]; NQ];
     let mut jq = [0.0; NQ];
     let (mut vol, mut jbar) = (0.0, 0.0);
@@ -291,6 +297,7 @@ mod tests {
     use super::*;
     use crate::element::PointGeometry;
     use crate::hex::HexPoint;
+    use nlvid_material::PointState;
 
     /// ∂J/∂F and ∂²J/∂F² of a storage `P` against central differences of
     /// J, and J against the determinant of the 3×3 matrix.
@@ -379,9 +386,8 @@ mod tests {
 
     #[test]
     fn lower_tangent_is_the_lower_triangle_of_a_symmetric_full_tangent() {
-        let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
-        let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
-        lower_is_the_lower_triangle(&crate::element::element_geometry(&x), u);
+        let (geo, u) = crate::element::distorted_element();
+        lower_is_the_lower_triangle(&geo, u);
         let mut x = crate::hex::unit_cube();
         for (a, p) in x.iter_mut().enumerate() {
             for (i, c) in p.iter_mut().enumerate() {

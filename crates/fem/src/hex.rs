@@ -315,6 +315,7 @@ mod tests {
     use crate::element::TangentPart;
     use crate::fbar::{fbar_energy as element_energy, fbar_kernel as fbar_hex};
     use crate::reference::NeoHookean;
+    use nlvid_material::PointState;
 
     /// A distorted, non-parallel hexahedron around the unit cube.
     fn distorted() -> [[f64; 3]; 8] {

@@ -37,6 +37,32 @@ impl<const ND: usize> LocalOutput<ND> {
     }
 }
 
+impl<const ND: usize> Default for LocalOutput<ND> {
+    fn default() -> Self {
+        Self::zero()
+    }
+}
+
+/// What the model reads of an element's output ([`LocalOutput`]).
+#[doc(hidden)]
+pub trait Local: Clone + Send + Default {
+    /// The element residual.
+    fn residual(&self) -> &[f64];
+    /// Row `a` of the element tangent.
+    fn tangent_row(&self, a: usize) -> &[f64];
+}
+
+impl<const ND: usize> Local for LocalOutput<ND> {
+    #[inline]
+    fn residual(&self) -> &[f64] {
+        &self.r
+    }
+    #[inline]
+    fn tangent_row(&self, a: usize) -> &[f64] {
+        &self.k[a]
+    }
+}
+
 /// Axisymmetric solids (module docs).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Axisymmetric;
@@ -215,11 +241,13 @@ pub trait ElementKind<M: Material3>: Send + Sync + 'static {
     type Geometry: Send + Sync;
     /// Residual and tangent storage of one element.
     #[doc(hidden)]
-    type Output: Clone + Send;
+    type Output: Local;
 
     /// An empty output.
     #[doc(hidden)]
-    fn output() -> Self::Output;
+    fn output() -> Self::Output {
+        Self::Output::default()
+    }
 
     /// Reference geometry of every element.
     ///
@@ -246,11 +274,15 @@ pub trait ElementKind<M: Material3>: Send + Sync + 'static {
 
     /// The element residual.
     #[doc(hidden)]
-    fn residual(out: &Self::Output) -> &[f64];
+    fn residual(out: &Self::Output) -> &[f64] {
+        out.residual()
+    }
 
     /// Row `a` of the element tangent.
     #[doc(hidden)]
-    fn tangent_row(out: &Self::Output, a: usize) -> &[f64];
+    fn tangent_row(out: &Self::Output, a: usize) -> &[f64] {
+        out.tangent_row(a)
+    }
 
     /// `Σ_q w_q ψ(F̄_q)` of one element for a strain-energy density `psi`.
     #[doc(hidden)]
@@ -273,10 +305,6 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
     type Geometry = [PointGeometry; 4];
     type Output = ElementOutput;
 
-    fn output() -> ElementOutput {
-        ElementOutput::zero()
-    }
-
     fn geometry(mesh: &Mesh) -> Result<Vec<[PointGeometry; 4]>> {
         Ok(mesh
             .elements
@@ -296,16 +324,7 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
         part: TangentPart,
         out: &mut ElementOutput,
     ) -> std::result::Result<(), PointFailure> {
-        let u: &[f64; 8] = u.try_into().map_err(|_| bad_length(u.len()))?;
         fbar_kernel(material, geometry, u, state_n, trial, dt, fbar, part, out)
-    }
-
-    fn residual(out: &ElementOutput) -> &[f64] {
-        &out.r
-    }
-
-    fn tangent_row(out: &ElementOutput, a: usize) -> &[f64] {
-        &out.k[a]
     }
 
     fn energy(
@@ -314,10 +333,7 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
         fbar: bool,
         psi: &dyn Fn(&Mat3) -> f64,
     ) -> f64 {
-        match <&[f64; 8]>::try_from(u) {
-            Ok(u) => fbar_energy(geometry, u, fbar, psi),
-            Err(_) => f64::NAN,
-        }
+        fbar_energy(geometry, u, fbar, psi)
     }
 }
 
@@ -327,11 +343,7 @@ impl<M: Material3> ElementKind<M> for Solid {
     const POINTS: usize = 8;
     type Mesh = Mesh3;
     type Geometry = [HexPoint; 8];
-    type Output = Box<HexOutput>;
-
-    fn output() -> Box<HexOutput> {
-        Box::new(HexOutput::zero())
-    }
+    type Output = HexOutput;
 
     fn geometry(mesh: &Mesh3) -> Result<Vec<[HexPoint; 8]>> {
         mesh.elements
@@ -356,34 +368,12 @@ impl<M: Material3> ElementKind<M> for Solid {
         dt: f64,
         fbar: bool,
         part: TangentPart,
-        out: &mut Box<HexOutput>,
+        out: &mut HexOutput,
     ) -> std::result::Result<(), PointFailure> {
-        let u: &[f64; 24] = u.try_into().map_err(|_| bad_length(u.len()))?;
-        fbar_kernel(
-            material,
-            geometry,
-            u,
-            state_n,
-            trial,
-            dt,
-            fbar,
-            part,
-            out.as_mut(),
-        )
-    }
-
-    fn residual(out: &Box<HexOutput>) -> &[f64] {
-        &out.r
-    }
-
-    fn tangent_row(out: &Box<HexOutput>, a: usize) -> &[f64] {
-        &out.k[a]
+        fbar_kernel(material, geometry, u, state_n, trial, dt, fbar, part, out)
     }
 
     fn energy(geometry: &[HexPoint; 8], u: &[f64], fbar: bool, psi: &dyn Fn(&Mat3) -> f64) -> f64 {
-        match <&[f64; 24]>::try_from(u) {
-            Ok(u) => fbar_energy(geometry, u, fbar, psi),
-            Err(_) => f64::NAN,
-        }
+        fbar_energy(geometry, u, fbar, psi)
     }
 }

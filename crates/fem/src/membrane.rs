@@ -261,14 +261,14 @@ pub fn membrane_element<M>(
     material: &M,
     g: &MembraneGeometry,
     u: &[f64; 4],
-    state_n: &[<M as Material3>::State],
-    trial: &mut [<M as Material3>::State],
+    state_n: &[M::State],
+    trial: &mut [M::State],
     dt: f64,
     part: TangentPart,
     out: &mut MembraneOutput,
 ) -> std::result::Result<(), PointFailure>
 where
-    M: Material3 + MembraneMaterial<State = <M as Material3>::State>,
+    M: Material3 + MembraneMaterial,
 {
     out.r = [0.0; 4];
     out.k = [[0.0; 4]; 4];
@@ -333,7 +333,7 @@ where
 
 impl<M> ElementKind<M> for Membrane
 where
-    M: Material3 + MembraneMaterial<State = <M as Material3>::State>,
+    M: Material3 + MembraneMaterial,
 {
     const DIM: usize = 2;
     const NODES: usize = 2;
@@ -341,10 +341,6 @@ where
     type Mesh = MembraneMesh;
     type Geometry = MembraneGeometry;
     type Output = MembraneOutput;
-
-    fn output() -> MembraneOutput {
-        MembraneOutput::zero()
-    }
 
     fn geometry(mesh: &MembraneMesh) -> Result<Vec<MembraneGeometry>> {
         Ok(mesh
@@ -359,8 +355,8 @@ where
         material: &M,
         geometry: &MembraneGeometry,
         u: &[f64],
-        state_n: &[<M as Material3>::State],
-        trial: &mut [<M as Material3>::State],
+        state_n: &[M::State],
+        trial: &mut [M::State],
         dt: f64,
         _fbar: bool,
         part: TangentPart,
@@ -368,14 +364,6 @@ where
     ) -> std::result::Result<(), PointFailure> {
         let u: &[f64; 4] = u.try_into().map_err(|_| bad_length(u.len()))?;
         membrane_element(material, geometry, u, state_n, trial, dt, part, out)
-    }
-
-    fn residual(out: &MembraneOutput) -> &[f64] {
-        &out.r
-    }
-
-    fn tangent_row(out: &MembraneOutput, a: usize) -> &[f64] {
-        &out.k[a]
     }
 
     /// `Σ_q w_q ψ(diag(λ1, λ2, 1/(λ1 λ2)))`.
@@ -416,7 +404,7 @@ pub struct MembranePoint {
 
 impl<M> Model<M, Membrane>
 where
-    M: Material3 + MembraneMaterial<State = <M as Material3>::State>,
+    M: Material3 + MembraneMaterial,
 {
     /// Converged nodal displacements, (u_r, u_z) per node.
     pub fn membrane_displacements(&self) -> impl Iterator<Item = [f64; 2]> + '_ {
@@ -436,7 +424,7 @@ where
     pub fn membrane_points(&self) -> Result<Vec<MembranePoint>> {
         let (material, geometry, history, u) = self.converged_parts();
         let mut out = Vec::with_capacity(2 * geometry.len());
-        let mut scratch = <M as Material3>::initial_state(material);
+        let mut scratch = material.initial_state();
         for (e, g) in geometry.iter().enumerate() {
             let conn = self.mesh().elements[e];
             let ue = [
@@ -479,7 +467,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nlvid_material::{MooneyRivlin, PipkinRogers};
+    use nlvid_material::{MooneyRivlin, PipkinRogers, PointState};
     use nlvid_model::{Prony, Relaxation};
 
     fn pipkin_rogers() -> PipkinRogers {
@@ -493,15 +481,9 @@ mod tests {
     }
 
     /// Residual of the element with history `state` over `dt` at `u`.
-    fn residual<M>(
-        m: &M,
-        g: &MembraneGeometry,
-        u: &[f64; 4],
-        st: &[<M as Material3>::State],
-        dt: f64,
-    ) -> [f64; 4]
+    fn residual<M>(m: &M, g: &MembraneGeometry, u: &[f64; 4], st: &[M::State], dt: f64) -> [f64; 4]
     where
-        M: Material3 + MembraneMaterial<State = <M as Material3>::State>,
+        M: Material3 + MembraneMaterial,
     {
         let mut trial = st.to_vec();
         let mut out = <Membrane as ElementKind<M>>::output();
@@ -509,9 +491,9 @@ mod tests {
         out.r
     }
 
-    fn check_tangent<M>(m: &M, st: &[<M as Material3>::State], dt: f64, u: [f64; 4])
+    fn check_tangent<M>(m: &M, st: &[M::State], dt: f64, u: [f64; 4])
     where
-        M: Material3 + MembraneMaterial<State = <M as Material3>::State>,
+        M: Material3 + MembraneMaterial,
     {
         let g = element();
         let mut trial = st.to_vec();
@@ -544,7 +526,7 @@ mod tests {
         // Pipkin–Rogers with a history from an earlier step.
         let pr = pipkin_rogers();
         let g = element();
-        let st0 = vec![<PipkinRogers as Material3>::initial_state(&pr); 2];
+        let st0 = vec![pr.initial_state(); 2];
         let mut st1 = st0.clone();
         let mut out = <Membrane as ElementKind<PipkinRogers>>::output();
         let u0 = [0.02e-3, 0.01e-3, 0.03e-3, -0.01e-3];

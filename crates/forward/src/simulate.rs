@@ -441,10 +441,10 @@ impl Simulation {
                         v.t1 * g10 * h0,
                         v.t2 * g10 * h0,
                         v.theta,
-                        u8::from(v.psi <= sol.psi_c)
+                        u8::from(v.psi <= sol.record.psi_c)
                     ));
                 }
-                (sol.time, s)
+                (sol.record.time, s)
             })
             .collect()
     }
