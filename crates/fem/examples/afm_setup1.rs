@@ -88,6 +88,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Ok(v) = std::env::var("NLVID_FEM_RAMP_STEPS") {
         setup.ramp_step_fraction = 1.0 / v.parse::<f64>()?;
     }
+    if let Ok(v) = std::env::var("NLVID_FEM_CHORD") {
+        setup.settings.chord_contraction = v.parse().unwrap();
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_TANGENT_PREDICTOR") {
+        setup.settings.tangent_predictor = v != "0";
+    }
     if let Ok(v) = std::env::var("NLVID_FEM_THREADS") {
         setup.settings.threads = v.parse()?;
     }
@@ -121,6 +127,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         last = Some(run);
     }
     walls.sort_by(f64::total_cmp);
+    // NLVID_FEM_DUMP=FILE: the written curve, "t F" per sample (to compare
+    // runs with different solver settings sample by sample).
+    if let (Some(path), Some(run)) = (std::env::var_os("NLVID_FEM_DUMP"), &last) {
+        let text: String = run
+            .time
+            .iter()
+            .zip(&run.force)
+            .map(|(t, f)| format!("{t:.9e} {f:.9e}\n"))
+            .collect();
+        std::fs::write(path, text)?;
+    }
     if let Some(run) = last {
         let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
         println!(
@@ -134,7 +151,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             run.iterations
         );
         println!(
-            "last run: CPU {:.3} s (wall {:.3} s) = assembly {:.3} s (elements {:.3} s, contact+loads {:.3} s) + factorise/solve {:.3} s + other {:.3} s; {} assemblies ({} residual-only), {} LU fallbacks",
+            "last run: CPU {:.3} s (wall {:.3} s) = assembly {:.3} s (elements {:.3} s, contact+loads {:.3} s) + factorise/solve {:.3} s + other {:.3} s; {} assemblies ({} residual-only), {} factorisations, {} LU fallbacks",
             run.cpu_seconds,
             run.wall_seconds,
             run.assembly_seconds,
@@ -144,6 +161,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             run.cpu_seconds - run.assembly_seconds - run.solve_seconds,
             run.assemblies,
             run.residual_only_assemblies,
+            run.factorisations,
             run.lu_fallbacks
         );
         // The bench ratios (docs/theory/fem.md, "Speed"): assemblies are

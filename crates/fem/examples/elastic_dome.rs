@@ -52,6 +52,12 @@ fn main() {
     if let Ok(v) = std::env::var("NLVID_FEM_LAZY") {
         setup.settings.lazy_tangent = v.parse().unwrap();
     }
+    if let Ok(v) = std::env::var("NLVID_FEM_CHORD") {
+        setup.settings.chord_contraction = v.parse().unwrap();
+    }
+    if let Ok(v) = std::env::var("NLVID_FEM_TANGENT_PREDICTOR") {
+        setup.settings.tangent_predictor = v != "0";
+    }
     if let Ok(v) = std::env::var("NLVID_FEM_THREADS") {
         setup.settings.threads = v.parse().unwrap();
     }
@@ -115,12 +121,14 @@ fn main() {
         println!("δ = {:.2} µm: F = {:.6e} N", depth * 1e6, run.force[i]);
     }
     println!(
-        "{} elements, {} steps ({} cut-backs), {} Newton iterations, {} assemblies; CPU median = {:.3} s (all {:.3?})",
+        "{} elements, {} steps ({} cut-backs), {} Newton iterations, {} assemblies ({} residual-only), {} factorisations; CPU median = {:.3} s (all {:.3?})",
         run.elements,
         run.steps,
         run.cutbacks,
         run.iterations,
         run.assemblies,
+        run.residual_only_assemblies,
+        run.factorisations,
         cpu[cpu.len() / 2],
         cpu
     );

@@ -280,6 +280,8 @@ pub struct AfmRun {
     pub assemblies: usize,
     /// Part of `assemblies` without the tangent (residual only).
     pub residual_only_assemblies: usize,
+    /// Numeric factorisations of the tangent (iterations less chord steps).
+    pub factorisations: usize,
     /// Factorisations that fell back from LDLᵀ to LU.
     pub lu_fallbacks: usize,
     /// Deformed node positions (r, z) at the end of the run (m).
@@ -548,6 +550,7 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
         solve_seconds: model.counters().solve_seconds,
         assemblies: model.counters().assemblies,
         residual_only_assemblies: model.counters().residual_only_assemblies,
+        factorisations: model.counters().factorisations,
         lu_fallbacks: model.counters().lu_fallbacks,
         deformed_nodes: model
             .mesh()

@@ -34,6 +34,10 @@ use crate::sparse::{NO_SLOT, SparseSystem};
 use crate::{FemError, NonConvergence, Result};
 use nlvid_material::{Mat3, Material3};
 
+/// Chord steps in a row before a Newton step gets its own tangent again
+/// (`Settings::chord_contraction`).
+const MAX_CHORD_STEPS: usize = 2;
+
 /// Displacement component of a support.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Component {
@@ -275,6 +279,12 @@ pub struct Settings {
     pub min_step_fraction: f64,
     /// Extrapolate the last increment as the Newton predictor.
     pub extrapolate: bool,
+    /// Tangent (Euler) predictor for a step that moves the probe (a
+    /// prescribed displacement, the spring's free end or the applied
+    /// force): the increment
+    /// K Δu = −(∂R/∂λ) Δλ with the last factorised tangent (one
+    /// back-substitution), instead of extrapolating the last increment.
+    pub tangent_predictor: bool,
     /// The material tangent is symmetric: factorise with LDLᵀ (LU
     /// fallback); false forces LU.
     pub symmetric: bool,
@@ -286,9 +296,18 @@ pub struct Settings {
     /// is within this factor of the tolerance, the Newton step is expected
     /// to converge (quadratic convergence), so its trial points are assembled
     /// without the tangent and the tangent is assembled only if the accepted
-    /// point turns out not converged. 0 disables. Default 1e4 (measured on
-    /// the thesis run: 105 tangent assemblies saved, 3 redone).
+    /// point turns out not converged (then, with `chord_contraction`, a
+    /// chord step may follow instead). 0 disables. Default 1e5 (session 3:
+    /// 1e4 without chord steps; with them 1e5 measured best on the thesis
+    /// run and the elastic dome, docs/theory/fem.md "Speed").
     pub lazy_tangent: f64,
+    /// Chord steps near convergence: after a residual-only (lazy)
+    /// assembly that is not converged but shows the residual contracted by
+    /// at least this factor in the last step, the next correction reuses
+    /// the last factors (no tangent assembly, no factorisation) and is kept
+    /// only if it contracts the residual by this factor again; otherwise
+    /// the tangent is assembled at that point. 0 disables. Default 0.1.
+    pub chord_contraction: f64,
     /// Dense output: largest estimated interpolation error of the probe
     /// (or plane) force between steps, relative to the force (floor
     /// 1e-7 G L²); steps that exceed 1.5× it are redone smaller, and the
@@ -315,9 +334,11 @@ impl Default for Settings {
             cutback: 0.25,
             min_step_fraction: 1e-6,
             extrapolate: true,
+            tangent_predictor: true,
             symmetric: true,
             residual_growth: 1.0,
-            lazy_tangent: 1e4,
+            lazy_tangent: 1e5,
+            chord_contraction: 0.1,
             output_tolerance: 2e-4,
             threads: 1,
         }
@@ -391,6 +412,9 @@ pub struct Counters {
     pub assemblies: usize,
     /// Part of `assemblies` without the tangent (residual only).
     pub residual_only_assemblies: usize,
+    /// Numeric factorisations of the tangent (Newton iterations less the
+    /// chord steps).
+    pub factorisations: usize,
     /// Numeric factorisations that fell back from LDLᵀ to LU.
     pub lu_fallbacks: usize,
 }
@@ -486,6 +510,9 @@ pub struct Model<M: Material3, K: ElementKind<M> = Axisymmetric> {
     records: Vec<StepRecord>,
     /// Loads of the last converged step.
     control: Control,
+    /// The last factorised tangent belongs to the Newton iterations of the
+    /// last converged step (not to a rejected or failed attempt since).
+    factors_current: bool,
     counters: Counters,
 }
 
@@ -871,6 +898,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             positions2,
             records: Vec::new(),
             control: Control::default(),
+            factors_current: false,
             counters: Counters::default(),
             system,
             mesh,
@@ -1382,6 +1410,87 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         }
     }
 
+    /// Tangent (Euler) predictor: u = u_c + Δu with K Δu = −(∂R/∂λ) Δλ, K
+    /// the last factorised tangent and λ the probe's drive (the prescribed
+    /// probe displacement, the spring's free end, or the applied force),
+    /// from the loads of the
+    /// last converged step to `ctl`. Only for a probe step with the other
+    /// loads unchanged; false (u untouched) otherwise.
+    fn tangent_predictor(&mut self, ctl: &Control) -> bool {
+        let old = self.control;
+        if old.plane_z != ctl.plane_z
+            || old.support_scale != ctl.support_scale
+            || old.fluid_injected != ctl.fluid_injected
+            || self.cavity.is_some()
+        {
+            return false;
+        }
+        let wdof = K::DIM * self.mesh.node_count();
+        let mut b = vec![0.0; self.rhs.len()];
+        match (old.probe, ctl.probe, &mut self.probe) {
+            (
+                ProbeDrive::Spring {
+                    stiffness: k0,
+                    free_end: z0,
+                },
+                ProbeDrive::Spring {
+                    stiffness: k1,
+                    free_end: z1,
+                },
+                Some(_),
+            ) if k0 == k1 && z1 != z0 => {
+                // R_w = … + k (w − z): −∂R_w/∂z Δz = k Δz.
+                b[self.dof_eq[wdof]] = k1 * (z1 - z0);
+            }
+            (ProbeDrive::Force(f0), ProbeDrive::Force(f1), Some(_)) if f1 != f0 => {
+                // R_w = … + F: −∂R_w/∂F ΔF = −ΔF.
+                b[self.dof_eq[wdof]] = -(f1 - f0);
+            }
+            (
+                ProbeDrive::Displacement(w0),
+                ProbeDrive::Displacement(w1),
+                Some((probe, surface)),
+            ) if w1 != w0 => {
+                // The w row is the identity and its column is not stored:
+                // −(∂R_u/∂w) Δw by central differences of the contact
+                // residual at the converged state (contact only, cheap).
+                let dw = w1 - w0;
+                let h = 1e-6 * dw;
+                let mut rp = vec![0.0; self.u.len()];
+                let mut rm = vec![0.0; self.u.len()];
+                for (r, sign) in [(&mut rp, 1.0), (&mut rm, -1.0)] {
+                    surface.assemble(
+                        &self.positions2,
+                        &self.u_committed,
+                        wdof,
+                        Obstacle::Sphere {
+                            centre_z: probe.centre_z + w0 + sign * h,
+                            radius: probe.radius,
+                        },
+                        false,
+                        false,
+                        r,
+                        &mut [],
+                    );
+                }
+                for (d, &eq) in self.dof_eq.iter().enumerate() {
+                    if eq != NO_SLOT && d != wdof {
+                        b[eq] = -(rp[d] - rm[d]) / (2.0 * h) * dw;
+                    }
+                }
+                b[self.dof_eq[wdof]] = dw * self.probe_diag;
+            }
+            _ => return false,
+        }
+        if !self.system.solve_with_last_factors(&mut b) {
+            return false;
+        }
+        for (d, &eq) in self.dof_eq.iter().enumerate() {
+            self.u[d] = self.u_committed[d] + if eq != NO_SLOT { b[eq] } else { 0.0 };
+        }
+        true
+    }
+
     fn add_increment(&mut self, du: &[f64], alpha: f64, base: &[f64]) {
         for (d, &eq) in self.dof_eq.iter().enumerate() {
             if eq != NO_SLOT {
@@ -1408,6 +1517,13 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         let mut du = vec![0.0; self.rhs.len()];
         let mut base = self.u.clone();
         let growth_limit = self.settings.residual_growth;
+        // No tangent at the current point (it was assembled residual-only
+        // near convergence): the next correction is a chord step with the
+        // last factors.
+        let mut chord = false;
+        // Chord steps in a row (at most `MAX_CHORD_STEPS`, then a tangent:
+        // a chord step converges only linearly).
+        let mut chords = 0;
         for it in 0..=self.settings.max_iterations {
             let tol = self.tolerance(&asm);
             if trace() {
@@ -1440,7 +1556,23 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             }
             du.copy_from_slice(&self.rhs);
             let clock = cpu_time::ThreadTime::now();
-            let solved = self.system.solve(&mut du);
+            let chord_step = chord && self.system.solve_with_last_factors(&mut du);
+            let solved = if chord_step {
+                Ok(true)
+            } else {
+                if chord {
+                    // No factors to reuse: the tangent here after all.
+                    asm = match self.assemble(ctl, dt, true) {
+                        Ok(a) => a,
+                        Err(e) => return Err((norm, tol, it, e.to_string())),
+                    };
+                    du.copy_from_slice(&self.rhs);
+                }
+                self.counters.factorisations += 1;
+                self.system.solve(&mut du)
+            };
+            chords = if chord_step { chords + 1 } else { 0 };
+            chord = false;
             self.counters.solve_seconds += clock.elapsed().as_secs_f64();
             match solved {
                 Ok(true) => {}
@@ -1491,8 +1623,13 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             let mut alpha = 1.0;
             let mut accepted = false;
             let mut last_err = String::new();
-            let lazy = norm <= self.settings.lazy_tangent * tol;
-            for _ in 0..=self.settings.line_search {
+            let lazy = chord_step || norm <= self.settings.lazy_tangent * tol;
+            let trials = if chord_step {
+                0
+            } else {
+                self.settings.line_search
+            };
+            for _ in 0..=trials {
                 self.add_increment(&du, alpha, &base);
                 match self.assemble(ctl, dt, !lazy) {
                     Ok(a) => {
@@ -1500,7 +1637,11 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                         // Monotone residual decrease by default: a full step
                         // that raises it is halved (measured: fewer
                         // iterations and cut-backs than accepting 10× rises).
-                        let limit = if alpha == 1.0 {
+                        let limit = if chord_step {
+                            // A chord step must contract as the Newton step
+                            // it stands in for would.
+                            self.settings.chord_contraction * norm
+                        } else if alpha == 1.0 {
                             growth_limit * norm
                         } else {
                             norm
@@ -1521,6 +1662,16 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                 }
                 alpha *= 0.5;
             }
+            if !accepted && chord_step {
+                // The old factors no longer do: a Newton step from the
+                // same point with its own tangent (same residual, bitwise).
+                self.u.copy_from_slice(&base);
+                asm = match self.assemble(ctl, dt, true) {
+                    Ok(a) => a,
+                    Err(e) => return Err((norm, tol, it + 1, e.to_string())),
+                };
+                continue;
+            }
             if !accepted {
                 if norm <= self.force_floor {
                     // No direction improves a residual already at round-off
@@ -1534,6 +1685,18 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                 return Err((norm, tol, it + 1, last_err));
             }
             if lazy && !self.converged(norm, previous_norm, &asm, true) {
+                if norm <= self.settings.chord_contraction * previous_norm
+                    && chords < MAX_CHORD_STEPS
+                    // Chord steps must not eat the iteration budget of a
+                    // step that converges only slowly.
+                    && it + 1 + MAX_CHORD_STEPS + 2 <= self.settings.max_iterations
+                {
+                    // Still contracting fast: the tangent of the last
+                    // factorisation is as good as a new one for the rest
+                    // (chord steps, residual-only assemblies).
+                    chord = true;
+                    continue;
+                }
                 // Predicted convergence did not happen: the next iteration
                 // needs the tangent at this point.
                 asm = match self.assemble(ctl, dt, true) {
@@ -1666,7 +1829,12 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             let t_new = self.time + dt;
             let ctl = (stage.control)(t_new);
             // Predictor.
-            if self.settings.extrapolate && !first && self.last_dt > 0.0 {
+            if self.settings.tangent_predictor
+                && self.factors_current
+                && self.tangent_predictor(&ctl)
+            {
+                // u set from the converged state and the load increment.
+            } else if self.settings.extrapolate && !first && self.last_dt > 0.0 {
                 let s = dt / self.last_dt;
                 for d in 0..self.u.len() {
                     self.u[d] =
@@ -1698,6 +1866,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                             );
                         }
                         self.counters.rejected_steps += 1;
+                        self.factors_current = false;
                         self.u.copy_from_slice(&self.u_committed);
                         dt = dt_error.max(dt_min);
                         continue;
@@ -1710,6 +1879,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                     first = false;
                     self.counters.steps += 1;
                     self.control = ctl;
+                    self.factors_current = true;
                     self.push_record(t_new, &ctl, &asm, iterations);
                     inadmissible = None;
                     observe(self)?;
@@ -1723,6 +1893,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                         eprintln!("cutback t={:.5} dt={dt:.3e} {cause}", self.time);
                     }
                     self.counters.cutbacks += 1;
+                    self.factors_current = false;
                     self.u.copy_from_slice(&self.u_committed);
                     if cause.starts_with("material at element") {
                         inadmissible = Some(cause.clone());

@@ -71,6 +71,11 @@ pub(crate) struct SparseSystem {
     kx: Vec<f64>,
     knorm: Vec<f64>,
     symmetric: bool,
+    /// `l_values` holds the LDLᵀ factors of the last factorised tangent
+    /// (false before the first one and after an LU fallback).
+    factored: bool,
+    /// The LU factors of the last factorised tangent, if LU did it.
+    last_lu: Option<Lu<usize, f64>>,
 }
 
 impl std::fmt::Debug for SparseSystem {
@@ -220,6 +225,8 @@ impl SparseSystem {
             kx: vec![0.0; n],
             knorm: vec![0.0; n],
             symmetric,
+            factored: false,
+            last_lu: None,
         })
     }
 
@@ -293,12 +300,48 @@ impl SparseSystem {
         if den > 0.0 { err / den } else { err }
     }
 
+    /// Solves `K x = rhs` in place with the factors (LDLᵀ or LU) of the
+    /// last factorised tangent (no new factorisation; the current `values`
+    /// are not read). false when there are none (before the first
+    /// factorisation) or the solution is not finite (`rhs` then holds no
+    /// solution).
+    pub(crate) fn solve_with_last_factors(&mut self, rhs: &mut [f64]) -> bool {
+        if let Some(lu) = &self.last_lu {
+            let col = faer::ColMut::from_slice_mut(rhs);
+            lu.solve_in_place(col.as_mat_mut());
+            return rhs.iter().all(|x| x.is_finite());
+        }
+        let Some(chol) = self.chol_symbolic.as_ref().filter(|_| self.factored) else {
+            return false;
+        };
+        for (w, &i) in self.work.iter_mut().zip(&self.from_stored) {
+            *w = rhs[i];
+        }
+        let ldlt = LdltRef::new(chol, &self.l_values);
+        let col = faer::ColMut::from_slice_mut(&mut self.work);
+        ldlt.solve_in_place_with_conj(
+            Conj::No,
+            col.as_mat_mut(),
+            Par::Seq,
+            MemStack::new(&mut self.stack),
+        );
+        if !self.work.iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        for (w, &i) in self.work.iter().zip(&self.from_stored) {
+            rhs[i] = *w;
+        }
+        true
+    }
+
     /// Factorises the current values and solves `K x = rhs` in place:
     /// LDLᵀ of the stored lower triangle (AMD numbering, symbolic analysis
     /// reused, no allocation) when the tangent is symmetric and the
     /// solution's residual is at round-off level; LU with partial pivoting
     /// otherwise. Ok(true) if LDLᵀ did it.
     pub(crate) fn solve(&mut self, rhs: &mut [f64]) -> Result<bool> {
+        self.factored = false;
+        self.last_lu = None;
         if let Some(chol) = &self.chol_symbolic {
             for (w, &i) in self.work.iter_mut().zip(&self.from_stored) {
                 *w = rhs[i];
@@ -335,6 +378,7 @@ impl SparseSystem {
                     for (w, &i) in self.work.iter().zip(&self.from_stored) {
                         rhs[i] = *w;
                     }
+                    self.factored = true;
                     return Ok(true);
                 }
             }
@@ -353,6 +397,7 @@ impl SparseSystem {
         let col = faer::ColMut::from_slice_mut(rhs);
         lu.solve_in_place(col.as_mat_mut());
         if rhs.iter().all(|x| x.is_finite()) {
+            self.last_lu = Some(lu);
             Ok(false)
         } else {
             Err(FemError::Solver(

@@ -102,7 +102,9 @@ fn parallel_element_loop_is_bitwise_serial() {
 /// is bitwise the same, with fewer tangent assemblies.
 #[test]
 fn lazy_tangent_is_bitwise_the_eager_run() {
-    let lazy = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    let mut lazy = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    // Chord steps (which do change the path) follow lazy assemblies only.
+    lazy.settings.chord_contraction = 0.0;
     let mut eager = lazy.clone();
     eager.settings.lazy_tangent = 0.0;
     let a = afm::run(&params(), &lazy).unwrap();
@@ -116,6 +118,72 @@ fn lazy_tangent_is_bitwise_the_eager_run() {
     assert!(a.residual_only_assemblies > 0);
     let tangents = |r: &afm::AfmRun| r.assemblies - r.residual_only_assemblies;
     assert!(tangents(&a) < tangents(&b));
+}
+
+/// The tangent (Euler) predictor of a probe step (K Δu = −∂R/∂λ Δλ with
+/// the last factors) changes only where Newton starts: both cantilevers
+/// (spring: λ = the free end; rigid: λ = the prescribed probe travel, whose
+/// coupling column is differenced from the contact residual) give the
+/// extrapolation-predictor run's forces to the dense-output tolerance
+/// (2e-4; the step sequences differ) and need fewer Newton iterations.
+#[test]
+fn tangent_predictor_keeps_the_forces_and_saves_iterations() {
+    for cantilever in [Cantilever::Spring { stiffness: 0.12 }, Cantilever::Rigid] {
+        let mut euler = short_setup(cantilever);
+        euler.engagement.force = 0.0;
+        let mut extrapolated = euler.clone();
+        extrapolated.settings.tangent_predictor = false;
+        assert!(euler.settings.tangent_predictor);
+        let a = afm::run(&params(), &euler).unwrap();
+        let b = afm::run(&params(), &extrapolated).unwrap();
+        let worst = a
+            .force
+            .iter()
+            .zip(&b.force)
+            .filter(|(_, f)| f.abs() > 1e-3 * b.peak_force)
+            .map(|(x, y)| (x / y - 1.0).abs())
+            .fold(0.0, f64::max);
+        eprintln!(
+            "{cantilever:?}: iterations {} vs {}, assemblies {} vs {}, worst force difference {worst:.2e}",
+            a.iterations, b.iterations, a.assemblies, b.assemblies
+        );
+        assert!(worst < 1e-3, "{cantilever:?}: {worst:.3e}");
+        assert!(
+            a.iterations < b.iterations,
+            "{cantilever:?}: {} vs {}",
+            a.iterations,
+            b.iterations
+        );
+    }
+}
+
+/// Chord steps near convergence (the last factors reused after a
+/// residual-only assembly that contracted fast) meet the same residual
+/// tolerance as full Newton, so the forces agree to the dense-output
+/// tolerance (the step sequences may differ), with fewer factorisations
+/// than Newton iterations.
+#[test]
+fn chord_steps_keep_the_forces_and_save_factorisations() {
+    let chord = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    let mut newton = chord.clone();
+    newton.settings.chord_contraction = 0.0;
+    assert!(chord.settings.chord_contraction > 0.0);
+    let a = afm::run(&params(), &chord).unwrap();
+    let b = afm::run(&params(), &newton).unwrap();
+    let worst = a
+        .force
+        .iter()
+        .zip(&b.force)
+        .map(|(x, y)| (x / y - 1.0).abs())
+        .fold(0.0, f64::max);
+    eprintln!(
+        "factorisations {} of {} iterations vs {} of {}; worst force difference {worst:.2e}",
+        a.factorisations, a.iterations, b.factorisations, b.iterations
+    );
+    assert!(worst < 1e-3, "{worst:.3e}");
+    assert_eq!(b.factorisations, b.iterations);
+    assert!(a.factorisations < a.iterations);
+    assert!(a.factorisations < b.factorisations);
 }
 
 /// The symmetric path (lower triangle of the element tangents, stored in
@@ -138,7 +206,9 @@ fn symmetric_lower_storage_agrees_with_full_lu() {
         worst <= 1e-7 * fmax,
         "force differs by {worst:e} of {fmax:e}"
     );
-    assert!(a.lu_fallbacks == 0 && b.lu_fallbacks == b.iterations);
+    // Every factorisation of the full-matrix run is LU (chord steps reuse
+    // factors, so iterations may exceed factorisations).
+    assert!(a.lu_fallbacks == 0 && b.lu_fallbacks == b.factorisations);
 }
 
 #[test]
