@@ -42,11 +42,11 @@ fn main() {
     walk(&demo, &demo, &mut files);
     let mut code = String::from(
         "/// Embedded files of examples/demo: (path relative to the demo folder, bytes).\n\
-         pub(crate) const FILES: &[(&str, &[u8])] = &[\n",
+         pub const FILES: &[(&str, &[u8])] = &[\n",
     );
     let mut skipped = String::from(
         "/// Files of examples/demo too large to embed: (path, size in bytes).\n\
-         pub(crate) const NOT_EMBEDDED: &[(&str, u64)] = &[\n",
+         pub const NOT_EMBEDDED: &[(&str, u64)] = &[\n",
     );
     for (rel, path, len) in &files {
         println!("cargo:rerun-if-changed={}", path.display());

@@ -453,6 +453,82 @@ pub fn inspect_row(
     })
 }
 
+/// `nlvid inspect FILE`: one curve of an instrument file, the number of
+/// curves the file holds, and the quick fit asked for.
+#[derive(Debug)]
+pub struct Inspection {
+    /// The curve.
+    pub curve: ForceCurve,
+    /// Curves in its file.
+    pub n_curves: usize,
+    /// The quick fit, if one was asked for.
+    pub fit: Option<QuickFit>,
+}
+
+impl Inspection {
+    /// `curve` (one of the `n_curves` of its file) with the quick fit `fit`
+    /// = (kind, probe radius m), if given ([`quick_fit`]).
+    ///
+    /// # Errors
+    /// As [`quick_fit`].
+    pub fn new(
+        curve: ForceCurve,
+        n_curves: usize,
+        fit: Option<(QuickFitKind, f64)>,
+        method: ContactMethod,
+    ) -> Result<Self> {
+        let fit = match fit {
+            Some((kind, r)) => Some(quick_fit(&curve, kind, r, method)?),
+            None => None,
+        };
+        Ok(Self {
+            curve,
+            n_curves,
+            fit,
+        })
+    }
+
+    /// [`summary_json`] (with every sample if `samples`) and the fit under `fit`.
+    pub fn to_json(&self, samples: bool) -> serde_json::Value {
+        let mut v = summary_json(&self.curve, self.n_curves, samples);
+        if let Some(f) = &self.fit {
+            v["fit"] = f.to_json();
+        }
+        v
+    }
+
+    /// [`summary_text`], the fit's line, and one line per file `written`
+    /// (`(what, path)`, e.g. `("CSV", …)`).
+    pub fn text(&self, written: &[(&str, &Path)]) -> String {
+        let mut out = summary_text(&self.curve, self.n_curves);
+        if let Some(f) = &self.fit {
+            out += &format!("\n{}\n", f.text);
+        }
+        for (what, p) in written {
+            out += &format!("{what} written to {}\n", p.display());
+        }
+        out
+    }
+}
+
+/// What a batch reports on stderr: one `failed: …` line per failure, and
+/// a line on the files of folders that are not AFM files.
+pub fn batch_warnings<T>(batch: &Batch<T>) -> Vec<String> {
+    let mut out: Vec<String> = batch
+        .failures
+        .iter()
+        .map(|f| format!("failed: {f}"))
+        .collect();
+    if let Some(first) = batch.ignored.first() {
+        out.push(format!(
+            "skipped {} file(s) that are not AFM files (e.g. {})",
+            batch.ignored.len(),
+            first.display()
+        ));
+    }
+    out
+}
+
 /// `nlvid inspect` on many files: every curve of `inputs` (files, maps, folders, globs;
 /// [`crate::batch::for_each_curve_with`]) summarised and optionally fitted, one row per
 /// curve; curves that fail are listed with their reason and the batch goes on.

@@ -70,8 +70,8 @@ pub use hertz::{
 pub use ibw::read_ibw_bytes;
 pub use indenter::{Indenter, Validity, hertz_force};
 pub use inspect::{
-    InspectRow, QuickFit, QuickFitKind, batch_csv, batch_json, inspect_batch, inspect_row,
-    quick_fit, range, summary_json, summary_text, write_plot,
+    InspectRow, Inspection, QuickFit, QuickFitKind, batch_csv, batch_json, batch_warnings,
+    inspect_batch, inspect_row, quick_fit, range, summary_json, summary_text, write_plot,
 };
 pub use jpk::{
     JpkArchive, ReadOptions, read_force_curve, read_force_curve_with, read_force_map,

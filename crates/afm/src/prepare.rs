@@ -136,6 +136,23 @@ pub enum ContactMethod {
     PiecewiseLinear,
 }
 
+impl ContactMethod {
+    /// The method by its name in the CLI and Python: `deviation` (the
+    /// default) or `piecewise`.
+    ///
+    /// # Errors
+    /// Any other name, quoted, with the two that exist.
+    pub fn from_name(name: &str) -> std::result::Result<Self, String> {
+        match name {
+            "deviation" => Ok(ContactMethod::default()),
+            "piecewise" => Ok(ContactMethod::PiecewiseLinear),
+            other => Err(format!(
+                "`{other}`: expected \"deviation\" or \"piecewise\""
+            )),
+        }
+    }
+}
+
 impl Default for ContactMethod {
     fn default() -> Self {
         ContactMethod::Deviation {

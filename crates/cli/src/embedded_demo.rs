@@ -39,27 +39,3 @@ pub fn write_to(dir: &Path) -> nlvid_report::Result<PathBuf> {
     }
     Ok(dir.to_path_buf())
 }
-
-#[cfg(test)]
-mod tests {
-    #![allow(clippy::unwrap_used)]
-    use super::*;
-
-    /// Every file of the repository's examples/demo is embedded, byte for
-    /// byte (the list is not maintained by hand).
-    #[test]
-    fn every_file_of_examples_demo_is_embedded() {
-        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo");
-        for rel in ["study.toml", "metamodel.toml", "ground_truth.csv"] {
-            let (_, bytes) = FILES.iter().find(|(r, _)| *r == rel).unwrap();
-            assert_eq!(
-                *bytes,
-                std::fs::read(root.join(rel)).unwrap().as_slice(),
-                "{rel}"
-            );
-        }
-        let data = FILES.iter().filter(|(r, _)| r.starts_with("data/")).count();
-        assert!(data >= 2, "{data} curves embedded");
-        assert!(NOT_EMBEDDED.is_empty(), "{NOT_EMBEDDED:?}");
-    }
-}

@@ -42,8 +42,9 @@ pub fn run() -> anyhow::Result<ExitCode> {
 
 /// Reports a failed run on stderr and gives the exit status: 1 for errors;
 /// a closed stdout pipe (`nlvid ... | head`) ends quietly with status 0.
-/// Each cause is printed once (an OS error wrapped by two layers that both
-/// quote it appears once).
+/// The error and its causes are `: `-joined, each cause text once (an OS
+/// error wrapped by two layers that both quote it appears once;
+/// [`nlvid_study::error_message`], also the Python exceptions' text).
 pub fn report(err: &anyhow::Error) -> ExitCode {
     let broken_pipe = err.chain().any(|e| {
         e.downcast_ref::<std::io::Error>()
@@ -55,14 +56,8 @@ pub fn report(err: &anyhow::Error) -> ExitCode {
     if broken_pipe {
         return ExitCode::SUCCESS;
     }
-    eprintln!("error: {}", message(err));
+    eprintln!("error: {}", nlvid_study::error_message(err.as_ref()));
     ExitCode::FAILURE
-}
-
-/// The error and its causes, `: `-joined, each cause text once
-/// ([`nlvid_study::error_message`], also the Python exceptions' text).
-pub fn message(err: &anyhow::Error) -> String {
-    nlvid_study::error_message(err.as_ref())
 }
 
 /// Logs to stderr; `-v` raises the level, `NLVID_LOG` (an `EnvFilter`

@@ -36,6 +36,19 @@ pub fn print_json(value: &Value) -> anyhow::Result<()> {
     print_text(&text)
 }
 
+/// The `--json` convention in one call: `value` as the one JSON document
+/// with `json`, else `text`.
+///
+/// # Errors
+/// Writing to stdout fails.
+pub fn emit(json: bool, value: &Value, text: &str) -> anyhow::Result<()> {
+    if json {
+        print_json(value)
+    } else {
+        print_text(text)
+    }
+}
+
 /// Writes `text` to stdout. A closed pipe (`nlvid … | head`) is an
 /// `io::Error` that [`crate::report`] turns into a quiet exit, never a
 /// panic as `print!` would.

@@ -63,3 +63,22 @@ fn installed_binary_runs_the_demo_from_its_embedded_copy() {
     let again = run();
     assert!(again.status.success(), "{}", common::text(&again.stderr));
 }
+
+/// Every file of the repository's examples/demo is embedded, byte for
+/// byte (the list is not maintained by hand).
+#[test]
+fn every_file_of_examples_demo_is_embedded() {
+    use nlvid_cli::embedded_demo::{FILES, NOT_EMBEDDED};
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo");
+    for rel in ["study.toml", "metamodel.toml", "ground_truth.csv"] {
+        let (_, bytes) = FILES.iter().find(|(r, _)| *r == rel).unwrap();
+        assert_eq!(
+            *bytes,
+            std::fs::read(root.join(rel)).unwrap().as_slice(),
+            "{rel}"
+        );
+    }
+    let data = FILES.iter().filter(|(r, _)| r.starts_with("data/")).count();
+    assert!(data >= 2, "{data} curves embedded");
+    assert!(NOT_EMBEDDED.is_empty(), "{NOT_EMBEDDED:?}");
+}

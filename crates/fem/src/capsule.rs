@@ -138,7 +138,7 @@ fn footprint_2d(x: &[[f64; 2]], nodes: &[usize], u: &[f64]) -> Vec<SurfaceNode> 
         .enumerate()
         .map(|(a, p)| [p[0] + u[2 * a], p[1] + u[2 * a + 1]])
         .collect();
-    let (area, _) = crate::kind::tributary(&current, nodes);
+    let (area, _) = crate::kind::tributary(|a| current[a], nodes);
     nodes
         .iter()
         .zip(area)

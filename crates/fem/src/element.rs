@@ -16,6 +16,9 @@
 //! Ψ = Ψ_iso(F) + U(J) this is exactly the Q1/P0 mixed element of
 //! Simo–Taylor–Pister with the pressure condensed out.
 
+use crate::fbar::FbarPoint;
+use nlvid_material::{Mat3, Material3, MaterialError};
+
 /// 2×2 Gauss points (ξ, η); all weights are 1.
 pub const GAUSS: [(f64, f64); 4] = {
     const G: f64 = 0.577_350_269_189_625_8;
@@ -141,12 +144,6 @@ pub(crate) fn jacobian_derivatives(f: &[f64; 5]) -> (f64, [f64; 5], [[f64; 5]; 5
 }
 
 #[cfg(test)]
-/// The 3×3 matrix of the stored components.
-pub(crate) fn to_mat3(f: &[f64; 5]) -> nlvid_material::Mat3 {
-    nlvid_material::Mat3::new(f[0], f[1], 0.0, f[2], f[3], 0.0, 0.0, 0.0, f[4])
-}
-
-#[cfg(test)]
 /// Bᵀ v for a 5×8 operator.
 pub(crate) fn bt_v(b: &[[f64; 8]; 5], v: &[f64; 5]) -> [f64; 8] {
     let mut out = [0.0; 8];
@@ -195,27 +192,33 @@ pub(crate) fn add_outer(out: &mut [[f64; 8]; 8], a: &[f64; 8], b: &[f64; 8], w: 
     }
 }
 
+/// A distorted element off the axis and a large displacement of it (tests).
+#[cfg(test)]
+pub(crate) fn distorted_element() -> ([PointGeometry; 4], [f64; 8]) {
+    let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
+    let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
+    (element_geometry(&x), u)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fbar::fbar_kernel;
 
-    #[test]
-    fn jacobian_gradient_and_hessian_match_finite_differences() {
-        let f = [1.1, 0.2, -0.15, 0.93, 1.07];
-        let (_, dj, hj) = jacobian_derivatives(&f);
-        let h = 1e-6;
-        for k in 0..5 {
-            let mut fp = f;
-            let mut fm = f;
-            fp[k] += h;
-            fm[k] -= h;
-            let (jp, dp, _) = jacobian_derivatives(&fp);
-            let (jm, dm, _) = jacobian_derivatives(&fm);
-            assert!(((jp - jm) / (2.0 * h) - dj[k]).abs() < 1e-8);
-            for i in 0..5 {
-                assert!(((dp[i] - dm[i]) / (2.0 * h) - hj[i][k]).abs() < 1e-8);
-            }
-        }
+    /// The kernel on [`distorted_element`] at `u` from fresh history over
+    /// Δt = 0.1.
+    fn evaluate<M: Material3>(
+        mat: &M,
+        u: &[f64; 8],
+        fbar: bool,
+        part: TangentPart,
+    ) -> ElementOutput {
+        let (geo, _) = distorted_element();
+        let sn: Vec<M::State> = (0..4).map(|_| mat.initial_state()).collect();
+        let mut tr = sn.clone();
+        let mut out = ElementOutput::zero();
+        fbar_kernel(mat, &geo, u, &sn, &mut tr, 0.1, fbar, part, &mut out).unwrap();
+        out
     }
 
     fn tangent_fd(fbar: bool) {
@@ -223,56 +226,16 @@ mod tests {
             mu: 1.0,
             kappa: 30.0,
         };
-        let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
-        let geo = element_geometry(&x);
-        let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
-        let mut out = ElementOutput::zero();
-        let sn = [(); 4];
-        let mut tr = [(); 4];
-        fbar_element(
-            &mat,
-            &geo,
-            &u,
-            &sn,
-            &mut tr,
-            0.1,
-            fbar,
-            TangentPart::Full,
-            &mut out,
-        )
-        .unwrap();
+        let (_, u) = distorted_element();
+        let out = evaluate(&mat, &u, fbar, TangentPart::Full);
         let h = 1e-7;
-        let mut op = ElementOutput::zero();
-        let mut om = ElementOutput::zero();
         for c in 0..8 {
             let mut up = u;
             let mut um = u;
             up[c] += h;
             um[c] -= h;
-            fbar_element(
-                &mat,
-                &geo,
-                &up,
-                &sn,
-                &mut tr,
-                0.1,
-                fbar,
-                TangentPart::None,
-                &mut op,
-            )
-            .unwrap();
-            fbar_element(
-                &mat,
-                &geo,
-                &um,
-                &sn,
-                &mut tr,
-                0.1,
-                fbar,
-                TangentPart::None,
-                &mut om,
-            )
-            .unwrap();
+            let op = evaluate(&mat, &up, fbar, TangentPart::None);
+            let om = evaluate(&mat, &um, fbar, TangentPart::None);
             for r in 0..8 {
                 let fd = (op.r[r] - om.r[r]) / (2.0 * h);
                 assert!(
@@ -295,25 +258,11 @@ mod tests {
     }
 
     fn compare_with_direct_form<M: nlvid_material::Material3>(mat: &M, fbar: bool) {
-        let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
-        let geo = element_geometry(&x);
-        let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
+        let (geo, u) = distorted_element();
         let sn: Vec<M::State> = (0..4).map(|_| mat.initial_state()).collect();
         let mut tr = sn.clone();
-        let mut fast = ElementOutput::zero();
+        let fast = evaluate(mat, &u, fbar, TangentPart::Full);
         let mut direct = ElementOutput::zero();
-        fbar_element(
-            mat,
-            &geo,
-            &u,
-            &sn,
-            &mut tr,
-            0.1,
-            fbar,
-            TangentPart::Full,
-            &mut fast,
-        )
-        .unwrap();
         fbar_element_reference(mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut direct).unwrap();
         let kmax = direct
             .k
@@ -359,82 +308,6 @@ mod tests {
     }
 
     #[test]
-    fn lower_tangent_is_the_lower_triangle_of_a_symmetric_full_tangent() {
-        // The AFM cell material with history and a time step, distorted
-        // element, large deformation: the full tangent is symmetric to
-        // round-off (it is the Hessian of the incremental potential), so the
-        // lower triangle carries all of it; `Lower` computes exactly that
-        // triangle and leaves the rest zero.
-        let cell = nlvid_material::PronyViscoelastic::cell(&afm_cell_shear(), 100.0).unwrap();
-        let x = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
-        let geo = element_geometry(&x);
-        let u = [0.05, -0.02, 0.11, 0.03, -0.04, -0.09, 0.02, 0.06];
-        let s0: Vec<_> = (0..4)
-            .map(|_| nlvid_material::Material3::initial_state(&cell))
-            .collect();
-        let mut sn = s0.clone();
-        let mut tr = s0.clone();
-        let half = u.map(|x| 0.5 * x);
-        let mut out = ElementOutput::zero();
-        fbar_element(
-            &cell,
-            &geo,
-            &half,
-            &s0,
-            &mut sn,
-            0.3,
-            true,
-            TangentPart::None,
-            &mut out,
-        )
-        .unwrap();
-        let mut full = ElementOutput::zero();
-        let mut low = ElementOutput::zero();
-        fbar_element(
-            &cell,
-            &geo,
-            &u,
-            &sn,
-            &mut tr,
-            0.2,
-            true,
-            TangentPart::Full,
-            &mut full,
-        )
-        .unwrap();
-        fbar_element(
-            &cell,
-            &geo,
-            &u,
-            &sn,
-            &mut tr,
-            0.2,
-            true,
-            TangentPart::Lower,
-            &mut low,
-        )
-        .unwrap();
-        let kmax = full.k.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
-        assert_eq!(full.r, low.r);
-        for r in 0..8 {
-            for c in 0..8 {
-                assert!(
-                    (full.k[r][c] - full.k[c][r]).abs() <= 1e-12 * kmax,
-                    "asymmetric K[{r}][{c}]"
-                );
-                if c <= r {
-                    assert!(
-                        (low.k[r][c] - full.k[r][c]).abs() <= 1e-14 * kmax,
-                        "K[{r}][{c}]"
-                    );
-                } else {
-                    assert_eq!(low.k[r][c], 0.0);
-                }
-            }
-        }
-    }
-
-    #[test]
     fn weights_integrate_ring_volume() {
         // Square [1,2]×[0,1]: volume of the ring = π (2² − 1²) · 1.
         let x = [[1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0]];
@@ -443,25 +316,9 @@ mod tests {
     }
 }
 
-/// Residual and tangent of one element.
+/// Residual and tangent of one element (8 dofs u_r0, u_z0, u_r1, …).
 #[doc(hidden)]
-#[derive(Debug, Clone)]
-pub struct ElementOutput {
-    /// Internal force ∂W/∂u (N).
-    pub r: [f64; 8],
-    /// Tangent ∂r/∂u (N/m).
-    pub k: [[f64; 8]; 8],
-}
-
-impl ElementOutput {
-    /// All zero.
-    pub fn zero() -> Self {
-        Self {
-            r: [0.0; 8],
-            k: [[0.0; 8]; 8],
-        }
-    }
-}
+pub type ElementOutput = crate::kind::LocalOutput<8>;
 
 /// Which part of the element tangent to compute.
 #[doc(hidden)]
@@ -481,316 +338,103 @@ pub enum TangentPart {
 #[doc(hidden)]
 pub type PointFailure = (usize, nlvid_material::MaterialError);
 
-/// Internal force and tangent of one axisymmetric element (module docs),
-/// F-bar if `fbar`, plain displacement element otherwise (for the locking
-/// comparison). Writes the trial history of the element's four points.
-///
-/// The tangent K = Σ_q w_q ∂²Ψ(F̄_q)/∂u² is assembled in a regrouped form
-/// (one Bᵀ M B product per Gauss point plus rank-one terms) that is
-/// algebraically identical to the direct form; with
-/// ln α = (ln J̄ − ln J_q)/3, F̄ = α F, B̄ = α B + F ⊗ ∂α:
-///
-/// ```text
-/// K = Σ_q Bᵀ [w α² A + c_q H_J] B                     (c_q = S w_q /(3 V J̄) − s_q /(3 J_q))
-///   + Σ_q [v_q ⊗ ∂lnα + ∂lnα ⊗ v'_q + (α² Fᵀ w A F + s_q) ∂lnα ⊗ ∂lnα + s_q/(3J_q²) ∂J ⊗ ∂J]
-///   − (S/3) ∂lnJ̄ ⊗ ∂lnJ̄ ,
-/// v_q = α² Bᵀ w A F + w α Bᵀ P,  v'_q = α² Bᵀ w Aᵀ F + w α Bᵀ P,
-/// s_q = w α P : F,  S = Σ_q s_q ,
-/// ```
-///
-/// A = ∂P/∂F at F̄_q, H_J = ∂²J/∂F², V the element volume. The test
-/// `regrouped_tangent_equals_direct_form` checks it against
-/// [`fbar_element_reference`] and the finite-difference tests against the
-/// residual.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn fbar_element<M: nlvid_material::Material3>(
-    material: &M,
-    geometry: &[PointGeometry; 4],
-    u: &[f64; 8],
-    state_n: &[M::State],
-    trial: &mut [M::State],
-    dt: f64,
-    fbar: bool,
-    part: TangentPart,
-    out: &mut ElementOutput,
-) -> std::result::Result<(), PointFailure> {
-    let tangent = part != TangentPart::None;
-    let lower = part == TangentPart::Lower;
-    out.r = [0.0; 8];
-    if tangent {
-        out.k = [[0.0; 8]; 8];
+/// The Q4 point in the shared F-bar kernel ([`crate::fbar::fbar_kernel`]):
+/// F stored as (rR, rZ, zR, zZ, θθ), B used through its sparsity (each
+/// column has at most 3 non-zeros), the material's axisymmetric update.
+impl FbarPoint<5, 8> for PointGeometry {
+    #[inline]
+    fn weight(&self) -> f64 {
+        self.weight
     }
-    let mut f = [[0.0; 5]; 4];
-    let mut jq = [0.0; 4];
-    let mut dj5 = [[0.0; 5]; 4];
-    let mut hj5 = [[[0.0; 5]; 5]; 4];
-    let mut dju = [[0.0; 8]; 4];
-    let mut vol = 0.0;
-    let mut jbar = 0.0;
-    let mut djbar = [0.0; 8];
-    for q in 0..4 {
-        let g = &geometry[q];
-        f[q] = deformation_structured(g, u);
-        let (j, dj, hj) = jacobian_derivatives(&f[q]);
-        if !(j > 0.0) {
-            return Err((
-                q,
-                nlvid_material::MaterialError::Deformation(format!("det F = {j:.3e} ≤ 0")),
-            ));
-        }
-        jq[q] = j;
-        dj5[q] = dj;
-        hj5[q] = hj;
-        if fbar {
-            let w = g.weight;
-            dju[q] = bt_v_structured(g, &dj);
-            vol += w;
-            jbar += w * j;
-            for c in 0..8 {
-                djbar[c] += w * dju[q][c];
-            }
-        }
-    }
-    let mut dlnjbar = [0.0; 8];
-    if fbar {
-        jbar /= vol;
-        for c in 0..8 {
-            dlnjbar[c] = djbar[c] / vol / jbar;
-        }
-    }
-    // Pass 1: material response at every point, residual, per-point terms.
-    let mut m5 = [[[0.0; 5]; 5]; 4];
-    let mut alpha = [1.0; 4];
-    let mut dlnalpha = [[0.0; 8]; 4];
-    let mut p5 = [[0.0; 5]; 4];
-    let mut s_q = [0.0; 4];
-    let mut bp = [[0.0; 8]; 4];
-    for q in 0..4 {
-        let g = &geometry[q];
-        let w = g.weight;
-        if fbar {
-            for c in 0..8 {
-                dlnalpha[q][c] = (dlnjbar[c] - dju[q][c] / jq[q]) / 3.0;
-            }
-            alpha[q] = nlvid_material::cube_root(jbar / jq[q]);
-        }
-        let a = alpha[q];
-        let mut fbar_q = f[q];
-        for x in &mut fbar_q {
-            *x *= a;
-        }
-        let resp = material
-            .update_axisymmetric(&state_n[q], &fbar_q, dt, &mut trial[q], tangent)
-            .map_err(|e| (q, e))?;
-        p5[q] = resp.first_piola;
-        if tangent {
-            for (mi, ti) in m5[q].iter_mut().zip(&resp.tangent) {
-                for (m, t) in mi.iter_mut().zip(ti) {
-                    *m = w * t;
-                }
-            }
-        }
-        // r = w B̄ᵀ P = w α Bᵀ P + w (P : F) ∂α.
-        let gp = bt_v_structured(g, &p5[q]);
-        bp[q] = gp;
-        let pf: f64 = (0..5).map(|i| p5[q][i] * f[q][i]).sum();
-        s_q[q] = w * a * pf;
-        for c in 0..8 {
-            out.r[c] += w * a * gp[c] + s_q[q] * dlnalpha[q][c];
-        }
-    }
-    if !tangent {
-        return Ok(());
-    }
-    let s_total: f64 = s_q.iter().sum();
-    for q in 0..4 {
-        let g = &geometry[q];
-        let w = g.weight;
-        let a = alpha[q];
-        let wa = &m5[q];
-        // Fᵀ(wA), (wA)F and Fᵀ(wA)F.
-        let mut af = [0.0; 5];
-        let mut fa = [0.0; 5];
-        let mut faf = 0.0;
-        for i in 0..5 {
-            for k in 0..5 {
-                af[i] += wa[i][k] * f[q][k];
-                fa[k] += f[q][i] * wa[i][k];
-            }
-        }
-        for i in 0..5 {
-            faf += f[q][i] * af[i];
-        }
-        let mut mq = [[0.0; 5]; 5];
-        for i in 0..5 {
-            for k in 0..5 {
-                mq[i][k] = a * a * wa[i][k];
-            }
-        }
-        if fbar {
-            let cq = s_total * w / (3.0 * vol * jbar) - s_q[q] / (3.0 * jq[q]);
-            for i in 0..5 {
-                for k in 0..5 {
-                    mq[i][k] += cq * hj5[q][i][k];
-                }
-            }
-        }
-        add_bt_m_b_structured(&mut out.k, g, &mq, lower);
-        if !fbar {
-            continue;
-        }
-        let bap = &bp[q];
-        let baf = bt_v_structured(g, &af);
-        let bfa = bt_v_structured(g, &fa);
-        let mut v = [0.0; 8];
-        let mut vt = [0.0; 8];
-        for c in 0..8 {
-            v[c] = a * a * baf[c] + w * a * bap[c];
-            vt[c] = a * a * bfa[c] + w * a * bap[c];
-        }
-        let dl = &dlnalpha[q];
-        let cc = a * a * faf + s_q[q];
-        let cj = s_q[q] / (3.0 * jq[q] * jq[q]);
-        let dj = &dju[q];
-        for r in 0..8 {
-            let (vr, dlr, cdl, cjr) = (v[r], dl[r], cc * dl[r], cj * dj[r]);
-            let row = &mut out.k[r];
-            let end = if lower { r + 1 } else { 8 };
-            for c in 0..end {
-                row[c] += vr * dl[c] + dlr * vt[c] + cdl * dl[c] + cjr * dj[c];
-            }
-        }
-    }
-    if fbar {
-        let w = -s_total / 3.0;
-        for r in 0..8 {
-            let ar = dlnjbar[r] * w;
-            let end = if lower { r + 1 } else { 8 };
-            for c in 0..end {
-                out.k[r][c] += ar * dlnjbar[c];
-            }
-        }
-    }
-    Ok(())
-}
 
-/// The stored F components at a point, from the shape functions directly
-/// (same as `deformation(&grad_operator(g), u)`).
-#[inline]
-fn deformation_structured(g: &PointGeometry, u: &[f64; 8]) -> [f64; 5] {
-    let mut f = [1.0, 0.0, 0.0, 1.0, 1.0];
-    for a in 0..4 {
-        let (ur, uz) = (u[2 * a], u[2 * a + 1]);
-        f[0] += g.dn[a][0] * ur;
-        f[1] += g.dn[a][1] * ur;
-        f[2] += g.dn[a][0] * uz;
-        f[3] += g.dn[a][1] * uz;
-        f[4] += g.n_over_r[a] * ur;
+    /// The stored F components at a point, from the shape functions directly
+    /// (same as `deformation(&grad_operator(g), u)`).
+    #[inline]
+    fn deformation(&self, u: &[f64; 8]) -> [f64; 5] {
+        let g = self;
+        let mut f = [1.0, 0.0, 0.0, 1.0, 1.0];
+        for a in 0..4 {
+            let (ur, uz) = (u[2 * a], u[2 * a + 1]);
+            f[0] += g.dn[a][0] * ur;
+            f[1] += g.dn[a][1] * ur;
+            f[2] += g.dn[a][0] * uz;
+            f[3] += g.dn[a][1] * uz;
+            f[4] += g.n_over_r[a] * ur;
+        }
+        f
     }
-    f
-}
 
-/// Bᵀ v using the sparsity of B (each column has ≤ 3 non-zeros).
-#[inline]
-fn bt_v_structured(g: &PointGeometry, v: &[f64; 5]) -> [f64; 8] {
-    let mut out = [0.0; 8];
-    for a in 0..4 {
-        out[2 * a] = g.dn[a][0] * v[0] + g.dn[a][1] * v[1] + g.n_over_r[a] * v[4];
-        out[2 * a + 1] = g.dn[a][0] * v[2] + g.dn[a][1] * v[3];
+    #[inline]
+    fn bt_v(&self, v: &[f64; 5]) -> [f64; 8] {
+        let g = self;
+        let mut out = [0.0; 8];
+        for a in 0..4 {
+            out[2 * a] = g.dn[a][0] * v[0] + g.dn[a][1] * v[1] + g.n_over_r[a] * v[4];
+            out[2 * a + 1] = g.dn[a][0] * v[2] + g.dn[a][1] * v[3];
+        }
+        out
     }
-    out
-}
 
-/// out += Bᵀ M B using the sparsity of B.
-#[inline]
-fn add_bt_m_b_structured(
-    out: &mut [[f64; 8]; 8],
-    g: &PointGeometry,
-    m: &[[f64; 5]; 5],
-    lower: bool,
-) {
-    // Column c of B as (row, value) pairs: even c → rows 0, 1, 4; odd c → 2, 3.
-    let mut col = [[0.0; 3]; 4];
-    for a in 0..4 {
-        col[a] = [g.dn[a][0], g.dn[a][1], g.n_over_r[a]];
-    }
-    // MB (5×8).
-    let mut mb = [[0.0; 8]; 5];
-    for i in 0..5 {
+    #[inline]
+    fn add_bt_m_b(&self, out: &mut [[f64; 8]; 8], m: &[[f64; 5]; 5], lower: bool) {
+        let g = self;
+        // Column c of B as (row, value) pairs: even c → rows 0, 1, 4; odd c → 2, 3.
+        let mut col = [[0.0; 3]; 4];
+        for a in 0..4 {
+            col[a] = [g.dn[a][0], g.dn[a][1], g.n_over_r[a]];
+        }
+        // MB (5×8).
+        let mut mb = [[0.0; 8]; 5];
+        for i in 0..5 {
+            for a in 0..4 {
+                let c = &col[a];
+                mb[i][2 * a] = m[i][0] * c[0] + m[i][1] * c[1] + m[i][4] * c[2];
+                mb[i][2 * a + 1] = m[i][2] * c[0] + m[i][3] * c[1];
+            }
+        }
         for a in 0..4 {
             let c = &col[a];
-            mb[i][2 * a] = m[i][0] * c[0] + m[i][1] * c[1] + m[i][4] * c[2];
-            mb[i][2 * a + 1] = m[i][2] * c[0] + m[i][3] * c[1];
+            let (ee, eo) = if lower {
+                (2 * a + 1, 2 * a + 2)
+            } else {
+                (8, 8)
+            };
+            let re = &mut out[2 * a];
+            for k in 0..ee {
+                re[k] += c[0] * mb[0][k] + c[1] * mb[1][k] + c[2] * mb[4][k];
+            }
+            let ro = &mut out[2 * a + 1];
+            for k in 0..eo {
+                ro[k] += c[0] * mb[2][k] + c[1] * mb[3][k];
+            }
         }
     }
-    for a in 0..4 {
-        let c = &col[a];
-        let (ee, eo) = if lower {
-            (2 * a + 1, 2 * a + 2)
-        } else {
-            (8, 8)
-        };
-        let re = &mut out[2 * a];
-        for k in 0..ee {
-            re[k] += c[0] * mb[0][k] + c[1] * mb[1][k] + c[2] * mb[4][k];
-        }
-        let ro = &mut out[2 * a + 1];
-        for k in 0..eo {
-            ro[k] += c[0] * mb[2][k] + c[1] * mb[3][k];
-        }
-    }
-}
 
-/// The stored energy `Σ_q w_q ψ(F̄_q)` of one element for a strain-energy
-/// density `psi` (J, full revolution): the potential whose gradient
-/// [`fbar_element`] returns.
-pub(crate) fn element_energy(
-    geometry: &[PointGeometry; 4],
-    u: &[f64],
-    fbar: bool,
-    psi: &dyn Fn(&nlvid_material::Mat3) -> f64,
-) -> f64 {
-    let Ok(u) = <&[f64; 8]>::try_from(u) else {
-        return f64::NAN;
-    };
-    let f: Vec<[f64; 5]> = geometry
-        .iter()
-        .map(|g| deformation_structured(g, u))
-        .collect();
-    let j: Vec<f64> = f.iter().map(|f| jacobian_derivatives(f).0).collect();
-    let vol: f64 = geometry.iter().map(|g| g.weight).sum();
-    let jbar = geometry
-        .iter()
-        .zip(&j)
-        .map(|(g, j)| g.weight * j)
-        .sum::<f64>()
-        / vol;
-    let mut e = 0.0;
-    for q in 0..4 {
-        let a = if fbar {
-            nlvid_material::cube_root(jbar / j[q])
-        } else {
-            1.0
-        };
-        let fq = f[q];
-        let m = nlvid_material::Mat3::new(
-            a * fq[0],
-            a * fq[1],
-            0.0,
-            a * fq[2],
-            a * fq[3],
-            0.0,
-            0.0,
-            0.0,
-            a * fq[4],
-        );
-        e += geometry[q].weight * psi(&m);
+    #[inline]
+    fn jacobian(f: &[f64; 5]) -> (f64, [f64; 5], [[f64; 5]; 5]) {
+        jacobian_derivatives(f)
     }
-    e
+
+    fn matrix(f: &[f64; 5]) -> Mat3 {
+        Mat3::new(f[0], f[1], 0.0, f[2], f[3], 0.0, 0.0, 0.0, f[4])
+    }
+
+    #[inline]
+    fn update<M: Material3>(
+        material: &M,
+        state_n: &M::State,
+        f: &[f64; 5],
+        dt: f64,
+        trial: &mut M::State,
+        tangent: bool,
+    ) -> Result<([f64; 5], [[f64; 5]; 5]), MaterialError> {
+        let resp = material.update_axisymmetric(state_n, f, dt, trial, tangent)?;
+        Ok((resp.first_piola, resp.tangent))
+    }
 }
 
 #[cfg(test)]
-/// The direct (unfactored) form of [`fbar_element`], kept as an independent
+/// The direct (unfactored) form of [`crate::fbar::fbar_kernel`], kept as an independent
 /// check of its regrouped tangent: internal force and tangent of one element,
 /// F-bar if `fbar`, plain displacement element otherwise (for the locking
 /// comparison). Writes the trial history of the element's four points.
@@ -820,12 +464,7 @@ pub(crate) fn fbar_element_reference<M: nlvid_material::Material3>(
         b[q] = grad_operator(&geometry[q]);
         f[q] = deformation(&b[q], u);
         let (j, dj, hj) = jacobian_derivatives(&f[q]);
-        if !(j > 0.0) {
-            return Err((
-                q,
-                nlvid_material::MaterialError::Deformation(format!("det F = {j:.3e} ≤ 0")),
-            ));
-        }
+        crate::fbar::positive_jacobian(q, j)?;
         jq[q] = j;
         if fbar {
             let w = geometry[q].weight;
@@ -879,7 +518,12 @@ pub(crate) fn fbar_element_reference<M: nlvid_material::Material3>(
             *x *= alpha;
         }
         let resp = material
-            .update(&state_n[q], &to_mat3(&fbar_q), dt, &mut trial[q])
+            .update(
+                &state_n[q],
+                &PointGeometry::matrix(&fbar_q),
+                dt,
+                &mut trial[q],
+            )
             .map_err(|e| (q, e))?;
         let mut p5 = [0.0; 5];
         let mut a5 = [[0.0; 5]; 5];

@@ -18,8 +18,8 @@
 //! (−−−, +−−, ++−, −+−, −−+, +−+, +++, −++), so that nodes 0–3 are the
 //! ζ = −1 face counter-clockwise seen from +ζ.
 
-use crate::element::{PointFailure, TangentPart};
-use nlvid_material::{Mat3, Material3};
+use crate::fbar::FbarPoint;
+use nlvid_material::{Mat3, Material3, MaterialError};
 
 /// Corner signs (ξ_a, η_a, ζ_a).
 pub const CORNERS: [[f64; 3]; 8] = [
@@ -157,25 +157,9 @@ pub fn element_geometry(x: &[[f64; 3]; 8]) -> std::result::Result<[HexPoint; 8],
     Ok(out)
 }
 
-/// Residual and tangent of one hexahedron.
+/// Residual and tangent of one hexahedron (dof `3a + i`).
 #[doc(hidden)]
-#[derive(Debug, Clone)]
-pub struct HexOutput {
-    /// Internal force ∂W/∂u (N), dof `3a + i`.
-    pub r: [f64; DOFS],
-    /// Tangent ∂r/∂u (N/m).
-    pub k: [[f64; DOFS]; DOFS],
-}
-
-impl HexOutput {
-    /// All zero.
-    pub fn zero() -> Self {
-        Self {
-            r: [0.0; DOFS],
-            k: [[0.0; DOFS]; DOFS],
-        }
-    }
-}
+pub type HexOutput = crate::kind::LocalOutput<DOFS>;
 
 /// J = det F, its gradient ∂J/∂F (the cofactor J F⁻ᵀ) and Hessian
 /// ∂²J/∂F_iJ∂F_kL = ε_ikm ε_JLN F_mN, row-major indices `3i+J`.
@@ -226,280 +210,112 @@ fn levi(i: usize, j: usize, k: usize) -> f64 {
     }
 }
 
-/// `F = I + Σ_a u_a ⊗ ∇N_a`, row-major.
-#[inline]
-fn deformation(g: &HexPoint, u: &[f64; DOFS]) -> [f64; 9] {
-    let mut f = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
-    for a in 0..8 {
-        for i in 0..3 {
-            let ui = u[3 * a + i];
-            for jj in 0..3 {
-                f[3 * i + jj] += ui * g.dn[a][jj];
-            }
-        }
+/// The hexahedron's point in the shared F-bar kernel
+/// ([`crate::fbar::fbar_kernel`]): F stored row-major (`3i+J`), the
+/// material's 3D update.
+impl FbarPoint<9, DOFS> for HexPoint {
+    #[inline]
+    fn weight(&self) -> f64 {
+        self.weight
     }
-    f
-}
 
-/// Bᵀ v: `(Bᵀ v)_{3a+i} = Σ_J v_{3i+J} ∂N_a/∂X_J`.
-#[inline]
-fn bt_v(g: &HexPoint, v: &[f64; 9]) -> [f64; DOFS] {
-    let mut out = [0.0; DOFS];
-    for a in 0..8 {
-        let d = &g.dn[a];
-        for i in 0..3 {
-            out[3 * a + i] = v[3 * i] * d[0] + v[3 * i + 1] * d[1] + v[3 * i + 2] * d[2];
-        }
-    }
-    out
-}
-
-/// out += Bᵀ M B.
-#[inline]
-fn add_bt_m_b(out: &mut [[f64; DOFS]; DOFS], g: &HexPoint, m: &[[f64; 9]; 9]) {
-    // MB[(3i+J)][(3b+k)] = Σ_L M[3i+J][3k+L] ∂N_b/∂X_L.
-    let mut mb = [[0.0; DOFS]; 9];
-    for (row, mrow) in mb.iter_mut().zip(m) {
-        for b in 0..8 {
-            let d = &g.dn[b];
-            for k in 0..3 {
-                row[3 * b + k] =
-                    mrow[3 * k] * d[0] + mrow[3 * k + 1] * d[1] + mrow[3 * k + 2] * d[2];
-            }
-        }
-    }
-    for a in 0..8 {
-        let d = &g.dn[a];
-        for i in 0..3 {
-            let (m0, m1, m2) = (&mb[3 * i], &mb[3 * i + 1], &mb[3 * i + 2]);
-            let row = &mut out[3 * a + i];
-            for c in 0..DOFS {
-                row[c] += d[0] * m0[c] + d[1] * m1[c] + d[2] * m2[c];
-            }
-        }
-    }
-}
-
-/// Internal force and tangent of one hexahedron (module docs): F-bar if
-/// `fbar`, the plain displacement element otherwise (for the locking
-/// comparison). Writes the trial history of the element's eight points.
-/// `part` ≠ [`TangentPart::None`] computes the full 24×24 tangent.
-///
-/// The tangent is the regrouped exact Hessian of [`crate::element`]'s
-/// `fbar_element` (same algebra, 9 components of F instead of 5): with
-/// ln α = (ln J̄ − ln J_q)/3, `s_q = w α P : F`, `S = Σ s_q`,
-///
-/// ```text
-/// K = Σ_q Bᵀ [w α² A + c_q H_J] B                     (c_q = S w_q /(3 V J̄) − s_q /(3 J_q))
-///   + Σ_q [v_q ⊗ ∂lnα + ∂lnα ⊗ v'_q + (α² Fᵀ w A F + s_q) ∂lnα ⊗ ∂lnα + s_q/(3J_q²) ∂J ⊗ ∂J]
-///   − (S/3) ∂lnJ̄ ⊗ ∂lnJ̄ ,
-/// v_q = α² Bᵀ w A F + w α Bᵀ P,  v'_q = α² Bᵀ w Aᵀ F + w α Bᵀ P.
-/// ```
-///
-/// Checked against central differences of the residual
-/// (`tangent_matches_finite_differences_*`).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn fbar_hex<M: Material3>(
-    material: &M,
-    geometry: &[HexPoint; 8],
-    u: &[f64; DOFS],
-    state_n: &[M::State],
-    trial: &mut [M::State],
-    dt: f64,
-    fbar: bool,
-    part: TangentPart,
-    out: &mut HexOutput,
-) -> std::result::Result<(), PointFailure> {
-    let tangent = part != TangentPart::None;
-    out.r = [0.0; DOFS];
-    if tangent {
-        out.k = [[0.0; DOFS]; DOFS];
-    }
-    let mut f = [[0.0; 9]; 8];
-    let mut jq = [0.0; 8];
-    let mut hj = [[[0.0; 9]; 9]; 8];
-    let mut dju = [[0.0; DOFS]; 8];
-    let mut vol = 0.0;
-    let mut jbar = 0.0;
-    let mut djbar = [0.0; DOFS];
-    for q in 0..8 {
-        let g = &geometry[q];
-        f[q] = deformation(g, u);
-        let (j, dj, h) = jacobian_derivatives(&f[q]);
-        if !(j > 0.0) {
-            return Err((
-                q,
-                nlvid_material::MaterialError::Deformation(format!("det F = {j:.3e} ≤ 0")),
-            ));
-        }
-        jq[q] = j;
-        hj[q] = h;
-        if fbar {
-            let w = g.weight;
-            dju[q] = bt_v(g, &dj);
-            vol += w;
-            jbar += w * j;
-            for c in 0..DOFS {
-                djbar[c] += w * dju[q][c];
-            }
-        }
-    }
-    let mut dlnjbar = [0.0; DOFS];
-    if fbar {
-        jbar /= vol;
-        for c in 0..DOFS {
-            dlnjbar[c] = djbar[c] / vol / jbar;
-        }
-    }
-    let mut alpha = [1.0; 8];
-    let mut dlnalpha = [[0.0; DOFS]; 8];
-    let mut p9 = [[0.0; 9]; 8];
-    let mut a9 = [[[0.0; 9]; 9]; 8];
-    let mut s_q = [0.0; 8];
-    let mut bp = [[0.0; DOFS]; 8];
-    for q in 0..8 {
-        let g = &geometry[q];
-        let w = g.weight;
-        if fbar {
-            for c in 0..DOFS {
-                dlnalpha[q][c] = (dlnjbar[c] - dju[q][c] / jq[q]) / 3.0;
-            }
-            alpha[q] = nlvid_material::cube_root(jbar / jq[q]);
-        }
-        let a = alpha[q];
-        let fb = f[q].map(|x| a * x);
-        let fm = Mat3::new(
-            fb[0], fb[1], fb[2], fb[3], fb[4], fb[5], fb[6], fb[7], fb[8],
-        );
-        let resp = material
-            .update(&state_n[q], &fm, dt, &mut trial[q])
-            .map_err(|e| (q, e))?;
-        for i in 0..3 {
-            for jj in 0..3 {
-                p9[q][3 * i + jj] = resp.first_piola[(i, jj)];
-            }
-        }
-        if tangent {
-            for r in 0..9 {
-                for c in 0..9 {
-                    a9[q][r][c] = w * resp.tangent[(r, c)];
+    /// `F = I + Σ_a u_a ⊗ ∇N_a`, row-major.
+    #[inline]
+    fn deformation(&self, u: &[f64; DOFS]) -> [f64; 9] {
+        let mut f = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+        for a in 0..8 {
+            for i in 0..3 {
+                let ui = u[3 * a + i];
+                for jj in 0..3 {
+                    f[3 * i + jj] += ui * self.dn[a][jj];
                 }
             }
         }
-        let gp = bt_v(g, &p9[q]);
-        bp[q] = gp;
-        let pf: f64 = (0..9).map(|i| p9[q][i] * f[q][i]).sum();
-        s_q[q] = w * a * pf;
-        for c in 0..DOFS {
-            out.r[c] += w * a * gp[c] + s_q[q] * dlnalpha[q][c];
-        }
+        f
     }
-    if !tangent {
-        return Ok(());
-    }
-    let s_total: f64 = s_q.iter().sum();
-    for q in 0..8 {
-        let g = &geometry[q];
-        let w = g.weight;
-        let a = alpha[q];
-        let wa = &a9[q];
-        let mut mq = [[0.0; 9]; 9];
-        for i in 0..9 {
-            for k in 0..9 {
-                mq[i][k] = a * a * wa[i][k];
+
+    /// `(Bᵀ v)_{3a+i} = Σ_J v_{3i+J} ∂N_a/∂X_J`.
+    #[inline]
+    fn bt_v(&self, v: &[f64; 9]) -> [f64; DOFS] {
+        let mut out = [0.0; DOFS];
+        for a in 0..8 {
+            let d = &self.dn[a];
+            for i in 0..3 {
+                out[3 * a + i] = v[3 * i] * d[0] + v[3 * i + 1] * d[1] + v[3 * i + 2] * d[2];
             }
         }
-        if fbar {
-            let cq = s_total * w / (3.0 * vol * jbar) - s_q[q] / (3.0 * jq[q]);
-            for i in 0..9 {
-                for k in 0..9 {
-                    mq[i][k] += cq * hj[q][i][k];
+        out
+    }
+
+    #[inline]
+    fn add_bt_m_b(&self, out: &mut [[f64; DOFS]; DOFS], m: &[[f64; 9]; 9], lower: bool) {
+        // MB[(3i+J)][(3b+k)] = Σ_L M[3i+J][3k+L] ∂N_b/∂X_L.
+        let mut mb = [[0.0; DOFS]; 9];
+        for (row, mrow) in mb.iter_mut().zip(m) {
+            for b in 0..8 {
+                let d = &self.dn[b];
+                for k in 0..3 {
+                    row[3 * b + k] =
+                        mrow[3 * k] * d[0] + mrow[3 * k + 1] * d[1] + mrow[3 * k + 2] * d[2];
                 }
             }
         }
-        add_bt_m_b(&mut out.k, g, &mq);
-        if !fbar {
-            continue;
-        }
-        let mut af = [0.0; 9];
-        let mut fa = [0.0; 9];
-        for i in 0..9 {
-            for k in 0..9 {
-                af[i] += wa[i][k] * f[q][k];
-                fa[k] += f[q][i] * wa[i][k];
-            }
-        }
-        let faf: f64 = (0..9).map(|i| f[q][i] * af[i]).sum();
-        let baf = bt_v(g, &af);
-        let bfa = bt_v(g, &fa);
-        let mut v = [0.0; DOFS];
-        let mut vt = [0.0; DOFS];
-        for c in 0..DOFS {
-            v[c] = a * a * baf[c] + w * a * bp[q][c];
-            vt[c] = a * a * bfa[c] + w * a * bp[q][c];
-        }
-        let dl = &dlnalpha[q];
-        let cc = a * a * faf + s_q[q];
-        let cj = s_q[q] / (3.0 * jq[q] * jq[q]);
-        let dj = &dju[q];
-        for r in 0..DOFS {
-            let (vr, dlr, cdl, cjr) = (v[r], dl[r], cc * dl[r], cj * dj[r]);
-            let row = &mut out.k[r];
-            for c in 0..DOFS {
-                row[c] += vr * dl[c] + dlr * vt[c] + cdl * dl[c] + cjr * dj[c];
+        for a in 0..8 {
+            let d = &self.dn[a];
+            for i in 0..3 {
+                let (m0, m1, m2) = (&mb[3 * i], &mb[3 * i + 1], &mb[3 * i + 2]);
+                let r = 3 * a + i;
+                let row = &mut out[r];
+                let end = if lower { r + 1 } else { DOFS };
+                for c in 0..end {
+                    row[c] += d[0] * m0[c] + d[1] * m1[c] + d[2] * m2[c];
+                }
             }
         }
     }
-    if fbar {
-        let w = -s_total / 3.0;
-        for r in 0..DOFS {
-            let ar = dlnjbar[r] * w;
-            for c in 0..DOFS {
-                out.k[r][c] += ar * dlnjbar[c];
-            }
-        }
-    }
-    Ok(())
-}
 
-/// The stored energy `Σ_q w_q ψ(F̄_q)` of one element for a strain-energy
-/// density `psi` (J): the potential whose gradient [`fbar_hex`] returns.
-pub(crate) fn element_energy(
-    geometry: &[HexPoint; 8],
-    u: &[f64; DOFS],
-    fbar: bool,
-    psi: &dyn Fn(&Mat3) -> f64,
-) -> f64 {
-    let mut f = [[0.0; 9]; 8];
-    let mut jq = [0.0; 8];
-    let (mut vol, mut jbar) = (0.0, 0.0);
-    for q in 0..8 {
-        f[q] = deformation(&geometry[q], u);
-        jq[q] = jacobian_derivatives(&f[q]).0;
-        vol += geometry[q].weight;
-        jbar += geometry[q].weight * jq[q];
+    #[inline]
+    fn jacobian(f: &[f64; 9]) -> (f64, [f64; 9], [[f64; 9]; 9]) {
+        jacobian_derivatives(f)
     }
-    jbar /= vol;
-    let mut e = 0.0;
-    for q in 0..8 {
-        let a = if fbar {
-            nlvid_material::cube_root(jbar / jq[q])
-        } else {
-            1.0
-        };
-        let fb = f[q].map(|x| a * x);
-        let fm = Mat3::new(
-            fb[0], fb[1], fb[2], fb[3], fb[4], fb[5], fb[6], fb[7], fb[8],
-        );
-        e += geometry[q].weight * psi(&fm);
+
+    fn matrix(f: &[f64; 9]) -> Mat3 {
+        Mat3::from_row_slice(f)
     }
-    e
+
+    #[inline]
+    fn update<M: Material3>(
+        material: &M,
+        state_n: &M::State,
+        f: &[f64; 9],
+        dt: f64,
+        trial: &mut M::State,
+        _tangent: bool,
+    ) -> Result<([f64; 9], [[f64; 9]; 9]), MaterialError> {
+        let resp = material.update(state_n, &Self::matrix(f), dt, trial)?;
+        let mut p = [0.0; 9];
+        for i in 0..3 {
+            for jj in 0..3 {
+                p[3 * i + jj] = resp.first_piola[(i, jj)];
+            }
+        }
+        let mut a = [[0.0; 9]; 9];
+        for (r, row) in a.iter_mut().enumerate() {
+            for (c, x) in row.iter_mut().enumerate() {
+                *x = resp.tangent[(r, c)];
+            }
+        }
+        Ok((p, a))
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::element::TangentPart;
+    use crate::fbar::{fbar_energy as element_energy, fbar_kernel as fbar_hex};
     use crate::reference::NeoHookean;
+    use nlvid_material::PointState;
 
     /// A distorted, non-parallel hexahedron around the unit cube.
     fn distorted() -> [[f64; 3]; 8] {
@@ -533,27 +349,6 @@ mod tests {
             *v = scale * ((s >> 11) as f64 / (1u64 << 53) as f64 - 0.5);
         }
         u
-    }
-
-    #[test]
-    fn jacobian_gradient_and_hessian_match_finite_differences() {
-        let f = [1.1, 0.2, -0.15, 0.05, 0.93, 0.07, -0.1, 0.12, 1.07];
-        let (_, dj, hj) = jacobian_derivatives(&f);
-        let h = 1e-6;
-        for k in 0..9 {
-            let mut fp = f;
-            let mut fm = f;
-            fp[k] += h;
-            fm[k] -= h;
-            let (jp, dp, _) = jacobian_derivatives(&fp);
-            let (jm, dm, _) = jacobian_derivatives(&fm);
-            assert!(((jp - jm) / (2.0 * h) - dj[k]).abs() < 1e-9);
-            for i in 0..9 {
-                assert!(((dp[i] - dm[i]) / (2.0 * h) - hj[i][k]).abs() < 1e-9);
-            }
-        }
-        let m = Mat3::from_row_slice(&f);
-        assert!((jacobian_derivatives(&f).0 - m.determinant()).abs() < 1e-15);
     }
 
     #[test]

@@ -10,9 +10,58 @@
 //! the sparse solver, Newton and the time stepping) is shared.
 
 use crate::element::{ElementOutput, PointFailure, PointGeometry, TangentPart};
+use crate::fbar::{fbar_energy, fbar_kernel};
 use crate::hex::{HexOutput, HexPoint};
+use crate::sets::NamedSets;
 use crate::{FemError, Mesh, Mesh3, Result};
 use nlvid_material::{Mat3, Material3};
+
+/// Residual and tangent of one element with `ND` dofs (every element
+/// kind's local output).
+#[doc(hidden)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LocalOutput<const ND: usize> {
+    /// Internal force ∂W/∂u (N).
+    pub r: [f64; ND],
+    /// Tangent ∂r/∂u (N/m).
+    pub k: [[f64; ND]; ND],
+}
+
+impl<const ND: usize> LocalOutput<ND> {
+    /// All zero.
+    pub fn zero() -> Self {
+        Self {
+            r: [0.0; ND],
+            k: [[0.0; ND]; ND],
+        }
+    }
+}
+
+impl<const ND: usize> Default for LocalOutput<ND> {
+    fn default() -> Self {
+        Self::zero()
+    }
+}
+
+/// What the model reads of an element's output ([`LocalOutput`]).
+#[doc(hidden)]
+pub trait Local: Clone + Send + Default {
+    /// The element residual.
+    fn residual(&self) -> &[f64];
+    /// Row `a` of the element tangent.
+    fn tangent_row(&self, a: usize) -> &[f64];
+}
+
+impl<const ND: usize> Local for LocalOutput<ND> {
+    #[inline]
+    fn residual(&self) -> &[f64] {
+        &self.r
+    }
+    #[inline]
+    fn tangent_row(&self, a: usize) -> &[f64] {
+        &self.k[a]
+    }
+}
 
 /// Axisymmetric solids (module docs).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -32,65 +81,81 @@ pub enum CavityCells {
     Quads(Vec<[usize; 4]>),
 }
 
-/// What a mesh offers the model (implemented by [`Mesh`] and [`Mesh3`]).
+/// What a mesh offers the model (implemented by [`Mesh`], [`Mesh3`] and
+/// [`crate::MembraneMesh`]): its nodes, cells and named node sets
+/// ([`Topology::parts`]), from which the provided methods read counts,
+/// positions, connectivity and sets.
+///
+/// Surfaces (contact, cavity) are by default ordered node sets of an
+/// axisymmetric mesh read as polylines in the (r, z) half-plane (the
+/// quadrilateral and membrane meshes); [`Mesh3`] reads face sets instead.
 pub trait Topology: Send + Sync {
+    /// Reference coordinates of one node (`[f64; 2]` or `[f64; 3]`, m).
+    type Point: AsRef<[f64]>;
+    /// Nodes of one element.
+    type Cell: AsRef<[usize]>;
+    /// The VTK cell type of the elements (9 quadrilateral, 12 hexahedron,
+    /// 3 line), for [`crate::vtu`].
+    const VTK_CELL: u8;
+
+    /// Every node's reference coordinates, every element's nodes and the
+    /// named node sets.
+    #[doc(hidden)]
+    fn parts(&self) -> (&[Self::Point], &[Self::Cell], &NamedSets<usize>);
+
     /// Number of nodes.
-    fn node_count(&self) -> usize;
+    fn node_count(&self) -> usize {
+        self.parts().0.len()
+    }
     /// Reference coordinates of node `a` (2 or 3 components).
-    fn position(&self, a: usize) -> &[f64];
+    fn position(&self, a: usize) -> &[f64] {
+        self.parts().0[a].as_ref()
+    }
     /// Number of elements.
-    fn element_count(&self) -> usize;
+    fn element_count(&self) -> usize {
+        self.parts().1.len()
+    }
     /// Nodes of element `e`.
-    fn connectivity(&self, e: usize) -> &[usize];
+    fn connectivity(&self, e: usize) -> &[usize] {
+        self.parts().1[e].as_ref()
+    }
     /// The node set `name`.
     ///
     /// # Errors
     /// [`FemError::Mesh`] if there is no such set.
-    fn node_set(&self, name: &str) -> Result<&[usize]>;
+    fn node_set(&self, name: &str) -> Result<&[usize]> {
+        self.parts().2.get(name)
+    }
+    /// The VTK cell type of the elements ([`Topology::VTK_CELL`]).
+    fn vtk_cell_type(&self) -> u8 {
+        Self::VTK_CELL
+    }
     /// Nodes of the contact surface `name`, their tributary areas (m², the
-    /// full revolved area for axisymmetric meshes) and spacings (m).
+    /// full revolved area for axisymmetric meshes) and spacings (m). By
+    /// default the ordered node set `name` read as an (r, z) polyline
+    /// ([`tributary`]).
     ///
     /// # Errors
     /// [`FemError::Mesh`] if there is no such surface.
-    fn contact_weights(&self, name: &str) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>)>;
-    /// The VTK cell type of the elements (9 quadrilateral, 12 hexahedron,
-    /// 3 line), for [`crate::vtu`].
-    fn vtk_cell_type(&self) -> u8;
-    /// The cells bounding the cavity `name`.
+    fn contact_weights(&self, name: &str) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>)> {
+        let nodes = self.node_set(name)?;
+        let (area, len) = tributary(
+            |a| {
+                let x = self.position(a);
+                [x[0], x[1]]
+            },
+            nodes,
+        );
+        Ok((nodes.to_vec(), area, len))
+    }
+    /// The cells bounding the cavity `name`. By default the ordered node
+    /// set `name` read as an (r, z) polyline (consecutive nodes joined).
     ///
     /// # Errors
     /// [`FemError::Mesh`] if there is no such boundary.
     #[doc(hidden)]
-    fn cavity_cells(&self, name: &str) -> Result<CavityCells>;
-}
-
-impl Topology for Mesh {
-    fn node_count(&self) -> usize {
-        self.nodes.len()
-    }
-    fn position(&self, a: usize) -> &[f64] {
-        &self.nodes[a]
-    }
-    fn element_count(&self) -> usize {
-        self.elements.len()
-    }
-    fn connectivity(&self, e: usize) -> &[usize] {
-        &self.elements[e]
-    }
-    fn node_set(&self, name: &str) -> Result<&[usize]> {
-        self.nodes_in(name)
-    }
-    fn contact_weights(&self, name: &str) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>)> {
-        let nodes = self.nodes_in(name)?.to_vec();
-        let (area, len) = tributary(&self.nodes, &nodes);
-        Ok((nodes, area, len))
-    }
-    fn vtk_cell_type(&self) -> u8 {
-        9
-    }
-    /// An ordered node set read as a polyline (consecutive nodes joined).
     fn cavity_cells(&self, name: &str) -> Result<CavityCells> {
-        let nodes = self.nodes_in(name)?;
+        let nodes = self.node_set(name)?;
         if nodes.len() < 2 {
             return Err(FemError::Mesh(format!(
                 "cavity boundary `{name}` needs at least two nodes"
@@ -102,28 +167,27 @@ impl Topology for Mesh {
     }
 }
 
+impl Topology for Mesh {
+    type Point = [f64; 2];
+    type Cell = [usize; 4];
+    const VTK_CELL: u8 = 9;
+    fn parts(&self) -> (&[[f64; 2]], &[[usize; 4]], &NamedSets<usize>) {
+        (&self.nodes, &self.elements, &self.sets)
+    }
+}
+
 impl Topology for Mesh3 {
-    fn node_count(&self) -> usize {
-        self.nodes.len()
+    type Point = [f64; 3];
+    type Cell = [usize; 8];
+    const VTK_CELL: u8 = 12;
+    fn parts(&self) -> (&[[f64; 3]], &[[usize; 8]], &NamedSets<usize>) {
+        (&self.nodes, &self.elements, &self.node_sets)
     }
-    fn position(&self, a: usize) -> &[f64] {
-        &self.nodes[a]
-    }
-    fn element_count(&self) -> usize {
-        self.elements.len()
-    }
-    fn connectivity(&self, e: usize) -> &[usize] {
-        &self.elements[e]
-    }
-    fn node_set(&self, name: &str) -> Result<&[usize]> {
-        self.nodes_in(name)
-    }
+    /// The face set `name` ([`Mesh3::tributary`]).
     fn contact_weights(&self, name: &str) -> Result<(Vec<usize>, Vec<f64>, Vec<f64>)> {
         self.tributary(name)
     }
-    fn vtk_cell_type(&self) -> u8 {
-        12
-    }
+    /// The face set `name`.
     fn cavity_cells(&self, name: &str) -> Result<CavityCells> {
         let faces = self.faces_in(name)?;
         if faces.is_empty() {
@@ -135,13 +199,13 @@ impl Topology for Mesh3 {
 
 /// Consistent tributary areas 2π∫N_a r ds and spacings of an ordered
 /// surface node set of an axisymmetric mesh with node positions `x`
-/// (reference or current).
-pub(crate) fn tributary(x: &[[f64; 2]], nodes: &[usize]) -> (Vec<f64>, Vec<f64>) {
+/// (reference or current) `x(a)`.
+pub(crate) fn tributary(x: impl Fn(usize) -> [f64; 2], nodes: &[usize]) -> (Vec<f64>, Vec<f64>) {
     let mut area = vec![0.0; nodes.len()];
     let mut len = vec![0.0; nodes.len()];
     for k in 0..nodes.len().saturating_sub(1) {
-        let a = x[nodes[k]];
-        let b = x[nodes[k + 1]];
+        let a = x(nodes[k]);
+        let b = x(nodes[k + 1]);
         let l = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
         let tp = 2.0 * std::f64::consts::PI * l;
         area[k] += tp * (a[0] / 3.0 + b[0] / 6.0);
@@ -177,11 +241,13 @@ pub trait ElementKind<M: Material3>: Send + Sync + 'static {
     type Geometry: Send + Sync;
     /// Residual and tangent storage of one element.
     #[doc(hidden)]
-    type Output: Clone + Send;
+    type Output: Local;
 
     /// An empty output.
     #[doc(hidden)]
-    fn output() -> Self::Output;
+    fn output() -> Self::Output {
+        Self::Output::default()
+    }
 
     /// Reference geometry of every element.
     ///
@@ -208,18 +274,23 @@ pub trait ElementKind<M: Material3>: Send + Sync + 'static {
 
     /// The element residual.
     #[doc(hidden)]
-    fn residual(out: &Self::Output) -> &[f64];
+    fn residual(out: &Self::Output) -> &[f64] {
+        out.residual()
+    }
 
     /// Row `a` of the element tangent.
     #[doc(hidden)]
-    fn tangent_row(out: &Self::Output, a: usize) -> &[f64];
+    fn tangent_row(out: &Self::Output, a: usize) -> &[f64] {
+        out.tangent_row(a)
+    }
 
     /// `Σ_q w_q ψ(F̄_q)` of one element for a strain-energy density `psi`.
     #[doc(hidden)]
     fn energy(geometry: &Self::Geometry, u: &[f64], fbar: bool, psi: &dyn Fn(&Mat3) -> f64) -> f64;
 }
 
-fn bad_length(n: usize) -> PointFailure {
+/// The error of a dof vector of the wrong length `n`.
+pub(crate) fn bad_length(n: usize) -> PointFailure {
     (
         0,
         nlvid_material::MaterialError::Deformation(format!("element dof vector has {n} entries")),
@@ -233,10 +304,6 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
     type Mesh = Mesh;
     type Geometry = [PointGeometry; 4];
     type Output = ElementOutput;
-
-    fn output() -> ElementOutput {
-        ElementOutput::zero()
-    }
 
     fn geometry(mesh: &Mesh) -> Result<Vec<[PointGeometry; 4]>> {
         Ok(mesh
@@ -257,16 +324,7 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
         part: TangentPart,
         out: &mut ElementOutput,
     ) -> std::result::Result<(), PointFailure> {
-        let u: &[f64; 8] = u.try_into().map_err(|_| bad_length(u.len()))?;
-        crate::element::fbar_element(material, geometry, u, state_n, trial, dt, fbar, part, out)
-    }
-
-    fn residual(out: &ElementOutput) -> &[f64] {
-        &out.r
-    }
-
-    fn tangent_row(out: &ElementOutput, a: usize) -> &[f64] {
-        &out.k[a]
+        fbar_kernel(material, geometry, u, state_n, trial, dt, fbar, part, out)
     }
 
     fn energy(
@@ -275,7 +333,7 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
         fbar: bool,
         psi: &dyn Fn(&Mat3) -> f64,
     ) -> f64 {
-        crate::element::element_energy(geometry, u, fbar, psi)
+        fbar_energy(geometry, u, fbar, psi)
     }
 }
 
@@ -285,11 +343,7 @@ impl<M: Material3> ElementKind<M> for Solid {
     const POINTS: usize = 8;
     type Mesh = Mesh3;
     type Geometry = [HexPoint; 8];
-    type Output = Box<HexOutput>;
-
-    fn output() -> Box<HexOutput> {
-        Box::new(HexOutput::zero())
-    }
+    type Output = HexOutput;
 
     fn geometry(mesh: &Mesh3) -> Result<Vec<[HexPoint; 8]>> {
         mesh.elements
@@ -314,24 +368,12 @@ impl<M: Material3> ElementKind<M> for Solid {
         dt: f64,
         fbar: bool,
         part: TangentPart,
-        out: &mut Box<HexOutput>,
+        out: &mut HexOutput,
     ) -> std::result::Result<(), PointFailure> {
-        let u: &[f64; 24] = u.try_into().map_err(|_| bad_length(u.len()))?;
-        crate::hex::fbar_hex(material, geometry, u, state_n, trial, dt, fbar, part, out)
-    }
-
-    fn residual(out: &Box<HexOutput>) -> &[f64] {
-        &out.r
-    }
-
-    fn tangent_row(out: &Box<HexOutput>, a: usize) -> &[f64] {
-        &out.k[a]
+        fbar_kernel(material, geometry, u, state_n, trial, dt, fbar, part, out)
     }
 
     fn energy(geometry: &[HexPoint; 8], u: &[f64], fbar: bool, psi: &dyn Fn(&Mat3) -> f64) -> f64 {
-        match <&[f64; 24]>::try_from(u) {
-            Ok(u) => crate::hex::element_energy(geometry, u, fbar, psi),
-            Err(_) => f64::NAN,
-        }
+        fbar_energy(geometry, u, fbar, psi)
     }
 }

@@ -2,6 +2,7 @@
 //! their generators: a graded block (half-space tests) and the oblate cell of
 //! thesis §5.3 (Fig. 5.11).
 
+use crate::sets::NamedSets;
 use crate::{FemError, Result};
 
 /// A mesh of 4-node quadrilaterals in the (r, z) half-plane, r ≥ 0.
@@ -14,7 +15,7 @@ pub struct Mesh {
     pub nodes: Vec<[f64; 2]>,
     /// Element connectivity, counter-clockwise.
     pub elements: Vec<[usize; 4]>,
-    sets: Vec<(String, Vec<usize>)>,
+    pub(crate) sets: NamedSets<usize>,
 }
 
 /// Geometric grading of `n` intervals on [0, 1]: the last interval is
@@ -53,7 +54,7 @@ impl Mesh {
         let mesh = Self {
             nodes,
             elements,
-            sets: Vec::new(),
+            sets: NamedSets::new("node"),
         };
         mesh.check()?;
         Ok(mesh)
@@ -86,11 +87,7 @@ impl Mesh {
 
     /// Adds (or replaces) a named node set.
     pub fn set_nodes(&mut self, name: &str, nodes: Vec<usize>) {
-        if let Some(s) = self.sets.iter_mut().find(|s| s.0 == name) {
-            s.1 = nodes;
-        } else {
-            self.sets.push((name.to_owned(), nodes));
-        }
+        self.sets.insert(name, nodes);
     }
 
     /// The node set called `name`.
@@ -98,11 +95,7 @@ impl Mesh {
     /// # Errors
     /// [`FemError::Mesh`] if there is no such set.
     pub fn nodes_in(&self, name: &str) -> Result<&[usize]> {
-        self.sets
-            .iter()
-            .find(|s| s.0 == name)
-            .map(|s| s.1.as_slice())
-            .ok_or_else(|| FemError::Mesh(format!("no node set named `{name}`")))
+        self.sets.get(name)
     }
 
     /// A block [0, width] × [0, height] with `nr` × `nz` elements, graded
@@ -306,20 +299,22 @@ fn positive(name: &'static str, value: f64) -> Result<()> {
     }
 }
 
+/// Area of the (r, z) section of `mesh` by 2×2 Gauss quadrature (tests).
+#[cfg(test)]
+pub(crate) fn section_area(mesh: &Mesh) -> f64 {
+    let mut total = 0.0;
+    for conn in &mesh.elements {
+        let x = conn.map(|a| mesh.nodes[a]);
+        for &(xi, eta) in &crate::element::GAUSS {
+            total += crate::element::shape_gradients(&x, xi, eta).2;
+        }
+    }
+    total
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn area(mesh: &Mesh) -> f64 {
-        let mut total = 0.0;
-        for conn in &mesh.elements {
-            let x = conn.map(|a| mesh.nodes[a]);
-            for &(xi, eta) in &crate::element::GAUSS {
-                total += crate::element::shape_gradients(&x, xi, eta).2;
-            }
-        }
-        total
-    }
 
     #[test]
     fn graded_spacing_has_requested_bias() {
@@ -335,8 +330,8 @@ mod tests {
         // Area of the half-ellipse section: π a H / 4.
         let (h, d) = (12.22e-6, 28.88e-6);
         let exact = std::f64::consts::PI * 0.5 * d * h / 4.0;
-        let coarse = (area(&Mesh::oblate_cell(h, d, 16, 4.0).unwrap()) - exact).abs();
-        let fine = (area(&Mesh::oblate_cell(h, d, 32, 4.0).unwrap()) - exact).abs();
+        let coarse = (section_area(&Mesh::oblate_cell(h, d, 16, 4.0).unwrap()) - exact).abs();
+        let fine = (section_area(&Mesh::oblate_cell(h, d, 32, 4.0).unwrap()) - exact).abs();
         assert!(fine / exact < 2e-3, "relative area error {}", fine / exact);
         assert!(
             fine < coarse / 3.0,

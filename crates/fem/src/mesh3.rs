@@ -2,6 +2,7 @@
 //! named sets of quadrilateral boundary faces (contact surfaces, fluid
 //! cavities), and a structured-block generator.
 
+use crate::sets::NamedSets;
 use crate::{FemError, Result};
 
 /// A mesh of 8-node hexahedra (node order of [`crate::hex::CORNERS`]).
@@ -16,8 +17,8 @@ pub struct Mesh3 {
     pub nodes: Vec<[f64; 3]>,
     /// Element connectivity.
     pub elements: Vec<[usize; 8]>,
-    node_sets: Vec<(String, Vec<usize>)>,
-    face_sets: Vec<(String, Vec<[usize; 4]>)>,
+    pub(crate) node_sets: NamedSets<usize>,
+    face_sets: NamedSets<[usize; 4]>,
 }
 
 impl Mesh3 {
@@ -51,18 +52,14 @@ impl Mesh3 {
         Ok(Self {
             nodes,
             elements,
-            node_sets: Vec::new(),
-            face_sets: Vec::new(),
+            node_sets: NamedSets::new("node"),
+            face_sets: NamedSets::new("face"),
         })
     }
 
     /// Adds (or replaces) a named node set.
     pub fn set_nodes(&mut self, name: &str, nodes: Vec<usize>) {
-        if let Some(s) = self.node_sets.iter_mut().find(|s| s.0 == name) {
-            s.1 = nodes;
-        } else {
-            self.node_sets.push((name.to_owned(), nodes));
-        }
+        self.node_sets.insert(name, nodes);
     }
 
     /// The node set called `name`.
@@ -70,11 +67,7 @@ impl Mesh3 {
     /// # Errors
     /// [`FemError::Mesh`] if there is no such set.
     pub fn nodes_in(&self, name: &str) -> Result<&[usize]> {
-        self.node_sets
-            .iter()
-            .find(|s| s.0 == name)
-            .map(|s| s.1.as_slice())
-            .ok_or_else(|| FemError::Mesh(format!("no node set named `{name}`")))
+        self.node_sets.get(name)
     }
 
     /// Adds (or replaces) a named face set; also defines the node set of
@@ -91,17 +84,13 @@ impl Mesh3 {
                 "face set `{name}`: face {f:?} refers to a missing node"
             )));
         }
-        if self.nodes_in(name).is_err() {
+        if !self.node_sets.contains(name) {
             let mut nodes: Vec<usize> = faces.iter().flatten().copied().collect();
             nodes.sort_unstable();
             nodes.dedup();
             self.set_nodes(name, nodes);
         }
-        if let Some(s) = self.face_sets.iter_mut().find(|s| s.0 == name) {
-            s.1 = faces;
-        } else {
-            self.face_sets.push((name.to_owned(), faces));
-        }
+        self.face_sets.insert(name, faces);
         Ok(())
     }
 
@@ -110,11 +99,7 @@ impl Mesh3 {
     /// # Errors
     /// [`FemError::Mesh`] if there is no such set.
     pub fn faces_in(&self, name: &str) -> Result<&[[usize; 4]]> {
-        self.face_sets
-            .iter()
-            .find(|s| s.0 == name)
-            .map(|s| s.1.as_slice())
-            .ok_or_else(|| FemError::Mesh(format!("no face set named `{name}`")))
+        self.face_sets.get(name)
     }
 
     /// Contact weights of a face set: its nodes (sorted), each node's

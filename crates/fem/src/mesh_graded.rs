@@ -433,17 +433,6 @@ fn graded_first(n: usize, q: f64, length: f64) -> f64 {
 mod tests {
     use super::*;
 
-    fn area(mesh: &Mesh) -> f64 {
-        let mut total = 0.0;
-        for conn in &mesh.elements {
-            let x = conn.map(|a| mesh.nodes[a]);
-            for &(xi, eta) in &crate::element::GAUSS {
-                total += crate::element::shape_gradients(&x, xi, eta).2;
-            }
-        }
-        total
-    }
-
     #[test]
     fn graded_cell_covers_the_quarter_ellipse() {
         let (h, d) = (12.22e-6, 28.88e-6);
@@ -460,7 +449,7 @@ mod tests {
             mesh.nodes.len()
         );
         let exact = std::f64::consts::PI * 0.5 * d * h / 4.0;
-        let rel = (area(&mesh) - exact).abs() / exact;
+        let rel = (crate::mesh::section_area(&mesh) - exact).abs() / exact;
         assert!(rel < 5e-3, "area error {rel}");
         // Surface nodes lie on the ellipse, ordered from the pole outward.
         let surface = mesh.nodes_in("surface").unwrap();

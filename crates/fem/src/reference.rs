@@ -11,7 +11,7 @@
 //!   small-strain limit it is exactly linear viscoelasticity with G(t) and a
 //!   constant bulk modulus κ, which is what the Lee–Radok check needs.
 
-use nlvid_material::{Mat3, Material3, MaterialError, PointResponse3, Tangent3};
+use nlvid_material::{Mat3, Material3, MaterialError, PointResponse3, PointState, Tangent3};
 use nlvid_model::Relaxation;
 
 /// Decoupled compressible neo-Hookean solid.
@@ -82,11 +82,13 @@ fn response(f: &Mat3, p: Mat3, tangent: Tangent3) -> PointResponse3 {
     }
 }
 
-impl Material3 for NeoHookean {
+impl PointState for NeoHookean {
     type State = ();
 
     fn initial_state(&self) {}
+}
 
+impl Material3 for NeoHookean {
     fn update(
         &self,
         _: &(),
@@ -154,7 +156,7 @@ impl PronyNeoHookean {
     }
 }
 
-impl Material3 for PronyNeoHookean {
+impl PointState for PronyNeoHookean {
     type State = PronyState;
 
     fn initial_state(&self) -> PronyState {
@@ -163,7 +165,9 @@ impl Material3 for PronyNeoHookean {
             s_iso: Mat3::zeros(),
         }
     }
+}
 
+impl Material3 for PronyNeoHookean {
     fn update(
         &self,
         state_n: &PronyState,

@@ -29,7 +29,7 @@ const EPS: f64 = 1e-9;
 
 fn model<M>(material: M, n: usize) -> Model<M, Membrane>
 where
-    M: Material3 + MembraneMaterial<State = <M as Material3>::State>,
+    M: Material3 + MembraneMaterial,
 {
     let mesh = MembraneMesh::spherical(1.0, H0, n).unwrap();
     let parts = Parts {
@@ -55,7 +55,7 @@ fn inflate_and_squeeze<M>(
     ds: &[f64],
     mut visit: impl FnMut(&Model<M, Membrane>, f64),
 ) where
-    M: Material3 + MembraneMaterial<State = <M as Material3>::State>,
+    M: Material3 + MembraneMaterial,
 {
     let dv = model.cavity_reference_volume().unwrap() * (RS.powi(3) - 1.0);
     model.set_time(-2.0 * EPS);
@@ -267,6 +267,7 @@ fn elastic_force_displacement_within_0_2_percent_of_the_semi_analytical_curve() 
             solver
                 .equilibrium(0.0, nlvid_membrane::Control::Displacement(d))
                 .unwrap()
+                .record
                 .force
         })
         .collect();

@@ -109,28 +109,31 @@ fn membrane_patch_agrees_with_the_semi_analytical_solution() {
         eprintln!(
             "D = {d}: a FE {a:.6} vs {:.6} ({:+.2e}); p̄ {:.6} vs {:.6}; F̄ {:.5} vs {:.5}; \
              pressure area {:.5} vs π a² {:.5}; ellipse {:.5}",
-            sol.contact_radius,
-            a / sol.contact_radius - 1.0,
+            sol.record.contact_radius,
+            a / sol.record.contact_radius - 1.0,
             rec.pressure / h0,
-            sol.pressure,
+            sol.record.pressure,
             rec.force / h0,
-            sol.force,
+            sol.record.force,
             patch.pressure_area,
-            PI * sol.contact_radius.powi(2),
+            PI * sol.record.contact_radius.powi(2),
             patch.ellipse_area
         );
         assert_eq!(a, b);
         // The edge lies between two nodes; the lift-off profile places it
         // to a fraction of the spacing.
         assert!(
-            (a - sol.contact_radius).abs() < 0.5 * spacing,
+            (a - sol.record.contact_radius).abs() < 0.5 * spacing,
             "contact radius"
         );
         assert!(
-            (rec.pressure / h0 / sol.pressure - 1.0).abs() < 2e-3,
+            (rec.pressure / h0 / sol.record.pressure - 1.0).abs() < 2e-3,
             "pressure"
         );
-        assert!((rec.force / h0 / sol.force - 1.0).abs() < 2e-3, "force");
+        assert!(
+            (rec.force / h0 / sol.record.force - 1.0).abs() < 2e-3,
+            "force"
+        );
         assert!((patch.ellipse_area - PI * a * a).abs() < 1e-12);
         // The pressed nodes' area lies within one spacing of the disc.
         let r_area = (patch.pressure_area / PI).sqrt();

@@ -10,7 +10,7 @@ use nlvid_fem::{
     Component, Control, Mesh3, Model, Parts, RigidPlane, Settings, Solid, SphereProbe, Stage,
     Support,
 };
-use nlvid_material::{Mat3, Material3};
+use nlvid_material::{Mat3, Material3, PointState};
 use std::f64::consts::PI;
 
 fn run<M: Material3>(

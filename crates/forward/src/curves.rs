@@ -27,6 +27,7 @@ use rayon::prelude::*;
 
 use crate::error::{ForwardError, Result};
 use crate::{ForwardSettings, ForwardSpec, fem_failure};
+use nlvid_model::Curve;
 
 /// Measurement noise of the written curves.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -37,41 +38,46 @@ pub struct Noise {
     pub seed: u64,
 }
 
-/// One synthetic AFM curve, SI units.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AfmCurve {
-    /// Sample times [s] (the forward model's clock: 0 at the start of the
-    /// piezo program).
-    pub time: Vec<f64>,
-    /// Piezo travel Z [m].
-    pub piezo: Vec<f64>,
-    /// Noise-free force F [N].
-    pub force: Vec<f64>,
-    /// Measured deflection [m]: (F + noise)/k.
-    pub deflection: Vec<f64>,
+/// One synthetic AFM curve is an [`nlvid_model::Curve`] on the forward
+/// model's clock (0 at the start of the piezo program) with the channels
+/// of `nlvid simulate`'s AFM curves: `piezo` (Z, m), `deflection`
+/// ((F + noise)/k, m) and `force` (noise-free F, N).
+fn afm_samples(time: Vec<f64>, piezo: Vec<f64>, force: Vec<f64>, k: f64) -> Result<Curve> {
+    let deflection = force.iter().map(|f| f / k).collect();
+    Curve::new(time)
+        .and_then(|c| c.with("piezo", "m", piezo))
+        .and_then(|c| c.with("deflection", "m", deflection))
+        .and_then(|c| c.with("force", "N", force))
+        .map_err(|e| setting("curve writer", e.to_string()))
 }
 
-impl AfmCurve {
-    /// The curve as the CSV of a measured curve: `time [s]`, `piezo [um]`,
-    /// `deflection [nm]`, 4 / 6 / 4 decimals.
-    pub fn to_csv(&self) -> String {
-        let mut csv = String::from("time [s],piezo [um],deflection [nm]\n");
-        for i in 0..self.time.len() {
-            let _ = writeln!(
-                csv,
-                "{:.4},{:.6},{:.4}",
-                self.time[i],
-                self.piezo[i] * 1e6,
-                self.deflection[i] * 1e9
-            );
-        }
-        csv
-    }
+/// A channel of a curve made by [`afm_curve`] (empty if absent).
+fn channel<'a>(curve: &'a Curve, name: &str) -> &'a [f64] {
+    curve.values(name).unwrap_or_default()
+}
 
-    /// Largest noise-free force [N].
-    pub fn peak_force(&self) -> f64 {
-        self.force.iter().fold(0.0f64, |a, &b| a.max(b))
+/// An AFM curve of [`afm_curve`] as the CSV of a measured curve:
+/// `time [s]`, `piezo [um]`, `deflection [nm]`, 4 / 6 / 4 decimals.
+pub fn measured_csv(curve: &Curve) -> String {
+    let (piezo, deflection) = (channel(curve, "piezo"), channel(curve, "deflection"));
+    let mut csv = String::from("time [s],piezo [um],deflection [nm]\n");
+    for (i, t) in curve.time().iter().enumerate() {
+        let _ = writeln!(
+            csv,
+            "{:.4},{:.6},{:.4}",
+            t,
+            piezo[i] * 1e6,
+            deflection[i] * 1e9
+        );
     }
+    csv
+}
+
+/// Largest noise-free force [N] of a curve of [`afm_curve`].
+pub fn peak_force(curve: &Curve) -> f64 {
+    channel(curve, "force")
+        .iter()
+        .fold(0.0f64, |a, &b| a.max(b))
 }
 
 /// A standard normal deviate by Box–Muller (u1 in (0, 1]).
@@ -100,7 +106,7 @@ pub fn afm_curve(
     x: &[f64],
     times: &[f64],
     spring_constant: f64,
-) -> Result<AfmCurve> {
+) -> Result<Curve> {
     if !(spring_constant > 0.0 && spring_constant.is_finite()) {
         return Err(setting(
             "curve writer",
@@ -145,12 +151,7 @@ pub fn afm_curve(
                 .map_err(|e| setting("afm-fe", e.to_string()))?;
             let run = nlvid_fem::afm::run(&params, &setup)
                 .map_err(|e| setting("afm-fe", fem_failure(&e).to_string()))?;
-            Ok(AfmCurve {
-                time: run.time,
-                piezo: run.piezo,
-                deflection: run.force.iter().map(|f| f / k).collect(),
-                force: run.force,
-            })
+            afm_samples(run.time, run.piezo, run.force, k)
         }
         ForwardSpec::HertzProny(spec) => {
             let model = spec.build()?;
@@ -184,12 +185,7 @@ pub fn afm_curve(
                 .zip(&force)
                 .map(|(&t, &f)| spec.indentation(t) + f / spring_constant)
                 .collect();
-            Ok(AfmCurve {
-                time: times.to_vec(),
-                piezo,
-                deflection: force.iter().map(|f| f / spring_constant).collect(),
-                force,
-            })
+            afm_samples(times.to_vec(), piezo, force, spring_constant)
         }
         ForwardSpec::Membrane(_) => Err(setting(
             "membrane",
@@ -208,27 +204,43 @@ pub fn afm_curve(
 
 /// Adds the measurement noise of curve number `index` to its deflection
 /// (σ = `noise.relative` × peak force, divided by k).
-pub fn add_noise(curve: &mut AfmCurve, noise: Noise, index: usize, spring_constant: f64) {
+///
+/// # Errors
+/// As [`add_noise_from`].
+pub fn add_noise(
+    curve: &mut Curve,
+    noise: Noise,
+    index: usize,
+    spring_constant: f64,
+) -> Result<()> {
     if !(noise.relative > 0.0) {
-        return;
+        return Ok(());
     }
     let mut rng = ChaCha8Rng::seed_from_u64(noise.seed);
     rng.set_stream(index as u64);
-    add_noise_from(curve, noise.relative, &mut rng, spring_constant);
+    add_noise_from(curve, noise.relative, &mut rng, spring_constant)
 }
 
 /// Adds noise of sd `relative` × peak force to the deflection, one
 /// deviate per sample in time order from `rng` (the caller's stream).
+///
+/// # Errors
+/// A noisy deflection that is not finite (a non-finite `relative` or
+/// spring constant).
 pub fn add_noise_from(
-    curve: &mut AfmCurve,
+    curve: &mut Curve,
     relative: f64,
     rng: &mut ChaCha8Rng,
     spring_constant: f64,
-) {
-    let sd = relative * curve.peak_force();
-    for (d, &f) in curve.deflection.iter_mut().zip(&curve.force) {
-        *d = (f + sd * standard_normal(rng)) / spring_constant;
-    }
+) -> Result<()> {
+    let sd = relative * peak_force(curve);
+    let deflection = channel(curve, "force")
+        .iter()
+        .map(|&f| (f + sd * standard_normal(rng)) / spring_constant)
+        .collect();
+    curve
+        .replace("deflection", deflection)
+        .map_err(|e| setting("curve writer", e.to_string()))
 }
 
 /// The curves of every parameter set in `sets` (each in model order, SI),
@@ -244,7 +256,7 @@ pub fn afm_curves(
     times: &[f64],
     spring_constant: f64,
     noise: Noise,
-) -> Result<Vec<AfmCurve>> {
+) -> Result<Vec<Curve>> {
     if !(noise.relative >= 0.0 && noise.relative.is_finite()) {
         return Err(setting(
             "curve writer",
@@ -260,7 +272,7 @@ pub fn afm_curves(
                     format!("parameter set {} ({x:?}): {e}", i + 1),
                 )
             })?;
-            add_noise(&mut c, noise, i, spring_constant);
+            add_noise(&mut c, noise, i, spring_constant)?;
             Ok(c)
         })
         .collect()
@@ -378,14 +390,13 @@ mod tests {
         ForwardSettings::from_study(&mut study).expect("forward")
     }
 
-    const HERTZ: &str = "[forward]\nmodel = \"hertz-prony\"\nprobe_radius = \"2.5 um\"\n\
-        rate = \"2 um/s\"\nramp = \"1 s\"\nhold = \"3 s\"\npoints = 40\n";
-
     /// hertz-prony: Z − d is the nominal indentation 2 µm/s · min(t, 1 s)
     /// (closed form), d·k the model's force on its grid, 0 at t = 0.
     #[test]
     fn hertz_curve_piezo_minus_deflection_is_the_nominal_indentation() {
-        let fwd = forward(HERTZ);
+        let fwd = forward(&crate::hertz_forward_toml(
+            "2.5 um", "2 um/s", "1 s", "3 s", 40,
+        ));
         let x = [1000.0, 0.3, 0.2, 0.5, 10.0];
         let times: Vec<f64> = std::iter::once(0.0)
             .chain((1..=40).map(|i| 4.0 * i as f64 / 40.0))
@@ -394,14 +405,12 @@ mod tests {
         let c = afm_curve(&fwd, &x, &times, k).expect("curve");
         let model = fwd.build().expect("model");
         let f = model.run(&x).expect("run");
+        let (piezo, deflection) = (channel(&c, "piezo"), channel(&c, "deflection"));
         for (i, &t) in times.iter().enumerate() {
             let delta = 2e-6 * t.min(1.0);
-            assert!(
-                (c.piezo[i] - c.deflection[i] - delta).abs() < 1e-18,
-                "t = {t}"
-            );
+            assert!((piezo[i] - deflection[i] - delta).abs() < 1e-18, "t = {t}");
             let expected = if i == 0 { 0.0 } else { f[i - 1] };
-            assert_eq!(c.deflection[i], expected / k, "t = {t}");
+            assert_eq!(deflection[i], expected / k, "t = {t}");
         }
         let e = afm_curve(&fwd, &x, &[0.05], k)
             .expect_err("off the grid")
@@ -442,29 +451,26 @@ mod tests {
     #[test]
     fn noise_has_the_requested_sd_and_depends_only_on_seed_and_index() {
         let n = 20_000;
-        let clean = AfmCurve {
-            time: (0..n).map(|i| i as f64).collect(),
-            piezo: vec![0.0; n],
-            force: (0..n).map(|i| if i == 0 { 2e-8 } else { 1e-8 }).collect(),
-            deflection: vec![0.0; n],
-        };
+        let force: Vec<f64> = (0..n).map(|i| if i == 0 { 2e-8 } else { 1e-8 }).collect();
+        let time = (0..n).map(|i| i as f64).collect();
+        let clean = afm_samples(time, vec![0.0; n], force.clone(), 1.0).expect("curve");
         let noise = Noise {
             relative: 0.01,
             seed: 7,
         };
         let k = 0.1;
         let mut a = clean.clone();
-        add_noise(&mut a, noise, 3, k);
+        add_noise(&mut a, noise, 3, k).expect("noise");
         let mut b = clean.clone();
-        add_noise(&mut b, noise, 3, k);
+        add_noise(&mut b, noise, 3, k).expect("noise");
         let mut c = clean.clone();
-        add_noise(&mut c, noise, 4, k);
+        add_noise(&mut c, noise, 4, k).expect("noise");
         assert_eq!(a, b);
-        assert_ne!(a.deflection, c.deflection);
-        let e: Vec<f64> = a
-            .deflection
+        assert_ne!(channel(&a, "deflection"), channel(&c, "deflection"));
+        assert_eq!(channel(&a, "force"), &force[..]);
+        let e: Vec<f64> = channel(&a, "deflection")
             .iter()
-            .zip(&clean.force)
+            .zip(&force)
             .map(|(d, f)| d * k - f)
             .collect();
         let mean = e.iter().sum::<f64>() / n as f64;
@@ -562,6 +568,17 @@ impl CurveJob {
         })
     }
 
+    /// One line on what [`CurveJob::write`] wrote: `files` of `samples`
+    /// samples each into `out_dir`, with the noise.
+    pub fn summary(&self, files: usize, samples: usize, out_dir: &std::path::Path) -> String {
+        format!(
+            "wrote {files} curves ({samples} samples each, noise {} of the peak force, seed {}) into {}\n",
+            self.noise.relative,
+            self.noise.seed,
+            out_dir.display()
+        )
+    }
+
     /// Runs every set (in parallel) and writes `<stem>.csv` into `out_dir`
     /// atomically; returns the files and the number of samples per curve.
     ///
@@ -581,7 +598,7 @@ impl CurveJob {
         let mut files = Vec::with_capacity(curves.len());
         for ((name, _), c) in self.sets.iter().zip(&curves) {
             let path = out_dir.join(format!("{name}.csv"));
-            nlvid_study::write_atomic(&path, c.to_csv().as_bytes()).map_err(|e| {
+            nlvid_study::write_atomic(&path, measured_csv(c).as_bytes()).map_err(|e| {
                 setting(
                     "curve writer",
                     format!("cannot write {}: {e}", path.display()),

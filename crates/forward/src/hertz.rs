@@ -332,19 +332,12 @@ mod tests {
     use super::*;
     use nlvid_study::Study;
 
-    const BASE: &str = r#"
-[forward]
-model = "hertz-prony"
-probe_radius = "2.5 um"
-rate = "10 um/s"
-ramp = "0.2 s"
-hold = "1.8 s"
-points = 10
-"#;
-
     fn spec(extra: &str) -> std::result::Result<HertzPronySpec, String> {
-        let mut st =
-            Study::parse("s.toml", &format!("{BASE}{extra}")).map_err(|e| e.to_string())?;
+        let mut st = Study::parse(
+            "s.toml",
+            &(crate::hertz_forward_toml("2.5 um", "10 um/s", "0.2 s", "1.8 s", 10) + extra),
+        )
+        .map_err(|e| e.to_string())?;
         let mut s = st.section("forward").map_err(|e| e.to_string())?;
         s.skip("model");
         let spec = HertzPronySpec::from_section(&mut s).map_err(|e| e.to_string())?;
@@ -467,7 +460,7 @@ points = 10
         );
         let e = spec("ramp_points = 10\n").unwrap_err();
         assert!(
-            e.contains("s.toml:9") && e.contains("forward.ramp_points"),
+            e.contains("s.toml:8") && e.contains("forward.ramp_points"),
             "{e}"
         );
         let e = spec("ramp_points = 9\nfirst_hold_step = \"1 ms\"\n").unwrap_err();

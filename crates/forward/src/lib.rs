@@ -74,7 +74,7 @@ pub use capsule_fe::{
     AreaKind, CapsuleFeModel, CapsuleFeSpec, PARAMETERS as CAPSULE_PARAMETERS, samples_curve,
 };
 
-pub use curves::{AfmCurve, CurveJob, Noise, afm_curve, afm_curves};
+pub use curves::{CurveJob, Noise, afm_curve, afm_curves, measured_csv};
 pub use error::{ForwardError, Result};
 pub use hertz::{HertzGrid, HertzProny, HertzPronySpec};
 pub use lee_radok::{LeeRadok, exp_convolution};
@@ -254,6 +254,22 @@ impl ForwardSettings {
 /// As [`ForwardSettings::from_study`] and [`ForwardSettings::build`].
 pub fn from_study(study: &mut Study) -> Result<Box<dyn ForwardModel>> {
     ForwardSettings::from_study(study)?.build()
+}
+
+/// Test fixture: a `hertz-prony` `[forward]` section (probe radius, rate,
+/// ramp, hold with units; output points).
+#[cfg(test)]
+pub(crate) fn hertz_forward_toml(
+    radius: &str,
+    rate: &str,
+    ramp: &str,
+    hold: &str,
+    points: usize,
+) -> String {
+    format!(
+        "[forward]\nmodel = \"hertz-prony\"\nprobe_radius = \"{radius}\"\nrate = \"{rate}\"\n\
+         ramp = \"{ramp}\"\nhold = \"{hold}\"\npoints = {points}\n"
+    )
 }
 
 /// Test-only wrapper: sleeps before every run.

@@ -343,6 +343,31 @@ impl Simulation {
         Ok(doc)
     }
 
+    /// What `nlvid simulate` / `nlvid membrane` print for the run of study
+    /// `name`: with `json`, [`Simulation::to_json`] with `files` as one
+    /// pretty JSON document; else [`Simulation::summary_text`] and `wrote`
+    /// (where the files went). Ends with a newline.
+    ///
+    /// # Errors
+    /// As [`Simulation::curve`].
+    pub fn report(
+        &self,
+        json: bool,
+        sim: &SimulateStudy,
+        (name, provenance): (&str, &serde_json::Value),
+        (files, wrote): (serde_json::Value, &str),
+    ) -> Result<String> {
+        if json {
+            let doc = self.to_json(sim, provenance.clone(), files)?;
+            let text = serde_json::to_string_pretty(&doc).map_err(|e| ForwardError::Setting {
+                model: "simulate",
+                message: e.to_string(),
+            })?;
+            return Ok(text + "\n");
+        }
+        Ok(format!("{} → {wrote}\n", self.summary_text(name)?))
+    }
+
     /// The summary for people: for afm-fe the solver's counts, then the
     /// peak, final and smallest force.
     ///
@@ -416,10 +441,10 @@ impl Simulation {
                         v.t1 * g10 * h0,
                         v.t2 * g10 * h0,
                         v.theta,
-                        u8::from(v.psi <= sol.psi_c)
+                        u8::from(v.psi <= sol.record.psi_c)
                     ));
                 }
-                (sol.time, s)
+                (sol.record.time, s)
             })
             .collect()
     }
@@ -433,21 +458,16 @@ mod tests {
         SimulateStudy::from_study(Study::parse("s.toml", text).expect("toml"))
     }
 
-    const HERTZ: &str = r#"
-[forward]
-model = "hertz-prony"
-probe_radius = "5 um"
-rate = "1 um/s"
-ramp = "1 s"
-hold = "9 s"
-points = 50
-"#;
+    fn hertz() -> String {
+        crate::hertz_forward_toml("5 um", "1 um/s", "1 s", "9 s", 50)
+    }
 
     #[test]
     fn parameters_are_read_by_the_models_names_with_units() {
         let s = study(&format!(
-            "{HERTZ}[parameters]\nG0 = \"1.2 kPa\"\ng1 = 0.3\ng2 = 0.2\ntau1 = \"100 ms\"\ntau2 = \"5 s\"\n\
-             [design]\nn_train = 3\n"
+            "{}[parameters]\nG0 = \"1.2 kPa\"\ng1 = 0.3\ng2 = 0.2\ntau1 = \"100 ms\"\ntau2 = \"5 s\"\n\
+             [design]\nn_train = 3\n",
+            hertz()
         ))
         .expect("study");
         assert_eq!(s.values, [1200.0, 0.3, 0.2, 0.1, 5.0]);
@@ -455,19 +475,19 @@ points = 50
             panic!("hertz-prony gives its response");
         };
         assert_eq!(c.len(), 50);
-        let e = study(&format!("{HERTZ}[parameters]\nG0 = \"1.2 kPa\"\n")).expect_err("g1");
+        let e = study(&format!("{}[parameters]\nG0 = \"1.2 kPa\"\n", hertz())).expect_err("g1");
         assert!(e.to_string().contains("`parameters.g1`"), "{e}");
     }
 
     #[test]
     fn sections_of_the_former_schemas_name_the_keys_that_replace_them() {
-        let e = study(&format!("{HERTZ}[cantilever]\nk = \"0.1 N/m\"\n")).expect_err("old");
+        let e = study(&format!("{}[cantilever]\nk = \"0.1 N/m\"\n", hertz())).expect_err("old");
         assert!(e.to_string().contains("`spring_constant`"), "{e}");
-        let e = study(&format!("{HERTZ}[fem]\nbias = 4\n")).expect_err("old");
+        let e = study(&format!("{}[fem]\nbias = 4\n", hertz())).expect_err("old");
         assert!(e.to_string().contains("`mesh_bias`"), "{e}");
-        let e = study(&format!("{HERTZ}[membrane]\nrs = 1.03\n")).expect_err("old");
+        let e = study(&format!("{}[membrane]\nrs = 1.03\n", hertz())).expect_err("old");
         assert!(e.to_string().contains("[parameters]"), "{e}");
-        let e = study(&format!("{HERTZ}[material]\nG0 = \"1 kPa\"\n")).expect_err("none");
+        let e = study(&format!("{}[material]\nG0 = \"1 kPa\"\n", hertz())).expect_err("none");
         assert!(
             e.to_string().contains("missing section [parameters]"),
             "{e}"

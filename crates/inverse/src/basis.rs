@@ -21,9 +21,9 @@ use std::sync::Arc;
 use nalgebra::{DMatrix, DVector};
 use nlvid_model::Domain;
 
-use crate::error::{InverseError, Result};
-use crate::misfit::{Objective, shared, sum_with_gradient};
-use crate::model::{Model, check_jacobian, check_len};
+use crate::error::Result;
+use crate::misfit::{MisfitTerm, SummedMisfit, rmse_of_sum};
+use crate::model::{Model, check_len};
 
 /// A model y(x) = μ + Bᵀ φ(x) on a fixed time grid.
 pub trait BasisModel {
@@ -234,69 +234,25 @@ impl<B: BasisModel> BasisExperiment<B> {
                 (gram_sum, g_phi + &self.h)
             }
         };
-        let swr2 = swr2.max(0.0);
-        if !swr2.is_finite() {
-            return Err(InverseError::NonFinite {
-                index: 0,
-                time: self.model.times().first().copied().unwrap_or(f64::NAN),
-                x: x.to_vec(),
-            });
-        }
-        let sqrt_s = (swr2 / self.sum_w).sqrt();
-        let e = sqrt_s / self.range;
-        if !with_gradient {
-            return Ok((e, Vec::new()));
-        }
-        check_jacobian(&dphi, phi.len(), x.len())?;
-        if sqrt_s == 0.0 {
-            return Ok((e, vec![0.0; x.len()]));
-        }
-        let grad = dphi.tr_mul(&v) / (self.sum_w * sqrt_s * self.range);
-        Ok((e, grad.iter().copied().collect()))
+        let time0 = self.model.times().first().copied().unwrap_or(f64::NAN);
+        let gradient = with_gradient.then_some((&dphi, phi.len(), move || v));
+        rmse_of_sum(swr2.max(0.0), (self.sum_w, self.range), x, time0, gradient)
     }
 }
 
 /// Sum of eq. 5.3 misfits over [`BasisExperiment`]s, evaluated through the
 /// precomputed Gram matrices. Same value and gradient as
 /// [`crate::Misfit`] over [`AsModel`] (to round-off).
-#[derive(Debug, Clone)]
-pub struct BasisMisfit<B> {
-    experiments: Vec<BasisExperiment<B>>,
-}
+pub type BasisMisfit<B> = SummedMisfit<BasisExperiment<B>>;
 
-impl<B: BasisModel> BasisMisfit<B> {
-    /// Combines experiments (at least one, same parameter names).
-    ///
-    /// # Errors
-    /// [`InverseError::InvalidSetting`].
-    pub fn new(experiments: Vec<BasisExperiment<B>>) -> Result<Self> {
-        let experiments = shared(experiments, |e| (e.label.as_str(), e.model.domain()))?;
-        Ok(Self { experiments })
+impl<B: BasisModel> MisfitTerm for BasisExperiment<B> {
+    fn label(&self) -> &str {
+        &self.label
     }
-
-    /// The experiments.
-    pub fn experiments(&self) -> &[BasisExperiment<B>] {
-        &self.experiments
-    }
-}
-
-impl<B: BasisModel> Objective for BasisMisfit<B> {
     fn domain(&self) -> &Domain {
-        self.experiments[0].model.domain()
+        self.model.domain()
     }
-
-    fn value(&self, x: &[f64]) -> Result<f64> {
-        Ok(self.per_experiment(x)?.iter().sum())
-    }
-
-    fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
-        sum_with_gradient(&self.experiments, x.len(), |e| e.eval(x, true))
-    }
-
-    fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>> {
-        self.experiments
-            .iter()
-            .map(|e| e.eval(x, false).map(|(v, _)| v))
-            .collect()
+    fn eval(&self, x: &[f64], with_gradient: bool) -> Result<(f64, Vec<f64>)> {
+        BasisExperiment::eval(self, x, with_gradient)
     }
 }

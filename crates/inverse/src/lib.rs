@@ -90,7 +90,10 @@ pub use measured::{
     AfmColumns, Calibration, CompressionColumns, MeasuredCurve, ProtocolTolerance, read_afm_csv,
     read_compression_csv,
 };
-pub use misfit::{Experiment, Misfit, Objective, Segment, range_normalised_rmse, segment_weights};
+pub use misfit::{
+    Experiment, Misfit, MisfitTerm, Objective, Segment, SummedMisfit, range_normalised_rmse,
+    segment_weights,
+};
 pub use model::{FD_STEP_UNIT, Model, check_finite, check_jacobian, check_len, fd_jacobian};
 pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
 pub use plausible::{Implausible, MAX_FORCE, MAX_LENGTH};

@@ -16,6 +16,7 @@
 
 use std::path::{Path, PathBuf};
 
+use nlvid_model::Curve;
 use nlvid_study::{Dimension, parse_unit};
 use serde::{Deserialize, Serialize};
 
@@ -225,23 +226,97 @@ pub struct CompressionColumns {
     pub contact_area: Option<String>,
 }
 
-/// A measured curve in SI units.
+/// A measured curve: the one curve type, [`Curve`], with the channels
+/// `displacement` (m: piezo Z (AFM) or plate displacement), `force` (N),
+/// optionally `indentation` (δ = Z − d, m, AFM) and `contact_area` (m²),
+/// plus where each sample stands in its file.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MeasuredCurve {
     /// Source file.
     pub path: PathBuf,
     /// 1-based file line of each sample.
     pub lines: Vec<usize>,
+    /// The samples (SI).
+    pub curve: Curve,
+}
+
+impl MeasuredCurve {
+    /// A measured curve of `path` from its samples and their file lines.
+    ///
+    /// # Errors
+    /// [`InverseError::InvalidSetting`] when `curve` lacks a `displacement`
+    /// or `force` channel or `lines` has not one entry per sample.
+    pub fn new(path: &Path, lines: Vec<usize>, curve: Curve) -> Result<Self> {
+        let missing = ["displacement", "force"]
+            .into_iter()
+            .find(|c| curve.values(c).is_none());
+        if let Some(c) = missing {
+            return Err(InverseError::InvalidSetting(format!(
+                "{}: a measured curve needs a `{c}` channel",
+                path.display()
+            )));
+        }
+        crate::model::check_len("file lines of the samples", curve.len(), lines.len())?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            lines,
+            curve,
+        })
+    }
+
+    /// Builds the [`Curve`] of a measured run (time, displacement, force,
+    /// optional indentation and contact area) and the curve of `path`.
+    ///
+    /// # Errors
+    /// As [`Curve::new`] and [`Curve::with`] (non-increasing time, a value
+    /// that is not finite, lengths that differ), and as [`MeasuredCurve::new`].
+    pub fn from_columns(
+        path: &Path,
+        lines: Vec<usize>,
+        (time, displacement, force): (Vec<f64>, Vec<f64>, Vec<f64>),
+        indentation: Option<Vec<f64>>,
+        contact_area: Option<Vec<f64>>,
+    ) -> Result<Self> {
+        let bad = |e: nlvid_model::ModelError| {
+            InverseError::InvalidSetting(format!("{}: {e}", path.display()))
+        };
+        let mut c = Curve::new(time)
+            .and_then(|c| c.with("displacement", "m", displacement))
+            .and_then(|c| c.with("force", "N", force))
+            .map_err(bad)?;
+        if let Some(d) = indentation {
+            c = c.with("indentation", "m", d).map_err(bad)?;
+        }
+        if let Some(a) = contact_area {
+            c = c.with("contact_area", "m^2", a).map_err(bad)?;
+        }
+        Self::new(path, lines, c)
+    }
+
     /// t (s).
-    pub time: Vec<f64>,
+    pub fn time(&self) -> &[f64] {
+        self.curve.time()
+    }
+
     /// Controlled displacement (m): piezo Z (AFM) or plate displacement.
-    pub displacement: Vec<f64>,
+    pub fn displacement(&self) -> &[f64] {
+        self.curve.values("displacement").unwrap_or_default()
+    }
+
     /// Force (N).
-    pub force: Vec<f64>,
+    pub fn force(&self) -> &[f64] {
+        self.curve.values("force").unwrap_or_default()
+    }
+
     /// Indentation δ = Z − d (m), AFM only.
-    pub indentation: Option<Vec<f64>>,
+    pub fn indentation(&self) -> Option<&[f64]> {
+        self.curve.values("indentation")
+    }
+
     /// Contact area (m²), if measured.
-    pub contact_area: Option<Vec<f64>>,
+    pub fn contact_area(&self) -> Option<&[f64]> {
+        self.curve.values("contact_area")
+    }
 }
 
 /// Reads an AFM run: F = k·d, δ = Z − d (§5.2.2).
@@ -285,15 +360,15 @@ pub fn read_afm_csv(path: &Path, cols: &AfmColumns, cal: &Calibration) -> Result
         Dimension::LENGTH => raw,
         _ => raw.iter().map(|f| f / k).collect(),
     };
-    Ok(MeasuredCurve {
-        path: path.to_path_buf(),
-        lines: table.rows.iter().map(|(l, _)| *l).collect(),
-        force: d.iter().map(|d| k * d).collect(),
-        indentation: Some(z.iter().zip(&d).map(|(z, d)| z - d).collect()),
-        time,
-        displacement: z,
-        contact_area: None,
-    })
+    let force = d.iter().map(|d| k * d).collect();
+    let indentation = z.iter().zip(&d).map(|(z, d)| z - d).collect();
+    MeasuredCurve::from_columns(
+        path,
+        table.rows.iter().map(|(l, _)| *l).collect(),
+        (time, z, force),
+        Some(indentation),
+        None,
+    )
 }
 
 /// Reads a plate-compression run.
@@ -310,15 +385,13 @@ pub fn read_compression_csv(path: &Path, cols: &CompressionColumns) -> Result<Me
         Some(name) => Some(table.column(name, &[Dimension::AREA])?.0),
         None => None,
     };
-    Ok(MeasuredCurve {
-        path: path.to_path_buf(),
-        lines: table.rows.iter().map(|(l, _)| *l).collect(),
-        time,
-        displacement,
-        force,
-        indentation: None,
+    MeasuredCurve::from_columns(
+        path,
+        table.rows.iter().map(|(l, _)| *l).collect(),
+        (time, displacement, force),
+        None,
         contact_area,
-    })
+    )
 }
 
 /// Tolerances of [`MeasuredCurve::check_protocol`].
@@ -383,17 +456,14 @@ impl MeasuredCurve {
             .iter()
             .map(|z| z - expected_displacement[0])
             .collect();
-        let tm: Vec<f64> = self.time.iter().map(|t| t - self.time[0]).collect();
-        let zm: Vec<f64> = self
-            .displacement
-            .iter()
-            .map(|z| z - self.displacement[0])
-            .collect();
+        let (time, displacement) = (self.time(), self.displacement());
+        let tm: Vec<f64> = time.iter().map(|t| t - time[0]).collect();
+        let zm: Vec<f64> = displacement.iter().map(|z| z - displacement[0]).collect();
         let last = tm.len() - 1;
         let mismatch = |j: usize, message: String| InverseError::ProtocolMismatch {
             path: self.path.clone(),
             row: self.lines[j],
-            time: self.time[j],
+            time: time[j],
             message,
         };
         let (dur_e, dur_m) = (te[n - 1], tm[last]);
@@ -446,23 +516,24 @@ impl MeasuredCurve {
         Ok(())
     }
 
-    /// Linear resampling of `values` (one per sample, e.g. `self.force`)
+    /// Linear resampling of `values` (one per sample, e.g. `self.force()`)
     /// onto a model time grid given relative to the first sample.
     ///
     /// # Errors
     /// [`InverseError::ProtocolMismatch`] if the grid runs beyond the data
     /// (by more than 1e-9 of the duration); [`InverseError::LengthMismatch`].
     pub fn resample(&self, values: &[f64], grid: &[f64]) -> Result<Vec<f64>> {
-        crate::model::check_len("values to resample", self.time.len(), values.len())?;
-        let tm: Vec<f64> = self.time.iter().map(|t| t - self.time[0]).collect();
+        let time = self.time();
+        crate::model::check_len("values to resample", time.len(), values.len())?;
+        let tm: Vec<f64> = time.iter().map(|t| t - time[0]).collect();
         let end = tm[tm.len() - 1];
         let slack = 1e-9 * end.max(f64::MIN_POSITIVE);
         if let Some(&bad) = grid.iter().find(|&&t| t < -slack || t > end + slack) {
-            let last = self.time.len() - 1;
+            let last = time.len() - 1;
             return Err(InverseError::ProtocolMismatch {
                 path: self.path.clone(),
                 row: self.lines[last],
-                time: self.time[last],
+                time: time[last],
                 message: format!(
                     "the model grid needs t = {bad} s but the data cover 0 ... {end} s"
                 ),

@@ -8,7 +8,7 @@
 //! Its gradient is ∂e/∂x_k = Σ w_j r_j J_jk / (W · R · √S) with
 //! S = Σ w_j r_j² / W, computed from the model Jacobian J.
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 use nlvid_model::Domain;
 
 use crate::error::{InverseError, Result};
@@ -295,11 +295,114 @@ impl<M: Model> Objective for Misfit<M> {
 ///
 /// # Errors
 /// [`InverseError::InvalidSetting`] for no experiments or differing domains.
-/// `experiments`, once [`check_shared_parameters`] has accepted their
-/// labels and domains (`id`): what every multi-experiment misfit holds.
-pub(crate) fn shared<E>(experiments: Vec<E>, id: impl Fn(&E) -> (&str, &Domain)) -> Result<Vec<E>> {
-    check_shared_parameters(experiments.iter().map(id))?;
-    Ok(experiments)
+/// Eq. 5.3 from the weighted residual sum of squares `swr2` = Σ w r²
+/// formed in some coordinates z of the curve: e = √(swr2/Σw) / range; with
+/// `gradient` = (J = ∂z/∂x with `rows` rows, v = ½ ∂(Σ w r²)/∂z, formed
+/// only when needed), ∂e/∂x = Jᵀv / (Σw · √(swr2/Σw) · range). `time0`
+/// (the grid's first time) and `x` name a non-finite sum.
+///
+/// # Errors
+/// [`InverseError::NonFinite`] for a non-finite `swr2`; a Jacobian of the
+/// wrong shape.
+pub(crate) fn rmse_of_sum(
+    swr2: f64,
+    (sum_w, range): (f64, f64),
+    x: &[f64],
+    time0: f64,
+    gradient: Option<(&DMatrix<f64>, usize, impl FnOnce() -> DVector<f64>)>,
+) -> Result<(f64, Vec<f64>)> {
+    if !swr2.is_finite() {
+        return Err(InverseError::NonFinite {
+            index: 0,
+            time: time0,
+            x: x.to_vec(),
+        });
+    }
+    let sqrt_s = (swr2 / sum_w).sqrt();
+    let e = sqrt_s / range;
+    let Some((jac, rows, v)) = gradient else {
+        return Ok((e, Vec::new()));
+    };
+    check_jacobian(jac, rows, x.len())?;
+    if sqrt_s == 0.0 {
+        return Ok((e, vec![0.0; x.len()]));
+    }
+    let grad = jac.tr_mul(&v()) / (sum_w * sqrt_s * range);
+    Ok((e, grad.iter().copied().collect()))
+}
+
+/// One experiment's term of a [`SummedMisfit`] (eq. 5.3 of one curve):
+/// [`crate::BasisExperiment`] (Gram form), [`crate::ReducedExperiment`]
+/// (PCA-reduced form).
+pub trait MisfitTerm {
+    /// Label for reports.
+    fn label(&self) -> &str;
+    /// The parameter domain.
+    fn domain(&self) -> &Domain;
+    /// Value and, with `with_gradient`, gradient in the search's form.
+    ///
+    /// # Errors
+    /// Model errors.
+    fn eval(&self, x: &[f64], with_gradient: bool) -> Result<(f64, Vec<f64>)>;
+    /// The value reported for the experiment: [`MisfitTerm::eval`]'s
+    /// unless the search form is an approximation of a direct one.
+    ///
+    /// # Errors
+    /// Model errors.
+    fn reported(&self, x: &[f64]) -> Result<f64> {
+        Ok(self.eval(x, false)?.0)
+    }
+}
+
+/// Sum of eq. 5.3 misfits over experiments fitted with one parameter set
+/// (§5.4.2): the search uses each term's [`MisfitTerm::eval`], the
+/// reports ([`Objective::per_experiment`], [`Objective::final_value`]) its
+/// [`MisfitTerm::reported`] value.
+#[derive(Debug, Clone)]
+pub struct SummedMisfit<E> {
+    experiments: Vec<E>,
+}
+
+impl<E: MisfitTerm> SummedMisfit<E> {
+    /// Combines experiments (at least one, same parameter names).
+    ///
+    /// # Errors
+    /// [`InverseError::InvalidSetting`].
+    pub fn new(experiments: Vec<E>) -> Result<Self> {
+        check_shared_parameters(experiments.iter().map(|e| (e.label(), e.domain())))?;
+        Ok(Self { experiments })
+    }
+
+    /// The experiments.
+    pub fn experiments(&self) -> &[E] {
+        &self.experiments
+    }
+}
+
+impl<E: MisfitTerm> Objective for SummedMisfit<E> {
+    fn domain(&self) -> &Domain {
+        self.experiments[0].domain()
+    }
+
+    fn value(&self, x: &[f64]) -> Result<f64> {
+        let mut total = 0.0;
+        for e in &self.experiments {
+            total += e.eval(x, false)?.0;
+        }
+        Ok(total)
+    }
+
+    fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
+        sum_with_gradient(&self.experiments, x.len(), |e| e.eval(x, true))
+    }
+
+    fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>> {
+        self.experiments.iter().map(|e| e.reported(x)).collect()
+    }
+
+    fn final_value(&self, x: &[f64]) -> Result<f64> {
+        Ok(self.per_experiment(x)?.iter().sum())
+    }
 }
 
 /// Σ_e of each experiment's value and gradient (`eval`), the gradient of
@@ -360,7 +463,11 @@ impl<M: Model> Misfit<M> {
     /// # Errors
     /// [`InverseError::InvalidSetting`] for no experiments or differing domains.
     pub fn new(experiments: Vec<Experiment<M>>) -> Result<Self> {
-        let experiments = shared(experiments, |e| (e.label.as_str(), e.model.domain()))?;
+        check_shared_parameters(
+            experiments
+                .iter()
+                .map(|e| (e.label.as_str(), e.model.domain())),
+        )?;
         Ok(Self { experiments })
     }
 

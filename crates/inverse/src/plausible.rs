@@ -55,11 +55,11 @@ impl MeasuredCurve {
     pub fn implausible(&self) -> Vec<Implausible> {
         let line = |i: usize| self.lines.get(i).copied().unwrap_or(i + 2);
         let mut out = Vec::new();
-        let f = &self.force;
+        let f = self.force();
         // Beyond the instrument's range.
         let ranges = [
             ("force", f, MAX_FORCE, "N"),
-            ("displacement", &self.displacement, MAX_LENGTH, "m"),
+            ("displacement", self.displacement(), MAX_LENGTH, "m"),
         ];
         for (what, v, max, unit) in ranges {
             if let Some(i) = v.iter().position(|x| x.abs() > max) {
@@ -93,7 +93,7 @@ impl MeasuredCurve {
                 });
             }
         }
-        let Some(ind) = &self.indentation else {
+        let Some(ind) = self.indentation() else {
             return out;
         };
         // Inverted sign: where the probe is pressed deepest, the force pulls.
@@ -135,7 +135,7 @@ impl MeasuredCurve {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::path::PathBuf;
+    use std::path::Path;
 
     /// A clean ramp-hold: indentation up to 1 µm in 1 s, force relaxing.
     fn curve() -> MeasuredCurve {
@@ -156,15 +156,23 @@ mod tests {
                 5e-9 * (d / 1e-6).powf(1.5) * relax + 2.5e-11 * ((i * 7919 % 13) as f64 / 6.0 - 1.0)
             })
             .collect();
-        MeasuredCurve {
-            path: PathBuf::from("c.csv"),
-            lines: (2..n + 2).collect(),
-            displacement: ind.iter().zip(&force).map(|(d, f)| d + f / 0.1).collect(),
-            time,
-            force,
-            indentation: Some(ind),
-            contact_area: None,
-        }
+        let displacement = ind.iter().zip(&force).map(|(d, f)| d + f / 0.1).collect();
+        MeasuredCurve::from_columns(
+            Path::new("c.csv"),
+            (2..n + 2).collect(),
+            (time, displacement, force),
+            Some(ind),
+            None,
+        )
+        .expect("curve")
+    }
+
+    /// `c` with its force changed by `f`.
+    fn with_force(mut c: MeasuredCurve, f: impl Fn(&mut Vec<f64>)) -> MeasuredCurve {
+        let mut force = c.force().to_vec();
+        f(&mut force);
+        c.curve.replace("force", force).expect("force");
+        c
     }
 
     #[test]
@@ -174,22 +182,19 @@ mod tests {
 
     #[test]
     fn each_defect_is_named_with_its_line() {
-        let mut c = curve();
-        c.force[40] = 1e300;
+        let c = with_force(curve(), |f| f[40] = 1e300);
         let e = c.implausible();
         assert_eq!(e.len(), 1);
         assert_eq!(e[0].line, 42);
         assert!(e[0].reason.contains("beyond any instrument"), "{e:?}");
 
-        let mut c = curve();
-        c.force[60] = 4e-8; // 8× the peak, one sample
+        let c = with_force(curve(), |f| f[60] = 4e-8); // 8× the peak, one sample
         let e = c.implausible();
         assert_eq!(e.len(), 1, "{e:?}");
         assert_eq!(e[0].line, 62);
         assert!(e[0].reason.contains("spike"));
 
-        let mut c = curve();
-        c.force.iter_mut().for_each(|f| *f = -*f);
+        let c = with_force(curve(), |f| f.iter_mut().for_each(|f| *f = -*f));
         let e = c.implausible();
         assert!(
             e.iter().any(|x| x.reason.contains("sign convention")),
@@ -197,7 +202,10 @@ mod tests {
         );
 
         let mut c = curve();
-        c.indentation = Some(vec![-1e-7; c.force.len()]);
+        let n = c.force().len();
+        c.curve
+            .replace("indentation", vec![-1e-7; n])
+            .expect("indentation");
         let e = c.implausible();
         assert!(
             e.iter().any(|x| x.reason.contains("never makes contact")),

@@ -24,8 +24,8 @@ use nalgebra::{DMatrix, DVector};
 use nlvid_model::Domain;
 
 use crate::error::{InverseError, Result};
-use crate::misfit::{Objective, shared, sum_with_gradient};
-use crate::model::{check_jacobian, check_len};
+use crate::misfit::{MisfitTerm, SummedMisfit, rmse_of_sum};
+use crate::model::check_len;
 
 /// A model ŷ(x) = A c(x) on a fixed time grid with a fixed output map A
 /// (m × r) and r reduced coordinates c(x).
@@ -209,26 +209,11 @@ impl<R: ReducedModel> ReducedExperiment<R> {
         check_len("reduced coordinates", self.b.len(), c.len())?;
         let res = &self.projection.r * &c - &self.b;
         let swr2 = res.norm_squared() + self.rho2;
-        if !swr2.is_finite() {
-            return Err(InverseError::NonFinite {
-                index: 0,
-                time: self.model.times().first().copied().unwrap_or(f64::NAN),
-                x: x.to_vec(),
-            });
-        }
-        let sqrt_s = (swr2 / self.sum_w).sqrt();
-        let e = sqrt_s / self.range;
-        if !with_gradient {
-            return Ok((e, Vec::new()));
-        }
-        check_jacobian(&dc, c.len(), x.len())?;
-        if sqrt_s == 0.0 {
-            return Ok((e, vec![0.0; x.len()]));
-        }
+        let time0 = self.model.times().first().copied().unwrap_or(f64::NAN);
         // ∂Σwr²/∂x = 2 (Rc − b)ᵀ R ∂c/∂x.
-        let v = self.projection.r.tr_mul(&res);
-        let grad = dc.tr_mul(&v) / (self.sum_w * sqrt_s * self.range);
-        Ok((e, grad.iter().copied().collect()))
+        let v = || self.projection.r.tr_mul(&res);
+        let gradient = with_gradient.then_some((&dc, c.len(), v));
+        rmse_of_sum(swr2, (self.sum_w, self.range), x, time0, gradient)
     }
 
     /// Eq. 5.3 from the predicted curve ŷ = A c(x), formed directly (O(m·r)).
@@ -249,51 +234,21 @@ impl<R: ReducedModel> ReducedExperiment<R> {
 
 /// Sum of eq. 5.3 misfits over [`ReducedExperiment`]s: values and
 /// gradients from the reduced form during the search, reported values
-/// ([`Objective::per_experiment`], [`Objective::final_value`]) from the
-/// directly formed predicted curve.
-#[derive(Debug, Clone)]
-pub struct ReducedMisfit<R> {
-    experiments: Vec<ReducedExperiment<R>>,
-}
+/// ([`crate::Objective::per_experiment`], [`crate::Objective::final_value`])
+/// from the directly formed predicted curve ([`ReducedExperiment::direct`]).
+pub type ReducedMisfit<R> = SummedMisfit<ReducedExperiment<R>>;
 
-impl<R: ReducedModel> ReducedMisfit<R> {
-    /// Combines experiments (at least one, same parameter names).
-    ///
-    /// # Errors
-    /// [`InverseError::InvalidSetting`].
-    pub fn new(experiments: Vec<ReducedExperiment<R>>) -> Result<Self> {
-        let experiments = shared(experiments, |e| (e.label.as_str(), e.model.domain()))?;
-        Ok(Self { experiments })
+impl<R: ReducedModel> MisfitTerm for ReducedExperiment<R> {
+    fn label(&self) -> &str {
+        &self.label
     }
-
-    /// The experiments.
-    pub fn experiments(&self) -> &[ReducedExperiment<R>] {
-        &self.experiments
-    }
-}
-
-impl<R: ReducedModel> Objective for ReducedMisfit<R> {
     fn domain(&self) -> &Domain {
-        self.experiments[0].model.domain()
+        self.model.domain()
     }
-
-    fn value(&self, x: &[f64]) -> Result<f64> {
-        let mut total = 0.0;
-        for e in &self.experiments {
-            total += e.eval(x, false)?.0;
-        }
-        Ok(total)
+    fn eval(&self, x: &[f64], with_gradient: bool) -> Result<(f64, Vec<f64>)> {
+        ReducedExperiment::eval(self, x, with_gradient)
     }
-
-    fn value_and_gradient(&self, x: &[f64]) -> Result<(f64, Vec<f64>)> {
-        sum_with_gradient(&self.experiments, x.len(), |e| e.eval(x, true))
-    }
-
-    fn per_experiment(&self, x: &[f64]) -> Result<Vec<f64>> {
-        self.experiments.iter().map(|e| e.direct(x)).collect()
-    }
-
-    fn final_value(&self, x: &[f64]) -> Result<f64> {
-        Ok(self.per_experiment(x)?.iter().sum())
+    fn reported(&self, x: &[f64]) -> Result<f64> {
+        self.direct(x)
     }
 }

@@ -37,10 +37,10 @@ fn afm_volts_are_converted_to_force_and_indentation() {
         "time [ms],height (um),vDeflection [V]\n0,0,0\n10,1.0,0.5\n20,2.0,1.0\n",
     );
     let c = read_afm_csv(&p, &afm_cols(), &cal()).expect("read");
-    assert_eq!(c.time, vec![0.0, 0.01, 0.02]);
+    assert_eq!(c.time(), vec![0.0, 0.01, 0.02]);
     let d = 1.0 * 110.28e-9;
-    assert!((c.force[2] - 1.0677 * d).abs() < 1e-20);
-    let delta = c.indentation.as_ref().expect("delta");
+    assert!((c.force()[2] - 1.0677 * d).abs() < 1e-20);
+    let delta = c.indentation().expect("delta");
     assert!((delta[2] - (2e-6 - d)).abs() < 1e-18);
     assert_eq!(c.lines, vec![2, 3, 4]);
 }
@@ -61,9 +61,9 @@ fn afm_deflection_in_metres_or_newtons_gives_the_same_curve() {
     };
     let a = read_afm_csv(&pm, &cols, &cal()).expect("m");
     let b = read_afm_csv(&pf, &cols, &cal()).expect("f");
-    assert!((a.force[1] - 106.77e-9).abs() < 1e-18);
-    assert!((b.force[1] - 106.77e-9).abs() < 1e-18);
-    let (da, db) = (a.indentation.expect("a"), b.indentation.expect("b"));
+    assert!((a.force()[1] - 106.77e-9).abs() < 1e-18);
+    assert!((b.force()[1] - 106.77e-9).abs() < 1e-18);
+    let (da, db) = (a.indentation().expect("a"), b.indentation().expect("b"));
     assert!((da[1] - db[1]).abs() < 1e-18 && (da[1] - 1.9e-6).abs() < 1e-15);
 }
 
@@ -89,8 +89,8 @@ fn nlvid_output_headers_with_unit_suffixes_are_accepted() {
         "time_s,height_um,vDeflection_nN\n0,0,0\n1,2,106.77\n",
     );
     let c = read_afm_csv(&p, &afm_cols(), &cal()).expect("read");
-    assert!((c.force[1] - 106.77e-9).abs() < 1e-18);
-    assert!((c.displacement[1] - 2e-6).abs() < 1e-18);
+    assert!((c.force()[1] - 106.77e-9).abs() < 1e-18);
+    assert!((c.displacement()[1] - 2e-6).abs() < 1e-18);
 }
 
 #[test]
@@ -157,9 +157,9 @@ fn compression_run_with_contact_area_is_read_in_si() {
         contact_area: Some("area".into()),
     };
     let c = read_compression_csv(&p, &cols).expect("read");
-    assert!((c.displacement[1] - 1e-4).abs() < 1e-18);
-    assert!((c.force[1] - 2.5e-3).abs() < 1e-18);
-    assert!((c.contact_area.expect("area")[1] - 1.5e-6).abs() < 1e-20);
+    assert!((c.displacement()[1] - 1e-4).abs() < 1e-18);
+    assert!((c.force()[1] - 2.5e-3).abs() < 1e-18);
+    assert!((c.contact_area().expect("area")[1] - 1.5e-6).abs() < 1e-20);
     let bad = CompressionColumns {
         force: "F".into(),
         ..cols
@@ -245,14 +245,14 @@ fn resampling_is_linear_and_refuses_grids_beyond_the_data() {
     );
     let c = read_afm_csv(&p, &afm_cols(), &cal()).expect("read");
     let z = c
-        .resample(&c.displacement, &[0.0, 0.5, 1.5, 2.0])
+        .resample(c.displacement(), &[0.0, 0.5, 1.5, 2.0])
         .expect("resample");
     let expect = [0.0, 0.5e-6, 2e-6, 3e-6];
     for (a, b) in z.iter().zip(expect) {
         assert!((a - b).abs() < 1e-18, "{z:?}");
     }
     let e = c
-        .resample(&c.displacement, &[0.0, 2.5])
+        .resample(c.displacement(), &[0.0, 2.5])
         .expect_err("beyond");
     assert!(
         matches!(e, InverseError::ProtocolMismatch { row: 4, .. }),
@@ -283,7 +283,7 @@ fn a_measured_curve_becomes_an_experiment_on_the_model_grid() {
     }
     let p = write("exp.csv", &s);
     let curve = read_afm_csv(&p, &afm_cols(), &cal()).expect("read");
-    let e = Experiment::from_measured("RH", model, &curve, &curve.force, None).expect("e");
+    let e = Experiment::from_measured("RH", model, &curve, curve.force(), None).expect("e");
     for (a, b) in e.data.iter().zip(&clean) {
         assert!((a - b).abs() < 1e-9 * b.abs().max(1e-12), "{a} vs {b}");
     }

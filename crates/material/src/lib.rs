@@ -40,14 +40,14 @@
 //! thesis's O(steps) trapezoidal sum (eq. 2.48) is kept in [`reference`].
 //!
 //! ```
-//! use nlvid_material::{Mat3, Material3, PronyViscoelastic};
+//! use nlvid_material::{Mat3, Material3, PointState, PronyViscoelastic};
 //! use nlvid_model::{Relaxation, names};
 //! // The cell model of eq. 5.1: G0 = 1 kPa (so C1 = 500 Pa), g1 = 0.4, g2 = 0.3,
 //! // τ1 = 0.5 s, τ2 = 10 s.
 //! let g = Relaxation::from_named(&names::PRONY2, &[1000.0, 0.4, 0.3, 0.5, 10.0])?;
 //! let cell = PronyViscoelastic::cell(&g, 5.0e5)?;
 //! assert_eq!(cell.elastic().c1(), 500.0);
-//! let mut state = Material3::initial_state(&cell);
+//! let mut state = PointState::initial_state(&cell);
 //! let mut trial = state.clone();
 //! let f = Mat3::new(1.2, 0.0, 0.0, 0.0, 0.913, 0.0, 0.0, 0.0, 0.913);
 //! let r0 = Material3::update(&cell, &state, &f, 0.0, &mut trial)?; // step at t = 0
@@ -85,7 +85,7 @@ pub use model::Incompressible;
 pub use pipkin_rogers::{Eq256, PipkinRogers, PipkinRogersState};
 pub use point::{
     AXISYMMETRIC_COMPONENTS, AxisymmetricResponse, Mat3, Material3, MembraneMaterial,
-    MembraneResponse, PointResponse3, Tangent3,
+    MembraneResponse, PointResponse3, PointState, Tangent3,
 };
 pub use prony::ThreeParameterSolid;
 pub use prony_visco::{PronyViscoelastic, PronyViscoelasticState};

@@ -5,19 +5,16 @@
 //! the homogeneous drivers ([`Incompressible`]).
 
 use crate::kernel::{IsoStress, Kin};
-use crate::{AxisymmetricResponse, Mat3, MaterialError, MembraneResponse, PointResponse3, Result};
+use crate::{
+    AxisymmetricResponse, Mat3, Material3, MaterialError, MembraneMaterial, MembraneResponse,
+    PointResponse3, PointState, Result,
+};
 
 /// A history-dependent, exactly incompressible material evaluated for an
 /// isochoric deformation gradient (`det F = 1`): returns the *extra* Cauchy
 /// stress `T` with `σ = −q I + T`, where the caller fixes `q` from boundary
 /// conditions (eq. 2.1). Used by [`crate::homogeneous`].
-pub trait Incompressible: Send + Sync {
-    /// History at one material point.
-    type State: Clone + Send + Sync + std::fmt::Debug;
-
-    /// History of an undeformed point.
-    fn initial_state(&self) -> Self::State;
-
+pub trait Incompressible: PointState {
     /// Extra Cauchy stress at `t_n + dt` for `f` (the caller guarantees
     /// `det f = 1` up to rounding); the updated history goes to `trial`.
     ///
@@ -33,9 +30,7 @@ pub trait Incompressible: Send + Sync {
 }
 
 /// A model given by its second Piola–Kirchhoff kernel.
-pub(crate) trait Kernel {
-    type State: Clone + Send + Sync + std::fmt::Debug;
-    fn init(&self) -> Self::State;
+pub(crate) trait Kernel: PointState {
     fn bulk(&self) -> f64;
     /// `S` at `t_n + dt` with volumetric penalty `bulk`; writes the history
     /// of `t_n + dt` into `trial`.
@@ -57,176 +52,124 @@ pub(crate) fn check_dt(dt: f64) -> Result<()> {
     }
 }
 
-pub(crate) fn update3<M: Kernel>(
-    m: &M,
-    state_n: &M::State,
-    f: &Mat3,
-    dt: f64,
-    trial: &mut M::State,
-) -> Result<PointResponse3> {
-    check_dt(dt)?;
-    let k = Kin::new(f)?;
-    let iso = m.eval(state_n, &k, dt, trial, m.bulk());
-    let s = iso.pk2(&k);
-    let p = f * s;
-    Ok(PointResponse3 {
-        cauchy: p * f.transpose() / k.j,
-        first_piola: p,
-        tangent: iso.tangent(&k, &s),
-    })
+/// The 3D update of a kernel model: `P = F S`, `σ = P Fᵀ / J` and the
+/// consistent tangent from the kernel's `S` and `∂S/∂E`.
+impl<M: Kernel> Material3 for M {
+    fn update(
+        &self,
+        state_n: &M::State,
+        f: &Mat3,
+        dt: f64,
+        trial: &mut M::State,
+    ) -> Result<PointResponse3> {
+        check_dt(dt)?;
+        let k = Kin::new(f)?;
+        let iso = self.eval(state_n, &k, dt, trial, self.bulk());
+        let s = iso.pk2(&k);
+        let p = f * s;
+        Ok(PointResponse3 {
+            cauchy: p * f.transpose() / k.j,
+            first_piola: p,
+            tangent: iso.tangent(&k, &s),
+        })
+    }
+
+    /// The kinematics from 2×2 block algebra ([`Kin::axisymmetric`]), the
+    /// kernel unchanged, `P` and the 5×5 block of `∂P/∂F`
+    /// ([`IsoStress::tangent_axisymmetric`]); no Cauchy stress, no 9×9
+    /// tangent.
+    fn update_axisymmetric(
+        &self,
+        state_n: &M::State,
+        f: &[f64; 5],
+        dt: f64,
+        trial: &mut M::State,
+        tangent: bool,
+    ) -> Result<AxisymmetricResponse> {
+        check_dt(dt)?;
+        let k = Kin::axisymmetric(f)?;
+        let iso = self.eval(state_n, &k, dt, trial, self.bulk());
+        let s = iso.pk2(&k);
+        Ok(AxisymmetricResponse {
+            first_piola: k.f_times_axisymmetric(&s),
+            tangent: if tangent {
+                iso.tangent_axisymmetric(&k, &s)
+            } else {
+                [[0.0; 5]; 5]
+            },
+        })
+    }
 }
 
-/// [`crate::Material3::update_axisymmetric`] for a kernel model: the
-/// kinematics from 2×2 block algebra ([`Kin::axisymmetric`]), the kernel
-/// unchanged, `P` and the 5×5 block of `∂P/∂F`
-/// ([`IsoStress::tangent_axisymmetric`]); no Cauchy stress, no 9×9 tangent.
-pub(crate) fn update_axisymmetric<M: Kernel>(
-    m: &M,
-    state_n: &M::State,
-    f: &[f64; 5],
-    dt: f64,
-    trial: &mut M::State,
-    tangent: bool,
-) -> Result<AxisymmetricResponse> {
-    check_dt(dt)?;
-    let k = Kin::axisymmetric(f)?;
-    let iso = m.eval(state_n, &k, dt, trial, m.bulk());
-    let s = iso.pk2(&k);
-    Ok(AxisymmetricResponse {
-        first_piola: k.f_times_axisymmetric(&s),
-        tangent: if tangent {
-            iso.tangent_axisymmetric(&k, &s)
-        } else {
-            [[0.0; 5]; 5]
-        },
-    })
-}
-
-pub(crate) fn extra_stress<M: Kernel>(
-    m: &M,
-    state_n: &M::State,
-    f: &Mat3,
-    dt: f64,
-    trial: &mut M::State,
-) -> Result<Mat3> {
-    check_dt(dt)?;
-    let k = Kin::new(f)?;
-    let s = m.eval(state_n, &k, dt, trial, 0.0).pk2(&k);
-    Ok(f * s * f.transpose())
+/// The extra stress `F S Fᵀ` of a kernel model without volumetric penalty.
+impl<M: Kernel> Incompressible for M {
+    fn extra_stress(
+        &self,
+        state_n: &M::State,
+        f: &Mat3,
+        dt: f64,
+        trial: &mut M::State,
+    ) -> Result<Mat3> {
+        check_dt(dt)?;
+        let k = Kin::new(f)?;
+        let s = self.eval(state_n, &k, dt, trial, 0.0).pk2(&k);
+        Ok(f * s * f.transpose())
+    }
 }
 
 /// Plane stress with `λ3 = 1/(λ1 λ2)`: `σ_α = τ_αα − τ_33`, and the chain
 /// rule through `λ3(λ1, λ2)` for `∂σ_α/∂λ_β`.
-pub(crate) fn update_membrane<M: Kernel>(
-    m: &M,
-    state_n: &M::State,
-    stretches: [f64; 2],
-    dt: f64,
-    trial: &mut M::State,
-) -> Result<MembraneResponse> {
-    check_dt(dt)?;
-    let [l1, l2] = stretches;
-    if !(l1.is_finite() && l2.is_finite() && l1 > 0.0 && l2 > 0.0) {
-        return Err(MaterialError::Deformation(format!(
-            "membrane stretches must be finite and > 0, got λ1 = {l1}, λ2 = {l2}"
-        )));
-    }
-    let l3 = 1.0 / (l1 * l2);
-    let lam = [l1, l2, l3];
-    let f = Mat3::from_diagonal(&nalgebra::Vector3::new(l1, l2, l3));
-    let k = Kin::new(&f)?;
-    let iso = m.eval(state_n, &k, dt, trial, 0.0);
-    let s = iso.pk2(&k);
-    let p = f * s;
-    let a = iso.tangent(&k, &s);
-    // d[i][j] = ∂τ_ii/∂λ_j with the other stretches fixed.
-    let mut d = [[0.0; 3]; 3];
-    for (i, di) in d.iter_mut().enumerate() {
-        for (j, dij) in di.iter_mut().enumerate() {
-            *dij = a[(4 * i, 4 * j)] * lam[i] + if i == j { p[(i, i)] } else { 0.0 };
+impl<M: Kernel> MembraneMaterial for M {
+    fn update(
+        &self,
+        state_n: &M::State,
+        stretches: [f64; 2],
+        dt: f64,
+        trial: &mut M::State,
+    ) -> Result<MembraneResponse> {
+        check_dt(dt)?;
+        let [l1, l2] = stretches;
+        if !(l1.is_finite() && l2.is_finite() && l1 > 0.0 && l2 > 0.0) {
+            return Err(MaterialError::Deformation(format!(
+                "membrane stretches must be finite and > 0, got λ1 = {l1}, λ2 = {l2}"
+            )));
         }
-    }
-    let tau = [p[(0, 0)] * l1, p[(1, 1)] * l2, p[(2, 2)] * l3];
-    let mut tangent = [[0.0; 2]; 2];
-    for (al, row) in tangent.iter_mut().enumerate() {
-        for (be, x) in row.iter_mut().enumerate() {
-            let dl3 = -l3 / lam[be];
-            *x = d[al][be] + d[al][2] * dl3 - d[2][be] - d[2][2] * dl3;
+        let l3 = 1.0 / (l1 * l2);
+        let lam = [l1, l2, l3];
+        let f = Mat3::from_diagonal(&nalgebra::Vector3::new(l1, l2, l3));
+        let k = Kin::new(&f)?;
+        let iso = self.eval(state_n, &k, dt, trial, 0.0);
+        let s = iso.pk2(&k);
+        let p = f * s;
+        let a = iso.tangent(&k, &s);
+        // d[i][j] = ∂τ_ii/∂λ_j with the other stretches fixed.
+        let mut d = [[0.0; 3]; 3];
+        for (i, di) in d.iter_mut().enumerate() {
+            for (j, dij) in di.iter_mut().enumerate() {
+                *dij = a[(4 * i, 4 * j)] * lam[i] + if i == j { p[(i, i)] } else { 0.0 };
+            }
         }
+        let tau = [p[(0, 0)] * l1, p[(1, 1)] * l2, p[(2, 2)] * l3];
+        let mut tangent = [[0.0; 2]; 2];
+        for (al, row) in tangent.iter_mut().enumerate() {
+            for (be, x) in row.iter_mut().enumerate() {
+                let dl3 = -l3 / lam[be];
+                *x = d[al][be] + d[al][2] * dl3 - d[2][be] - d[2][2] * dl3;
+            }
+        }
+        Ok(MembraneResponse {
+            cauchy: [tau[0] - tau[2], tau[1] - tau[2]],
+            tangent,
+        })
     }
-    Ok(MembraneResponse {
-        cauchy: [tau[0] - tau[2], tau[1] - tau[2]],
-        tangent,
-    })
 }
 
-/// Implements [`crate::Material3`], [`crate::MembraneMaterial`] and
-/// [`Incompressible`] for a type implementing [`Kernel`].
-macro_rules! impl_point_traits {
-    ($t:ty, $st:ty) => {
-        impl $crate::Material3 for $t {
-            type State = $st;
-            fn initial_state(&self) -> Self::State {
-                $crate::model::Kernel::init(self)
-            }
-            fn update(
-                &self,
-                state_n: &Self::State,
-                f: &$crate::Mat3,
-                dt: f64,
-                trial: &mut Self::State,
-            ) -> $crate::Result<$crate::PointResponse3> {
-                $crate::model::update3(self, state_n, f, dt, trial)
-            }
-            fn update_axisymmetric(
-                &self,
-                state_n: &Self::State,
-                f: &[f64; 5],
-                dt: f64,
-                trial: &mut Self::State,
-                tangent: bool,
-            ) -> $crate::Result<$crate::AxisymmetricResponse> {
-                $crate::model::update_axisymmetric(self, state_n, f, dt, trial, tangent)
-            }
-        }
-        impl $crate::MembraneMaterial for $t {
-            type State = $st;
-            fn initial_state(&self) -> Self::State {
-                $crate::model::Kernel::init(self)
-            }
-            fn update(
-                &self,
-                state_n: &Self::State,
-                stretches: [f64; 2],
-                dt: f64,
-                trial: &mut Self::State,
-            ) -> $crate::Result<$crate::MembraneResponse> {
-                $crate::model::update_membrane(self, state_n, stretches, dt, trial)
-            }
-        }
-        impl $crate::model::Incompressible for $t {
-            type State = $st;
-            fn initial_state(&self) -> Self::State {
-                $crate::model::Kernel::init(self)
-            }
-            fn extra_stress(
-                &self,
-                state_n: &Self::State,
-                f: &$crate::Mat3,
-                dt: f64,
-                trial: &mut Self::State,
-            ) -> $crate::Result<$crate::Mat3> {
-                $crate::model::extra_stress(self, state_n, f, dt, trial)
-            }
-        }
-    };
+impl PointState for crate::MooneyRivlin {
+    type State = ();
+    fn initial_state(&self) {}
 }
-#[allow(unused_imports)]
-pub(crate) use impl_point_traits;
 
 impl Kernel for crate::MooneyRivlin {
-    type State = ();
-    fn init(&self) {}
     fn bulk(&self) -> f64 {
         self.bulk()
     }
@@ -237,4 +180,3 @@ impl Kernel for crate::MooneyRivlin {
         out
     }
 }
-impl_point_traits!(crate::MooneyRivlin, ());

@@ -19,10 +19,11 @@
 //! `K J (J − 1)` of eqs. 2.50/D.5 (the thesis evaluates R on `C`, not `C̄`,
 //! and so do we).
 
+use crate::PointState;
 use crate::history::advance;
 use crate::hyperelastic::{add_volumetric, check_bulk};
 use crate::kernel::{IsoStress, Kin, XC, XCI, XH, XI};
-use crate::model::{Kernel, impl_point_traits};
+use crate::model::Kernel;
 use nlvid_model::{Prony, Relaxation};
 
 use crate::{HistoryRule, Mat3, MaterialError, MooneyRivlin, Result};
@@ -278,10 +279,10 @@ fn basis(k: &Kin, a: f64) -> (Mat3, Mat3, f64) {
     (id * 2.0 - ci, id * (2.0 * k.i1) - k.c * 2.0 - ci * 2.0, phi)
 }
 
-impl Kernel for PipkinRogers {
+impl PointState for PipkinRogers {
     type State = PipkinRogersState;
 
-    fn init(&self) -> PipkinRogersState {
+    fn initial_state(&self) -> PipkinRogersState {
         PipkinRogersState {
             h1: vec![Mat3::zeros(); self.g1.prony().len()],
             h2: vec![Mat3::zeros(); self.g2.prony().len()],
@@ -289,7 +290,9 @@ impl Kernel for PipkinRogers {
             a2: Mat3::zeros(),
         }
     }
+}
 
+impl Kernel for PipkinRogers {
     fn bulk(&self) -> f64 {
         self.bulk
     }
@@ -344,4 +347,3 @@ impl Kernel for PipkinRogers {
         out
     }
 }
-impl_point_traits!(PipkinRogers, PipkinRogersState);

@@ -29,15 +29,21 @@ pub struct PointResponse3 {
     pub tangent: Tangent3,
 }
 
-/// A history-dependent 3D material (incompressibility by a volumetric
-/// penalty, or nearly incompressible: see the implementing type).
-pub trait Material3: Send + Sync {
+/// The history a material carries at each point (deal.II's
+/// `PointHistory`): shared by every point update ([`Material3`],
+/// [`MembraneMaterial`], [`crate::Incompressible`]), so one model has one
+/// state type whichever update a caller uses.
+pub trait PointState: Send + Sync {
     /// History at one material point (O(number of Prony terms) in size).
     type State: Clone + Send + Sync + std::fmt::Debug;
 
     /// History of a point that has never been deformed (F = I for t < 0).
     fn initial_state(&self) -> Self::State;
+}
 
+/// A history-dependent 3D material (incompressibility by a volumetric
+/// penalty, or nearly incompressible: see the implementing type).
+pub trait Material3: PointState {
     /// Stress and consistent tangent at `t_{n+1} = t_n + dt` for the
     /// deformation gradient `f`, given the converged history `state_n` at
     /// `t_n`. The updated history is written to `trial`; the caller commits
@@ -119,13 +125,7 @@ pub struct MembraneResponse {
 }
 
 /// A history-dependent incompressible membrane in principal stretches.
-pub trait MembraneMaterial: Send + Sync {
-    /// History at one material point (O(number of Prony terms) in size).
-    type State: Clone + Send + Sync + std::fmt::Debug;
-
-    /// History of an undeformed point.
-    fn initial_state(&self) -> Self::State;
-
+pub trait MembraneMaterial: PointState {
     /// Principal Cauchy stresses and tangent at `t_{n+1} = t_n + dt` for the
     /// principal stretches `[λ1, λ2]` (λ3 = 1/(λ1 λ2)), given the converged
     /// history `state_n`; the updated history goes to `trial`.

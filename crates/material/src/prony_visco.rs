@@ -14,10 +14,11 @@
 //! `H_k(t) = ∫_0^t (1/τ_k) e^{−(t−s)/τ_k} S̄0(s) ds`, updated recursively.
 //! The bulk response does not relax (`K(s) = K`): `τᴴ = K J (J − 1) I`.
 
+use crate::PointState;
 use crate::history::advance;
 use crate::hyperelastic::add_volumetric;
 use crate::kernel::{IsoStress, Kin, XCI, XH};
-use crate::model::{Kernel, impl_point_traits};
+use crate::model::Kernel;
 use nlvid_model::{Prony, Relaxation};
 
 use crate::{HistoryRule, Mat3, MooneyRivlin};
@@ -143,16 +144,18 @@ impl PronyViscoelastic {
     }
 }
 
-impl Kernel for PronyViscoelastic {
+impl PointState for PronyViscoelastic {
     type State = PronyViscoelasticState;
 
-    fn init(&self) -> PronyViscoelasticState {
+    fn initial_state(&self) -> PronyViscoelasticState {
         PronyViscoelasticState {
             h: vec![Mat3::zeros(); self.prony.len()],
             sbar: Mat3::zeros(),
         }
     }
+}
 
+impl Kernel for PronyViscoelastic {
     fn bulk(&self) -> f64 {
         self.elastic.bulk()
     }
@@ -193,7 +196,6 @@ impl Kernel for PronyViscoelastic {
         out
     }
 }
-impl_point_traits!(PronyViscoelastic, PronyViscoelasticState);
 
 #[cfg(test)]
 mod tests {
@@ -205,7 +207,7 @@ mod tests {
         let g = Relaxation::from_named(&nlvid_model::names::PRONY2, &[1000.0, 0.3, 0.3, 0.5, 10.0])
             .expect("valid");
         let m = PronyViscoelastic::cell(&g, 1e5).expect("valid");
-        let s0 = Material3::initial_state(&m);
+        let s0 = PointState::initial_state(&m);
         let mut s1 = s0.clone();
         let f = Mat3::new(1.1, 0.1, 0.0, 0.0, 0.95, 0.0, 0.0, 0.0, 0.97);
         m.update(&s0, &f, 0.1, &mut s1).expect("update");

@@ -173,7 +173,7 @@ fn axisymmetric_fast_path_matches_general_update_and_finite_differences() {
 fn axisymmetric_fast_path_rejects_inverted_and_non_finite_gradients() {
     let (_, visco, _) = models();
     let mr = &visco[2];
-    let s = Material3::initial_state(mr);
+    let s = nlvid_material::PointState::initial_state(mr);
     let mut t = s.clone();
     for f in [
         [1.0, 0.0, 0.0, -1.0, 1.0],

@@ -3,7 +3,9 @@
 //! with its own Prony functions and Gauss–Legendre rule).
 
 use nlvid_material::homogeneous::{History, Mode, Sample, drive};
-use nlvid_material::{Eq256, HistoryRule, Incompressible, Mat3, MooneyRivlin, PipkinRogers};
+use nlvid_material::{
+    Eq256, HistoryRule, Incompressible, Mat3, MooneyRivlin, PipkinRogers, PointState,
+};
 use nlvid_model::{Prony, Relaxation};
 
 // ---------------------------------------------------------------- reference

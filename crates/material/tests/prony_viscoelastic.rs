@@ -2,7 +2,9 @@
 //! agreement of the recursive history with the full eq. 2.48 sum.
 
 use nlvid_material::homogeneous::{History, Mode, drive};
-use nlvid_material::{HistoryRule, Incompressible, Mat3, MooneyRivlin, PronyViscoelastic};
+use nlvid_material::{
+    HistoryRule, Incompressible, Mat3, MooneyRivlin, PointState, PronyViscoelastic,
+};
 use nlvid_model::{Relaxation, names};
 
 fn capsule() -> PronyViscoelastic {

@@ -103,11 +103,11 @@ fn main() -> Result<()> {
                             writeln!(
                                 f,
                                 "{t},{},{},{},{},{},{m1},{p1},{m2},{p2},{},{last}",
-                                s.displacement,
-                                s.force,
-                                s.psi_c,
-                                s.pressure,
-                                s.lambda0,
+                                s.record.displacement,
+                                s.record.force,
+                                s.record.psi_c,
+                                s.record.pressure,
+                                s.record.lambda0,
                                 s.profile[0].t1
                             )
                             .ok();

@@ -28,7 +28,7 @@
 //! // Mooney–Rivlin membrane, γ = 0.1, inflated to r_s = 1.03, squeezed to D/r0 = 0.78.
 //! let m = MooneyRivlinMembrane::new(1.0, 0.1)?;
 //! let mut solver = MembraneSolver::new(m, Geometry::default(), 1.0)?;
-//! let sol = solver.equilibrium(0.0, Control::Displacement(0.78))?;
+//! let sol = solver.equilibrium(0.0, Control::Displacement(0.78))?.record;
 //! assert!((sol.psi_c - 1.2917).abs() < 2e-3); // §2.5.1
 //! // The flat frictionless contact carries exactly the fluid pressure.
 //! let f = std::f64::consts::PI * sol.contact_radius.powi(2) * sol.pressure;
@@ -60,7 +60,5 @@ pub use models::{
     MooneyRivlinMembrane, PipkinRogersMembrane, PipkinRogersParams, PipkinRogersState,
 };
 pub use shooting::NodeValue;
-pub use simulate::{
-    ControlKind, Loading, MembraneRun, StepRecord, run_loading, simulate, simulate_with,
-};
-pub use solver::{Control, Geometry, MembraneSolver, NewtonSettings, Solution};
+pub use simulate::{ControlKind, Loading, MembraneRun, run_loading, simulate, simulate_with};
+pub use solver::{Control, Geometry, MembraneSolver, NewtonSettings, Solution, StepRecord};

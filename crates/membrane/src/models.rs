@@ -9,7 +9,7 @@
 //! Both implement [`MembraneMaterial`], so the solver does not know which one
 //! it runs.
 
-use nlvid_material::{MaterialError, MembraneMaterial, MembraneResponse};
+use nlvid_material::{MaterialError, MembraneMaterial, MembraneResponse, PointState};
 use serde::{Deserialize, Serialize};
 
 use crate::{MembraneError, Result};
@@ -65,11 +65,13 @@ impl MooneyRivlinMembrane {
     }
 }
 
-impl MembraneMaterial for MooneyRivlinMembrane {
+impl PointState for MooneyRivlinMembrane {
     type State = ();
 
     fn initial_state(&self) -> Self::State {}
+}
 
+impl MembraneMaterial for MooneyRivlinMembrane {
     fn update(
         &self,
         _state_n: &(),
@@ -234,13 +236,15 @@ impl PipkinRogersMembrane {
     }
 }
 
-impl MembraneMaterial for PipkinRogersMembrane {
+impl PointState for PipkinRogersMembrane {
     type State = PipkinRogersState;
 
     fn initial_state(&self) -> Self::State {
-        PipkinRogersState(MembraneMaterial::initial_state(&self.inner))
+        PipkinRogersState(self.inner.initial_state())
     }
+}
 
+impl MembraneMaterial for PipkinRogersMembrane {
     fn update(
         &self,
         state_n: &PipkinRogersState,

@@ -7,6 +7,7 @@ use serde::Serialize;
 
 use crate::{
     Control, Geometry, MembraneError, MembraneSolver, PipkinRogersParams, Result, Solution,
+    StepRecord,
 };
 
 /// Which quantity the loading program prescribes.
@@ -87,52 +88,6 @@ impl Loading {
         match self.control {
             ControlKind::Displacement => Control::Displacement(v),
             ControlKind::Force => Control::Force(v),
-        }
-    }
-}
-
-/// One row of the time history (dimensionless, eq. 2.47).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct StepRecord {
-    /// Time.
-    pub time: f64,
-    /// Plate displacement D/r0.
-    pub displacement: f64,
-    /// Half-height H1/r0.
-    pub h1: f64,
-    /// Contact force F/(G10 h0 r0).
-    pub force: f64,
-    /// Pressure p r0/(G10 h0).
-    pub pressure: f64,
-    /// Contact angle ψc (rad).
-    pub psi_c: f64,
-    /// Crown stretch λ0.
-    pub lambda0: f64,
-    /// Contact radius a/r0.
-    pub contact_radius: f64,
-    /// Equatorial radius ρ(π/2)/r0.
-    pub equator_radius: f64,
-    /// Smallest principal tension over the nodes, min(T1, T2)/(G10 h0).
-    pub min_tension: f64,
-}
-
-impl From<&Solution> for StepRecord {
-    fn from(s: &Solution) -> Self {
-        let min_tension = s
-            .profile
-            .iter()
-            .fold(f64::INFINITY, |m, v| m.min(v.t1).min(v.t2));
-        Self {
-            time: s.time,
-            displacement: s.displacement,
-            h1: s.h1,
-            force: s.force,
-            pressure: s.pressure,
-            psi_c: s.psi_c,
-            lambda0: s.lambda0,
-            contact_radius: s.contact_radius,
-            equator_radius: s.equator_radius,
-            min_tension,
         }
     }
 }
@@ -225,7 +180,7 @@ pub fn run_loading<M: MembraneMaterial>(
     want.dedup();
     for (i, &t) in loading.times.iter().enumerate() {
         let sol = solver.advance(t, loading.control_at(t))?;
-        history.push(StepRecord::from(&sol));
+        history.push(sol.record);
         if want.binary_search(&i).is_ok() {
             profiles.push(sol);
         }

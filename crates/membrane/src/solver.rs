@@ -90,9 +90,11 @@ impl std::fmt::Display for Control {
     }
 }
 
-/// A converged equilibrium at one time (dimensionless, eq. 2.47).
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Solution {
+/// The scalars of a converged equilibrium at one time (dimensionless,
+/// eq. 2.47): one row of a run's time history, and the head of its
+/// [`Solution`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StepRecord {
     /// Time (material time units; t0 = t/τ1 when τ1 = 1).
     pub time: f64,
     /// Plate displacement D/r0: r_s − H1/r0 in contact; the prescribed plate
@@ -112,6 +114,17 @@ pub struct Solution {
     pub contact_radius: f64,
     /// Equatorial radius ρ(π/2)/r0.
     pub equator_radius: f64,
+    /// Smallest principal tension over the nodes, min(T1, T2)/(G10 h0).
+    pub min_tension: f64,
+}
+
+/// A converged equilibrium at one time (dimensionless, eq. 2.47): its
+/// [`StepRecord`] and the profile.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Solution {
+    /// Time, displacement, force, pressure, contact and crown values.
+    #[serde(flatten)]
+    pub record: StepRecord,
     /// Meridional tension at the equator T1/(G10 h0).
     pub t1_equator: f64,
     /// Enclosed volume V/r0³.
@@ -126,7 +139,10 @@ impl Solution {
     /// Angle (deg) from the axis of the radial line to the particle at ψc in the
     /// current configuration, atan(a/H1) (the "80.6°" of §2.5.1).
     pub fn current_contact_angle_deg(&self) -> f64 {
-        self.contact_radius.atan2(self.h1).to_degrees()
+        self.record
+            .contact_radius
+            .atan2(self.record.h1)
+            .to_degrees()
     }
 }
 
@@ -908,16 +924,22 @@ impl<M: MembraneMaterial> MembraneSolver<M> {
         } else {
             0.0
         };
+        let min_tension = prof
+            .iter()
+            .fold(f64::INFINITY, |m, v| m.min(v.t1).min(v.t2));
         Ok(Solution {
-            time,
-            displacement: self.detached.unwrap_or(self.geometry.rs - end.h1),
-            h1: end.h1,
-            force,
-            pressure: x[2],
-            psi_c,
-            lambda0: x[0],
-            contact_radius: end.contact_radius,
-            equator_radius: end.rho_equator,
+            record: StepRecord {
+                time,
+                displacement: self.detached.unwrap_or(self.geometry.rs - end.h1),
+                h1: end.h1,
+                force,
+                pressure: x[2],
+                psi_c,
+                lambda0: x[0],
+                contact_radius: end.contact_radius,
+                equator_radius: end.rho_equator,
+                min_tension,
+            },
             t1_equator: end.t1_equator,
             volume: end.volume,
             iterations,

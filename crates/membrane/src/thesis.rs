@@ -185,7 +185,7 @@ fn load_unload(
     let mut note = None;
     for &t in &l.times {
         match solver.advance(t, Control::Displacement(l.program.value(t))) {
-            Ok(sol) => history.push(crate::StepRecord::from(&sol)),
+            Ok(sol) => history.push(sol.record),
             Err(e) => {
                 note = Some(e.to_string());
                 break;
@@ -226,8 +226,8 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         ));
         series.push(Series::points(
             format!("contact edge, D/r0 = {d}"),
-            vec![sol.contact_radius],
-            vec![sol.h1],
+            vec![sol.record.contact_radius],
+            vec![sol.record.h1],
         ));
     }
     figs.push(fig(
@@ -245,7 +245,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
         let mut s = mr(gamma)?;
         let mut f = Vec::new();
         for &d in &ds {
-            f.push(s.equilibrium(0.0, Control::Displacement(d))?.force);
+            f.push(s.equilibrium(0.0, Control::Displacement(d))?.record.force);
         }
         series.push(Series::line(format!("γ = {gamma}"), ds.clone(), f));
     }
@@ -381,7 +381,7 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
             for (k, name) in [(0, "λ1"), (1, "λ2")] {
                 v.push(Series::line(
                     format!("{name}, {n}"),
-                    r.profiles.iter().map(|s| s.time).collect(),
+                    r.profiles.iter().map(|s| s.record.time).collect(),
                     r.profiles
                         .iter()
                         .map(|s| at_psi(s, 0.25, |p| if k == 0 { p.lambda1 } else { p.lambda2 }))
@@ -430,8 +430,8 @@ pub fn reproduce() -> Result<(Vec<Figure>, Vec<SlopeRow>, Vec<String>)> {
             Series::line("σ2/G10", psi.clone(), col(|v| v.sigma2)),
             Series::points(
                 "ψc",
-                vec![last.psi_c],
-                vec![at_psi(last, last.psi_c, |v| v.lambda2)],
+                vec![last.record.psi_c],
+                vec![at_psi(last, last.record.psi_c, |v| v.lambda2)],
             ),
             Series::thesis(
                 "thesis §2.5.1: λ2 = 1.1551 (crown), 1.7564 (edge, ψc = 73.7°)",

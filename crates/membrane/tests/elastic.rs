@@ -28,10 +28,10 @@ fn free_inflation_satisfies_rivlin_identity_with_fourth_order_convergence() {
                 let sol = solver(gamma, rs, n)
                     .equilibrium(0.0, Control::Displacement(0.0))
                     .unwrap();
-                approx::assert_relative_eq!(sol.lambda0, rs, max_relative = 1e-6);
-                approx::assert_relative_eq!(sol.h1, rs, max_relative = 1e-6);
-                assert_eq!(sol.force, 0.0);
-                (sol.pressure - rivlin).abs() / rivlin
+                approx::assert_relative_eq!(sol.record.lambda0, rs, max_relative = 1e-6);
+                approx::assert_relative_eq!(sol.record.h1, rs, max_relative = 1e-6);
+                assert_eq!(sol.record.force, 0.0);
+                (sol.record.pressure - rivlin).abs() / rivlin
             };
             let (e32, e64) = (err(32), err(64));
             assert!(e64 < 1e-7, "γ={gamma} rs={rs}: error {e64:.2e}");
@@ -53,19 +53,27 @@ fn squeezed_membrane_is_in_vertical_equilibrium_at_every_cut() {
         for d in [0.1, 0.28, 0.53, 0.78] {
             let sol = squeeze(gamma, d, 96);
             approx::assert_relative_eq!(
-                sol.force,
-                PI * sol.contact_radius.powi(2) * sol.pressure,
+                sol.record.force,
+                PI * sol.record.contact_radius.powi(2) * sol.record.pressure,
                 max_relative = 1e-12
             );
-            let cap = sol.pressure * PI * (sol.equator_radius.powi(2) - sol.contact_radius.powi(2));
+            let cap = sol.record.pressure
+                * PI
+                * (sol.record.equator_radius.powi(2) - sol.record.contact_radius.powi(2));
             approx::assert_relative_eq!(
                 cap,
-                2.0 * PI * sol.equator_radius * sol.t1_equator,
+                2.0 * PI * sol.record.equator_radius * sol.t1_equator,
                 max_relative = 1e-6
             );
-            for v in sol.profile.iter().filter(|v| v.psi > sol.psi_c) {
-                let f = PI * v.rho * v.rho * sol.pressure - 2.0 * PI * v.rho * v.t1 * v.theta.sin();
-                approx::assert_relative_eq!(f, sol.force, max_relative = 1e-6, epsilon = 1e-9);
+            for v in sol.profile.iter().filter(|v| v.psi > sol.record.psi_c) {
+                let f = PI * v.rho * v.rho * sol.record.pressure
+                    - 2.0 * PI * v.rho * v.t1 * v.theta.sin();
+                approx::assert_relative_eq!(
+                    f,
+                    sol.record.force,
+                    max_relative = 1e-6,
+                    epsilon = 1e-9
+                );
             }
             approx::assert_relative_eq!(
                 sol.volume,
@@ -108,7 +116,7 @@ fn contact_force_is_half_the_energy_derivative() {
         let dn = squeeze(gamma, d - h, 192);
         let mid = squeeze(gamma, d, 192);
         let du = (energy(&up, gamma) - energy(&dn, gamma)) / (2.0 * h);
-        approx::assert_relative_eq!(du, 2.0 * mid.force, max_relative = 2e-3);
+        approx::assert_relative_eq!(du, 2.0 * mid.record.force, max_relative = 2e-3);
     }
 }
 
@@ -120,7 +128,12 @@ fn fig_2_4_force_displacement_stiffens_with_gamma() {
         let mut s = solver(gamma, 1.03, 96);
         let f: Vec<f64> = ds
             .iter()
-            .map(|&d| s.equilibrium(0.0, Control::Displacement(d)).unwrap().force)
+            .map(|&d| {
+                s.equilibrium(0.0, Control::Displacement(d))
+                    .unwrap()
+                    .record
+                    .force
+            })
             .collect();
         assert!(
             f.windows(2).all(|w| w[1] > w[0]),
@@ -141,12 +154,12 @@ fn contact_angle_at_d078_matches_the_thesis_qlv_value() {
     // §2.5.1 / Fig. 2.10: ψc = 1.2917 at D/r0 = 0.78 (QLV, γ0 = γ∞ = 0.1;
     // the shape is the elastic one at any time).
     let sol = squeeze(0.1, 0.78, 96);
-    approx::assert_relative_eq!(sol.psi_c, 1.2917, max_relative = 1e-3);
+    approx::assert_relative_eq!(sol.record.psi_c, 1.2917, max_relative = 1e-3);
 }
 
 #[test]
 fn force_grows_about_tenfold_from_d053_to_d078() {
-    let ratio = squeeze(0.1, 0.78, 96).force / squeeze(0.1, 0.53, 96).force;
+    let ratio = squeeze(0.1, 0.78, 96).record.force / squeeze(0.1, 0.53, 96).record.force;
     // §2.5.1 says "by a factor of 10"; we obtain 8.7.
     assert!((8.0..11.0).contains(&ratio), "ratio {ratio}");
 }
@@ -156,11 +169,15 @@ fn displacement_and_force_control_give_the_same_equilibrium() {
     for d in [0.05, 0.28, 0.78] {
         let by_d = squeeze(0.1, d, 96);
         let by_f = solver(0.1, 1.03, 96)
-            .equilibrium(0.0, Control::Force(by_d.force))
+            .equilibrium(0.0, Control::Force(by_d.record.force))
             .unwrap();
-        approx::assert_relative_eq!(by_f.displacement, d, max_relative = 1e-7);
-        approx::assert_relative_eq!(by_f.psi_c, by_d.psi_c, max_relative = 1e-7);
-        approx::assert_relative_eq!(by_f.pressure, by_d.pressure, max_relative = 1e-7);
+        approx::assert_relative_eq!(by_f.record.displacement, d, max_relative = 1e-7);
+        approx::assert_relative_eq!(by_f.record.psi_c, by_d.record.psi_c, max_relative = 1e-7);
+        approx::assert_relative_eq!(
+            by_f.record.pressure,
+            by_d.record.pressure,
+            max_relative = 1e-7
+        );
     }
 }
 
@@ -168,8 +185,8 @@ fn displacement_and_force_control_give_the_same_equilibrium() {
 fn discretisation_error_at_default_nodes_is_below_one_per_mille() {
     let coarse = squeeze(0.1, 0.78, 96);
     let fine = squeeze(0.1, 0.78, 384);
-    approx::assert_relative_eq!(coarse.force, fine.force, max_relative = 1e-3);
-    approx::assert_relative_eq!(coarse.psi_c, fine.psi_c, max_relative = 1e-4);
+    approx::assert_relative_eq!(coarse.record.force, fine.record.force, max_relative = 1e-3);
+    approx::assert_relative_eq!(coarse.record.psi_c, fine.record.psi_c, max_relative = 1e-4);
 }
 
 #[test]

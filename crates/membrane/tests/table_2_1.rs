@@ -61,10 +61,15 @@ fn nle_rows_match_the_thesis_in_the_app_d_force_scale_with_a_001_secant() {
     )
     .unwrap();
     for (d, thesis) in [(0.28, 4.7), (0.78, 324.5)] {
-        let f_hi = s.equilibrium(0.0, Control::Displacement(d)).unwrap().force;
+        let f_hi = s
+            .equilibrium(0.0, Control::Displacement(d))
+            .unwrap()
+            .record
+            .force;
         let f_lo = s
             .equilibrium(0.0, Control::Displacement(d - 0.01))
             .unwrap()
+            .record
             .force;
         let secant = (f_hi - f_lo) / 0.01;
         let ratio = secant / 2.0 / thesis;

@@ -75,8 +75,8 @@ fn crown_stress_during_unloading_matches_an_independent_eq_2_48_sum() {
     let hist: Vec<(f64, [f64; 3], [f64; 3])> = sols
         .iter()
         .map(|s| {
-            let (a1, a2) = crown_a(s.lambda0);
-            (s.time, a1, a2)
+            let (a1, a2) = crown_a(s.record.lambda0);
+            (s.record.time, a1, a2)
         })
         .collect();
     let mut worst: f64 = 0.0;
@@ -94,7 +94,7 @@ fn crown_stress_during_unloading_matches_an_independent_eq_2_48_sum() {
                 s[i] += 0.5 * (t1 - t0) * (f0 + f1);
             }
         }
-        let l = sols[n].lambda0;
+        let l = sols[n].record.lambda0;
         let sigma = l * l * s[0] - l.powi(-4) * s[2];
         let got = sols[n].profile[0].sigma1;
         worst = worst.max((got - sigma).abs() / sigma.abs());
@@ -105,7 +105,7 @@ fn crown_stress_during_unloading_matches_an_independent_eq_2_48_sum() {
     );
     // The unloading branch is complete and ends at D = 0 with F = 0.
     let last = sols.last().unwrap();
-    assert!(last.displacement.abs() < 1e-9 && last.force.abs() < 1e-9);
+    assert!(last.record.displacement.abs() < 1e-9 && last.record.force.abs() < 1e-9);
 }
 
 #[test]
@@ -117,8 +117,10 @@ fn force_controlled_unloading_retraces_the_displacement_controlled_run() {
     let mut s = MembraneSolver::new(p.check().unwrap(), Geometry::default(), 1.0).unwrap();
     let mut worst: f64 = 0.0;
     for a in &sd {
-        let b = s.advance(a.time, Control::Force(a.force)).unwrap();
-        worst = worst.max((a.displacement - b.displacement).abs());
+        let b = s
+            .advance(a.record.time, Control::Force(a.record.force))
+            .unwrap();
+        worst = worst.max((a.record.displacement - b.record.displacement).abs());
     }
     assert!(worst < 1e-6, "D from force control differs by {worst:e}");
 }
@@ -151,8 +153,8 @@ fn fast_unloading_from_d078_slackens_the_crown_and_is_reported_as_wrinkling() {
     let (sc, _) = run(&p, &g, true);
     let past = sc
         .iter()
-        .find(|s| s.time > 0.78 && s.displacement < 0.54)
+        .find(|s| s.record.time > 0.78 && s.record.displacement < 0.54)
         .expect("compression run passes D = 0.54");
     assert!(past.profile[0].t1 < 0.0);
-    assert!(past.force > 0.0);
+    assert!(past.record.force > 0.0);
 }

@@ -87,12 +87,12 @@ fn fig_2_12_case_matches_thesis_stretches_and_angles() {
     let p = PipkinRogersParams::chapter2(0.2, 0.3, 1.0);
     let run = step_run(p, 0.78, 10.0, 100);
     let sol = &run.profiles[0];
-    assert_eq!(sol.time, 10.0);
+    assert_eq!(sol.record.time, 10.0);
     let crown = sol.profile[0].lambda2;
     let edge = sol.profile[sol.profile.len() - 1].lambda2;
     approx::assert_relative_eq!(crown, 1.1551, max_relative = 0.01);
     approx::assert_relative_eq!(edge, 1.7564, max_relative = 0.01);
-    approx::assert_relative_eq!(sol.psi_c.to_degrees(), 73.7, max_relative = 0.01);
+    approx::assert_relative_eq!(sol.record.psi_c.to_degrees(), 73.7, max_relative = 0.01);
     approx::assert_relative_eq!(sol.current_contact_angle_deg(), 80.6, max_relative = 0.01);
     // λ2 > λ1 and σ2 > σ1 everywhere (§2.5.1).
     for v in &sol.profile[1..] {
@@ -157,8 +157,8 @@ fn displacement_and_force_controlled_relaxation_agree() {
     let mut s = MembraneSolver::new(p.check().unwrap(), Geometry::default(), 1.0).unwrap();
     for r in &run.history {
         let sol = s.advance(r.time, Control::Force(r.force)).unwrap();
-        approx::assert_relative_eq!(sol.displacement, 0.53, max_relative = 1e-6);
-        approx::assert_relative_eq!(sol.psi_c, r.psi_c, max_relative = 1e-6);
+        approx::assert_relative_eq!(sol.record.displacement, 0.53, max_relative = 1e-6);
+        approx::assert_relative_eq!(sol.record.psi_c, r.psi_c, max_relative = 1e-6);
     }
 }
 

@@ -94,16 +94,44 @@ impl Curve {
     /// [`ModelError::Curve`] when its length differs from the times', the
     /// name is taken, or a value is not finite (naming the sample).
     pub fn with(mut self, name: &str, unit: &str, values: Vec<f64>) -> Result<Self> {
+        if self.channel(name).is_some() {
+            return Err(ModelError::Curve(format!(
+                "channel `{name}` is given twice"
+            )));
+        }
+        self.check_values(name, &values)?;
+        self.channels.push(Channel {
+            name: name.to_string(),
+            unit: unit.to_string(),
+            values,
+        });
+        Ok(self)
+    }
+
+    /// Replaces the values of an existing channel (same name and unit),
+    /// e.g. a measured channel with noise added.
+    ///
+    /// # Errors
+    /// [`ModelError::Curve`] when there is no such channel, or as
+    /// [`Curve::with`] for the length and the values.
+    pub fn replace(&mut self, name: &str, values: Vec<f64>) -> Result<()> {
+        self.check_values(name, &values)?;
+        let channel = self
+            .channels
+            .iter_mut()
+            .find(|c| c.name == name)
+            .ok_or_else(|| ModelError::Curve(format!("no channel `{name}` to replace")))?;
+        channel.values = values;
+        Ok(())
+    }
+
+    /// One value per time, each finite.
+    fn check_values(&self, name: &str, values: &[f64]) -> Result<()> {
         if values.len() != self.time.len() {
             return Err(ModelError::Curve(format!(
                 "channel `{name}` has {} values for {} times",
                 values.len(),
                 self.time.len()
-            )));
-        }
-        if self.channel(name).is_some() {
-            return Err(ModelError::Curve(format!(
-                "channel `{name}` is given twice"
             )));
         }
         if let Some(i) = values.iter().position(|v| !v.is_finite()) {
@@ -114,12 +142,7 @@ impl Curve {
                 values[i]
             )));
         }
-        self.channels.push(Channel {
-            name: name.to_string(),
-            unit: unit.to_string(),
-            values,
-        });
-        Ok(self)
+        Ok(())
     }
 
     /// Sample times (s).
@@ -231,5 +254,22 @@ mod tests {
             .collect();
         assert_eq!(second, vec![0.1, 1.0 / 3.0e9, 2e-7, 0.5]);
         assert_eq!(c.values("force").map(|v| v[1]), Some(1.0 / 3.0e9));
+    }
+
+    #[test]
+    fn replace_keeps_name_and_unit_and_checks_the_values() {
+        let mut c = Curve::new(vec![0.0, 1.0])
+            .and_then(|c| c.with("force", "N", vec![0.0, 1.0]))
+            .expect("curve");
+        c.replace("force", vec![2.0, 3.0]).expect("replace");
+        assert_eq!(c.values("force"), Some(&[2.0, 3.0][..]));
+        assert_eq!(c.channels()[0].header(), "force_N");
+        let e = c.replace("force", vec![1.0]).expect_err("length");
+        assert!(e.to_string().contains("1 values for 2 times"), "{e}");
+        let e = c.replace("force", vec![1.0, f64::NAN]).expect_err("NaN");
+        assert!(e.to_string().contains("sample 2"), "{e}");
+        let e = c.replace("area", vec![1.0, 1.0]).expect_err("missing");
+        assert!(e.to_string().contains("no channel `area`"), "{e}");
+        assert_eq!(c.values("force"), Some(&[2.0, 3.0][..]));
     }
 }

@@ -13,6 +13,7 @@ use pyo3::types::{PyDict, PyList};
 
 use crate::arrays::{quantity, same_length, vector};
 use crate::errors::{IntoPy, input};
+use nlvid_afm::QuickFitKind;
 use nlvid_study::Dimension;
 
 /// One force curve of an instrument file, SI units.
@@ -160,13 +161,7 @@ fn read_jpk(
 }
 
 fn contact_method(name: &str) -> PyResult<nlvid_afm::ContactMethod> {
-    match name {
-        "deviation" => Ok(nlvid_afm::ContactMethod::default()),
-        "piecewise" => Ok(nlvid_afm::ContactMethod::PiecewiseLinear),
-        other => Err(input(format!(
-            "contact: `{other}`: expected \"deviation\" or \"piecewise\""
-        ))),
-    }
+    nlvid_afm::ContactMethod::from_name(name).map_err(|e| input(format!("contact: {e}")))
 }
 
 /// A `ForceCurve`, or anything [`ForceCurve::from_columns`] takes (an
@@ -181,18 +176,20 @@ fn with_curve<T>(
     f(&crate::columns::force_curve(curve, None, None)?)
 }
 
+/// `nlvid_afm::quick_fit` of `curve` (as [`with_curve`] takes it) as the
+/// dict of `nlvid --json inspect` plus the `plot` arrays.
 fn quick<'py>(
     py: Python<'py>,
-    curve: &nlvid_afm::ForceCurve,
-    kind: nlvid_afm::QuickFitKind,
+    curve: &Bound<'py, PyAny>,
+    kind: QuickFitKind,
     tip_radius: &Bound<'py, PyAny>,
     contact: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let r = quantity(tip_radius, "tip_radius", Dimension::LENGTH)?;
     let method = contact_method(contact)?;
-    let f = py
-        .detach(|| nlvid_afm::quick_fit(curve, kind, r, method))
-        .py()?;
+    let f = with_curve(curve, |c| {
+        py.detach(|| nlvid_afm::quick_fit(c, kind, r, method)).py()
+    })?;
     let d = crate::pyjson::dict(py, &f.to_json())?;
     let plot = PyDict::new(py);
     plot.set_item("x", PyArray1::from_slice(py, &f.x))?;
@@ -219,15 +216,13 @@ fn hertz<'py>(
     poisson: f64,
     contact: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    with_curve(curve, |c| {
-        quick(
-            py,
-            c,
-            nlvid_afm::QuickFitKind::Hertz { poisson },
-            &tip_radius,
-            contact,
-        )
-    })
+    quick(
+        py,
+        curve,
+        QuickFitKind::Hertz { poisson },
+        &tip_radius,
+        contact,
+    )
 }
 
 /// Lee–Radok Prony fit of a curve's extend + hold segments
@@ -242,15 +237,13 @@ fn lee_radok<'py>(
     terms: usize,
     contact: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    with_curve(curve, |c| {
-        quick(
-            py,
-            c,
-            nlvid_afm::QuickFitKind::LeeRadok { terms },
-            &tip_radius,
-            contact,
-        )
-    })
+    quick(
+        py,
+        curve,
+        QuickFitKind::LeeRadok { terms },
+        &tip_radius,
+        contact,
+    )
 }
 
 /// Hertz fit (eq. 1.1, paraboloid of radius `tip_radius`) of `force` (N)

@@ -76,18 +76,16 @@ fn curve_from_dict(
         None => format!("curve{i}"),
     };
     let n = time.len();
-    Ok((
-        label.clone(),
-        nlvid_inverse::MeasuredCurve {
-            path: PathBuf::from(format!("<{label}>")),
-            lines: (0..n).collect(),
-            time,
-            displacement: z.values().into_owned(),
-            force: f.values().into_owned(),
-            indentation: ind.map(|x| x.values().into_owned()),
-            contact_area: None,
-        },
-    ))
+    let columns = (time, z.values().into_owned(), f.values().into_owned());
+    let curve = nlvid_inverse::MeasuredCurve::from_columns(
+        &PathBuf::from(format!("<{label}>")),
+        (0..n).collect(),
+        columns,
+        ind.map(|x| x.values().into_owned()),
+        None,
+    )
+    .map_err(|e| input(format!("data[{i}]: {e}")))?;
+    Ok((label, curve))
 }
 
 /// Fits one NLV parameter set to `data` on the meta-models of the study's

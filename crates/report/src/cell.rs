@@ -124,7 +124,9 @@ pub struct HertzBaseline {
 }
 
 impl CellResult {
-    fn failed(group: &str, file: &str, cell: &str, hash: &str, reason: String) -> Self {
+    /// A failed cell: no parameters, no curves, `reason` (also the base of
+    /// test cells built with `..CellResult::failed(…)`).
+    pub(crate) fn failed(group: &str, file: &str, cell: &str, hash: &str, reason: String) -> Self {
         Self {
             group: group.into(),
             file: file.into(),
@@ -256,7 +258,8 @@ fn read_cell_curve(
         };
         let c = nlvid_afm::read_ramp_hold_curve(&input.path, input.curve, &options)
             .map_err(|e| e.to_string())?;
-        return Ok(crate::fit::measured_from_ramp_hold(&input.path, &c));
+        let lines = (1..=c.len()).collect();
+        return nlvid_inverse::MeasuredCurve::new(&input.path, lines, c).map_err(|e| e.to_string());
     }
     let Some(spring_constant) = settings.spring_constant else {
         return Err(format!(
@@ -295,10 +298,10 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
         let all: Vec<String> = implausible.iter().map(ToString::to_string).collect();
         return fail(format!("implausible data: {}", all.join("; ")));
     }
-    let Some(indentation) = curve.indentation.clone() else {
+    let Some(indentation) = curve.indentation().map(<[f64]>::to_vec) else {
         return fail("no indentation in the curve".into());
     };
-    let (Some(&t_first), Some(&t_last)) = (curve.time.first(), curve.time.last()) else {
+    let (Some(&t_first), Some(&t_last)) = (curve.time().first(), curve.time().last()) else {
         return fail("the curve has no samples".into());
     };
     let grid = match model.grid(settings) {
@@ -359,7 +362,7 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
         ));
     }
     let (mut force, delta) = match (
-        curve.resample(&curve.force, &grid[..used]),
+        curve.resample(curve.force(), &grid[..used]),
         curve.resample(&indentation, &grid[..used]),
     ) {
         (Ok(f), Ok(d)) => (f, d),
@@ -377,13 +380,13 @@ pub fn fit_cell(settings: &CohortSettings, model: &CellModel, input: &CellInput)
     }
     // Peak of the measured samples inside the fitted window.
     let peak = curve
-        .time
+        .time()
         .iter()
-        .zip(&curve.force)
+        .zip(curve.force())
         .filter(|(t, _)| **t - t_first <= settings.hold_end * (1.0 + 1e-12))
         .map(|(_, f)| *f)
         .fold(f64::NEG_INFINITY, f64::max);
-    let end_force = match curve.resample(&curve.force, &[settings.hold_end]) {
+    let end_force = match curve.resample(curve.force(), &[settings.hold_end]) {
         Ok(v) => v[0],
         Err(e) => {
             base.reason = format!("resampling: {e}");
@@ -531,9 +534,9 @@ pub fn hertz_baseline(
     curve: &MeasuredCurve,
     indentation: &[f64],
 ) -> std::result::Result<HertzBaseline, String> {
-    let t0 = curve.time.first().copied().unwrap_or(0.0);
+    let t0 = curve.time().first().copied().unwrap_or(0.0);
     let (mut sep, mut f) = (Vec::new(), Vec::new());
-    for ((t, d), fv) in curve.time.iter().zip(indentation).zip(&curve.force) {
+    for ((t, d), fv) in curve.time().iter().zip(indentation).zip(curve.force()) {
         if t - t0 <= settings.ramp * (1.0 + 1e-9) {
             sep.push(-d);
             f.push(*fv);
@@ -542,7 +545,7 @@ pub fn hertz_baseline(
     let hs = nlvid_afm::HertzSettings::new(settings.radius, settings.poisson);
     let h = nlvid_afm::fit_hertz(&sep, &f, &hs).map_err(|e| e.to_string())?;
     let t_end = curve
-        .time
+        .time()
         .get(sep.len().saturating_sub(1))
         .map_or(0.0, |t| t - t0);
     Ok(HertzBaseline {
@@ -626,7 +629,7 @@ mod tests {
             spring_constant: k,
         };
         let curve = nlvid_inverse::read_afm_csv(&path, &cols, &cal).unwrap();
-        let delta = curve.indentation.clone().unwrap();
+        let delta = curve.indentation().map(<[f64]>::to_vec).unwrap();
         let h = hertz_baseline(&s, &curve, &delta).unwrap();
         assert!(
             (h.youngs_modulus / e - 1.0).abs() < 1e-3,

@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 use crate::cell::{CellModel, CellResult, CellStatus, fit_cell};
 use crate::error::{ReportError, Result};
 use crate::input::sorted_entries;
-pub use crate::input::{CellInput, Geometry, discover};
+pub use crate::input::{CellInput, Geometry, default_out, discover};
 use crate::settings::CohortSettings;
 
 /// Path of the per-cell result file of `cell` under `out_dir`.
@@ -516,18 +516,14 @@ mod tests {
             ("tau1", "s"),
             ("tau2", "s"),
         ];
+        let reason = if status == CellStatus::Ok {
+            String::new()
+        } else {
+            "misfit 0.2 above fit.suspicious_misfit = 0.05".into()
+        };
+        let cell = file.trim_end_matches(".csv");
         CellResult {
-            group: group.into(),
-            file: file.into(),
-            cell: file.trim_end_matches(".csv").into(),
-            study_hash: "h".into(),
             status,
-            reason: if status == CellStatus::Ok {
-                String::new()
-            } else {
-                "misfit 0.2 above fit.suspicious_misfit = 0.05".into()
-            },
-            flags: Vec::new(),
             parameters: names
                 .iter()
                 .zip(p)
@@ -538,16 +534,9 @@ mod tests {
                 })
                 .collect(),
             misfit: Some(0.01),
-            alternatives: 0,
             peak_force: Some(1e-9),
             relaxation: Some(0.4),
-            times: Vec::new(),
-            data: Vec::new(),
-            fit: Vec::new(),
-            hertz: None,
-            cell_height: None,
-            base_diameter: None,
-            posterior: None,
+            ..CellResult::failed(group, file, cell, "h", reason)
         }
     }
 

@@ -126,6 +126,19 @@ pub struct DemoFiles {
     pub cells: Vec<TrueCell>,
 }
 
+impl DemoFiles {
+    /// One line on what was written for `spec` (`nlvid demo --write-data`).
+    pub fn text(&self, spec: &DemoSpec) -> String {
+        format!(
+            "wrote {} groups × {} cells from known parameters into {} (truth: {})\n",
+            spec.groups.len(),
+            spec.cells_per_group,
+            self.data.display(),
+            self.truth.display()
+        )
+    }
+}
+
 fn normal(rng: &mut ChaCha8Rng) -> f64 {
     nlvid_forward::curves::standard_normal(rng)
 }
@@ -301,14 +314,15 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
         .zip(&mut curves)
     {
         draw(g, &domain, &mut rng)?;
-        nlvid_forward::curves::add_noise_from(curve, spec.noise, &mut rng, k);
+        nlvid_forward::curves::add_noise_from(curve, spec.noise, &mut rng, k)
+            .map_err(|e| ReportError::InvalidSetting(format!("forward model: {e}")))?;
     }
     let data = dir.join("data");
     let mut truth = String::from("group,cell,G0_Pa,g1,g2,tau1_s,tau2_s,G_end_Pa,relaxation_end\n");
     for (c, curve) in cells.iter().zip(&curves) {
         write_atomic(
             &data.join(&c.group).join(format!("{}.csv", c.cell)),
-            curve.to_csv().as_bytes(),
+            nlvid_forward::measured_csv(curve).as_bytes(),
         )?;
         let x = c.x;
         // G(t) of eq. 5.1 through the one Prony type, by parameter name.

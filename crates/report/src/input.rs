@@ -74,6 +74,15 @@ pub struct Geometry {
     pub image_distances: Option<(f64, f64)>,
 }
 
+/// Where `nlvid cohort` writes when not told: `<study stem>-cohort` in
+/// the current directory.
+pub fn default_out(study: &Path) -> PathBuf {
+    let stem = study
+        .file_stem()
+        .map_or_else(|| "study".into(), |s| s.to_string_lossy().into_owned());
+    PathBuf::from(format!("{stem}-cohort"))
+}
+
 /// The cells of a cohort input: a folder whose sub-folders are the groups
 /// (each `*.csv` or instrument file in them, searched recursively, a cell, each curve of a force map a
 /// cell), instrument files directly in the folder forming a group named after it,

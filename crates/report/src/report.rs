@@ -60,6 +60,54 @@ pub struct ReportFiles {
     pub svgs: Vec<PathBuf>,
 }
 
+impl ReportOptions {
+    /// Checks, before any work, that `dir` is an output directory of
+    /// `nlvid cohort`, that `out` can be written and that a given
+    /// `surrogate_check` file exists.
+    ///
+    /// # Errors
+    /// [`ReportError::InvalidSetting`] naming the path.
+    pub fn check(&self, dir: &Path) -> Result<()> {
+        if !dir.join("cohort.json").is_file() {
+            return Err(ReportError::InvalidSetting(format!(
+                "{}: not an output directory of `nlvid cohort` (no cohort.json)",
+                dir.display()
+            )));
+        }
+        if let Some(o) = &self.out {
+            nlvid_study::check_output_dir(o)
+                .map_err(|e| ReportError::InvalidSetting(e.to_string()))?;
+        }
+        match &self.surrogate_check {
+            Some(p) if !p.is_file() => Err(ReportError::InvalidSetting(format!(
+                "--surrogate-check {}: no such file",
+                p.display()
+            ))),
+            _ => Ok(()),
+        }
+    }
+}
+
+impl ReportFiles {
+    /// `nlvid --json report`: `html`, `figures` (ids), `svgs`.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "html": self.html.display().to_string(),
+            "figures": self.figure_ids,
+            "svgs": self.svgs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
+        })
+    }
+
+    /// One line: where the page is and how many figures it has.
+    pub fn text(&self) -> String {
+        format!(
+            "report: {} ({} figures)\n",
+            self.html.display(),
+            self.figure_ids.len()
+        )
+    }
+}
+
 /// HTML-escapes text.
 pub fn escape(s: &str) -> String {
     let mut o = String::with_capacity(s.len());
@@ -121,6 +169,21 @@ struct Figure {
     file: String,
     caption: String,
     svg: String,
+}
+
+impl Figure {
+    /// Appends the figure inline (SVG, caption, link to its file).
+    fn html(&self, h: &mut String) {
+        let _ = writeln!(
+            h,
+            "<figure id=\"{}\">{}<figcaption>{} (<a href=\"{}\">{}</a>)</figcaption></figure>",
+            self.id,
+            strip_xml_decl(&self.svg),
+            escape(&self.caption),
+            self.file,
+            self.file
+        );
+    }
 }
 
 fn strip_xml_decl(svg: &str) -> &str {
@@ -464,15 +527,7 @@ pub fn write_report_of(
     let section = |h: &mut String, id: &str, title: &str, figs: &[&str]| {
         let _ = writeln!(h, "<h2 id=\"{id}\">{title}</h2>");
         for f in figures.iter().filter(|f| figs.contains(&f.id.as_str())) {
-            let _ = writeln!(
-                h,
-                "<figure id=\"{}\">{}<figcaption>{} (<a href=\"{}\">{}</a>)</figcaption></figure>",
-                f.id,
-                strip_xml_decl(&f.svg),
-                escape(&f.caption),
-                f.file,
-                f.file
-            );
+            f.html(h);
         }
     };
     section(
@@ -814,15 +869,7 @@ fn uncertainty_section(
     for f in figures.iter().filter(|f| {
         ["fig-cell-posteriors", "fig-group-posterior", "fig-p-draws"].contains(&f.id.as_str())
     }) {
-        let _ = writeln!(
-            h,
-            "<figure id=\"{}\">{}<figcaption>{} (<a href=\"{}\">{}</a>)</figcaption></figure>",
-            f.id,
-            strip_xml_decl(&f.svg),
-            escape(&f.caption),
-            f.file,
-            f.file
-        );
+        f.html(h);
     }
     let head = [
         "group".to_string(),

@@ -306,20 +306,14 @@ impl FitSettings {
             constraint_epsilon,
             inputs,
             columns,
-            starts: s
-                .opt_usize("starts", Bounds::closed(1.0, 1000.0))?
-                .unwrap_or(8),
+            starts: s.usize_or("starts", Bounds::closed(1.0, 1000.0), 8)?,
             seed: s.opt_u64("seed")?.unwrap_or(1),
             modulus_times: s
                 .opt_quantities("modulus_times", Dimension::TIME, Bounds::non_negative())?
                 .unwrap_or_else(|| vec![0.0, 0.1, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 52.0]),
             window,
-            ramp_points: s
-                .opt_usize("ramp_points", Bounds::closed(1.0, 10000.0))?
-                .unwrap_or(40),
-            hold_points: s
-                .opt_usize("hold_points", Bounds::closed(2.0, 100000.0))?
-                .unwrap_or(120),
+            ramp_points: s.usize_or("ramp_points", Bounds::closed(1.0, 10000.0), 40)?,
+            hold_points: s.usize_or("hold_points", Bounds::closed(2.0, 100000.0), 120)?,
             first_hold_step: s.quantity_or(
                 "first_hold_step",
                 Dimension::TIME,
@@ -670,27 +664,15 @@ struct PosteriorSection(Option<PosteriorStudy>);
 impl FromSection for PosteriorSection {
     fn from_section(s: &mut Section) -> std::result::Result<Self, StudyError> {
         let enabled = s.opt_bool("enabled")?.unwrap_or(true);
-        let steps = s
-            .opt_usize("steps", Bounds::closed(20.0, 1e7))?
-            .unwrap_or(250);
+        let steps = s.usize_or("steps", Bounds::closed(20.0, 1e7), 250)?;
         let p = PosteriorStudy {
-            ensembles: s
-                .opt_usize("ensembles", Bounds::closed(2.0, 64.0))?
-                .unwrap_or(4),
-            walkers: s
-                .opt_usize("walkers", Bounds::closed(12.0, 10000.0))?
-                .unwrap_or(16),
-            burn: s
-                .opt_usize("burn", Bounds::closed(0.0, 1e6))?
-                .unwrap_or(200),
+            ensembles: s.usize_or("ensembles", Bounds::closed(2.0, 64.0), 4)?,
+            walkers: s.usize_or("walkers", Bounds::closed(12.0, 10000.0), 16)?,
+            burn: s.usize_or("burn", Bounds::closed(0.0, 1e6), 200)?,
             steps,
-            max_steps: s
-                .opt_usize("max_steps", Bounds::closed(20.0, 1e8))?
-                .unwrap_or(4 * steps),
+            max_steps: s.usize_or("max_steps", Bounds::closed(20.0, 1e8), 4 * steps)?,
             level: s.f64_or("level", Bounds::closed(0.5, 0.999), 0.9)?,
-            keep: s
-                .opt_usize("keep", Bounds::closed(10.0, 1e5))?
-                .unwrap_or(200),
+            keep: s.usize_or("keep", Bounds::closed(10.0, 1e5), 200)?,
             seed: s.opt_u64("seed")?,
         };
         Ok(Self(enabled.then_some(p)))

@@ -264,7 +264,10 @@ fn hertz_baseline_lies_between_the_true_instantaneous_and_ramp_end_moduli() {
     for t in &files.cells {
         let path = files.data.join(&t.group).join(format!("{}.csv", t.cell));
         let curve = nlvid_inverse::read_afm_csv(&path, &cols, &cal).expect("demo curve");
-        let delta = curve.indentation.clone().expect("indentation");
+        let delta = curve
+            .indentation()
+            .map(<[f64]>::to_vec)
+            .expect("indentation");
         let h = nlvid_report::cell::hertz_baseline(&settings, &curve, &delta)
             .expect("Hertz baseline fitted");
         let x = t.x;

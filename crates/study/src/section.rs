@@ -307,6 +307,19 @@ impl Section {
             .transpose()
     }
 
+    /// A non-negative integer with a default.
+    ///
+    /// # Errors
+    /// As [`Self::opt_usize`].
+    pub fn usize_or(
+        &mut self,
+        key: &str,
+        bounds: impl Into<Bounds>,
+        default: usize,
+    ) -> Result<usize> {
+        Ok(self.opt_usize(key, bounds)?.unwrap_or(default))
+    }
+
     /// A required `u64` (e.g. a random seed).
     ///
     /// # Errors

@@ -464,6 +464,28 @@ impl DesignSettings {
         )?;
         Ok((train, if self.n_check == 0 { Vec::new() } else { check }))
     }
+
+    /// `nlvid sample`: [`DesignSettings::designs`] written into `out`
+    /// (created) as `train.csv` and, when there is one, `check.csv`
+    /// (header: the domain's parameter names); returns the numbers of
+    /// training and checking points.
+    ///
+    /// # Errors
+    /// As [`DesignSettings::designs`]; a file that cannot be written.
+    pub fn write_designs(&self, out: &std::path::Path) -> Result<(usize, usize)> {
+        let (train, check) = self.designs()?;
+        std::fs::create_dir_all(out).map_err(crate::error::io_err(out))?;
+        let header = self.domain.names();
+        for (name, rows) in [("train.csv", &train), ("check.csv", &check)] {
+            if !rows.is_empty() {
+                let mut buf = Vec::new();
+                crate::write_table(&mut buf, &header, rows)?;
+                let path = out.join(name);
+                nlvid_study::write_atomic(&path, &buf).map_err(crate::error::io_err(path))?;
+            }
+        }
+        Ok((train.len(), check.len()))
+    }
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@
 //!   (`--domain FILE`: the domain the design was sampled in, stored in the
 //!   export's `meta.json` for `nlvid fit`).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, bail};
@@ -101,43 +101,35 @@ impl Filters {
     }
 }
 
-fn options(shard: Option<Shard>, quiet: bool) -> BuildOptions<'static> {
-    BuildOptions {
-        shard,
-        progress: !quiet && crate::progress::progress_enabled(),
-        cancel: None,
+/// Checks that the store and the export directory can be written.
+fn check_dirs(store: &Path, export: Option<&Path>) -> anyhow::Result<()> {
+    for d in std::iter::once(store).chain(export) {
+        nlvid_study::check_output_dir(d)?;
     }
+    Ok(())
 }
 
 impl BuildArgs {
     /// Run.
     pub fn run(self) -> anyhow::Result<ExitCode> {
-        let shard = self.shard.as_deref().map(Shard::parse).transpose()?;
+        let opts = BuildOptions {
+            shard: self.shard.as_deref().map(Shard::parse).transpose()?,
+            progress: !self.quiet && crate::progress::progress_enabled(),
+            cancel: None,
+        };
+        let say = &mut |t: &str| std::io::Write::write_all(&mut std::io::stdout(), t.as_bytes());
         if let Some(path) = &self.study {
             let st = BuildStudy::load(path)?;
-            let (store, export_dir) = st.outputs(
-                path,
-                self.store.clone(),
-                self.export.clone(),
-                shard.is_some(),
-            )?;
-            nlvid_study::check_output_dir(&store)?;
-            if let Some(d) = &export_dir {
-                nlvid_study::check_output_dir(d)?;
-            }
-            let opts = options(shard, self.quiet);
-            st.build_all(&store, export_dir.as_deref(), &opts, &mut |t| {
-                std::io::Write::write_all(&mut std::io::stdout(), t.as_bytes())
-            })?;
+            let shard = opts.shard.is_some();
+            let (store, export) = st.outputs(path, self.store, self.export, shard)?;
+            check_dirs(&store, export.as_deref())?;
+            st.build_all(&store, export.as_deref(), &opts, say)?;
             return Ok(ExitCode::SUCCESS);
         }
         let (Some(design), Some(store)) = (&self.design, &self.store) else {
             bail!("give a study file, or --design X.csv and --store DIR");
         };
-        nlvid_study::check_output_dir(store)?;
-        if let Some(d) = &self.export {
-            nlvid_study::check_output_dir(d)?;
-        }
+        check_dirs(store, self.export.as_deref())?;
         let build = nlvid_surrogate::FlagBuild {
             design,
             domain: self.domain.as_deref(),
@@ -147,9 +139,7 @@ impl BuildArgs {
             export: self.export.as_deref(),
             filters: self.filters.admissibility(),
         };
-        build.run(&options(shard, self.quiet), &mut |t| {
-            std::io::Write::write_all(&mut std::io::stdout(), t.as_bytes())
-        })?;
+        build.run(&opts, say)?;
         Ok(ExitCode::SUCCESS)
     }
 }

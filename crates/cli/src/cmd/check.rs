@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use nlvid_report::check::{StudyCheck, check_study};
 
 use super::{Context, Run};
-use crate::output::{print_json, print_text};
+use crate::output::emit;
 
 pub(crate) use nlvid_report::check::section_typos;
 
@@ -40,13 +40,9 @@ impl Run for Args {
     }
 
     fn execute(c: Config, ctx: &Context) -> anyhow::Result<ExitCode> {
-        if ctx.json {
-            print_json(&c.check.to_json())?;
-        } else {
-            print_text(&c.check.text())?;
-            for w in &c.check.warnings {
-                eprintln!("warning: {w}");
-            }
+        emit(ctx.json, &c.check.to_json(), &c.check.text())?;
+        for w in c.check.warnings.iter().filter(|_| !ctx.json) {
+            eprintln!("warning: {w}");
         }
         if c.strict && !c.check.warnings.is_empty() {
             eprintln!("error: {} warning(s) with --strict", c.check.warnings.len());

@@ -42,13 +42,7 @@ impl Run for Args {
     fn validate(self, _ctx: &Context) -> anyhow::Result<Config> {
         let settings = CohortSettings::load(&self.study)?;
         let cells = cohort::discover(&self.input)?;
-        let out = self.out.unwrap_or_else(|| {
-            let stem = self
-                .study
-                .file_stem()
-                .map_or_else(|| "study".into(), |s| s.to_string_lossy().into_owned());
-            PathBuf::from(format!("{stem}-cohort"))
-        });
+        let out = self.out.unwrap_or_else(|| cohort::default_out(&self.study));
         nlvid_study::check_output_dir(&out)?;
         Ok(Config {
             study: self.study,
@@ -68,11 +62,7 @@ impl Run for Args {
         };
         let run = cohort::run_cohort(&c.settings, &c.study, &c.input, &c.cells, &c.out, &opts)?;
         bar.finish_and_clear();
-        if ctx.json {
-            crate::output::print_json(&run.to_json(&c.out))?;
-        } else {
-            crate::output::print_text(&run.text())?;
-        }
+        crate::output::emit(ctx.json, &run.to_json(&c.out), &run.text())?;
         // Exit status CELLS_FAILED with a summary on stderr when any cell
         // failed (the table and report list them).
         match run.failures_text() {

@@ -13,7 +13,7 @@ use nlvid_study::Dimension;
 
 use super::{Context, Run};
 use crate::args::quantity;
-use crate::output::{print_json, print_text};
+use crate::output::emit;
 
 /// Raw arguments of `nlvid compare`.
 #[derive(Debug, clap::Args)]
@@ -84,11 +84,7 @@ impl Run for Args {
     fn execute(c: Config, ctx: &Context) -> anyhow::Result<ExitCode> {
         let groups = c.groups.as_deref();
         let out = compare(&c.results, c.table, groups, &c.times, &c.method, &c.out_dir)?;
-        if ctx.json {
-            print_json(&out.to_json())?;
-        } else {
-            print_text(&out.text())?;
-        }
+        emit(ctx.json, &out.to_json(), &out.text())?;
         Ok(ExitCode::SUCCESS)
     }
 }

@@ -53,13 +53,7 @@ impl Run for Args {
         if a.write_data {
             let spec = DemoSpec::default();
             let files = write_demo_data(&spec, &study, &demo.join("metamodel.toml"))?;
-            say!(
-                "wrote {} groups × {} cells from known parameters into {} (truth: {})",
-                spec.groups.len(),
-                spec.cells_per_group,
-                files.data.display(),
-                files.truth.display()
-            )?;
+            crate::output::print_text(&files.text(&spec))?;
             return Ok(ExitCode::SUCCESS);
         }
         let n = nlvid_report::cohort::discover(&demo.join("data"))?.len();

@@ -59,11 +59,7 @@ impl Run for Args {
         if let Some(dir) = &c.plot {
             outcome = outcome.with_plots(&c.experiments, dir)?;
         }
-        if ctx.json {
-            crate::output::print_json(&outcome.to_json()?)?;
-        } else {
-            crate::output::print_text(&outcome.text())?;
-        }
+        crate::output::emit(ctx.json, &outcome.to_json()?, &outcome.text())?;
         Ok(ExitCode::SUCCESS)
     }
 }

@@ -10,10 +10,10 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 use clap::{Args as ClapArgs, ValueEnum};
-use nlvid_afm::{ContactMethod, QuickFitKind, ReadOptions, quick_fit};
+use nlvid_afm::{ContactMethod, Inspection, QuickFitKind, ReadOptions};
 use nlvid_study::Dimension;
 
-use crate::output::{print_json, print_text, write_atomic};
+use crate::output::{emit, write_atomic};
 
 /// A quantity with a unit, or a bare number in SI.
 /// A positive quantity in SI (a bare number is taken as SI); negative
@@ -71,9 +71,10 @@ pub struct Args {
     /// Prony terms for --fit lee-radok (1 to 3).
     #[arg(long, default_value_t = 2)]
     pub terms: usize,
-    /// Contact-point method.
-    #[arg(long, value_enum, default_value_t = Contact::Deviation)]
-    pub contact: Contact,
+    /// Contact-point method: deviation (from the baseline by 5 noise standard
+    /// deviations) or piecewise (constant + line least-squares fit).
+    #[arg(long, default_value = "deviation", value_parser = ContactMethod::from_name)]
+    pub contact: ContactMethod,
 }
 
 /// Fits `inspect` can run.
@@ -83,15 +84,6 @@ pub enum Fit {
     Hertz,
     /// Lee–Radok Prony fit of the extend + hold segments.
     LeeRadok,
-}
-
-/// Contact-point methods.
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum Contact {
-    /// Deviation from the baseline by 5 noise standard deviations.
-    Deviation,
-    /// Piecewise constant + line least-squares fit.
-    Piecewise,
 }
 
 /// A progress bar over the files of a batch ([`crate::progress::bar`]).
@@ -133,10 +125,10 @@ impl Args {
         Ok(Some((kind, r)))
     }
 
-    fn method(&self) -> ContactMethod {
-        match self.contact {
-            Contact::Deviation => ContactMethod::default(),
-            Contact::Piecewise => ContactMethod::PiecewiseLinear,
+    fn read_options(&self) -> ReadOptions {
+        ReadOptions {
+            spring_constant: self.spring_constant,
+            sensitivity: self.sensitivity,
         }
     }
 
@@ -151,47 +143,27 @@ impl Args {
         for p in [&self.csv, &self.plot].into_iter().flatten() {
             nlvid_study::check_output_file(p)?;
         }
-        let options = ReadOptions {
-            spring_constant: self.spring_constant,
-            sensitivity: self.sensitivity,
-        };
         let file = &self.files[0];
-        let curves = nlvid_afm::read_force_map(file, &options)
+        let curves = nlvid_afm::read_force_map(file, &self.read_options())
             .with_context(|| format!("reading {}", file.display()))?;
         let n_curves = curves.len();
         let curve = curves.into_iter().nth(self.curve).with_context(|| {
             format!("--curve {}: the file holds {n_curves} curve(s)", self.curve)
         })?;
-        let fit = match self.fit_kind()? {
-            None => None,
-            Some((kind, r)) => Some(quick_fit(&curve, kind, r, self.method())?),
-        };
+        let one = Inspection::new(curve, n_curves, self.fit_kind()?, self.contact)?;
         if let Some(path) = &self.csv {
             let mut buf = Vec::new();
-            curve.write_csv(&mut buf)?;
+            one.curve.write_csv(&mut buf)?;
             write_atomic(path, &buf)?;
         }
         if let Some(path) = &self.plot {
-            nlvid_afm::write_plot(path, &curve, fit.as_ref())?;
+            nlvid_afm::write_plot(path, &one.curve, one.fit.as_ref())?;
         }
-        if json {
-            let mut v = nlvid_afm::summary_json(&curve, n_curves, self.samples);
-            if let Some(f) = &fit {
-                v["fit"] = f.to_json();
-            }
-            print_json(&v)?;
-            return Ok(ExitCode::SUCCESS);
-        }
-        let mut out = nlvid_afm::summary_text(&curve, n_curves);
-        if let Some(f) = &fit {
-            out += &format!("\n{}\n", f.text);
-        }
-        for (what, p) in [("CSV", &self.csv), ("plot", &self.plot)] {
-            if let Some(p) = p {
-                out += &format!("{what} written to {}\n", p.display());
-            }
-        }
-        print_text(&out)?;
+        let written: Vec<(&str, &std::path::Path)> = [("CSV", &self.csv), ("plot", &self.plot)]
+            .into_iter()
+            .filter_map(|(what, p)| Some((what, p.as_deref()?)))
+            .collect();
+        emit(json, &one.to_json(self.samples), &one.text(&written))?;
         Ok(ExitCode::SUCCESS)
     }
 
@@ -214,40 +186,26 @@ impl Args {
         if let Some(p) = &self.table {
             nlvid_study::check_output_file(p)?;
         }
-        let options = ReadOptions {
-            spring_constant: self.spring_constant,
-            sensitivity: self.sensitivity,
-        };
-        let fit = self.fit_kind()?;
+        let (options, fit) = (self.read_options(), self.fit_kind()?);
         let bar = Bar(crate::progress::bar(0, "files"));
-        let batch = nlvid_afm::inspect_batch(&self.files, &options, fit, self.method(), &bar)?;
+        let batch = nlvid_afm::inspect_batch(&self.files, &options, fit, self.contact, &bar)?;
         bar.0.finish_and_clear();
-        for f in &batch.failures {
-            eprintln!("failed: {f}");
-        }
-        if !batch.ignored.is_empty() {
-            eprintln!(
-                "skipped {} file(s) that are not AFM files (e.g. {})",
-                batch.ignored.len(),
-                batch.ignored[0].display()
-            );
+        for line in nlvid_afm::batch_warnings(&batch) {
+            eprintln!("{line}");
         }
         let csv = nlvid_afm::batch_csv(&batch);
-        if let Some(p) = &self.table {
-            write_atomic(p, csv.as_bytes())?;
-        }
-        if json {
-            print_json(&nlvid_afm::batch_json(&batch))?;
-        } else if let Some(p) = &self.table {
-            print_text(&format!(
-                "{} curve(s) analysed, {} failed; table written to {}\n",
-                batch.rows.len(),
-                batch.failures.len(),
-                p.display()
-            ))?;
-        } else {
-            print_text(&csv)?;
-        }
+        let text = match &self.table {
+            Some(p) => {
+                write_atomic(p, csv.as_bytes())?;
+                let (n, failed) = (batch.rows.len(), batch.failures.len());
+                format!(
+                    "{n} curve(s) analysed, {failed} failed; table written to {}\n",
+                    p.display()
+                )
+            }
+            None => csv,
+        };
+        emit(json, &nlvid_afm::batch_json(&batch), &text)?;
         if batch.failures.is_empty() {
             Ok(ExitCode::SUCCESS)
         } else {

@@ -76,8 +76,8 @@ fn run_study(args: &MembraneArgs, path: &Path, json: bool) -> anyhow::Result<Exi
         write_atomic(&out.join(&files[files.len() - 1]), csv.as_bytes())?;
     }
     let wrote = format!("{} files in {}", files.len(), out.display());
-    let files = json!({ "files": files, "out": out });
-    super::simulate::report(json, (&name, &prov), &sim, &run, files, &wrote)?;
+    let files = (json!({ "files": files, "out": out }), &*wrote);
+    print_text(&run.report(json, &sim, (&name, &prov), files)?)?;
     Ok(ExitCode::SUCCESS)
 }
 

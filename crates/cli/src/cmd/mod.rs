@@ -116,12 +116,8 @@ impl Command {
         match self {
             Command::Version => {
                 let v = env!("CARGO_PKG_VERSION");
-                match ctx.json {
-                    true => crate::output::print_json(
-                        &serde_json::json!({"name": "nlvid", "version": v}),
-                    )?,
-                    false => say!("nlvid {v}")?,
-                }
+                let doc = serde_json::json!({"name": "nlvid", "version": v});
+                crate::output::emit(ctx.json, &doc, &format!("nlvid {v}\n"))?;
                 Ok(ExitCode::SUCCESS)
             }
             Command::Check(a) => a.run(ctx),

@@ -5,7 +5,6 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use nlvid_report::report::{ReportOptions, write_report};
-use serde_json::json;
 
 use super::{Context, Run};
 
@@ -27,45 +26,18 @@ impl Run for Args {
     type Config = (PathBuf, ReportOptions);
 
     fn validate(self, _ctx: &Context) -> anyhow::Result<Self::Config> {
-        if !self.dir.join("cohort.json").is_file() {
-            anyhow::bail!(
-                "{}: not an output directory of `nlvid cohort` (no cohort.json)",
-                self.dir.display()
-            );
-        }
-        if let Some(o) = &self.out {
-            nlvid_study::check_output_dir(o)?;
-        }
-        if let Some(p) = &self.surrogate_check
-            && !p.is_file()
-        {
-            anyhow::bail!("--surrogate-check {}: no such file", p.display());
-        }
-        Ok((
-            self.dir,
-            ReportOptions {
-                out: self.out,
-                surrogate_check: self.surrogate_check,
-                ..ReportOptions::default()
-            },
-        ))
+        let opts = ReportOptions {
+            out: self.out,
+            surrogate_check: self.surrogate_check,
+            ..ReportOptions::default()
+        };
+        opts.check(&self.dir)?;
+        Ok((self.dir, opts))
     }
 
     fn execute((dir, opts): Self::Config, ctx: &Context) -> anyhow::Result<ExitCode> {
         let files = write_report(&dir, &opts)?;
-        if ctx.json {
-            crate::output::print_json(&json!({
-                "html": files.html.display().to_string(),
-                "figures": files.figure_ids,
-                "svgs": files.svgs.iter().map(|p| p.display().to_string()).collect::<Vec<_>>(),
-            }))?;
-        } else {
-            say!(
-                "report: {} ({} figures)",
-                files.html.display(),
-                files.figure_ids.len()
-            )?;
-        }
+        crate::output::emit(ctx.json, &files.to_json(), &files.text())?;
         Ok(ExitCode::SUCCESS)
     }
 }

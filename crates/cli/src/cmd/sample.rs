@@ -3,10 +3,10 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{Context, bail};
+use anyhow::bail;
 use clap::Args;
-use nlvid_surrogate::doe::training_and_checking;
-use nlvid_surrogate::{read_domain, write_table};
+use nlvid_surrogate::doe::DesignSettings;
+use nlvid_surrogate::read_domain;
 
 /// Arguments of `sample`.
 #[derive(Debug, Args)]
@@ -36,43 +36,25 @@ pub struct SampleArgs {
 impl SampleArgs {
     /// Run.
     pub fn run(self) -> anyhow::Result<ExitCode> {
-        let (domain, train, check) = if let Some(path) = &self.study {
-            let st = nlvid_surrogate::BuildStudy::load(path)?;
-            let (train, check) = st.settings.design.designs()?;
-            (st.settings.design.domain, train, check)
+        let design = if let Some(path) = &self.study {
+            nlvid_surrogate::BuildStudy::load(path)?.settings.design
         } else {
-            let (Some(dpath), Some(n)) = (&self.domain, self.n) else {
+            let (Some(dpath), Some(n_train)) = (&self.domain, self.n) else {
                 bail!("give a study file, or --domain FILE and -n N");
             };
-            let domain = read_domain(dpath, &[], &[])?;
-            let (train, check) = training_and_checking(
-                &domain,
-                n,
-                self.check.max(1),
-                self.seed,
-                self.iterations,
-                1e-6,
-            )?;
-            let check = if self.check > 0 { check } else { Vec::new() };
-            (domain, train, check)
+            DesignSettings {
+                domain: read_domain(dpath, &[], &[])?,
+                n_train,
+                n_check: self.check,
+                seed: self.seed,
+                ese_iterations: self.iterations,
+                infill: None,
+            }
         };
         nlvid_study::check_output_dir(&self.out)?;
-        std::fs::create_dir_all(&self.out)
-            .with_context(|| format!("cannot create {}", self.out.display()))?;
-        let header = domain.names();
-        for (name, rows) in [("train.csv", &train), ("check.csv", &check)] {
-            if !rows.is_empty() {
-                let mut buf = Vec::new();
-                write_table(&mut buf, &header, rows)?;
-                crate::output::write_atomic(&self.out.join(name), &buf)?;
-            }
-        }
-        say!(
-            "wrote {} training and {} checking points to {}",
-            train.len(),
-            check.len(),
-            self.out.display()
-        )?;
+        let (train, check) = design.write_designs(&self.out)?;
+        let out = self.out.display();
+        say!("wrote {train} training and {check} checking points to {out}")?;
         Ok(ExitCode::SUCCESS)
     }
 }

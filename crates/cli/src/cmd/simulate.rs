@@ -7,12 +7,12 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context as _;
-use nlvid_forward::{SimulateStudy, Simulation};
+use nlvid_forward::{CurveJob, Noise, SimulateStudy};
 use nlvid_study::Study;
 use serde_json::json;
 
 use super::{Context, Run};
-use crate::output::{print_json, write_atomic};
+use crate::output::{emit, print_text, write_atomic};
 
 /// Raw arguments of `nlvid simulate`.
 #[derive(Debug, clap::Args)]
@@ -47,55 +47,13 @@ pub struct Args {
     pub spring_constant: Option<f64>,
 }
 
-/// The curve writer's job (`--parameters`): [`nlvid_forward::CurveJob`]
-/// and where its curves go.
-#[derive(Debug)]
-pub struct Curves {
-    job: nlvid_forward::CurveJob,
-    out_dir: PathBuf,
-}
-
-impl Curves {
-    fn validate(a: &Args) -> anyhow::Result<Option<Curves>> {
-        let (Some(table), Some(out_dir)) = (&a.parameters, &a.out_dir) else {
-            return Ok(None);
-        };
-        let noise = nlvid_forward::Noise {
-            relative: a.noise,
-            seed: a.seed,
-        };
-        let job = nlvid_forward::CurveJob::load(&a.study, table, a.spring_constant, noise)?;
-        Ok(Some(Curves {
-            job,
-            out_dir: out_dir.clone(),
-        }))
-    }
-
-    fn execute(self, ctx: &Context) -> anyhow::Result<ExitCode> {
-        let (files, samples) = self.job.write(&self.out_dir)?;
-        if ctx.json {
-            print_json(&json!({ "curves": files }))?;
-            return Ok(ExitCode::SUCCESS);
-        }
-        let noise = self.job.noise;
-        say!(
-            "wrote {} curves ({samples} samples each, noise {} of the peak force, seed {}) into {}",
-            files.len(),
-            noise.relative,
-            noise.seed,
-            self.out_dir.display()
-        )?;
-        Ok(ExitCode::SUCCESS)
-    }
-}
-
 /// A validated simulation.
 #[derive(Debug)]
 pub enum Config {
     /// One run at the study's `[parameters]`.
     Run(Box<OneRun>),
-    /// The curve writer (`--parameters`).
-    Curves(Box<Curves>),
+    /// The curve writer (`--parameters`): the job and where its curves go.
+    Curves(Box<(CurveJob, PathBuf)>),
 }
 
 /// One run: the study, its name and provenance, and where the files go.
@@ -112,8 +70,13 @@ impl Run for Args {
     type Config = Config;
 
     fn validate(self, _ctx: &Context) -> anyhow::Result<Config> {
-        if let Some(curves) = Curves::validate(&self)? {
-            return Ok(Config::Curves(Box::new(curves)));
+        if let (Some(table), Some(out_dir)) = (&self.parameters, self.out_dir) {
+            let noise = Noise {
+                relative: self.noise,
+                seed: self.seed,
+            };
+            let job = CurveJob::load(&self.study, table, self.spring_constant, noise)?;
+            return Ok(Config::Curves(Box::new((job, out_dir))));
         }
         let study = Study::load(&self.study)?;
         let (name, provenance) = (study.name().to_string(), study.provenance());
@@ -139,7 +102,13 @@ impl Run for Args {
 
     fn execute(c: Config, ctx: &Context) -> anyhow::Result<ExitCode> {
         let c = match c {
-            Config::Curves(curves) => return curves.execute(ctx),
+            Config::Curves(curves) => {
+                let (job, out_dir) = *curves;
+                let (files, samples) = job.write(&out_dir)?;
+                let text = job.summary(files.len(), samples, &out_dir);
+                emit(ctx.json, &json!({ "curves": files }), &text)?;
+                return Ok(ExitCode::SUCCESS);
+            }
             Config::Run(run) => *run,
         };
         let run = c
@@ -151,36 +120,9 @@ impl Run for Args {
         if let (Some(path), Some(csv)) = (&c.mesh_output, run.mesh_csv()) {
             write_atomic(path, csv.as_bytes())?;
         }
-        let files = json!({ "csv": c.output });
-        let wrote = c.output.display().to_string();
-        report(
-            ctx.json,
-            (&c.name, &c.provenance),
-            &c.sim,
-            &run,
-            files,
-            &wrote,
-        )?;
+        let files = (json!({ "csv": c.output }), &*c.output.display().to_string());
+        let text = run.report(ctx.json, &c.sim, (&c.name, &c.provenance), files)?;
+        print_text(&text)?;
         Ok(ExitCode::SUCCESS)
     }
-}
-
-/// Prints one run: with `json`, [`Simulation::to_json`] with `files`;
-/// else the summary and `wrote` (where the files went).
-///
-/// # Errors
-/// A non-finite value in the run; stdout cannot be written.
-pub fn report(
-    json: bool,
-    (name, provenance): (&str, &serde_json::Value),
-    sim: &SimulateStudy,
-    run: &Simulation,
-    files: serde_json::Value,
-    wrote: &str,
-) -> anyhow::Result<()> {
-    if json {
-        return print_json(&run.to_json(sim, provenance.clone(), files)?);
-    }
-    say!("{} → {wrote}", run.summary_text(name)?)?;
-    Ok(())
 }

@@ -9,7 +9,7 @@ use anyhow::Context as _;
 use nlvid_surrogate::slurm::{self, SlurmSettings};
 
 use super::{Context, Run};
-use crate::output::{print_json, print_text};
+use crate::output::emit;
 
 /// Raw arguments of `nlvid slurm` (defaults: docs/cli/slurm.md).
 #[derive(Debug, clap::Args)]
@@ -115,11 +115,7 @@ impl Run for Args {
         let (s, submit, tasks) = match config {
             Config::Status(dir) => {
                 let st = slurm::status(&dir)?;
-                if ctx.json {
-                    print_json(&st.to_json())?;
-                } else {
-                    say!("{st}")?;
-                }
+                emit(ctx.json, &st.to_json(), &format!("{st}\n"))?;
                 // Status 1 until the merge job has finished.
                 return Ok(ExitCode::from(u8::from(!st.merged)));
             }
@@ -132,11 +128,8 @@ impl Run for Args {
         let ids = submit
             .then(|| slurm::submit(&s, tasks.as_deref(), "sbatch".as_ref()))
             .transpose()?;
-        if ctx.json {
-            print_json(&files.to_json(ids.as_ref()))?;
-        } else {
-            print_text(&files.text(ids.as_ref()))?;
-        }
+        let text = files.text(ids.as_ref());
+        emit(ctx.json, &files.to_json(ids.as_ref()), &text)?;
         Ok(ExitCode::SUCCESS)
     }
 }

@@ -9,7 +9,7 @@ use nlvid_surrogate::{
     Correlation, FitOptions, NamedModel, OptimiserSettings, Regression, check, read_table,
 };
 
-use crate::output::{print_json, print_text, write_atomic};
+use crate::output::{emit, print_json, print_text, write_atomic};
 
 /// Kriging surrogates (DACE-equivalent).
 #[derive(Debug, Subcommand)]
@@ -161,15 +161,14 @@ fn fit(a: FitArgs, json: bool) -> anyhow::Result<ExitCode> {
         .with_context(|| format!("{} → {}", a.x.display(), a.y.display()))?;
     let secs = t0.elapsed().as_secs_f64();
     named.save(&a.out)?;
-    if json {
-        let mut v = named.report_json();
-        v["seconds"] = serde_json::json!(secs);
-        v["model"] = serde_json::json!(a.out);
-        print_json(&v)?;
-    } else {
-        print_text(&named.report_text())?;
-        say!("in {secs:.2} s; model written to {}", a.out.display())?;
-    }
+    let mut v = named.report_json();
+    (v["seconds"], v["model"]) = (serde_json::json!(secs), serde_json::json!(a.out));
+    let out = a.out.display();
+    let text = format!(
+        "{}in {secs:.2} s; model written to {out}\n",
+        named.report_text()
+    );
+    emit(json, &v, &text)?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -6,7 +6,7 @@
 //! for the tests.
 #![allow(dead_code)]
 
-use nlvid_material::{MaterialError, MembraneMaterial, MembraneResponse};
+use nlvid_material::{MaterialError, MembraneMaterial, MembraneResponse, PointState};
 use nlvid_membrane::PipkinRogersParams;
 
 fn check_stretches(l: [f64; 2]) -> std::result::Result<(), MaterialError> {
@@ -92,14 +92,16 @@ impl PipkinRogersMembrane {
     }
 }
 
-impl MembraneMaterial for PipkinRogersMembrane {
+impl PointState for PipkinRogersMembrane {
     type State = PipkinRogersState;
 
     fn initial_state(&self) -> Self::State {
         // A(I) = B(I) = 0 (eq. 2.11 with K = 0): the undeformed history is zero.
         PipkinRogersState::default()
     }
+}
 
+impl MembraneMaterial for PipkinRogersMembrane {
     fn update(
         &self,
         state_n: &PipkinRogersState,

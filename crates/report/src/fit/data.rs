@@ -181,7 +181,7 @@ fn load_each<T>(
             let grid = format!("surrogate's time grid{grid}");
             check_protocol(&curve, p, t_end, &settings.study, &grid)?;
         }
-        let mut force = curve.resample(&curve.force, &times[..used])?;
+        let mut force = curve.resample(curve.force(), &times[..used])?;
         let last = force.last().copied().unwrap_or(0.0);
         force.resize(times.len(), last);
         let mut weights =
@@ -330,22 +330,9 @@ fn read_jpk(path: &Path, cal: Option<&Calibration>) -> Result<MeasuredCurve> {
     };
     let c = nlvid_afm::read_ramp_hold(path, &options)
         .map_err(|e| ReportError::io(path, format!("cannot read the JPK ramp-hold curve: {e}")))?;
-    Ok(measured_from_ramp_hold(path, &c))
-}
-
-/// A ramp-hold curve of `nlvid_afm::read_ramp_hold_curve` (channels `displacement`,
-/// `force`, `indentation`) as a measured curve of `path`.
-pub(crate) fn measured_from_ramp_hold(path: &Path, c: &nlvid_model::Curve) -> MeasuredCurve {
-    let channel = |name: &str| c.values(name).map(<[f64]>::to_vec).unwrap_or_default();
-    MeasuredCurve {
-        path: path.to_path_buf(),
-        lines: (1..=c.len()).collect(),
-        time: c.time().to_vec(),
-        displacement: channel("displacement"),
-        force: channel("force"),
-        indentation: Some(channel("indentation")),
-        contact_area: None,
-    }
+    // The ramp-hold curve (channels displacement, force, indentation),
+    // sample i numbered i + 1.
+    Ok(MeasuredCurve::new(path, (1..=c.len()).collect(), c)?)
 }
 
 /// Checks `curve` against `[fit.protocol]` (`p`): ramp from 0 at `rate`
@@ -393,10 +380,10 @@ fn data_facts(
     exp: &ExperimentSettings,
     real: Option<&RealModel>,
 ) -> super::domain::DataFacts {
-    let t0 = curve.time.first().copied().unwrap_or(0.0);
-    let end = curve.time.last().copied().unwrap_or(t0) - t0;
+    let t0 = curve.time().first().copied().unwrap_or(0.0);
+    let end = curve.time().last().copied().unwrap_or(t0) - t0;
     let peak = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-    let depth = match &curve.indentation {
+    let depth = match curve.indentation() {
         Some(d) if !d.is_empty() => Some(peak(d)),
         _ => exp.protocol.as_ref().map(|p| p.amplitude),
     };
@@ -441,15 +428,16 @@ mod tests {
                 }
             })
             .collect();
-        MeasuredCurve {
-            path: PathBuf::from("rr.csv"),
-            lines: (2..=302).collect(),
-            force: vec![0.0; time.len()],
-            time,
-            displacement,
-            indentation: None,
-            contact_area: None,
-        }
+        let force = vec![0.0; time.len()];
+        let lines = (2..=302).collect();
+        MeasuredCurve::from_columns(
+            Path::new("rr.csv"),
+            lines,
+            (time, displacement, force),
+            None,
+            None,
+        )
+        .expect("curve")
     }
 
     fn protocol(kind: ProtocolKind) -> Protocol {

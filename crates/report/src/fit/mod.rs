@@ -27,7 +27,6 @@ mod recheck;
 
 use nlvid_inverse::{MultiStart, Precomputed, SurrogateCurve, SurrogateMisfit};
 
-pub(crate) use data::measured_from_ramp_hold;
 pub use data::{LoadedExperiment, RealModel, Surrogate, check_protocol, load, load_curves};
 pub use outcome::{Agreement, ExperimentOutcome, Outcome};
 

@@ -18,7 +18,7 @@ fn lee_radok(
     radius: f64,
     poisson: f64,
 ) -> Result<Box<dyn ForwardModel>> {
-    let Some(delta) = &exp.curve.indentation else {
+    let Some(delta) = exp.curve.indentation() else {
         return Err(ReportError::InvalidSetting(format!(
             "{}: the Lee-Radok re-check needs an indentation history (AFM data)",
             exp.curve.path.display()

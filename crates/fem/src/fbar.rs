@@ -1,0 +1,400 @@
+//! The F-bar (mean-dilatation) element kernel, one piece of code for the
+//! axisymmetric Q4 of [`crate::element`] (F stored as 5 components, 8 dofs,
+//! 4 Gauss points) and the hexahedron of [`crate::hex`] (9 components, 24
+//! dofs, 8 Gauss points).
+//!
+//! An element kind supplies its Gauss-point geometry as a [`FbarPoint`]: how
+//! F and `Bᵀ v` follow from the dofs, `J = det F` with its derivatives with
+//! respect to the stored components, and the material update in its storage.
+//! The kernel is generic over the point type and the three sizes, so it is
+//! monomorphised per element kind and material: the loops have constant
+//! bounds as in a hand-written kernel, no allocation, no dynamic dispatch.
+//!
+//! The material sees `F̄ = (J̄/J)^{1/3} F` with `J̄ = ∫J dV₀ / ∫dV₀`; the
+//! element is the stationary point of `∫ Ψ(F̄(u)) dV₀` (module docs of
+//! [`crate::element`] and [`crate::hex`]).
+
+use crate::element::{PointFailure, TangentPart};
+use crate::kind::{LocalOutput, bad_length};
+use nlvid_material::{Mat3, Material3, MaterialError};
+
+/// One Gauss point of an element whose deformation gradient is stored as
+/// `NF` components and whose dof vector has `ND` entries.
+#[doc(hidden)]
+pub trait FbarPoint<const NF: usize, const ND: usize> {
+    /// Integration weight (m³).
+    fn weight(&self) -> f64;
+    /// The stored F components for element displacements `u`.
+    fn deformation(&self, u: &[f64; ND]) -> [f64; NF];
+    /// `Bᵀ v` with B = ∂F/∂u (constant: F is linear in u).
+    fn bt_v(&self, v: &[f64; NF]) -> [f64; ND];
+    /// `out += Bᵀ M B`, rows `r` and columns `c ≤ r` only if `lower`.
+    fn add_bt_m_b(&self, out: &mut [[f64; ND]; ND], m: &[[f64; NF]; NF], lower: bool);
+    /// J = det F, its gradient and Hessian w.r.t. the stored components.
+    fn jacobian(f: &[f64; NF]) -> (f64, [f64; NF], [[f64; NF]; NF]);
+    /// The 3×3 matrix of the stored components.
+    fn matrix(f: &[f64; NF]) -> Mat3;
+    /// First Piola–Kirchhoff stress P and ∂P/∂F (stored components) of the
+    /// point update at F (the tangent only if `tangent`; else unspecified).
+    ///
+    /// # Errors
+    /// The material's error.
+    fn update<M: Material3>(
+        material: &M,
+        state_n: &M::State,
+        f: &[f64; NF],
+        dt: f64,
+        trial: &mut M::State,
+        tangent: bool,
+    ) -> Result<([f64; NF], [[f64; NF]; NF]), MaterialError>;
+}
+
+/// `Err` naming point `q` unless `j = det F > 0`.
+pub(crate) fn positive_jacobian(q: usize, j: f64) -> Result<(), PointFailure> {
+    if j > 0.0 {
+        Ok(())
+    } else {
+        Err((
+            q,
+            MaterialError::Deformation(format!("det F = {j:.3e} ≤ 0")),
+        ))
+    }
+}
+
+/// Internal force and tangent of one F-bar element (module docs), F-bar if
+/// `fbar`, plain displacement element otherwise (for the locking
+/// comparison). Writes the trial history of the element's points.
+/// `part` = [`TangentPart::Lower`] computes the entries `k[r][c]`, `c ≤ r`,
+/// only (the rest stays zero); they are the same numbers as with
+/// [`TangentPart::Full`].
+///
+/// The tangent K = Σ_q w_q ∂²Ψ(F̄_q)/∂u² is assembled in a regrouped form
+/// (one Bᵀ M B product per Gauss point plus rank-one terms) that is
+/// algebraically identical to the direct form; with
+/// ln α = (ln J̄ − ln J_q)/3, F̄ = α F, B̄ = α B + F ⊗ ∂α:
+///
+/// ```text
+/// K = Σ_q Bᵀ [w α² A + c_q H_J] B                     (c_q = S w_q /(3 V J̄) − s_q /(3 J_q))
+///   + Σ_q [v_q ⊗ ∂lnα + ∂lnα ⊗ v'_q + (α² Fᵀ w A F + s_q) ∂lnα ⊗ ∂lnα + s_q/(3J_q²) ∂J ⊗ ∂J]
+///   − (S/3) ∂lnJ̄ ⊗ ∂lnJ̄ ,
+/// v_q = α² Bᵀ w A F + w α Bᵀ P,  v'_q = α² Bᵀ w Aᵀ F + w α Bᵀ P,
+/// s_q = w α P : F,  S = Σ_q s_q ,
+/// ```
+///
+/// A = ∂P/∂F at F̄_q, H_J = ∂²J/∂F², V the element volume. The test
+/// `regrouped_tangent_equals_direct_form` (crates/fem/src/element.rs) checks
+/// it against the direct form, and the finite-difference tests of both
+/// element kinds against the residual.
+///
+/// # Errors
+/// The failing Gauss point and the material's error (also for det F ≤ 0
+/// and for a dof vector `u` without `ND` entries).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn fbar_kernel<M, P, const NF: usize, const ND: usize, const NQ: usize>(
+    material: &M,
+    geometry: &[P; NQ],
+    u: &[f64],
+    state_n: &[M::State],
+    trial: &mut [M::State],
+    dt: f64,
+    fbar: bool,
+    part: TangentPart,
+    out: &mut LocalOutput<ND>,
+) -> Result<(), PointFailure>
+where
+    M: Material3,
+    P: FbarPoint<NF, ND>,
+{
+    let u: &[f64; ND] = u.try_into().map_err(|_| bad_length(u.len()))?;
+    let tangent = part != TangentPart::None;
+    let lower = part == TangentPart::Lower;
+    out.r = [0.0; ND];
+    if tangent {
+        out.k = [[0.0; ND]; ND];
+    }
+    let mut f = [[0.0; NF]; NQ];
+    let mut jq = [0.0; NQ];
+    let mut hj = [[[0.0; NF]; NF]; NQ];
+    let mut dju = [[0.0; ND]; NQ];
+    let mut vol = 0.0;
+    let mut jbar = 0.0;
+    let mut djbar = [0.0; ND];
+    for q in 0..NQ {
+        let g = &geometry[q];
+        f[q] = g.deformation(u);
+        let (j, dj, h) = P::jacobian(&f[q]);
+        positive_jacobian(q, j)?;
+        jq[q] = j;
+        hj[q] = h;
+        if fbar {
+            let w = g.weight();
+            dju[q] = g.bt_v(&dj);
+            vol += w;
+            jbar += w * j;
+            for c in 0..ND {
+                djbar[c] += w * dju[q][c];
+            }
+        }
+    }
+    let mut dlnjbar = [0.0; ND];
+    if fbar {
+        jbar /= vol;
+        for c in 0..ND {
+            dlnjbar[c] = djbar[c] / vol / jbar;
+        }
+    }
+    // Pass 1: material response at every point, residual, per-point terms.
+    let mut wa = [[[0.0; NF]; NF]; NQ];
+    let mut alpha = [1.0; NQ];
+    let mut dlnalpha = [[0.0; ND]; NQ];
+    let mut p = [[0.0; NF]; NQ];
+    let mut s_q = [0.0; NQ];
+    let mut bp = [[0.0; ND]; NQ];
+    for q in 0..NQ {
+        let g = &geometry[q];
+        let w = g.weight();
+        if fbar {
+            for c in 0..ND {
+                dlnalpha[q][c] = (dlnjbar[c] - dju[q][c] / jq[q]) / 3.0;
+            }
+            alpha[q] = nlvid_material::cube_root(jbar / jq[q]);
+        }
+        let a = alpha[q];
+        let fbar_q = f[q].map(|x| a * x);
+        let (pq, aq) = P::update(material, &state_n[q], &fbar_q, dt, &mut trial[q], tangent)
+            .map_err(|e| (q, e))?;
+        p[q] = pq;
+        if tangent {
+            for (mi, ti) in wa[q].iter_mut().zip(&aq) {
+                for (m, t) in mi.iter_mut().zip(ti) {
+                    *m = w * t;
+                }
+            }
+        }
+        // r = w B̄ᵀ P = w α Bᵀ P + w (P : F) ∂α.
+        let gp = g.bt_v(&p[q]);
+        bp[q] = gp;
+        let pf: f64 = (0..NF).map(|i| p[q][i] * f[q][i]).sum();
+        s_q[q] = w * a * pf;
+        for c in 0..ND {
+            out.r[c] += w * a * gp[c] + s_q[q] * dlnalpha[q][c];
+        }
+    }
+    if !tangent {
+        return Ok(());
+    }
+    let s_total: f64 = s_q.iter().sum();
+    for q in 0..NQ {
+        let g = &geometry[q];
+        let w = g.weight();
+        let a = alpha[q];
+        let waq = &wa[q];
+        let mut mq = [[0.0; NF]; NF];
+        for i in 0..NF {
+            for k in 0..NF {
+                mq[i][k] = a * a * waq[i][k];
+            }
+        }
+        if fbar {
+            let cq = s_total * w / (3.0 * vol * jbar) - s_q[q] / (3.0 * jq[q]);
+            for i in 0..NF {
+                for k in 0..NF {
+                    mq[i][k] += cq * hj[q][i][k];
+                }
+            }
+        }
+        g.add_bt_m_b(&mut out.k, &mq, lower);
+        if !fbar {
+            continue;
+        }
+        // Fᵀ(wA), (wA)F and Fᵀ(wA)F.
+        let mut af = [0.0; NF];
+        let mut fa = [0.0; NF];
+        for i in 0..NF {
+            for k in 0..NF {
+                af[i] += waq[i][k] * f[q][k];
+                fa[k] += f[q][i] * waq[i][k];
+            }
+        }
+        let mut faf = 0.0;
+        for i in 0..NF {
+            faf += f[q][i] * af[i];
+        }
+        let baf = g.bt_v(&af);
+        let bfa = g.bt_v(&fa);
+        let mut v = [0.0; ND];
+        let mut vt = [0.0; ND];
+        for c in 0..ND {
+            v[c] = a * a * baf[c] + w * a * bp[q][c];
+            vt[c] = a * a * bfa[c] + w * a * bp[q][c];
+        }
+        let dl = &dlnalpha[q];
+        let cc = a * a * faf + s_q[q];
+        let cj = s_q[q] / (3.0 * jq[q] * jq[q]);
+        let dj = &dju[q];
+        for r in 0..ND {
+            let (vr, dlr, cdl, cjr) = (v[r], dl[r], cc * dl[r], cj * dj[r]);
+            let row = &mut out.k[r];
+            let end = if lower { r + 1 } else { ND };
+            for c in 0..end {
+                row[c] += vr * dl[c] + dlr * vt[c] + cdl * dl[c] + cjr * dj[c];
+            }
+        }
+    }
+    if fbar {
+        let w = -s_total / 3.0;
+        for r in 0..ND {
+            let ar = dlnjbar[r] * w;
+            let end = if lower { r + 1 } else { ND };
+            for c in 0..end {
+                out.k[r][c] += ar * dlnjbar[c];
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The stored energy `Σ_q w_q ψ(F̄_q)` of one element for a strain-energy
+/// density `psi` (J; the full revolution for axisymmetric elements): the
+/// potential whose gradient [`fbar_kernel`] returns. NaN if `u` does not
+/// have `ND` entries.
+pub(crate) fn fbar_energy<P, const NF: usize, const ND: usize, const NQ: usize>(
+    geometry: &[P; NQ],
+    u: &[f64],
+    fbar: bool,
+    psi: &dyn Fn(&Mat3) -> f64,
+) -> f64
+where
+    P: FbarPoint<NF, ND>,
+{
+    let Ok(u) = <&[f64; ND]>::try_from(u) else {
+        return f64::NAN;
+    };
+    let mut f = [[0.0; NF]; NQ];
+    let mut jq = [0.0; NQ];
+    let (mut vol, mut jbar) = (0.0, 0.0);
+    for q in 0..NQ {
+        f[q] = geometry[q].deformation(u);
+        jq[q] = P::jacobian(&f[q]).0;
+        vol += geometry[q].weight();
+        jbar += geometry[q].weight() * jq[q];
+    }
+    jbar /= vol;
+    let mut e = 0.0;
+    for q in 0..NQ {
+        let a = if fbar {
+            nlvid_material::cube_root(jbar / jq[q])
+        } else {
+            1.0
+        };
+        e += geometry[q].weight() * psi(&P::matrix(&f[q].map(|x| a * x)));
+    }
+    e
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::element::PointGeometry;
+    use crate::hex::HexPoint;
+    use nlvid_material::PointState;
+
+    /// ∂J/∂F and ∂²J/∂F² of a storage `P` against central differences of
+    /// J, and J against the determinant of the 3×3 matrix.
+    fn jacobian_matches_finite_differences<P, const NF: usize, const ND: usize>(
+        f: [f64; NF],
+        tol: f64,
+    ) where
+        P: FbarPoint<NF, ND>,
+    {
+        let (j, dj, hj) = P::jacobian(&f);
+        let h = 1e-6;
+        for k in 0..NF {
+            let (mut fp, mut fm) = (f, f);
+            fp[k] += h;
+            fm[k] -= h;
+            let (jp, dp, _) = P::jacobian(&fp);
+            let (jm, dm, _) = P::jacobian(&fm);
+            assert!(((jp - jm) / (2.0 * h) - dj[k]).abs() < tol, "dJ[{k}]");
+            for i in 0..NF {
+                assert!(
+                    ((dp[i] - dm[i]) / (2.0 * h) - hj[i][k]).abs() < tol,
+                    "H[{i}][{k}]"
+                );
+            }
+        }
+        assert!((j - P::matrix(&f).determinant()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn jacobian_gradient_and_hessian_match_finite_differences() {
+        jacobian_matches_finite_differences::<PointGeometry, 5, 8>(
+            [1.1, 0.2, -0.15, 0.93, 1.07],
+            1e-8,
+        );
+        jacobian_matches_finite_differences::<HexPoint, 9, 24>(
+            [1.1, 0.2, -0.15, 0.05, 0.93, 0.07, -0.1, 0.12, 1.07],
+            1e-9,
+        );
+    }
+
+    /// The AFM cell material with history and a time step, a distorted
+    /// element, large deformation: the full tangent is symmetric to
+    /// round-off (it is the Hessian of the incremental potential), so the
+    /// lower triangle carries all of it; `Lower` computes exactly that
+    /// triangle and leaves the rest zero.
+    fn lower_is_the_lower_triangle<P, const NF: usize, const ND: usize, const NQ: usize>(
+        geo: &[P; NQ],
+        u: [f64; ND],
+    ) where
+        P: FbarPoint<NF, ND>,
+    {
+        let shear = nlvid_model::Relaxation::from_named(
+            &nlvid_model::names::PRONY2,
+            &[1.0, 0.3, 0.3, 0.5, 10.0],
+        )
+        .unwrap();
+        let cell = nlvid_material::PronyViscoelastic::cell(&shear, 100.0).unwrap();
+        let s0: Vec<_> = (0..NQ).map(|_| cell.initial_state()).collect();
+        let mut sn = s0.clone();
+        let mut out = LocalOutput::zero();
+        let half = u.map(|x| 0.5 * x);
+        let part = TangentPart::None;
+        fbar_kernel(&cell, geo, &half, &s0, &mut sn, 0.3, true, part, &mut out).unwrap();
+        let [full, low] = [TangentPart::Full, TangentPart::Lower].map(|part| {
+            let mut tr = s0.clone();
+            let mut out = LocalOutput::zero();
+            fbar_kernel(&cell, geo, &u, &sn, &mut tr, 0.2, true, part, &mut out).unwrap();
+            out
+        });
+        let kmax = full.k.iter().flatten().fold(0.0f64, |m, x| m.max(x.abs()));
+        assert_eq!(full.r, low.r);
+        for r in 0..ND {
+            for c in 0..ND {
+                assert!(
+                    (full.k[r][c] - full.k[c][r]).abs() <= 1e-12 * kmax,
+                    "asymmetric K[{r}][{c}]"
+                );
+                if c <= r {
+                    assert_eq!(low.k[r][c], full.k[r][c], "K[{r}][{c}]");
+                } else {
+                    assert_eq!(low.k[r][c], 0.0);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn lower_tangent_is_the_lower_triangle_of_a_symmetric_full_tangent() {
+        let (geo, u) = crate::element::distorted_element();
+        lower_is_the_lower_triangle(&geo, u);
+        let mut x = crate::hex::unit_cube();
+        for (a, p) in x.iter_mut().enumerate() {
+            for (i, c) in p.iter_mut().enumerate() {
+                *c += 0.05 * ((3 * a + i) as f64 * 1.3).sin();
+            }
+        }
+        let u = std::array::from_fn(|k| 0.08 * (k as f64 * 0.7).cos());
+        lower_is_the_lower_triangle(&crate::hex::element_geometry(&x).unwrap(), u);
+    }
+}
