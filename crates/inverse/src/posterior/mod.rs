@@ -371,7 +371,7 @@ pub fn sample_posterior(
 /// The ridge move of a Prony domain (eq. 5.1): scale `G0` (or `C1`, which
 /// scales G0 in proportion), the weight whose relaxation time has the
 /// lowest bound redrawn (g1 of Table 5.3, τ1 ∈ [0.01, 2] s), the other
-/// weights carried. None when the domain has no modulus or fewer than one
+/// weights carried, its time redrawn on half the moves. None when the domain has no modulus or fewer than one
 /// weight/time pair.
 pub fn ridge_move(domain: &nlvid_model::Domain) -> Option<RidgeMove> {
     use nlvid_model::names;
@@ -379,17 +379,18 @@ pub fn ridge_move(domain: &nlvid_model::Domain) -> Option<RidgeMove> {
     let scale = domain
         .index_of(names::G0)
         .or_else(|| domain.index_of(names::C1))?;
-    let pairs: Vec<(usize, f64)> = (1..)
+    let pairs: Vec<(usize, usize)> = (1..)
         .map_while(|k| {
-            let g = domain.index_of(&names::weight(k))?;
-            let t = domain.index_of(&names::time(k))?;
-            Some((g, domain.params()[t].lower))
+            Some((
+                domain.index_of(&names::weight(k))?,
+                domain.index_of(&names::time(k))?,
+            ))
         })
         .collect();
-    let fast = pairs
+    let lower = |t: usize| domain.params()[t].lower;
+    let (fast, fast_time) = *pairs
         .iter()
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|p| p.0)?;
+        .min_by(|a, b| lower(a.1).total_cmp(&lower(b.1)))?;
     Some(RidgeMove {
         scale: axis(scale),
         fast: axis(fast),
@@ -398,6 +399,7 @@ pub fn ridge_move(domain: &nlvid_model::Domain) -> Option<RidgeMove> {
             .filter(|p| p.0 != fast)
             .map(|p| axis(p.0))
             .collect(),
+        fast_time: Some(fast_time),
     })
 }
 
@@ -542,7 +544,7 @@ mod tests {
     fn the_ridge_of_table_5_3_redraws_g1_and_carries_g2() {
         let d = nlvid_model::Domain::table_5_3(0.01).expect("domain");
         let r = ridge_move(&d).expect("ridge");
-        assert_eq!((r.scale.0, r.fast.0), (0, 1));
+        assert_eq!((r.scale.0, r.fast.0, r.fast_time), (0, 1, Some(3)));
         assert_eq!(r.carried.iter().map(|c| c.0).collect::<Vec<_>>(), vec![2]);
         let g = nlvid_model::Parameter::new("G0", "Pa", 1.0, 2.0, nlvid_model::Scale::Log);
         let only = nlvid_model::Domain::new(vec![g]).expect("1-d");
