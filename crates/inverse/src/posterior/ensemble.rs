@@ -366,7 +366,8 @@ impl<F: Fn(&[f64]) -> f64> Ensemble<F> {
         {
             for k in 0..w {
                 let v: f64 = rng.random();
-                let time = (rng.random::<f64>() < 0.5).then(|| rng.random::<f64>());
+                let time = (ridge.fast_time.is_some() && rng.random::<f64>() < 0.5)
+                    .then(|| rng.random::<f64>());
                 let u: f64 = rng.random();
                 self.proposed += 1;
                 let Some((yv, log_j)) = ridge.propose(&self.pos[k], v, time) else {

@@ -73,6 +73,10 @@ pub struct PosteriorSettings {
     /// fixed G0·(1 − g1) and G0·g_k, [`ensemble`] module docs; 0: off).
     #[serde(default = "default_ridge")]
     pub ridge_fraction: f64,
+    /// Redraw the fast weight's τ too on half the ridge steps
+    /// ([`RidgeMove::fast_time`]; measured, not better: docs/theory/inverse.md).
+    #[serde(default)]
+    pub ridge_time: bool,
 }
 
 fn default_ridge() -> f64 {
@@ -110,6 +114,7 @@ impl PosteriorSettings {
             refresh_fraction: default_refresh(),
             refit_proposal: default_refit(),
             ridge_fraction: default_ridge(),
+            ridge_time: false,
         }
     }
 }
@@ -342,7 +347,10 @@ pub fn sample_posterior(
             ..EnsembleSettings::default()
         };
         let mut ens = Ensemble::new(&log_density, start, &es)?;
-        if let Some(ridge) = ridge_move(&domain) {
+        if let Some(mut ridge) = ridge_move(&domain) {
+            if !settings.ridge_time {
+                ridge.fast_time = None;
+            }
             ens = ens.with_ridge(ridge);
         }
         ens.burn_in();
