@@ -7,7 +7,7 @@
 //!
 //! ```text
 //! cargo run --release -p nlvid-report --example posterior_cells \
-//!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [cell ...]
+//!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=BOOL] [cell ...]
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -40,6 +40,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let refresh: Option<f64> = opt("refresh").map(|v| v.parse()).transpose()?;
     let refit: Option<bool> = opt("refit").map(|v| v.parse()).transpose()?;
+    let ridge: Option<f64> = opt("ridge").map(|v| v.parse()).transpose()?;
+    let ridge_time: bool = opt("ridge_time").map_or(Ok(false), |v| v.parse())?;
     let demo =
         std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
     let root = std::env::temp_dir().join(format!("nlvid-cells-{}", std::process::id()));
@@ -82,10 +84,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             )],
         };
         for (refresh_fraction, refit_proposal) in configs {
-            println!("refresh {refresh_fraction}, refit {refit_proposal}:");
+            let ridge_fraction = ridge.unwrap_or(ps.ridge_fraction);
+            println!(
+                "refresh {refresh_fraction}, refit {refit_proposal}, ridge {ridge_fraction}, \
+                 ridge_time {ridge_time}:"
+            );
             let ps = PosteriorSettings {
                 refresh_fraction,
                 refit_proposal,
+                ridge_fraction,
+                ridge_time,
                 ..ps.clone()
             };
             let t0 = std::time::Instant::now();
