@@ -10,7 +10,7 @@
 //!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=BOOL] [cell ...]
 //! ```
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use nlvid_inverse::Model;
 use nlvid_inverse::posterior::{PosteriorSettings, quantile, sample_posterior};
@@ -45,7 +45,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let demo =
         std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
     let root = std::env::temp_dir().join(format!("nlvid-cells-{}", std::process::id()));
-    let study = write_study(&root, &demo)?;
+    let study = coverage_cohort::write_study(&root, &demo, "")?;
     let spec = coverage_cohort::wide_groups(cells, seed, noise);
     let files = write_demo_data(&spec, &study, &demo.join("metamodel.toml"))?;
     let settings = CohortSettings::load(&study)?;
@@ -143,15 +143,4 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
 fn round(u: &[f64]) -> Vec<f64> {
     u.iter().map(|v| (v * 1000.0).round() / 1000.0).collect()
-}
-
-/// The demo's cohort study with absolute meta-model paths, in `dir`.
-fn write_study(dir: &Path, demo: &Path) -> Result<PathBuf, Box<dyn std::error::Error>> {
-    std::fs::create_dir_all(dir)?;
-    let text = std::fs::read_to_string(demo.join("study.toml"))?;
-    let mm = demo.join("metamodel");
-    let text = text.replace("\"metamodel/", &format!("\"{}/", mm.display()));
-    let study = dir.join("study.toml");
-    std::fs::write(&study, text)?;
-    Ok(study)
 }

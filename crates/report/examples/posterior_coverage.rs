@@ -176,19 +176,12 @@ fn write_study(
     demo: &Path,
     keys: &[String],
 ) -> Result<PathBuf, Box<dyn std::error::Error>> {
-    let text = std::fs::read_to_string(demo.join("study.toml"))?;
-    let mm = demo.join("metamodel");
-    let text = text.replace("\"metamodel/", &format!("\"{}/", mm.display()));
-    let study = dir.join("study.toml");
-    std::fs::write(
-        &study,
-        format!(
-            "{text}\n[posterior]\nlevel = 0.9\n{}\n",
-            keys.iter()
-                .map(|kv| kv.replacen('=', " = ", 1))
-                .collect::<Vec<_>>()
-                .join("\n")
-        ),
-    )?;
-    Ok(study)
+    let posterior = format!(
+        "[posterior]\nlevel = 0.9\n{}\n",
+        keys.iter()
+            .map(|kv| kv.replacen('=', " = ", 1))
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+    coverage_cohort::write_study(dir, demo, &posterior)
 }

@@ -15,7 +15,7 @@
 //! cargo run --release -p nlvid-report --example posterior_diagnose [cells] [noise] [seed]
 //! ```
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use nalgebra::{DMatrix, DVector};
 use nlvid_inverse::Model;
@@ -37,8 +37,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
     let root = std::env::temp_dir().join(format!("nlvid-diagnose-{}", std::process::id()));
     let spec = |noise: f64| coverage_cohort::wide_groups(cells, seed, noise);
-    let noisy_study = write_study(&root.join("noisy"), &demo)?;
-    let clean_study = write_study(&root.join("clean"), &demo)?;
+    let noisy_study = coverage_cohort::write_study(&root.join("noisy"), &demo, "")?;
+    let clean_study = coverage_cohort::write_study(&root.join("clean"), &demo, "")?;
     let files = write_demo_data(&spec(noise), &noisy_study, &demo.join("metamodel.toml"))?;
     let clean_files = write_demo_data(&spec(0.0), &clean_study, &demo.join("metamodel.toml"))?;
     let settings = CohortSettings::load(&noisy_study)?;
@@ -128,15 +128,4 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     std::fs::remove_dir_all(&root)?;
     Ok(())
-}
-
-/// The demo's cohort study with absolute meta-model paths, in `dir`.
-fn write_study(dir: &Path, demo: &Path) -> Result<PathBuf, Box<dyn std::error::Error>> {
-    std::fs::create_dir_all(dir)?;
-    let text = std::fs::read_to_string(demo.join("study.toml"))?;
-    let mm = demo.join("metamodel");
-    let text = text.replace("\"metamodel/", &format!("\"{}/", mm.display()));
-    let study = dir.join("study.toml");
-    std::fs::write(&study, text)?;
-    Ok(study)
 }

@@ -3,6 +3,8 @@
 //! much of the Table 5.3 domain, so the coverage study sees well- and
 //! badly-determined cells alike.
 
+use std::path::{Path, PathBuf};
+
 use nlvid_report::demo::{DemoSpec, GroupSpec};
 
 /// `cells` cells in two groups (rounded up to an even count), seeded,
@@ -32,4 +34,25 @@ pub fn wide_groups(cells: usize, seed: u64, noise: f64) -> DemoSpec {
         noise,
         ..DemoSpec::default()
     }
+}
+
+/// The demo's cohort study in `dir` with absolute meta-model paths, and
+/// `extra` (e.g. a `[posterior]` section) appended when not empty.
+pub fn write_study(
+    dir: &Path,
+    demo: &Path,
+    extra: &str,
+) -> Result<PathBuf, Box<dyn std::error::Error>> {
+    std::fs::create_dir_all(dir)?;
+    let text = std::fs::read_to_string(demo.join("study.toml"))?;
+    let mm = demo.join("metamodel");
+    let text = text.replace("\"metamodel/", &format!("\"{}/", mm.display()));
+    let text = if extra.is_empty() {
+        text
+    } else {
+        format!("{text}\n{extra}")
+    };
+    let study = dir.join("study.toml");
+    std::fs::write(&study, text)?;
+    Ok(study)
 }
