@@ -317,14 +317,7 @@ impl SparseSystem {
         for (w, &i) in self.work.iter_mut().zip(&self.from_stored) {
             *w = rhs[i];
         }
-        let ldlt = LdltRef::new(chol, &self.l_values);
-        let col = faer::ColMut::from_slice_mut(&mut self.work);
-        ldlt.solve_in_place_with_conj(
-            Conj::No,
-            col.as_mat_mut(),
-            Par::Seq,
-            MemStack::new(&mut self.stack),
-        );
+        ldlt_solve(chol, &self.l_values, &mut self.work, &mut self.stack);
         if !self.work.iter().all(|v| v.is_finite()) {
             return false;
         }
@@ -360,14 +353,7 @@ impl SparseSystem {
                 )
                 .is_ok();
             if ok {
-                let ldlt = LdltRef::new(chol, &self.l_values);
-                let col = faer::ColMut::from_slice_mut(&mut self.work);
-                ldlt.solve_in_place_with_conj(
-                    Conj::No,
-                    col.as_mat_mut(),
-                    Par::Seq,
-                    MemStack::new(&mut self.stack),
-                );
+                ldlt_solve(chol, &self.l_values, &mut self.work, &mut self.stack);
                 let x = std::mem::take(&mut self.work);
                 let b = std::mem::take(&mut self.rhs_copy);
                 let good = x.iter().all(|v| v.is_finite())
@@ -405,6 +391,20 @@ impl SparseSystem {
             ))
         }
     }
+}
+
+/// Solves `L D Lᵀ x = b` in place (`work` holds b in the factor's
+/// numbering on entry, x on return) with the numeric factors `l_values` of
+/// the symbolic `chol`: one place for fresh and reused factors.
+fn ldlt_solve(
+    chol: &SymbolicCholesky<usize>,
+    l_values: &[f64],
+    work: &mut [f64],
+    stack: &mut MemBuffer,
+) {
+    let ldlt = LdltRef::new(chol, l_values);
+    let col = faer::ColMut::from_slice_mut(work);
+    ldlt.solve_in_place_with_conj(Conj::No, col.as_mat_mut(), Par::Seq, MemStack::new(stack));
 }
 
 #[cfg(test)]
