@@ -127,7 +127,8 @@ fn bench_folder(dir: &std::path::Path, curves: usize) -> usize {
 /// Issue 14's benchmark: 1000 public curves through `nlvid inspect --fit hertz FOLDER`
 /// in ≤ 10 s wall on 2 cores. Release build only (crates/afm/benches/README.md):
 /// `cargo test --release -p nlvid --test inspect_batch -- --ignored --nocapture`.
-/// The folder stays at `<temp>/nlvid-inspect-bench-1000/curves` for `farm-bench`.
+/// The folder stays at `<temp>/nlvid-inspect-bench-1000/curves` for timing the whole process
+/// from outside (e.g. `hyperfine`).
 #[test]
 #[ignore = "benchmark: run with --release (crates/afm/benches/README.md)"]
 fn thousand_public_curves_through_inspect_fit_hertz_in_10_s() {
