@@ -19,8 +19,9 @@
 //! half depend only on positions that do not change during its update,
 //! so they are evaluated in one batch ([`LogDensity`]); ensembles stepped
 //! together ([`burn_in`], [`sample`]) put their halves in the same batch
-//! (the posterior's batches: 4 ensembles × 8 walkers), each with its own
-//! random stream.
+//! (the posterior's batches: 4 ensembles × 8 walkers, × 16 for the moves
+//! that read only the walker's own position), each with its own random
+//! stream.
 //!
 //! Moves, for walker k of the half being updated:
 //! - stretch (GW eq. 7): y = x_j + z (x_k − x_j), j in the other half,
@@ -474,8 +475,12 @@ impl Ensemble {
 
 /// One step of every ensemble in `ensembles`: each draws its move, then
 /// each half of every ensemble's walkers is proposed and the proposals of
-/// all ensembles are evaluated in one batch (two calls of
-/// `log_density` per step). `kept` allows the independence move.
+/// all ensembles are evaluated in one batch (two calls of `log_density`
+/// per step). A move whose proposal depends only on the walker's own
+/// position (refresh, ridge, independence) proposes both halves in the
+/// first batch: the positions it reads do not change in between, so the
+/// draws are the same, and larger batches cost less per point.
+/// `kept` allows the independence move.
 fn step_all(ensembles: &mut [Ensemble], log_density: &impl LogDensity, kept: bool) {
     for e in ensembles.iter_mut() {
         e.choose_move(kept);
@@ -484,8 +489,20 @@ fn step_all(ensembles: &mut [Ensemble], log_density: &impl LogDensity, kept: boo
         let mut ys = Vec::new();
         let mut batches = Vec::with_capacity(ensembles.len());
         for e in ensembles.iter_mut() {
+            let own_only = !matches!(
+                e.current,
+                Move::Stretch | Move::DifferentialEvolution { .. }
+            );
             let from = ys.len();
-            let pending = e.propose(h, &mut ys);
+            let pending = match (h, own_only) {
+                (0, true) => {
+                    let mut p = e.propose(0, &mut ys);
+                    p.extend(e.propose(1, &mut ys));
+                    p
+                }
+                (_, true) => Vec::new(),
+                _ => e.propose(h, &mut ys),
+            };
             batches.push((from, pending));
         }
         let lps = log_density.log_densities(&ys);
