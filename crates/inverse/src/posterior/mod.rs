@@ -300,7 +300,10 @@ fn starts(
 ///
 /// Cost: ensembles·walkers·(burn + kept steps) likelihood evaluations,
 /// each one reduced prediction O(N·q·d) and one Kriging variance O(N²)
-/// (N training runs).
+/// (N training runs); the ensembles are stepped together so that each
+/// step's proposals of all ensembles are evaluated in batches of 32–64
+/// points, the O(N²) triangular solve done for the batch at once
+/// ([`CurveLikelihood::values`]).
 ///
 /// # Errors
 /// Bad settings, a curve without measurable noise, surrogate failures.

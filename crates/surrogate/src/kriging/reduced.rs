@@ -233,20 +233,6 @@ impl KrigingModel {
         Ok((coords, scales))
     }
 
-    fn check_linear_outputs(&self) -> Result<()> {
-        if self.log_outputs {
-            Err(SurrogateError::InvalidSettings(
-                "the model predicts exp(kriged ln y): it has no linear output map (refit \
-                 without --log-outputs to use the reduced form)"
-                    .into(),
-            ))
-        } else {
-            Ok(())
-        }
-    }
-}
-
-impl KrigingModel {
     /// r(d) of the model's correlation at a normalised difference d; for
     /// `gauss` exp(−Σ θ_k d_k²) with one exp instead of one per dimension.
     fn correlation_value(&self, dx: &[f64]) -> f64 {
@@ -257,6 +243,18 @@ impl KrigingModel {
             .exp()
         } else {
             self.correlation.value(&self.theta, dx)
+        }
+    }
+
+    fn check_linear_outputs(&self) -> Result<()> {
+        if self.log_outputs {
+            Err(SurrogateError::InvalidSettings(
+                "the model predicts exp(kriged ln y): it has no linear output map (refit \
+                 without --log-outputs to use the reduced form)"
+                    .into(),
+            ))
+        } else {
+            Ok(())
         }
     }
 }
