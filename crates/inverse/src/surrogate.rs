@@ -172,6 +172,28 @@ impl KrigingSurrogate {
         self.kriging.mse_scale(&xs).map_err(|e| model_err(x, &e))
     }
 
+    /// The reduced coordinates c(x) ([`crate::ReducedModel`]) and v(x)
+    /// ([`KrigingSurrogate::mse_scale`]) at many physical points at once
+    /// ([`KrigingModel::coordinates_and_mse_scales`]: one multi-column
+    /// triangular solve for the batch).
+    ///
+    /// # Errors
+    /// As [`KrigingSurrogate::mse_scale`] for any point (naming the first).
+    pub fn coordinates_and_mse_scales(
+        &self,
+        xs: &[Vec<f64>],
+    ) -> Result<(Vec<DVector<f64>>, Vec<f64>)> {
+        let inputs = xs
+            .iter()
+            .map(|x| Ok(self.inputs(x)?.0))
+            .collect::<Result<Vec<_>>>()?;
+        let (c, v) = self
+            .kriging
+            .coordinates_and_mse_scales(&inputs)
+            .map_err(|e| model_err(xs.first().map_or(&[][..], Vec::as_slice), &e))?;
+        Ok((c.into_iter().map(DVector::from_vec).collect(), v))
+    }
+
     /// The leave-one-out calibration of the Kriging variance,
     /// σ²_CV/σ²_ML ([`KrigingModel::cv_variance_ratio`], Bachoc 2013):
     /// the factor by which the model's own MSE under- (> 1) or over-

@@ -9,7 +9,13 @@
 //!   covariance's span;
 //! - χ²/m of the residual d − ŷ(x_true) under the likelihood's
 //!   Σ = σ̂²I + v(x)K (≈ 1 ± √(2/m) when the likelihood is calibrated) and
-//!   under σ̂²I alone.
+//!   under σ̂²I alone;
+//! - at the end, per PCA direction i: the surrogate error's score
+//!   e_i = (Vᵀ D⁻¹ (f − ŷ))_i against its Kriging variance v(x)Σ_ii, the
+//!   mean of e_i²/(vΣ_ii) over the cells with Σ by maximum likelihood and by
+//!   leave-one-out (1 when calibrated in that direction), and the mean of
+//!   vΣ_CV,ii over the measurement noise's variance in that direction,
+//!   σ² Σ_j V_ji²/D_j² (where the surrogate term matters at all).
 //!
 //! ```text
 //! cargo run --release -p nlvid-report --example posterior_diagnose [cells] [noise] [seed]
@@ -62,6 +68,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "cell  sigma_hat/sigma  |f-yhat|/(sigma sqrt m)  outside-span  chi2/m(Sigma)  chi2/m(sigma only)  v·tr(K)/(m sigma^2)  mahal/k"
     );
     let (mut ratios, mut chis, mut mahals) = (Vec::new(), Vec::new(), Vec::new());
+    let kr = s.kriging();
+    let pca = kr.pca.as_ref().ok_or("PCA model")?;
+    let sig_ml = pca.residual_cov.clone();
+    let sig_cv = kr.cv_process_covariance()?;
+    let basis = |i: usize, j: usize| pca.basis[i * m + j];
+    // Per direction: Σ e_i²/(vΣ_ML,ii), Σ e_i²/(vΣ_CV,ii), Σ vΣ_CV,ii/noise_i.
+    let mut per_dir = vec![[0.0f64; 3]; k];
     for (inp, cin) in inputs.iter().zip(&clean_inputs).take(cells) {
         let r = fit_cell(&settings, &model, inp);
         let c = fit_cell(&settings, &model, cin);
@@ -108,6 +121,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             mahal,
             truth.x
         );
+        for (i, acc) in per_dir.iter_mut().enumerate() {
+            let e: f64 = (0..m).map(|j| basis(i, j) * rs[j] / kr.y_std[j]).sum();
+            let noise_i: f64 = sigma
+                * sigma
+                * (0..m)
+                    .map(|j| (basis(i, j) / kr.y_std[j]).powi(2))
+                    .sum::<f64>();
+            acc[0] += e * e / (v * sig_ml[i * k + i]);
+            acc[1] += e * e / (v * sig_cv[i * k + i]);
+            acc[2] += v * sig_cv[i * k + i] / noise_i;
+        }
         ratios.push(est / sigma);
         chis.push(chi);
         mahals.push(mahal);
@@ -126,6 +150,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         mean(&chis),
         (2.0 / m as f64 / chis.len() as f64).sqrt()
     );
+    let nc = chis.len() as f64;
+    println!(
+        "per PCA direction i: mean e_i^2/(v Sigma_ii) with Sigma ML, CV (1 = calibrated); mean \
+         v Sigma_CV,ii / noise variance in direction i"
+    );
+    for (i, acc) in per_dir.iter().enumerate() {
+        println!(
+            "  {i}: ML {:8.3}  CV {:8.3}  surrogate/noise {:10.4}",
+            acc[0] / nc,
+            acc[1] / nc,
+            acc[2] / nc
+        );
+    }
     std::fs::remove_dir_all(&root)?;
     Ok(())
 }

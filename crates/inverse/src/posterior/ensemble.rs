@@ -7,16 +7,28 @@
 //! `rand`; a NUTS crate would need the log-density's gradient through the
 //! bounded, constrained domain (a logit transform and its Jacobian) for a
 //! five-parameter problem that an ensemble handles without tuning. The
-//! sampler is ~100 lines, seeded (ChaCha8) and sequential, so a cell's
-//! draws do not depend on threads.
+//! sampler is seeded (ChaCha8, one stream per ensemble) and sequential,
+//! so a cell's draws do not depend on threads.
 //!
-//! Moves, walkers updated one after another against the current ensemble
-//! (the serial form of Goodman & Weare §3, which keeps detailed balance):
-//! - stretch (GW eq. 7): y = x_j + z (x_k − x_j), g(z) ∝ 1/√z on [1/a, a],
-//!   accepted with min(1, z^{d−1} p(y)/p(x_k));
+//! *Split form* (Goodman & Weare §3, "parallel" version; emcee's
+//! default): each step updates the first half of the walkers against the
+//! second half held fixed, then the second half against the (updated)
+//! first. Given the other half, each walker of a half makes its own
+//! Metropolis–Hastings move that keeps p(x_k) invariant, so the half's
+//! joint update keeps the product of the walkers' p. The proposals of a
+//! half depend only on positions that do not change during its update,
+//! so they are evaluated in one batch ([`LogDensity`]); ensembles stepped
+//! together ([`burn_in`], [`sample`]) put their halves in the same batch
+//! (the posterior's batches: 4 ensembles × 8 walkers, × 16 for the moves
+//! that read only the walker's own position), each with its own random
+//! stream.
+//!
+//! Moves, for walker k of the half being updated:
+//! - stretch (GW eq. 7): y = x_j + z (x_k − x_j), j in the other half,
+//!   g(z) ∝ 1/√z on [1/a, a], accepted with min(1, z^{d−1} p(y)/p(x_k));
 //! - differential evolution (ter Braak 2006): y = x_k + γ (x_i − x_j) + ε,
-//!   γ = 2.38/√(2d) (1 every 10th step: mode hopping), ε ~ N(0, 1e-10²),
-//!   accepted with min(1, p(y)/p(x_k)).
+//!   i ≠ j in the other half, γ = 2.38/√(2d) (1 every 10th step: mode
+//!   hopping), ε ~ N(0, 1e-10²), accepted with min(1, p(y)/p(x_k)).
 //!
 //! - independence (after burn-in only): y ~ t₅(μ̂, 1.2²·Σ̂) with μ̂, Σ̂ the
 //!   mean and covariance of the ensemble over the second half of burn-in
@@ -157,20 +169,35 @@ fn normal(rng: &mut ChaCha8Rng) -> f64 {
     (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
 }
 
-/// A walker index in 0..n other than the ones in `not`.
-fn other(rng: &mut ChaCha8Rng, n: usize, not: &[usize]) -> usize {
+/// A walker index of `from` other than `not`.
+fn other(rng: &mut ChaCha8Rng, from: std::ops::Range<usize>, not: Option<usize>) -> usize {
     loop {
-        let j = rng.random_range(0..n);
-        if !not.contains(&j) {
+        let j = rng.random_range(from.clone());
+        if Some(j) != not {
             return j;
         }
     }
 }
 
+/// A log-density evaluated at a batch of points at once (module docs:
+/// the sampler proposes half an ensemble, of every ensemble stepped
+/// together, per batch). Every closure `Fn(&[f64]) -> f64` is one,
+/// evaluated point by point.
+pub trait LogDensity {
+    /// ln p at each point of `xs` in order (−∞ outside the support).
+    fn log_densities(&self, xs: &[Vec<f64>]) -> Vec<f64>;
+}
+
+impl<F: Fn(&[f64]) -> f64> LogDensity for F {
+    fn log_densities(&self, xs: &[Vec<f64>]) -> Vec<f64> {
+        xs.iter().map(|x| self(x)).collect()
+    }
+}
+
 /// Samples `log_density` (−∞ outside the support) with an ensemble started
 /// at `init` (one position per walker, each with a finite log-density):
-/// [`Ensemble::new`], `burn` steps of [`Ensemble::burn_in`], then `steps`
-/// kept steps of [`Ensemble::sample`].
+/// [`Ensemble::new`], `burn` steps of [`burn_in`], then `steps` kept steps
+/// of [`sample`].
 ///
 /// Cost: W·(burn + steps) evaluations of `log_density`.
 ///
@@ -178,39 +205,67 @@ fn other(rng: &mut ChaCha8Rng, n: usize, not: &[usize]) -> usize {
 /// [`InverseError::InvalidSetting`] for too few walkers, a stretch scale
 /// ≤ 1, no kept steps, or a start with a non-finite log-density.
 pub fn sample_ensemble(
-    log_density: impl Fn(&[f64]) -> f64,
+    log_density: impl LogDensity,
     init: &[Vec<f64>],
     settings: &EnsembleSettings,
 ) -> Result<Chains> {
-    let mut e = Ensemble::new(log_density, init, settings)?;
-    e.burn_in();
-    let mut chains = e.empty_chains();
-    e.sample(settings.steps, &mut chains);
+    let mut e = [Ensemble::new(&log_density, init, settings)?];
+    burn_in(&mut e, &log_density);
+    let mut chains = [e[0].empty_chains()];
+    sample(&mut e, &log_density, settings.steps, &mut chains);
+    let [chains] = chains;
     Ok(chains)
 }
 
+/// The move of one step of an ensemble (module docs).
+#[derive(Debug, Clone, Copy)]
+enum Move {
+    Refresh,
+    Ridge,
+    Independence,
+    DifferentialEvolution { gamma: f64 },
+    Stretch,
+}
+
+/// A proposal of one walker awaiting the log-density of its point:
+/// accepted when ln u < `log_ratio` + ln p(y) − ln p(x).
+struct Pending {
+    walker: usize,
+    log_ratio: f64,
+    ln_u: f64,
+}
+
 /// An ensemble in flight: positions, log-densities, random stream and the
-/// frozen independence proposal (module docs). Stepping it in several
-/// calls of [`Ensemble::sample`] gives the same draws as one call.
-pub struct Ensemble<F> {
-    log_density: F,
+/// frozen independence proposal (module docs). Stepped by [`burn_in`] and
+/// [`sample`], alone or together with other ensembles (each with its own
+/// random stream: the draws of one ensemble do not depend on the others);
+/// stepping in several calls of [`sample`] gives the same draws as one
+/// call.
+pub struct Ensemble {
     settings: EnsembleSettings,
     pos: Vec<Vec<f64>>,
     lp: Vec<f64>,
     rng: ChaCha8Rng,
     proposal: Option<TProposal>,
     ridge: Option<RidgeMove>,
+    /// The move of the current step, drawn at its start.
+    current: Move,
     step: usize,
     accepted: usize,
     proposed: usize,
 }
 
-impl<F: Fn(&[f64]) -> f64> Ensemble<F> {
-    /// An ensemble at `init` (see [`sample_ensemble`] for the errors).
+impl Ensemble {
+    /// An ensemble at `init` (see [`sample_ensemble`] for the errors);
+    /// `log_density` gives the starts' log-densities.
     ///
     /// # Errors
     /// As [`sample_ensemble`].
-    pub fn new(log_density: F, init: &[Vec<f64>], settings: &EnsembleSettings) -> Result<Self> {
+    pub fn new(
+        log_density: &impl LogDensity,
+        init: &[Vec<f64>],
+        settings: &EnsembleSettings,
+    ) -> Result<Self> {
         let w = init.len();
         let d = init.first().map_or(0, Vec::len);
         let bad = |m: String| Err(InverseError::InvalidSetting(m));
@@ -240,18 +295,18 @@ impl<F: Fn(&[f64]) -> f64> Ensemble<F> {
             ));
         }
         let pos: Vec<Vec<f64>> = init.to_vec();
-        let lp: Vec<f64> = pos.iter().map(|x| log_density(x)).collect();
+        let lp = log_density.log_densities(&pos);
         if let Some(k) = lp.iter().position(|v| !v.is_finite()) {
             return bad(format!("ensemble: start {k} has log-density {}", lp[k]));
         }
         Ok(Self {
-            log_density,
             settings: *settings,
             pos,
             lp,
             rng: ChaCha8Rng::seed_from_u64(settings.seed),
             proposal: None,
             ridge: None,
+            current: Move::Stretch,
             step: 0,
             accepted: 0,
             proposed: 0,
@@ -259,14 +314,14 @@ impl<F: Fn(&[f64]) -> f64> Ensemble<F> {
     }
 
     /// The ensemble with the ridge move (module docs) used with
-    /// probability `ridge_fraction`; `log_density` must be a density on
+    /// probability `ridge_fraction`; the log-density must be a density on
     /// the unit coordinates of the ridge's axes.
     pub fn with_ridge(mut self, ridge: RidgeMove) -> Self {
         self.ridge = Some(ridge);
         self
     }
 
-    /// Kept draws with nothing in them yet, for [`Ensemble::sample`].
+    /// Kept draws with nothing in them yet, for [`sample`].
     pub fn empty_chains(&self) -> Chains {
         Chains {
             dim: self.pos[0].len(),
@@ -275,29 +330,6 @@ impl<F: Fn(&[f64]) -> f64> Ensemble<F> {
             samples: Vec::new(),
             log_density: Vec::new(),
             acceptance: 0.0,
-        }
-    }
-
-    /// `settings.burn` steps of stretch/DE moves; at their end stray
-    /// walkers are moved onto the bulk ([`prune_strays`]) and the
-    /// independence proposal is fitted to the second half of burn-in.
-    pub fn burn_in(&mut self) {
-        let burn = self.settings.burn;
-        let use_t = self.settings.independence_fraction > 0.0;
-        let mut burn_points: Vec<Vec<f64>> = Vec::new();
-        for s in 0..burn {
-            if s >= burn / 2 && use_t {
-                burn_points.extend(self.pos.iter().cloned());
-            }
-            self.move_walkers(false);
-        }
-        if burn > 0 {
-            let d = self.pos[0].len();
-            prune_strays(&mut self.pos, &mut self.lp, d, &mut self.rng);
-        }
-        if use_t {
-            burn_points.extend(self.pos.iter().cloned());
-            self.proposal = TProposal::fit(&burn_points, 1.2);
         }
     }
 
@@ -321,122 +353,222 @@ impl<F: Fn(&[f64]) -> f64> Ensemble<F> {
         }
     }
 
-    /// `steps` more steps, appended to `out` (from [`Ensemble::empty_chains`]).
-    pub fn sample(&mut self, steps: usize, out: &mut Chains) {
-        for _ in 0..steps {
-            self.move_walkers(true);
-            for k in 0..self.pos.len() {
-                out.samples.extend_from_slice(&self.pos[k]);
-                out.log_density.push(self.lp[k]);
-            }
-        }
-        out.steps += steps;
-        out.acceptance = self.accepted as f64 / self.proposed.max(1) as f64;
+    /// Draws the move of the next step (`kept` allows the independence
+    /// move): refresh, else ridge, else independence, else DE or stretch.
+    fn choose_move(&mut self, kept: bool) {
+        let s = &self.settings;
+        let rng = &mut self.rng;
+        self.current = if s.refresh_fraction > 0.0 && rng.random::<f64>() < s.refresh_fraction {
+            Move::Refresh
+        } else if self.ridge.is_some() && rng.random::<f64>() < s.ridge_fraction {
+            Move::Ridge
+        } else if self.proposal.is_some() && kept && rng.random::<f64>() < s.independence_fraction {
+            Move::Independence
+        } else if rng.random::<f64>() < s.de_fraction {
+            let d = self.pos[0].len();
+            let gamma = if self.step % 10 == 9 {
+                1.0
+            } else {
+                2.38 / (2.0 * d as f64).sqrt()
+            };
+            Move::DifferentialEvolution { gamma }
+        } else {
+            Move::Stretch
+        };
     }
 
-    /// One step of every walker; `kept` allows the independence move.
-    fn move_walkers(&mut self, kept: bool) {
-        let w = self.pos.len();
+    /// The walkers of half `h` (0: the first ⌊W/2⌋, 1: the rest) and of
+    /// the complementary half.
+    fn halves(&self, h: usize) -> (std::ops::Range<usize>, std::ops::Range<usize>) {
+        let (w, mid) = (self.pos.len(), self.pos.len() / 2);
+        if h == 0 {
+            (0..mid, mid..w)
+        } else {
+            (mid..w, 0..mid)
+        }
+    }
+
+    /// Proposals of the current move for the walkers of half `h`, their
+    /// points appended to `ys`. Stretch and DE draw their partners from
+    /// the complementary half only (the split form, module docs).
+    fn propose(&mut self, h: usize, ys: &mut Vec<Vec<f64>>) -> Vec<Pending> {
+        let (own, rest) = self.halves(h);
         let d = self.pos[0].len();
-        let f = &self.log_density;
-        let rng = &mut self.rng;
-        if self.settings.refresh_fraction > 0.0
-            && rng.random::<f64>() < self.settings.refresh_fraction
-        {
-            for k in 0..w {
-                let c = rng.random_range(0..d);
-                let mut yv = self.pos[k].clone();
-                yv[c] = rng.random::<f64>();
-                let lpy = f(&yv);
-                self.proposed += 1;
-                let u: f64 = rng.random();
-                if lpy.is_finite() && u.ln() < lpy - self.lp[k] {
-                    self.pos[k] = yv;
-                    self.lp[k] = lpy;
-                    self.accepted += 1;
-                }
-            }
-            self.step += 1;
-            return;
-        }
-        if let Some(ridge) = self
-            .ridge
-            .as_ref()
-            .filter(|_| rng.random::<f64>() < self.settings.ridge_fraction)
-        {
-            for k in 0..w {
-                let v: f64 = rng.random();
-                let time = (ridge.fast_time.is_some() && rng.random::<f64>() < 0.5)
-                    .then(|| rng.random::<f64>());
-                let u: f64 = rng.random();
-                self.proposed += 1;
-                let Some((yv, log_j)) = ridge.propose(&self.pos[k], v, time) else {
-                    continue;
-                };
-                let lpy = f(&yv);
-                if lpy.is_finite() && u.ln() < lpy - self.lp[k] + log_j {
-                    self.pos[k] = yv;
-                    self.lp[k] = lpy;
-                    self.accepted += 1;
-                }
-            }
-            self.step += 1;
-            return;
-        }
-        if let Some(q) = self
-            .proposal
-            .as_ref()
-            .filter(|_| kept && rng.random::<f64>() < self.settings.independence_fraction)
-        {
-            for k in 0..w {
-                let (yv, lqy) = q.draw(rng);
-                let lqx = q.log_density(&self.pos[k]);
-                let lpy = f(&yv);
-                self.proposed += 1;
-                let u: f64 = rng.random();
-                if lpy.is_finite() && u.ln() < lpy - self.lp[k] + lqx - lqy {
-                    self.pos[k] = yv;
-                    self.lp[k] = lpy;
-                    self.accepted += 1;
-                }
-            }
-            self.step += 1;
-            return;
-        }
         let a = self.settings.stretch;
-        let gamma0 = 2.38 / (2.0 * d as f64).sqrt();
-        let de = rng.random::<f64>() < self.settings.de_fraction;
-        let gamma = if self.step % 10 == 9 { 1.0 } else { gamma0 };
-        let mut y = vec![0.0; d];
-        for k in 0..w {
-            let log_ratio_extra = if de {
-                let i = other(rng, w, &[k]);
-                let j = other(rng, w, &[k, i]);
-                for c in 0..d {
-                    y[c] = self.pos[k][c]
-                        + gamma * (self.pos[i][c] - self.pos[j][c])
-                        + 1e-10 * normal(rng);
-                }
-                0.0
-            } else {
-                let j = other(rng, w, &[k]);
-                let u: f64 = rng.random();
-                let z = ((a - 1.0) * u + 1.0).powi(2) / a;
-                for c in 0..d {
-                    y[c] = self.pos[j][c] + z * (self.pos[k][c] - self.pos[j][c]);
-                }
-                (d as f64 - 1.0) * z.ln()
-            };
-            let lpy = f(&y);
+        let rng = &mut self.rng;
+        let mut out = Vec::with_capacity(own.len());
+        for k in own {
+            let x = &self.pos[k];
             self.proposed += 1;
+            let (y, log_ratio) = match self.current {
+                Move::Refresh => {
+                    let c = rng.random_range(0..d);
+                    let mut y = x.clone();
+                    y[c] = rng.random::<f64>();
+                    (y, 0.0)
+                }
+                Move::Ridge => {
+                    let Some(ridge) = self.ridge.as_ref() else {
+                        continue;
+                    };
+                    let v: f64 = rng.random();
+                    let time = (ridge.fast_time.is_some() && rng.random::<f64>() < 0.5)
+                        .then(|| rng.random::<f64>());
+                    match ridge.propose(x, v, time) {
+                        Some(p) => p,
+                        None => {
+                            // Rejected; the acceptance uniform is drawn as for any walker.
+                            let _: f64 = rng.random();
+                            continue;
+                        }
+                    }
+                }
+                Move::Independence => {
+                    let Some(q) = self.proposal.as_ref() else {
+                        continue;
+                    };
+                    let (y, lqy) = q.draw(rng);
+                    let lqx = q.log_density(x);
+                    (y, lqx - lqy)
+                }
+                Move::DifferentialEvolution { gamma } => {
+                    let i = other(rng, rest.clone(), None);
+                    let j = other(rng, rest.clone(), Some(i));
+                    let (xi, xj) = (&self.pos[i], &self.pos[j]);
+                    let y = (0..d)
+                        .map(|c| x[c] + gamma * (xi[c] - xj[c]) + 1e-10 * normal(rng))
+                        .collect();
+                    (y, 0.0)
+                }
+                Move::Stretch => {
+                    let j = other(rng, rest.clone(), None);
+                    let u: f64 = rng.random();
+                    let z = ((a - 1.0) * u + 1.0).powi(2) / a;
+                    let xj = &self.pos[j];
+                    let y = (0..d).map(|c| xj[c] + z * (x[c] - xj[c])).collect();
+                    (y, (d as f64 - 1.0) * z.ln())
+                }
+            };
             let u: f64 = rng.random();
-            if lpy.is_finite() && u.ln() < log_ratio_extra + lpy - self.lp[k] {
-                self.pos[k].copy_from_slice(&y);
-                self.lp[k] = lpy;
+            ys.push(y);
+            out.push(Pending {
+                walker: k,
+                log_ratio,
+                ln_u: u.ln(),
+            });
+        }
+        out
+    }
+
+    /// Accepts or rejects the proposals `pending` at points `ys` with
+    /// log-densities `lps` (Metropolis–Hastings).
+    fn accept(&mut self, pending: &[Pending], ys: Vec<Vec<f64>>, lps: &[f64]) {
+        for ((p, y), &lpy) in pending.iter().zip(ys).zip(lps) {
+            if lpy.is_finite() && p.ln_u < p.log_ratio + lpy - self.lp[p.walker] {
+                self.pos[p.walker] = y;
+                self.lp[p.walker] = lpy;
                 self.accepted += 1;
             }
         }
-        self.step += 1;
+    }
+}
+
+/// One step of every ensemble in `ensembles`: each draws its move, then
+/// each half of every ensemble's walkers is proposed and the proposals of
+/// all ensembles are evaluated in one batch (two calls of `log_density`
+/// per step). A move whose proposal depends only on the walker's own
+/// position (refresh, ridge, independence) proposes both halves in the
+/// first batch: the positions it reads do not change in between, so the
+/// draws are the same, and larger batches cost less per point.
+/// `kept` allows the independence move.
+fn step_all(ensembles: &mut [Ensemble], log_density: &impl LogDensity, kept: bool) {
+    for e in ensembles.iter_mut() {
+        e.choose_move(kept);
+    }
+    for h in 0..2 {
+        let mut ys = Vec::new();
+        let mut batches = Vec::with_capacity(ensembles.len());
+        for e in ensembles.iter_mut() {
+            let own_only = !matches!(
+                e.current,
+                Move::Stretch | Move::DifferentialEvolution { .. }
+            );
+            let from = ys.len();
+            let pending = match (h, own_only) {
+                (0, true) => {
+                    let mut p = e.propose(0, &mut ys);
+                    p.extend(e.propose(1, &mut ys));
+                    p
+                }
+                (_, true) => Vec::new(),
+                _ => e.propose(h, &mut ys),
+            };
+            batches.push((from, pending));
+        }
+        let lps = log_density.log_densities(&ys);
+        let mut ys = ys.into_iter();
+        for (e, (from, pending)) in ensembles.iter_mut().zip(batches) {
+            let n = pending.len();
+            let mine: Vec<Vec<f64>> = ys.by_ref().take(n).collect();
+            e.accept(&pending, mine, &lps[from..from + n]);
+        }
+    }
+    for e in ensembles.iter_mut() {
+        e.step += 1;
+    }
+}
+
+/// `burn` steps (the first ensemble's setting) of every ensemble,
+/// stepped together (without the independence move); at their end stray
+/// walkers are moved onto the bulk ([`prune_strays`]) and each ensemble's
+/// independence proposal is fitted to its second half of burn-in.
+pub fn burn_in(ensembles: &mut [Ensemble], log_density: &impl LogDensity) {
+    let Some(burn) = ensembles.first().map(|e| e.settings.burn) else {
+        return;
+    };
+    let mut burn_points: Vec<Vec<Vec<f64>>> = vec![Vec::new(); ensembles.len()];
+    for s in 0..burn {
+        if s >= burn / 2 {
+            for (e, pts) in ensembles.iter().zip(&mut burn_points) {
+                if e.settings.independence_fraction > 0.0 {
+                    pts.extend(e.pos.iter().cloned());
+                }
+            }
+        }
+        step_all(ensembles, log_density, false);
+    }
+    for (e, mut pts) in ensembles.iter_mut().zip(burn_points) {
+        if burn > 0 {
+            let d = e.pos[0].len();
+            prune_strays(&mut e.pos, &mut e.lp, d, &mut e.rng);
+        }
+        if e.settings.independence_fraction > 0.0 {
+            pts.extend(e.pos.iter().cloned());
+            e.proposal = TProposal::fit(&pts, 1.2);
+        }
+    }
+}
+
+/// `steps` more steps of every ensemble, stepped together, appended to
+/// `out` (one [`Ensemble::empty_chains`] per ensemble, same order).
+pub fn sample(
+    ensembles: &mut [Ensemble],
+    log_density: &impl LogDensity,
+    steps: usize,
+    out: &mut [Chains],
+) {
+    for _ in 0..steps {
+        step_all(ensembles, log_density, true);
+        for (e, c) in ensembles.iter().zip(out.iter_mut()) {
+            for k in 0..e.pos.len() {
+                c.samples.extend_from_slice(&e.pos[k]);
+                c.log_density.push(e.lp[k]);
+            }
+        }
+    }
+    for (e, c) in ensembles.iter().zip(out.iter_mut()) {
+        c.steps += steps;
+        c.acceptance = e.accepted as f64 / e.proposed.max(1) as f64;
     }
 }
 
@@ -699,13 +831,14 @@ mod tests {
             seed: 11,
             ..EnsembleSettings::default()
         };
-        let mut e = Ensemble::new(logp, &init, &s).expect("ensemble");
-        e.burn_in();
-        let mut ch = e.empty_chains();
+        let mut e = [Ensemble::new(&logp, &init, &s).expect("ensemble")];
+        burn_in(&mut e, &logp);
+        let mut ch = [e[0].empty_chains()];
         for _ in 0..8 {
-            e.sample(500, &mut ch);
-            e.refit_proposal(&ch, 500);
+            sample(&mut e, &logp, 500, &mut ch);
+            e[0].refit_proposal(&ch[0], 500);
         }
+        let [ch] = ch;
         let n = (ch.steps * ch.walkers) as f64;
         let mean = |i: usize| ch.samples.iter().skip(i).step_by(2).sum::<f64>() / n;
         let var = |i: usize| {
@@ -803,12 +936,13 @@ mod tests {
             fast_time: Some(3),
             ..ridge_3d()
         };
-        let mut e = Ensemble::new(logp, &init, &s)
+        let mut e = [Ensemble::new(&logp, &init, &s)
             .expect("ensemble")
-            .with_ridge(ridge);
-        e.burn_in();
-        let mut ch = e.empty_chains();
-        e.sample(s.steps, &mut ch);
+            .with_ridge(ridge)];
+        burn_in(&mut e, &logp);
+        let mut ch = [e[0].empty_chains()];
+        sample(&mut e, &logp, s.steps, &mut ch);
+        let [ch] = ch;
         let n = (ch.steps * ch.walkers) as f64;
         let mean = |i: usize| ch.samples.iter().skip(i).step_by(4).sum::<f64>() / n;
         let var = |i: usize| {
@@ -833,6 +967,36 @@ mod tests {
                 var(i)
             );
         }
+    }
+
+    /// Ensembles stepped together (their proposals evaluated in shared
+    /// batches) give exactly the chains each gives alone: own random
+    /// streams, nothing shared but the batch, so they stay independent
+    /// for R̂.
+    #[test]
+    fn ensembles_stepped_together_equal_ensembles_run_alone() {
+        let logp = |x: &[f64]| -0.5 * (x[0] * x[0] + 4.0 * (x[1] - x[0]).powi(2));
+        let init: Vec<Vec<f64>> = (0..8).map(|k| vec![k as f64 * 0.1, -0.2]).collect();
+        let settings = |seed| EnsembleSettings {
+            walkers: 8,
+            burn: 20,
+            steps: 60,
+            refresh_fraction: 0.1,
+            seed,
+            ..EnsembleSettings::default()
+        };
+        let mut together: Vec<Ensemble> = [3, 4]
+            .map(|seed| Ensemble::new(&logp, &init, &settings(seed)).expect("e"))
+            .into();
+        burn_in(&mut together, &logp);
+        let mut chains: Vec<Chains> = together.iter().map(Ensemble::empty_chains).collect();
+        sample(&mut together, &logp, 30, &mut chains);
+        sample(&mut together, &logp, 30, &mut chains);
+        for (seed, ch) in [3, 4].into_iter().zip(&chains) {
+            let alone = sample_ensemble(logp, &init, &settings(seed)).expect("alone");
+            assert_eq!(&alone, ch);
+        }
+        assert_ne!(chains[0].samples, chains[1].samples);
     }
 
     #[test]

@@ -14,8 +14,10 @@
 //! [`crate::ReducedModel`]), so by the Woodbury identity, with
 //! M = I_k + (v/σ²) UᵀU and w = Uᵀr:
 //! ln det Σ = m ln σ² + ln det M, rᵀΣ⁻¹r = (rᵀr − (v/σ²) wᵀM⁻¹w)/σ²,
-//! rᵀr = dᵀd − 2 dᵀA c + cᵀ(AᵀA)c, w = Uᵀd − (UᵀA)c — O(k³ + r²) per
-//! evaluation after O(m·(k + r)²) once per curve. Otherwise K is diagonal
+//! rᵀr = dᵀd − 2 dᵀA c + cᵀ(AᵀA)c, w = Uᵀd − (UᵀA)c; with UᵀU = QΛQᵀ
+//! diagonalised once per curve, ln det M and wᵀM⁻¹w are sums over its k
+//! eigenvalues — O(k·r + r²) per evaluation after O(m·(k + r)²) once per
+//! curve. Otherwise K is diagonal
 //! and the sum runs over the m points.
 
 use nalgebra::{DMatrix, DVector};
@@ -75,12 +77,18 @@ pub fn noise_sd(times: &[f64], values: &[f64]) -> Result<f64> {
 }
 
 enum Form {
+    /// UᵀU = QΛQᵀ diagonalised once, so that M = Q(I + (v/σ²)Λ)Qᵀ:
+    /// ln det M = Σ ln(1 + (v/σ²)λ_i) and wᵀM⁻¹w = Σ (Qᵀw)_i²/(1 + (v/σ²)λ_i),
+    /// O(k·r) per evaluation.
     LowRank {
         ata: DMatrix<f64>,
-        uta: DMatrix<f64>,
-        utu: DMatrix<f64>,
+        /// QᵀUᵀA.
+        qta: DMatrix<f64>,
+        /// λ, the eigenvalues of UᵀU (≥ 0).
+        lambda: DVector<f64>,
         atd: DVector<f64>,
-        utd: DVector<f64>,
+        /// QᵀUᵀd.
+        qtd: DVector<f64>,
         dtd: f64,
     },
     Diagonal {
@@ -117,12 +125,14 @@ impl<'a> CurveLikelihood<'a> {
             OutputCovariance::LowRank { m: mm, k, factor } if surrogate.is_reduced() => {
                 let u = DMatrix::from_column_slice(mm, k, &factor);
                 let a = surrogate.output_map();
+                let eig = (u.transpose() * &u).symmetric_eigen();
+                let qtu = eig.eigenvectors.transpose() * u.transpose();
                 Form::LowRank {
                     ata: a.transpose() * a,
-                    uta: u.transpose() * a,
-                    utu: u.transpose() * &u,
+                    qta: &qtu * a,
+                    lambda: eig.eigenvalues.map(|l| l.max(0.0)),
                     atd: a.transpose() * &d,
-                    utd: u.transpose() * &d,
+                    qtd: qtu * &d,
                     dtd: d.dot(&d),
                 }
             }
@@ -149,44 +159,58 @@ impl<'a> CurveLikelihood<'a> {
     /// Surrogate failures at x; a non-positive-definite Σ (not expected:
     /// σ² > 0 and v(x)·K ⪰ 0).
     pub fn value(&self, x: &[f64]) -> Result<f64> {
+        Ok(self.values(&[x.to_vec()])?[0])
+    }
+
+    /// ln L at each of many physical points: with a PCA the surrogate's
+    /// c(x) and v(x) for the whole batch at once
+    /// ([`KrigingSurrogate::coordinates_and_mse_scales`]), then the
+    /// Woodbury form (module docs) point by point.
+    ///
+    /// # Errors
+    /// As [`CurveLikelihood::value`] for any point of the batch.
+    pub fn values(&self, xs: &[Vec<f64>]) -> Result<Vec<f64>> {
         let s2 = self.noise_var;
-        let v = self.surrogate.mse_scale(x)?;
         let m = self.data.len() as f64;
         match &self.form {
             Form::LowRank {
                 ata,
-                uta,
-                utu,
+                qta,
+                lambda,
                 atd,
-                utd,
+                qtd,
                 dtd,
             } => {
-                let c = self.surrogate.coordinate_values(x)?;
-                let rtr = dtd - 2.0 * atd.dot(&c) + c.dot(&(ata * &c));
-                let w = utd - uta * &c;
-                let ratio = v / s2;
-                let mut mm = utu * ratio;
-                for i in 0..mm.nrows() {
-                    mm[(i, i)] += 1.0;
+                let (cs, vs) = self.surrogate.coordinates_and_mse_scales(xs)?;
+                let mut out = Vec::with_capacity(xs.len());
+                for (c, v) in cs.iter().zip(vs) {
+                    let rtr = dtd - 2.0 * atd.dot(c) + c.dot(&(ata * c));
+                    let w = qtd - qta * c;
+                    let ratio = v / s2;
+                    let (mut logdet_m, mut wmw) = (0.0, 0.0);
+                    for (wi, li) in w.iter().zip(lambda) {
+                        let e = 1.0 + ratio * li;
+                        logdet_m += e.ln();
+                        wmw += wi * wi / e;
+                    }
+                    let quad = (rtr.max(0.0) - ratio * wmw) / s2;
+                    out.push(-0.5 * (m * s2.ln() + logdet_m + quad));
                 }
-                let chol = mm.cholesky().ok_or_else(|| InverseError::Model {
-                    x: x.to_vec(),
-                    message: "likelihood: I + (v/σ²)UᵀU is not positive definite".into(),
-                })?;
-                let logdet_m: f64 = 2.0 * chol.l().diagonal().iter().map(|l| l.ln()).sum::<f64>();
-                let minv_w = chol.solve(&w);
-                let quad = (rtr.max(0.0) - ratio * w.dot(&minv_w)) / s2;
-                Ok(-0.5 * (m * s2.ln() + logdet_m + quad))
+                Ok(out)
             }
-            Form::Diagonal { k } => {
-                let y = Model::response(self.surrogate, x)?;
-                let mut sum = 0.0;
-                for ((yj, dj), kj) in y.iter().zip(&self.data).zip(k) {
-                    let var = s2 + v * kj;
-                    sum += var.ln() + (dj - yj).powi(2) / var;
-                }
-                Ok(-0.5 * sum)
-            }
+            Form::Diagonal { k } => xs
+                .iter()
+                .map(|x| {
+                    let v = self.surrogate.mse_scale(x)?;
+                    let y = Model::response(self.surrogate, x)?;
+                    let mut sum = 0.0;
+                    for ((yj, dj), kj) in y.iter().zip(&self.data).zip(k) {
+                        let var = s2 + v * kj;
+                        sum += var.ln() + (dj - yj).powi(2) / var;
+                    }
+                    Ok(-0.5 * sum)
+                })
+                .collect(),
         }
     }
 }

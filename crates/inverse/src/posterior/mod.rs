@@ -27,7 +27,9 @@ mod likelihood;
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-pub use ensemble::{Chains, Ensemble, EnsembleSettings, RidgeMove, sample_ensemble};
+pub use ensemble::{
+    Chains, Ensemble, EnsembleSettings, LogDensity, RidgeMove, burn_in, sample, sample_ensemble,
+};
 pub use likelihood::{CurveLikelihood, noise_sd};
 
 use crate::error::{InverseError, Result};
@@ -298,7 +300,10 @@ fn starts(
 ///
 /// Cost: ensembles·walkers·(burn + kept steps) likelihood evaluations,
 /// each one reduced prediction O(N·q·d) and one Kriging variance O(N²)
-/// (N training runs).
+/// (N training runs); the ensembles are stepped together so that each
+/// step's proposals of all ensembles are evaluated in batches of 32–64
+/// points, the O(N²) triangular solve done for the batch at once
+/// ([`CurveLikelihood::values`]).
 ///
 /// # Errors
 /// Bad settings, a curve without measurable noise, surrogate failures.
@@ -348,12 +353,11 @@ pub fn sample_posterior_fixed(
     let inside = |u: &[f64]| {
         u.iter().all(|v| (0.0..=1.0).contains(v)) && domain.feasible(&domain.from_unit(u), 0.0)
     };
-    let log_density = |u: &[f64]| {
-        if !inside(u) {
-            return f64::NEG_INFINITY;
-        }
-        lik.value(&fixed.expand(&domain.from_unit(u)))
-            .unwrap_or(f64::NEG_INFINITY)
+    let log_density = UnitDensity {
+        lik: &lik,
+        fixed,
+        domain: &domain,
+        inside: &inside,
     };
     let init = starts(
         surrogate,
@@ -365,6 +369,7 @@ pub fn sample_posterior_fixed(
         &inside,
     )?;
     let mut ensembles = Vec::with_capacity(init.len());
+    let mut chains = Vec::with_capacity(init.len());
     for (e, start) in init.iter().enumerate() {
         let es = EnsembleSettings {
             walkers: settings.walkers,
@@ -384,26 +389,57 @@ pub fn sample_posterior_fixed(
             }
             ens = ens.with_ridge(ridge);
         }
-        ens.burn_in();
-        let chains = ens.empty_chains();
-        ensembles.push((ens, chains));
+        chains.push(ens.empty_chains());
+        ensembles.push(ens);
     }
+    burn_in(&mut ensembles, &log_density);
     let max_steps = settings.max_steps.max(settings.steps);
     loop {
-        for (ens, chains) in &mut ensembles {
-            ens.sample(settings.steps, chains);
-        }
-        let kept = ensembles[0].1.steps;
-        let draws = to_draws(&domain, ensembles.iter().map(|(_, c)| c));
+        sample(&mut ensembles, &log_density, settings.steps, &mut chains);
+        let kept = chains[0].steps;
+        let draws = to_draws(&domain, chains.iter());
         let post = summarise(&draws, noise, settings)?;
         if post.rhat_max <= RHAT_TARGET || kept + settings.steps > max_steps {
             return Ok(post);
         }
         if settings.refit_proposal {
-            for (ens, chains) in &mut ensembles {
-                ens.refit_proposal(chains, settings.steps);
+            for (ens, ch) in ensembles.iter_mut().zip(&chains) {
+                ens.refit_proposal(ch, settings.steps);
             }
         }
+    }
+}
+
+/// The posterior's log-density in the unit coordinates u of the free
+/// parameters: −∞ outside the prior's support, else ln L at the expanded
+/// physical point, the points of a batch evaluated together
+/// ([`CurveLikelihood::values`]).
+struct UnitDensity<'a> {
+    lik: &'a CurveLikelihood<'a>,
+    fixed: &'a FixedInputs,
+    domain: &'a nlvid_model::Domain,
+    inside: &'a dyn Fn(&[f64]) -> bool,
+}
+
+impl LogDensity for UnitDensity<'_> {
+    fn log_densities(&self, us: &[Vec<f64>]) -> Vec<f64> {
+        let mut out = vec![f64::NEG_INFINITY; us.len()];
+        let idx: Vec<usize> = (0..us.len()).filter(|&i| (self.inside)(&us[i])).collect();
+        let xs: Vec<Vec<f64>> = idx
+            .iter()
+            .map(|&i| self.fixed.expand(&self.domain.from_unit(&us[i])))
+            .collect();
+        match self.lik.values(&xs) {
+            Ok(v) => idx.iter().zip(v).for_each(|(&i, l)| out[i] = l),
+            // A point the surrogate refuses: evaluate one by one so that
+            // only it gets −∞.
+            Err(_) => {
+                for (&i, x) in idx.iter().zip(&xs) {
+                    out[i] = self.lik.value(x).unwrap_or(f64::NEG_INFINITY);
+                }
+            }
+        }
+        out
     }
 }
 

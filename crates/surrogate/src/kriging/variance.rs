@@ -152,23 +152,34 @@ impl KrigingModel {
             }
             rt[(i, 0)] = self.correlation.value(&self.theta, &dx);
         }
-        let fac = self.mse_factors()?;
-        solve_lower_triangular_in_place(fac.c(n), rt.as_mut(), Par::Seq);
-        let mut v = fac.ft(n, p).transpose() * &rt;
-        for k in 0..p {
-            v[(k, 0)] -= f[k];
-        }
-        solve_lower_triangular_in_place(fac.g(p).transpose(), v.as_mut(), Par::Seq);
+        let fm = Mat::<f64>::from_fn(p, 1, |k, _| f[k]);
+        let v = self.solve_variance(rt.as_mut(), &fm)?;
+        let phi = phi_of(rt.col(0).iter(), v.col(0).iter());
         let rt: Vec<f64> = rt.col(0).iter().copied().collect();
         let v: Vec<f64> = v.col(0).iter().copied().collect();
-        let phi =
-            1.0 + v.iter().map(|a| a * a).sum::<f64>() - rt.iter().map(|a| a * a).sum::<f64>();
-        Ok(VariancePoint {
-            xn,
-            rt,
-            v,
-            phi: phi.max(0.0),
-        })
+        Ok(VariancePoint { xn, rt, v, phi })
+    }
+
+    /// rt = C⁻¹r (in place, column by column of `r`, n × B) and
+    /// v = G⁻ᵀ(F̃ᵀrt − f) (returned, p × B) for B points with regression
+    /// values `f` (p × B): the two triangular solves of φ (module docs),
+    /// all columns at once.
+    fn solve_variance(&self, mut r: faer::MatMut<'_, f64>, f: &Mat<f64>) -> Result<Mat<f64>> {
+        let (n, p) = (self.n_sites, self.p());
+        let fac = self.mse_factors()?;
+        solve_lower_triangular_in_place(fac.c(n), r.as_mut(), Par::Seq);
+        let mut v = fac.ft(n, p).transpose() * r.as_ref() - f;
+        solve_lower_triangular_in_place(fac.g(p).transpose(), v.as_mut(), Par::Seq);
+        Ok(v)
+    }
+
+    /// φ(x) of each column of a batch of correlation columns `r` (n × B,
+    /// overwritten by C⁻¹r) with regression values `f` (p × B).
+    pub(crate) fn mse_factors_of(&self, mut r: Mat<f64>, f: &Mat<f64>) -> Result<Vec<f64>> {
+        let v = self.solve_variance(r.as_mut(), f)?;
+        Ok((0..r.ncols())
+            .map(|j| phi_of(r.col(j).iter(), v.col(j).iter()))
+            .collect())
     }
 
     /// k(a, b): the posterior covariance of the kriged outputs at a and b
@@ -211,6 +222,12 @@ impl KrigingModel {
         }
         Ok(mean_mse_over_phi / (range * range))
     }
+}
+
+/// φ = 1 + |v|² − |rt|² (module docs), clamped at 0 (rounding).
+fn phi_of<'a>(rt: impl Iterator<Item = &'a f64>, v: impl Iterator<Item = &'a f64>) -> f64 {
+    let phi = 1.0 + v.map(|a| a * a).sum::<f64>() - rt.map(|a| a * a).sum::<f64>();
+    phi.max(0.0)
 }
 
 /// The process covariance K of the outputs (m × m), `Cov[ŷ(x)] = v(x)·K`
@@ -433,7 +450,7 @@ impl KrigingModel {
         Ok(total / (n * rank) as f64)
     }
 
-    fn check_linear_for_variance(&self) -> Result<()> {
+    pub(super) fn check_linear_for_variance(&self) -> Result<()> {
         if self.log_outputs {
             Err(SurrogateError::InvalidSettings(
                 "the model predicts exp(kriged ln y): its MSE is not v(x)·K (refit without \
@@ -762,6 +779,49 @@ mod covariance_tests {
 
     /// With a PCA, U Uᵀ has the off-diagonal terms D V Σ Vᵀ D: checked
     /// entry by entry against that product written out.
+    /// The batch of [`KrigingModel::coordinates_and_mse_scales`] equals
+    /// the one-point functions (`output_coordinate_values`, `mse_scale`,
+    /// separate code paths) point by point, with and without a PCA and an
+    /// output scale, for a batch of one and of seven points.
+    #[test]
+    fn batched_coordinates_and_mse_scales_equal_the_one_point_values() {
+        let pts: Vec<Vec<f64>> = (0..7)
+            .map(|i| vec![0.55 + 0.13 * i as f64, (0.31 * i as f64).sin().abs()])
+            .collect();
+        for (pca, scaled) in [(None, false), (Some(0.99999), false), (Some(0.99999), true)] {
+            let m = model(pca, scaled);
+            for batch in [&pts[..1], &pts[..]] {
+                let (cs, vs) = m.coordinates_and_mse_scales(batch).expect("batch");
+                assert_eq!((cs.len(), vs.len()), (batch.len(), batch.len()));
+                for (x, (c, v)) in batch.iter().zip(cs.iter().zip(&vs)) {
+                    let c1 = m.output_coordinate_values(x).expect("c");
+                    let v1 = m.mse_scale(x).expect("v");
+                    // φ = 1 + |v|² − |rt|² is a difference of O(1) terms:
+                    // near a site (φ ≈ 1e-11 at (0.55, 0)) the two roundings
+                    // agree to ≈ nε absolutely, not relatively.
+                    assert!(
+                        (v - v1).abs() <= 1e-10 * v1.abs() + 1e-12,
+                        "x {x:?}: {v} vs {v1}"
+                    );
+                    // z_k = Σ_i γ_ik r_i + Σ_j β_jk f_j sums terms far larger
+                    // than z_k (γ of an ill-conditioned R), in another order
+                    // in the batch: rounding ≈ nε·Σ|terms| (r ≤ 1, |f| ≲ 2).
+                    let (n, p) = (m.n_sites, m.p());
+                    for (k, (a, b)) in c.iter().zip(&c1).enumerate().skip(1) {
+                        let terms: f64 =
+                            (0..n).map(|i| m.gamma[(k - 1) * n + i].abs()).sum::<f64>()
+                                + 2.0 * (0..p).map(|j| m.beta[(k - 1) * p + j].abs()).sum::<f64>();
+                        assert!(
+                            (a - b).abs() <= 1e-12 * c[0] * terms,
+                            "x {x:?}, c_{k}: {a} vs {b} (terms {terms:e})"
+                        );
+                    }
+                    assert_eq!(c[0], c1[0]);
+                }
+            }
+        }
+    }
+
     #[test]
     fn low_rank_factor_reproduces_the_score_covariance() {
         let m = model(Some(0.99999), false);

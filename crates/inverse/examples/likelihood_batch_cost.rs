@@ -1,0 +1,80 @@
+//! Cost of the surrogate's part of one posterior likelihood evaluation
+//! (issue 17, docs/theory/inverse.md "Fourth round"): c(x) and v(x) at 64
+//! points of the demo meta-model (N = 970 sites), one point at a time
+//! (`mse_scale` + `output_coordinate_values`, the sampler before session
+//! 10) or in batches (`coordinates_and_mse_scales`). For instruction
+//! counts run it under callgrind, collecting the timed function only:
+//!
+//! ```text
+//! valgrind --tool=callgrind '--toggle-collect=likelihood_batch_cost::*_path' \
+//!     target/release/examples/likelihood_batch_cost [one|32|64]
+//! ```
+//! Without valgrind it also prints the CPU seconds per point over 20 repeats.
+
+use std::path::Path;
+
+use nlvid_inverse::{Coordinates, load_kriging_surrogate};
+use nlvid_surrogate::KrigingModel;
+
+#[inline(never)]
+fn one_path(k: &KrigingModel, pts: &[Vec<f64>]) -> f64 {
+    pts.iter()
+        .map(|p| k.mse_scale(p).expect("v(x)") + k.output_coordinate_values(p).expect("c(x)")[1])
+        .sum()
+}
+
+#[inline(never)]
+fn batch_path(k: &KrigingModel, pts: &[Vec<f64>], b: usize) -> f64 {
+    pts.chunks(b)
+        .map(|c| {
+            let (cs, vs) = k.coordinates_and_mse_scales(c).expect("batch");
+            vs.iter().sum::<f64>() + cs[0][1]
+        })
+        .sum()
+}
+
+/// User + system CPU seconds of this process (Linux /proc).
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let rest = stat.rsplit(')').next().unwrap_or("");
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    (ticks(11) + ticks(12)) / 100.0
+}
+
+fn main() {
+    let mode = std::env::args().nth(1).unwrap_or_else(|| "32".into());
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo/metamodel");
+    let s = load_kriging_surrogate(
+        &dir.join("model.json"),
+        &dir.join("meta.json"),
+        Coordinates::Physical,
+    )
+    .expect("demo meta-model");
+    let k = s.kriging();
+    let pts: Vec<Vec<f64>> = (0..64)
+        .map(|i| {
+            let t = f64::from(i) / 64.0;
+            vec![
+                800.0 + 2000.0 * t,
+                0.1 + 0.5 * t,
+                0.3 - 0.2 * t,
+                0.05 + t,
+                3.0 + 20.0 * t,
+            ]
+        })
+        .collect();
+    // The MSE factors (Cholesky of R) are built once, outside the count.
+    let _ = k.mse_scale(&pts[0]).expect("v(x)");
+    let run = || match mode.as_str() {
+        "one" => one_path(k, &pts),
+        b => batch_path(k, &pts, b.parse().unwrap_or(32)),
+    };
+    let c0 = cpu_seconds();
+    let mut v = 0.0;
+    for _ in 0..20 {
+        v += run();
+    }
+    let per = (cpu_seconds() - c0) / (20.0 * pts.len() as f64);
+    println!("{mode}: {:.1} us CPU per point (sum {v:.6e})", per * 1e6);
+}
