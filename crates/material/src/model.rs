@@ -77,7 +77,9 @@ impl<M: Kernel> Material3 for M {
     /// The kinematics from 2×2 block algebra ([`Kin::axisymmetric`]), the
     /// kernel unchanged, `P` and the 5×5 block of `∂P/∂F`
     /// ([`IsoStress::tangent_axisymmetric`]); no Cauchy stress, no 9×9
-    /// tangent.
+    /// tangent. Inlined into the element kernel: the response (30 numbers)
+    /// is then built in place instead of copied out twice per point.
+    #[inline(always)]
     fn update_axisymmetric(
         &self,
         state_n: &M::State,

@@ -170,6 +170,12 @@ impl Kernel for PronyViscoelastic {
     ) -> IsoStress {
         let mut iso = IsoStress::default();
         self.elastic.add_isochoric(k, 1.0, &mut iso);
+        if self.prony.is_empty() {
+            // No Prony term (an elastic cell): no history and no H term;
+            // the general path below would add exact zeros only.
+            add_volumetric(k, bulk, &mut iso);
+            return iso;
+        }
         let j23 = k.j23;
         let sbar = iso.pk2(k) * (1.0 / j23);
         let (frozen, sum_b1) = advance(
