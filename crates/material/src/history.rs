@@ -107,9 +107,15 @@ thread_local! {
 pub(crate) fn cached_weights(rule: HistoryRule, dt: f64, tau: f64) -> StepWeights {
     WEIGHTS.with(|memo| {
         let mut memo = memo.borrow_mut();
-        for (r, d, t, w) in memo.0.iter().flatten() {
-            if *r == rule && d.to_bits() == dt.to_bits() && t.to_bits() == tau.to_bits() {
-                return *w;
+        // Newest entry first: the terms of the current step were stored
+        // last, so a hit is found after one or two comparisons.
+        for k in 1..=MEMO {
+            if let Some((r, d, t, w)) = memo.0[(memo.1 + MEMO - k) % MEMO]
+                && r == rule
+                && d.to_bits() == dt.to_bits()
+                && t.to_bits() == tau.to_bits()
+            {
+                return w;
             }
         }
         let w = rule.weights(dt, tau);
