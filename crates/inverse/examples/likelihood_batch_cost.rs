@@ -33,15 +33,6 @@ fn batch_path(k: &KrigingModel, pts: &[Vec<f64>], b: usize) -> f64 {
         .sum()
 }
 
-/// User + system CPU seconds of this process (Linux /proc).
-fn cpu_seconds() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let rest = stat.rsplit(')').next().unwrap_or("");
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
-    (ticks(11) + ticks(12)) / 100.0
-}
-
 fn main() {
     let mode = std::env::args().nth(1).unwrap_or_else(|| "32".into());
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo/metamodel");
@@ -70,11 +61,11 @@ fn main() {
         "one" => one_path(k, &pts),
         b => batch_path(k, &pts, b.parse().unwrap_or(32)),
     };
-    let c0 = cpu_seconds();
+    let clock = cpu_time::ProcessTime::now();
     let mut v = 0.0;
     for _ in 0..20 {
         v += run();
     }
-    let per = (cpu_seconds() - c0) / (20.0 * pts.len() as f64);
+    let per = clock.elapsed().as_secs_f64() / (20.0 * pts.len() as f64);
     println!("{mode}: {:.1} us CPU per point (sum {v:.6e})", per * 1e6);
 }

@@ -59,7 +59,7 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     let settings = CohortSettings::load(&study)?;
     let inputs = discover(&files.data)?;
     let t0 = Instant::now();
-    let cpu0 = cpu_seconds();
+    let cpu_clock = cpu_time::ProcessTime::now();
     let run = run_cohort(
         &settings,
         &study,
@@ -69,7 +69,7 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
         &RunOptions::default(),
     )?;
     let seconds = t0.elapsed().as_secs_f64();
-    let cpu = cpu_seconds() - cpu0;
+    let cpu = cpu_clock.elapsed().as_secs_f64();
     let domain = nlvid_inverse::read_meta(&demo.join("metamodel/meta.json"))?.domain;
     let (mut n, mut cover) = (0usize, [0usize; 3]);
     let mut rhat_max = 0.0f64;
@@ -158,16 +158,6 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     }
     std::fs::remove_dir_all(&dir)?;
     Ok(ok)
-}
-
-/// User + system CPU seconds of this process (Linux /proc; 0 elsewhere).
-fn cpu_seconds() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    // Fields after the command name "(…)": utime, stime are 14th, 15th.
-    let rest = stat.rsplit(')').next().unwrap_or("");
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
-    (ticks(11) + ticks(12)) / 100.0
 }
 
 /// The demo's cohort study with absolute meta-model paths and `[posterior]`.
