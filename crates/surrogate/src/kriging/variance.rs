@@ -777,8 +777,6 @@ mod covariance_tests {
         }
     }
 
-    /// With a PCA, U Uᵀ has the off-diagonal terms D V Σ Vᵀ D: checked
-    /// entry by entry against that product written out.
     /// The batch of [`KrigingModel::coordinates_and_mse_scales`] equals
     /// the one-point functions (`output_coordinate_values`, `mse_scale`,
     /// separate code paths) point by point, with and without a PCA and an
@@ -822,6 +820,8 @@ mod covariance_tests {
         }
     }
 
+    /// With a PCA, U Uᵀ has the off-diagonal terms D V Σ Vᵀ D: checked
+    /// entry by entry against that product written out.
     #[test]
     fn low_rank_factor_reproduces_the_score_covariance() {
         let m = model(Some(0.99999), false);
