@@ -57,7 +57,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err("the demo meta-model is PCA-reduced".into());
     };
     let u = DMatrix::from_column_slice(m, k, &factor);
-    let cv = s.variance_calibration()?;
+    let cv = s.kriging().cv_variance_ratio()?;
     println!(
         "LOO calibration of the Kriging variance sigma2_CV/sigma2_ML = {cv:.3} (k = {k}, N = {})",
         s.kriging().n_sites
