@@ -80,6 +80,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (mut ratios, mut chis, mut mahals) = (Vec::new(), Vec::new(), Vec::new());
     // (v·tr(K)/(m σ²), |a|²/(v k), |a|²/(v_cal k)) per cell.
     let mut by_v = Vec::new();
+    // Leading PCA direction (the curve's level, G(52 s)) per cell:
+    // (vΣ_00/noise_0, v_cal Σ_00/noise_0, e_0²/(vΣ_00), e_0²/(v_cal Σ_00)).
+    let mut lead = Vec::new();
     let kr = s.kriging();
     let pca = kr.pca.as_ref().ok_or("PCA model")?;
     let sig_ml = pca.residual_cov.clone();
@@ -147,6 +150,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             acc[1] += e * e / (v * sig_cv[i * k + i]);
             acc[2] += v * sig_cv[i * k + i] / noise_i;
             acc[3] += e * e / (vc * sig_cv[i * k + i]);
+            if i == 0 {
+                lead.push((
+                    v * sig_cv[0] / noise_i,
+                    vc * sig_cv[0] / noise_i,
+                    e * e / (v * sig_cv[0]),
+                    e * e / (vc * sig_cv[0]),
+                ));
+            }
         }
         ratios.push(est / sigma);
         chis.push(chi);
@@ -188,6 +199,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         x.sort_by(f64::total_cmp);
         x[x.len() / 2]
     };
+    // Where the surrogate term matters for the level: cells grouped by the
+    // calibrated surrogate/noise variance ratio in the leading direction.
+    println!(
+        "leading direction: v_cal Sigma_00/noise_0 range  cells  median ratio before, after  \
+         median e0^2/(v Sigma_00) before, after (1 = calibrated)"
+    );
+    for (lo, hi) in [(0.0, 0.1), (0.1, 1.0), (1.0, f64::INFINITY)] {
+        let g: Vec<_> = lead.iter().filter(|c| c.1 >= lo && c.1 < hi).collect();
+        if g.is_empty() {
+            continue;
+        }
+        println!(
+            "[{lo}, {hi})  {}  {:.3} {:.3}  {:.3} {:.3}",
+            g.len(),
+            med(g.iter().map(|c| c.0).collect()),
+            med(g.iter().map(|c| c.1).collect()),
+            med(g.iter().map(|c| c.2).collect()),
+            med(g.iter().map(|c| c.3).collect())
+        );
+    }
     for (lo, hi) in [(0.0, 0.005), (0.005, 0.05), (0.05, f64::INFINITY)] {
         let g: Vec<_> = by_v.iter().filter(|c| c.0 >= lo && c.0 < hi).collect();
         if g.is_empty() {
