@@ -7,9 +7,10 @@
 //! calibration is fitted to) and on the held-out checking runs.
 //!
 //! ```text
-//! cargo run --release -p nlvid-surrogate --example variance_calibration -- STUDY MODEL STORE [bins]
+//! cargo run --release -p nlvid-surrogate --example variance_calibration -- STUDY MODEL STORE
 //! ```
-//! e.g. `examples/demo/metamodel.toml examples/demo/metamodel/model.json /tmp/demo-check`.
+//! e.g. `examples/demo/metamodel.toml examples/demo/metamodel/model.json work/demo-check` (a scratch
+//! directory: the checking runs are not part of the committed demo).
 
 use std::path::PathBuf;
 
