@@ -17,7 +17,7 @@ use std::sync::OnceLock;
 
 use nalgebra::{DMatrix, DVector};
 use nlvid_model::{Domain, FailureKind, ForwardModel, RunFailure, Scale};
-use nlvid_surrogate::{KrigingModel, SurrogateError};
+use nlvid_surrogate::{KrigingModel, SurrogateError, VarianceCalibration};
 
 use crate::basis::BasisModel;
 use crate::error::{InverseError, Result};
@@ -45,8 +45,8 @@ pub struct KrigingSurrogate {
     /// Output map A of the reduced form ŷ = A c(x) (m × (q + 1)), built
     /// on first use (without a PCA it is m × (m + 1) and rarely wanted).
     a: OnceLock<DMatrix<f64>>,
-    /// σ²_CV/σ²_ML of the Kriging model, computed on first use.
-    cv_ratio: OnceLock<std::result::Result<f64, String>>,
+    /// The Kriging variance calibration, computed on first use.
+    calibration: OnceLock<std::result::Result<VarianceCalibration, String>>,
     /// The cross-validated output covariance, computed on first use.
     cv_cov: OnceLock<std::result::Result<nlvid_surrogate::OutputCovariance, String>>,
 }
@@ -98,7 +98,7 @@ impl KrigingSurrogate {
             b,
             mu,
             a: OnceLock::new(),
-            cv_ratio: OnceLock::new(),
+            calibration: OnceLock::new(),
             cv_cov: OnceLock::new(),
         };
         s.check_basis_form()?;
@@ -194,17 +194,24 @@ impl KrigingSurrogate {
         Ok((c.into_iter().map(DVector::from_vec).collect(), v))
     }
 
-    /// The leave-one-out calibration of the Kriging variance,
-    /// σ²_CV/σ²_ML ([`KrigingModel::cv_variance_ratio`], Bachoc 2013):
-    /// the factor by which the model's own MSE under- (> 1) or over-
-    /// (< 1) states the errors it makes at its left-out design sites.
-    /// Computed once per surrogate (O(N³/3)).
+    /// The x-dependent calibration of the Kriging variance, v(x) ↦
+    /// α·v(x)^β, fitted by maximum likelihood to the model's own
+    /// leave-one-out residuals under the K of
+    /// [`KrigingSurrogate::output_covariance_cv`]
+    /// ([`KrigingModel::variance_calibration`],
+    /// docs/theory/inverse.md, "Fifth round"). Computed once per surrogate
+    /// (O(N³/3)).
     ///
     /// # Errors
-    /// A process covariance that is not positive definite.
-    pub fn variance_calibration(&self) -> Result<f64> {
-        self.cv_ratio
-            .get_or_init(|| self.kriging.cv_variance_ratio().map_err(|e| e.to_string()))
+    /// A process covariance that is not positive semi-definite; LOO data
+    /// the fit refuses (e.g. all v equal).
+    pub fn variance_calibration(&self) -> Result<VarianceCalibration> {
+        self.calibration
+            .get_or_init(|| {
+                self.kriging
+                    .variance_calibration()
+                    .map_err(|e| e.to_string())
+            })
             .clone()
             .map_err(|e| InverseError::InvalidSetting(format!("Kriging variance calibration: {e}")))
     }

@@ -41,8 +41,9 @@ fn noisy(s: &KrigingSurrogate, x: &[f64], frac: f64, seed: u64) -> (Vec<f64>, f6
 
 /// With 0.5 % noise the posterior is tight enough to be Gaussian: the 90 %
 /// interval of every parameter must match ± 1.645 sd of the Laplace
-/// approximation (JᵀΣ⁻¹J)⁻¹ at the truth, with Σ = σ²I + v(x)K the
-/// likelihood's covariance built densely here, within 15 %; G0 must be
+/// approximation (JᵀΣ⁻¹J)⁻¹ at the truth, with Σ = σ²I + α v(x)^β K the
+/// likelihood's covariance (calibrated Kriging variance) built densely
+/// here, within 15 %; G0 must be
 /// centred within two such sd of the truth. (At 2 % noise the G0 posterior
 /// is skewed and 1.3× wider than the Laplace sd: nonlinearity, not a
 /// sampler fault.) The noise estimated from the curve must be
@@ -70,7 +71,8 @@ fn posterior_of_g0_matches_the_laplace_approximation() {
         panic!("the demo meta-model is PCA-reduced");
     };
     let u = DMatrix::from_column_slice(m, k, &factor);
-    let mut sigma = &u * u.transpose() * s.mse_scale(&x0).expect("v");
+    let cal = s.variance_calibration().expect("calibration");
+    let mut sigma = &u * u.transpose() * cal.apply(s.mse_scale(&x0).expect("v"));
     for j in 0..m {
         sigma[(j, j)] += est * est;
     }

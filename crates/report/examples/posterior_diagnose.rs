@@ -15,7 +15,12 @@
 //!   mean of e_i²/(vΣ_ii) over the cells with Σ by maximum likelihood and by
 //!   leave-one-out (1 when calibrated in that direction), and the mean of
 //!   vΣ_CV,ii over the measurement noise's variance in that direction,
-//!   σ² Σ_j V_ji²/D_j² (where the surrogate term matters at all).
+//!   σ² Σ_j V_ji²/D_j² (where the surrogate term matters at all);
+//! - with the Kriging variance calibrated (α v^β,
+//!   `KrigingSurrogate::variance_calibration`): χ²/m uses it, and the
+//!   Mahalanobis norm and per-direction means are printed for it too, and
+//!   per group of cells by v·tr(K)/(mσ²) the median |a|²/(v k) before and
+//!   after.
 //!
 //! ```text
 //! cargo run --release -p nlvid-report --example posterior_diagnose [cells] [noise] [seed]
@@ -57,24 +62,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err("the demo meta-model is PCA-reduced".into());
     };
     let u = DMatrix::from_column_slice(m, k, &factor);
-    let cv = s.variance_calibration()?;
+    let cv = s.kriging().cv_variance_ratio()?;
+    let cal = s.variance_calibration()?;
     println!(
-        "LOO calibration of the Kriging variance sigma2_CV/sigma2_ML = {cv:.3} (k = {k}, N = {})",
-        s.kriging().n_sites
+        "LOO calibration of the Kriging variance sigma2_CV/sigma2_ML = {cv:.3} (k = {k}, N = {}); \
+         x-dependent: v_cal = {:.4e} v^{:.4} (± {:.4})",
+        s.kriging().n_sites,
+        cal.alpha,
+        cal.beta,
+        cal.beta_se
     );
     let inputs = discover(&files.data)?;
     let clean_inputs = discover(&clean_files.data)?;
     println!(
-        "cell  sigma_hat/sigma  |f-yhat|/(sigma sqrt m)  outside-span  chi2/m(Sigma)  chi2/m(sigma only)  v·tr(K)/(m sigma^2)  mahal/k"
+        "cell  sigma_hat/sigma  |f-yhat|/(sigma sqrt m)  outside-span  chi2/m(Sigma)  chi2/m(sigma only)  v·tr(K)/(m sigma^2)  mahal/k  mahal/k(calibrated)"
     );
     let (mut ratios, mut chis, mut mahals) = (Vec::new(), Vec::new(), Vec::new());
+    // (v·tr(K)/(m σ²), |a|²/(v k), |a|²/(v_cal k)) per cell.
+    let mut by_v = Vec::new();
+    // Leading PCA direction (the curve's level, G(52 s)) per cell:
+    // (vΣ_00/noise_0, v_cal Σ_00/noise_0, e_0²/(vΣ_00), e_0²/(v_cal Σ_00)).
+    let mut lead = Vec::new();
     let kr = s.kriging();
     let pca = kr.pca.as_ref().ok_or("PCA model")?;
     let sig_ml = pca.residual_cov.clone();
     let sig_cv = kr.cv_process_covariance()?;
     let basis = |i: usize, j: usize| pca.basis[i * m + j];
     // Per direction: Σ e_i²/(vΣ_ML,ii), Σ e_i²/(vΣ_CV,ii), Σ vΣ_CV,ii/noise_i.
-    let mut per_dir = vec![[0.0f64; 3]; k];
+    let mut per_dir = vec![[0.0f64; 4]; k];
     for (inp, cin) in inputs.iter().zip(&clean_inputs).take(cells) {
         let r = fit_cell(&settings, &model, inp);
         let c = fit_cell(&settings, &model, cin);
@@ -100,7 +115,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         // per dimension (1 when the Kriging variance is calibrated).
         let mahal = coef.dot(&coef) / v / k as f64;
         let rd = DVector::from_iterator(m, r.data.iter().zip(&y).map(|(d, y)| d - y));
-        let mut sig = &u * u.transpose() * v;
+        let vc = cal.apply(v);
+        let mut sig = &u * u.transpose() * vc;
         for j in 0..m {
             sig[(j, j)] += est * est;
         }
@@ -110,7 +126,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .map(|j| (0..k).map(|i| u[(j, i)].powi(2)).sum::<f64>())
             .sum::<f64>();
         println!(
-            "{:10} {:6.3} {:8.3} {:6.3} {:8.3} {:8.3} {:8.4} {:8.3}  x {:?}",
+            "{:10} {:6.3} {:8.3} {:6.3} {:8.3} {:8.3} {:8.4} {:8.3} {:8.3}  x {:?}",
             r.cell,
             est / sigma,
             rs.norm() / (sigma * (m as f64).sqrt()),
@@ -119,8 +135,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             chi0,
             v * trk / (m as f64 * sigma * sigma),
             mahal,
+            mahal * v / vc,
             truth.x
         );
+        by_v.push((v * trk / (m as f64 * sigma * sigma), mahal, mahal * v / vc));
         for (i, acc) in per_dir.iter_mut().enumerate() {
             let e: f64 = (0..m).map(|j| basis(i, j) * rs[j] / kr.y_std[j]).sum();
             let noise_i: f64 = sigma
@@ -131,6 +149,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             acc[0] += e * e / (v * sig_ml[i * k + i]);
             acc[1] += e * e / (v * sig_cv[i * k + i]);
             acc[2] += v * sig_cv[i * k + i] / noise_i;
+            acc[3] += e * e / (vc * sig_cv[i * k + i]);
+            if i == 0 {
+                lead.push((
+                    v * sig_cv[0] / noise_i,
+                    vc * sig_cv[0] / noise_i,
+                    e * e / (v * sig_cv[0]),
+                    e * e / (vc * sig_cv[0]),
+                ));
+            }
         }
         ratios.push(est / sigma);
         chis.push(chi);
@@ -157,10 +184,51 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     for (i, acc) in per_dir.iter().enumerate() {
         println!(
-            "  {i}: ML {:8.3}  CV {:8.3}  surrogate/noise {:10.4}",
+            "  {i}: ML {:8.3}  CV {:8.3}  CV calibrated {:8.3}  surrogate/noise {:10.4}",
             acc[0] / nc,
             acc[1] / nc,
+            acc[3] / nc,
             acc[2] / nc
+        );
+    }
+    // The x-dependence: cells grouped by the surrogate's share of the
+    // variance, v·tr(K)/(m σ²), median |a|²/(v k) before and after.
+    by_v.sort_by(|a, b| a.0.total_cmp(&b.0));
+    println!("v·tr(K)/(m sigma^2) range  cells  median mahal/k  calibrated");
+    let med = |mut x: Vec<f64>| {
+        x.sort_by(f64::total_cmp);
+        x[x.len() / 2]
+    };
+    // Where the surrogate term matters for the level: cells grouped by the
+    // calibrated surrogate/noise variance ratio in the leading direction.
+    println!(
+        "leading direction: v_cal Sigma_00/noise_0 range  cells  median ratio before, after  \
+         median e0^2/(v Sigma_00) before, after (1 = calibrated)"
+    );
+    for (lo, hi) in [(0.0, 0.1), (0.1, 1.0), (1.0, f64::INFINITY)] {
+        let g: Vec<_> = lead.iter().filter(|c| c.1 >= lo && c.1 < hi).collect();
+        if g.is_empty() {
+            continue;
+        }
+        println!(
+            "[{lo}, {hi})  {}  {:.3} {:.3}  {:.3} {:.3}",
+            g.len(),
+            med(g.iter().map(|c| c.0).collect()),
+            med(g.iter().map(|c| c.1).collect()),
+            med(g.iter().map(|c| c.2).collect()),
+            med(g.iter().map(|c| c.3).collect())
+        );
+    }
+    for (lo, hi) in [(0.0, 0.005), (0.005, 0.05), (0.05, f64::INFINITY)] {
+        let g: Vec<_> = by_v.iter().filter(|c| c.0 >= lo && c.0 < hi).collect();
+        if g.is_empty() {
+            continue;
+        }
+        println!(
+            "[{lo}, {hi})  {}  {:.3}  {:.3}",
+            g.len(),
+            med(g.iter().map(|c| c.1).collect()),
+            med(g.iter().map(|c| c.2).collect())
         );
     }
     std::fs::remove_dir_all(&root)?;

@@ -29,7 +29,7 @@ use rand_chacha::ChaCha8Rng;
 mod reduced;
 mod variance;
 
-pub use variance::{OutputCovariance, VariancePoint};
+pub use variance::{CalibrationData, OutputCovariance, VarianceCalibration, VariancePoint};
 
 /// How θ is chosen.
 #[derive(Debug, Clone)]

@@ -71,8 +71,8 @@ pub use error::{Result, SurrogateError};
 pub use faer;
 pub use flag_build::FlagBuild;
 pub use kriging::{
-    FitReport, KrigingModel, KrigingSettings, OutputCovariance, OutputScale, Pca, PointPrediction,
-    ThetaSearch, VariancePoint, likelihood_psi,
+    CalibrationData, FitReport, KrigingModel, KrigingSettings, OutputCovariance, OutputScale, Pca,
+    PointPrediction, ThetaSearch, VarianceCalibration, VariancePoint, likelihood_psi,
 };
 pub use optimise::OptimiserSettings;
 pub use options::FitOptions;

@@ -8,7 +8,10 @@
 //! with the kriged outputs' process covariance in K estimated by
 //! leave-one-out cross-validation, `KrigingModel::output_covariance_cv`:
 //! the ML estimate understates the demo meta-model's errors threefold,
-//! docs/theory/inverse.md) and the measurement noise e_n ~ N(0, σ²I):
+//! docs/theory/inverse.md), v(x) replaced by its x-dependent calibration
+//! α·v(x)^β fitted to the model's own leave-one-out residuals
+//! (`KrigingSurrogate::variance_calibration`; below, v stands for the
+//! calibrated value) and the measurement noise e_n ~ N(0, σ²I):
 //! ln L(x) = −½ [ln det Σ + rᵀΣ⁻¹r] + const, Σ = σ²I + v(x)K, r = d − ŷ(x).
 //! For a PCA-reduced surrogate K = U Uᵀ (rank k) and ŷ = A c(x) (rank r,
 //! [`crate::ReducedModel`]), so by the Woodbury identity, with
@@ -21,7 +24,7 @@
 //! and the sum runs over the m points.
 
 use nalgebra::{DMatrix, DVector};
-use nlvid_surrogate::OutputCovariance;
+use nlvid_surrogate::{OutputCovariance, VarianceCalibration};
 
 use crate::error::{InverseError, Result};
 use crate::model::{Model, check_len};
@@ -101,6 +104,8 @@ pub struct CurveLikelihood<'a> {
     surrogate: &'a KrigingSurrogate,
     data: Vec<f64>,
     noise_var: f64,
+    /// v ↦ α v^β applied to the Kriging variance.
+    calibration: VarianceCalibration,
     form: Form,
 }
 
@@ -120,6 +125,7 @@ impl<'a> CurveLikelihood<'a> {
             )));
         }
         let cov = surrogate.output_covariance_cv()?;
+        let calibration = surrogate.variance_calibration()?;
         let d = DVector::from_column_slice(data);
         let form = match cov {
             OutputCovariance::LowRank { m: mm, k, factor } if surrogate.is_reduced() => {
@@ -144,6 +150,7 @@ impl<'a> CurveLikelihood<'a> {
             surrogate,
             data: data.to_vec(),
             noise_var: noise * noise,
+            calibration,
             form,
         })
     }
@@ -186,7 +193,7 @@ impl<'a> CurveLikelihood<'a> {
                 for (c, v) in cs.iter().zip(vs) {
                     let rtr = dtd - 2.0 * atd.dot(c) + c.dot(&(ata * c));
                     let w = qtd - qta * c;
-                    let ratio = v / s2;
+                    let ratio = self.calibration.apply(v) / s2;
                     let (mut logdet_m, mut wmw) = (0.0, 0.0);
                     for (wi, li) in w.iter().zip(lambda) {
                         let e = 1.0 + ratio * li;
@@ -201,7 +208,7 @@ impl<'a> CurveLikelihood<'a> {
             Form::Diagonal { k } => xs
                 .iter()
                 .map(|x| {
-                    let v = self.surrogate.mse_scale(x)?;
+                    let v = self.calibration.apply(self.surrogate.mse_scale(x)?);
                     let y = Model::response(self.surrogate, x)?;
                     let mut sum = 0.0;
                     for ((yj, dj), kj) in y.iter().zip(&self.data).zip(k) {
@@ -233,8 +240,9 @@ mod tests {
     }
 
     /// The Woodbury form equals the dense Gaussian log-density with
-    /// Σ = σ²I + v(x)·diag(σ_y) V Σ_z Vᵀ diag(σ_y) built and factorised as
-    /// an m × m matrix (second method), at the truth and off it.
+    /// Σ = σ²I + α v(x)^β·diag(σ_y) V Σ_z Vᵀ diag(σ_y) (the calibrated
+    /// Kriging variance) built and factorised as an m × m matrix (second
+    /// method), at the truth and off it.
     #[test]
     fn woodbury_likelihood_equals_the_dense_gaussian() {
         let s = demo_surrogate();
@@ -255,12 +263,16 @@ mod tests {
             panic!("PCA model");
         };
         let u = DMatrix::from_column_slice(m, k, &factor);
+        let cal = s.variance_calibration().unwrap();
+        // A calibration that differs from v ↦ v, or the test would not
+        // see it applied.
+        assert!((cal.beta - 1.0).abs() > 0.05, "{cal:?}");
         for x in [
             x0,
             [1400.0, 0.35, 0.2, 0.3, 14.0],
             [3000.0, 0.1, 0.6, 1.5, 5.0],
         ] {
-            let v = s.mse_scale(&x).unwrap();
+            let v = cal.alpha * s.mse_scale(&x).unwrap().powf(cal.beta);
             let mut sigma = &u * u.transpose() * v;
             for j in 0..m {
                 sigma[(j, j)] += noise * noise;
