@@ -12,6 +12,7 @@
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
+use rayon::prelude::*;
 
 use super::KrigingModel;
 use crate::correlation::Correlation;
@@ -167,13 +168,55 @@ impl KrigingModel {
     /// solve C⁻¹[r(x_1) … r(x_B)] streams the n × n factor once for the
     /// batch instead of once per point (the O(n²) part of every likelihood
     /// evaluation; same flops, cache-bound instead of memory-bound).
-    /// Sequential (no threads), so the values do not depend on the
-    /// thread count.
+    ///
+    /// With `threads` > 1 the batch is cut into up to `threads` contiguous
+    /// parts of at least 2 points each, solved on the rayon pool (for one
+    /// posterior run alone; a cohort already runs one cell per core and
+    /// passes 1). Each point's values are bitwise the same for every
+    /// `threads`: faer's multi-column products and triangular solve give a
+    /// column the same arithmetic in any batch of ≥ 2 columns (a single
+    /// column takes a matrix–vector path with another summation order, so
+    /// no part has one point; pinned by the test
+    /// `batch_values_do_not_depend_on_the_thread_count`).
     ///
     /// # Errors
     /// As [`KrigingModel::output_coordinates`] and
     /// [`KrigingModel::mse_scale`] for any point of the batch.
-    pub fn coordinates_and_mse_scales(&self, xs: &[Vec<f64>]) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
+    pub fn coordinates_and_mse_scales(
+        &self,
+        xs: &[Vec<f64>],
+        threads: usize,
+    ) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
+        let parts = threads.min(xs.len() / 2);
+        if parts <= 1 {
+            return self.batch_coordinates_and_mse_scales(xs);
+        }
+        // Balanced: every part has ⌊B/parts⌋ ≥ 2 or one more point.
+        let (base, extra) = (xs.len() / parts, xs.len() % parts);
+        let bounds: Vec<(usize, usize)> = (0..parts)
+            .map(|j| {
+                let start = j * base + j.min(extra);
+                (start, start + base + usize::from(j < extra))
+            })
+            .collect();
+        let done = bounds
+            .into_par_iter()
+            .map(|(a, b)| self.batch_coordinates_and_mse_scales(&xs[a..b]))
+            .collect::<Result<Vec<_>>>()?;
+        let (mut coords, mut scales) = (Vec::with_capacity(xs.len()), Vec::with_capacity(xs.len()));
+        for (c, v) in done {
+            coords.extend(c);
+            scales.extend(v);
+        }
+        Ok((coords, scales))
+    }
+
+    /// [`KrigingModel::coordinates_and_mse_scales`] of one part, on the
+    /// calling thread.
+    fn batch_coordinates_and_mse_scales(
+        &self,
+        xs: &[Vec<f64>],
+    ) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
         self.check_linear_outputs()?;
         self.check_linear_for_variance()?;
         let (n, d, p, q) = (self.n_sites, self.dim, self.p(), self.n_kriged());
