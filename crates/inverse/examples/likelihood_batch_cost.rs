@@ -27,7 +27,7 @@ fn one_path(k: &KrigingModel, pts: &[Vec<f64>]) -> f64 {
 fn batch_path(k: &KrigingModel, pts: &[Vec<f64>], b: usize) -> f64 {
     pts.chunks(b)
         .map(|c| {
-            let (cs, vs) = k.coordinates_and_mse_scales(c).expect("batch");
+            let (cs, vs) = k.coordinates_and_mse_scales(c, 1).expect("batch");
             vs.iter().sum::<f64>() + cs[0][1]
         })
         .sum()

@@ -175,13 +175,15 @@ impl KrigingSurrogate {
     /// The reduced coordinates c(x) ([`crate::ReducedModel`]) and v(x)
     /// ([`KrigingSurrogate::mse_scale`]) at many physical points at once
     /// ([`KrigingModel::coordinates_and_mse_scales`]: one multi-column
-    /// triangular solve for the batch).
+    /// triangular solve for the batch, split over up to `threads` threads
+    /// with the same values for any count).
     ///
     /// # Errors
     /// As [`KrigingSurrogate::mse_scale`] for any point (naming the first).
     pub fn coordinates_and_mse_scales(
         &self,
         xs: &[Vec<f64>],
+        threads: usize,
     ) -> Result<(Vec<DVector<f64>>, Vec<f64>)> {
         let inputs = xs
             .iter()
@@ -189,7 +191,7 @@ impl KrigingSurrogate {
             .collect::<Result<Vec<_>>>()?;
         let (c, v) = self
             .kriging
-            .coordinates_and_mse_scales(&inputs)
+            .coordinates_and_mse_scales(&inputs, threads)
             .map_err(|e| model_err(xs.first().map_or(&[][..], Vec::as_slice), &e))?;
         Ok((c.into_iter().map(DVector::from_vec).collect(), v))
     }

@@ -3,11 +3,15 @@
 //! named cells (all when none is named) the posterior is sampled with the
 //! given settings; per parameter this prints the split R̂ across
 //! ensembles, the ESS and each ensemble's median and 5/95 % quantiles in
-//! the domain's unit coordinates u (which ensemble is off, and where).
+//! the domain's unit coordinates u (which ensemble is off, and where),
+//! and per posterior the wall and CPU seconds of `sample_posterior` alone
+//! (the curve writing and the fit excluded; `threads=2` splits each batch
+//! of proposals over two threads, the same draws).
 //!
 //! ```text
 //! cargo run --release -p nlvid-report --example posterior_cells \
-//!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=BOOL] [cell ...]
+//!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=BOOL] \
+//!     [threads=N] [cell ...]
 //! ```
 
 use std::path::Path;
@@ -42,6 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let refit: Option<bool> = opt("refit").map(|v| v.parse()).transpose()?;
     let ridge: Option<f64> = opt("ridge").map(|v| v.parse()).transpose()?;
     let ridge_time: bool = opt("ridge_time").map_or(Ok(false), |v| v.parse())?;
+    let threads: usize = opt("threads").map_or(Ok(1), |v| v.parse())?;
     let demo =
         std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
     let root = std::env::temp_dir().join(format!("nlvid-cells-{}", std::process::id()));
@@ -94,19 +99,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 refit_proposal,
                 ridge_fraction,
                 ridge_time,
+                threads,
                 ..ps.clone()
             };
-            let t0 = std::time::Instant::now();
+            let (t0, cpu0) = (std::time::Instant::now(), cpu_time::ProcessTime::now());
             let p = sample_posterior(s, &r.data, &x_hat, &ps)?;
+            let (wall, cpu) = (t0.elapsed(), cpu0.elapsed());
             let n_per = p.draws.len() / ps.ensembles;
             println!(
-                "{} R-hat {:.4} ESS {:.0} acc {:.2} kept {} per walker, {:.2} s; truth u {:?}; fit u {:?}",
+                "{} R-hat {:.4} ESS {:.0} acc {:.2} kept {} per walker, {:.2} s wall, {:.2} s CPU \
+                 ({threads} thread(s)); truth u {:?}; fit u {:?}",
                 r.cell,
                 p.rhat_max,
                 p.ess_min,
                 p.acceptance,
                 n_per / ps.walkers,
-                t0.elapsed().as_secs_f64(),
+                wall.as_secs_f64(),
+                cpu.as_secs_f64(),
                 round(&domain.to_unit(&truth.x)),
                 round(&domain.to_unit(&x_hat)),
             );

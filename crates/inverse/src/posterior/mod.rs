@@ -81,6 +81,16 @@ pub struct PosteriorSettings {
     /// ([`RidgeMove::fast_time`]; measured, not better: docs/theory/inverse.md).
     #[serde(default)]
     pub ridge_time: bool,
+    /// Threads over which each batch of proposals is evaluated (1: the
+    /// calling thread). The draws are bitwise the same for any count
+    /// ([`CurveLikelihood::with_threads`]); more than 1 is for one
+    /// posterior at a time — a cohort already runs one cell per core.
+    #[serde(default = "default_threads")]
+    pub threads: usize,
+}
+
+fn default_threads() -> usize {
+    1
 }
 
 fn default_ridge() -> f64 {
@@ -122,6 +132,7 @@ impl PosteriorSettings {
             refit_proposal: default_refit(),
             ridge_fraction: default_ridge(),
             ridge_time: false,
+            threads: default_threads(),
         }
     }
 }
@@ -349,7 +360,7 @@ pub fn sample_posterior_fixed(
     }
     let domain = fixed.free_domain().clone();
     let noise = noise_sd(Model::times(surrogate), data)?;
-    let lik = CurveLikelihood::new(surrogate, data, noise)?;
+    let lik = CurveLikelihood::new(surrogate, data, noise)?.with_threads(settings.threads);
     let inside = |u: &[f64]| {
         u.iter().all(|v| (0.0..=1.0).contains(v)) && domain.feasible(&domain.from_unit(u), 0.0)
     };

@@ -1171,7 +1171,7 @@ mod covariance_tests {
         for (pca, scaled) in [(None, false), (Some(0.99999), false), (Some(0.99999), true)] {
             let m = model(pca, scaled);
             for batch in [&pts[..1], &pts[..]] {
-                let (cs, vs) = m.coordinates_and_mse_scales(batch).expect("batch");
+                let (cs, vs) = m.coordinates_and_mse_scales(batch, 1).expect("batch");
                 assert_eq!((cs.len(), vs.len()), (batch.len(), batch.len()));
                 for (x, (c, v)) in batch.iter().zip(cs.iter().zip(&vs)) {
                     let c1 = m.output_coordinate_values(x).expect("c");
@@ -1198,6 +1198,62 @@ mod covariance_tests {
                     }
                     assert_eq!(c[0], c1[0]);
                 }
+            }
+        }
+    }
+
+    /// The batch split over threads gives every point bitwise the values
+    /// of the whole batch on one thread, for 2 and 3 threads and for every
+    /// cut of the batch into two parts of ≥ 2 points (what the split relies
+    /// on: faer's kernels give a column the same arithmetic in any batch of
+    /// ≥ 2 columns).
+    #[test]
+    fn batch_values_do_not_depend_on_the_thread_count() {
+        let pts: Vec<Vec<f64>> = (0..17)
+            .map(|i| vec![0.52 + 0.057 * i as f64, (0.73 * i as f64).cos().abs()])
+            .collect();
+        let bits = |(c, v): (Vec<Vec<f64>>, Vec<f64>)| -> Vec<Vec<u64>> {
+            c.iter()
+                .zip(&v)
+                .map(|(c, v)| c.iter().chain([v]).map(|x| x.to_bits()).collect())
+                .collect()
+        };
+        for (pca, scaled) in [(None, false), (Some(0.99999), true)] {
+            let m = model(pca, scaled);
+            let one = bits(m.coordinates_and_mse_scales(&pts, 1).expect("batch"));
+            for threads in [2, 3] {
+                let par = bits(m.coordinates_and_mse_scales(&pts, threads).expect("batch"));
+                assert_eq!(par, one, "{threads} threads");
+            }
+            for cut in 2..pts.len() - 1 {
+                let mut parts = bits(m.coordinates_and_mse_scales(&pts[..cut], 1).expect("a"));
+                parts.extend(bits(
+                    m.coordinates_and_mse_scales(&pts[cut..], 1).expect("b"),
+                ));
+                assert_eq!(parts, one, "cut at {cut}");
+            }
+        }
+    }
+
+    /// The correlation column of the batch path equals the per-site
+    /// formula bit for bit, for `gauss` (accumulated by dimension) and for
+    /// another family (per site).
+    #[test]
+    fn correlation_column_equals_the_per_site_formula_bitwise() {
+        for corr in [Correlation::Gauss, Correlation::Exp] {
+            let mut m = model(Some(0.99999), false);
+            m.correlation = corr;
+            let (n, d) = (m.n_sites, m.dim);
+            let xn = [0.37, -1.21];
+            let mut col = vec![0.0; n];
+            m.correlation_column(&xn, &mut col, &mut [0.0; 2]);
+            for (i, r) in col.iter().enumerate() {
+                let dx: Vec<f64> = (0..d).map(|k| xn[k] - m.sites[k * n + i]).collect();
+                assert_eq!(
+                    r.to_bits(),
+                    m.correlation_value(&dx).to_bits(),
+                    "{corr:?} site {i}"
+                );
             }
         }
     }
