@@ -415,6 +415,23 @@ impl FbarPoint<5, 8> for PointGeometry {
         jacobian_derivatives(f)
     }
 
+    /// The 12 non-zero entries of the Hessian of [`jacobian_derivatives`].
+    #[inline]
+    fn add_jacobian_hessian(f: &[f64; 5], c: f64, m: &mut [[f64; 5]; 5]) {
+        let h = f[4];
+        for (i, k, x) in [
+            (0, 3, h),
+            (1, 2, -h),
+            (0, 4, f[3]),
+            (3, 4, f[0]),
+            (1, 4, -f[2]),
+            (2, 4, -f[1]),
+        ] {
+            m[i][k] += c * x;
+            m[k][i] += c * x;
+        }
+    }
+
     fn matrix(f: &[f64; 5]) -> Mat3 {
         Mat3::new(f[0], f[1], 0.0, f[2], f[3], 0.0, 0.0, 0.0, f[4])
     }

@@ -32,6 +32,18 @@ pub trait FbarPoint<const NF: usize, const ND: usize> {
     fn add_bt_m_b(&self, out: &mut [[f64; ND]; ND], m: &[[f64; NF]; NF], lower: bool);
     /// J = det F, its gradient and Hessian w.r.t. the stored components.
     fn jacobian(f: &[f64; NF]) -> (f64, [f64; NF], [[f64; NF]; NF]);
+    /// `m += c H_J` with H_J = ∂²J/∂F² at `f` (the Hessian of
+    /// [`FbarPoint::jacobian`]); a kind whose Hessian is sparse adds only
+    /// its non-zero entries (adding `c · 0` leaves `m` unchanged).
+    #[inline]
+    fn add_jacobian_hessian(f: &[f64; NF], c: f64, m: &mut [[f64; NF]; NF]) {
+        let h = Self::jacobian(f).2;
+        for i in 0..NF {
+            for k in 0..NF {
+                m[i][k] += c * h[i][k];
+            }
+        }
+    }
     /// The 3×3 matrix of the stored components.
     fn matrix(f: &[f64; NF]) -> Mat3;
     /// First Piola–Kirchhoff stress P and ∂P/∂F (stored components) of the
@@ -114,7 +126,6 @@ where
     }
     let mut f = [[0.0; NF]; NQ];
     let mut jq = [0.0; NQ];
-    let mut hj = [[[0.0; NF]; NF]; NQ];
     let mut dju = [[0.0; ND]; NQ];
     let mut vol = 0.0;
     let mut jbar = 0.0;
@@ -122,10 +133,9 @@ where
     for q in 0..NQ {
         let g = &geometry[q];
         f[q] = g.deformation(u);
-        let (j, dj, h) = P::jacobian(&f[q]);
+        let (j, dj, _) = P::jacobian(&f[q]);
         positive_jacobian(q, j)?;
         jq[q] = j;
-        hj[q] = h;
         if fbar {
             let w = g.weight();
             dju[q] = g.bt_v(&dj);
@@ -197,11 +207,7 @@ where
         }
         if fbar {
             let cq = s_total * w / (3.0 * vol * jbar) - s_q[q] / (3.0 * jq[q]);
-            for i in 0..NF {
-                for k in 0..NF {
-                    mq[i][k] += cq * hj[q][i][k];
-                }
-            }
+            P::add_jacobian_hessian(&f[q], cq, &mut mq);
         }
         g.add_bt_m_b(&mut out.k, &mq, lower);
         if !fbar {
@@ -324,6 +330,9 @@ mod tests {
             }
         }
         assert!((j - P::matrix(&f).determinant()).abs() < 1e-15);
+        let mut m = [[0.0; NF]; NF];
+        P::add_jacobian_hessian(&f, 1.0, &mut m);
+        assert_eq!(m, hj, "add_jacobian_hessian");
     }
 
     #[test]
