@@ -375,7 +375,9 @@ impl FbarPoint<5, 8> for PointGeometry {
         out
     }
 
-    #[inline]
+    /// Always inlined, so it is compiled in the kernel's SIMD dispatch
+    /// ([`crate::fbar::fbar_kernel`]).
+    #[inline(always)]
     fn add_bt_m_b(&self, out: &mut [[f64; 8]; 8], m: &[[f64; 5]; 5], lower: bool) {
         let g = self;
         // Column c of B as (row, value) pairs: even c → rows 0, 1, 4; odd c → 2, 3.
@@ -436,7 +438,9 @@ impl FbarPoint<5, 8> for PointGeometry {
         Mat3::new(f[0], f[1], 0.0, f[2], f[3], 0.0, 0.0, 0.0, f[4])
     }
 
-    #[inline]
+    /// Always inlined, so the point update is compiled in the kernel's
+    /// SIMD dispatch ([`crate::fbar::fbar_kernel`]).
+    #[inline(always)]
     fn update<M: Material3>(
         material: &M,
         state_n: &M::State,
