@@ -375,7 +375,9 @@ impl FbarPoint<5, 8> for PointGeometry {
         out
     }
 
-    #[inline]
+    /// Always inlined, so it is compiled in the kernel's SIMD dispatch
+    /// ([`crate::fbar::fbar_kernel`]).
+    #[inline(always)]
     fn add_bt_m_b(&self, out: &mut [[f64; 8]; 8], m: &[[f64; 5]; 5], lower: bool) {
         let g = self;
         // Column c of B as (row, value) pairs: even c → rows 0, 1, 4; odd c → 2, 3.
@@ -415,11 +417,30 @@ impl FbarPoint<5, 8> for PointGeometry {
         jacobian_derivatives(f)
     }
 
+    /// The 12 non-zero entries of the Hessian of [`jacobian_derivatives`].
+    #[inline]
+    fn add_jacobian_hessian(f: &[f64; 5], c: f64, m: &mut [[f64; 5]; 5]) {
+        let h = f[4];
+        for (i, k, x) in [
+            (0, 3, h),
+            (1, 2, -h),
+            (0, 4, f[3]),
+            (3, 4, f[0]),
+            (1, 4, -f[2]),
+            (2, 4, -f[1]),
+        ] {
+            m[i][k] += c * x;
+            m[k][i] += c * x;
+        }
+    }
+
     fn matrix(f: &[f64; 5]) -> Mat3 {
         Mat3::new(f[0], f[1], 0.0, f[2], f[3], 0.0, 0.0, 0.0, f[4])
     }
 
-    #[inline]
+    /// Always inlined, so the point update is compiled in the kernel's
+    /// SIMD dispatch ([`crate::fbar::fbar_kernel`]).
+    #[inline(always)]
     fn update<M: Material3>(
         material: &M,
         state_n: &M::State,

@@ -75,54 +75,91 @@ pub(crate) fn advance(
     h_out: &mut Vec<crate::Mat3>,
 ) -> (crate::Mat3, f64) {
     h_out.resize(prony.len(), crate::Mat3::zeros());
-    let mut frozen = crate::Mat3::zeros();
-    let mut sum_b1 = 0.0;
-    for ((term, hn), ho) in prony.terms().iter().zip(h_n).zip(h_out.iter_mut()) {
-        let w = cached_weights(rule, dt, term.tau);
-        let old = hn * w.decay + a_n * w.beta0;
-        frozen -= old * term.weight;
-        *ho = old + a_new * w.beta1;
-        sum_b1 += term.weight * w.beta1;
-    }
-    (frozen, sum_b1)
+    with_series_weights(rule, prony, dt, |weights| {
+        let mut frozen = crate::Mat3::zeros();
+        let mut sum_b1 = 0.0;
+        for (((term, w), hn), ho) in prony
+            .terms()
+            .iter()
+            .zip(weights)
+            .zip(h_n)
+            .zip(h_out.iter_mut())
+        {
+            let old = hn * w.decay + a_n * w.beta0;
+            frozen -= old * term.weight;
+            *ho = old + a_new * w.beta1;
+            sum_b1 += term.weight * w.beta1;
+        }
+        (frozen, sum_b1)
+    })
 }
 
 /// Entries of the per-thread memo of [`HistoryRule::weights`].
-const MEMO: usize = 8;
+const MEMO: usize = 4;
 
-type MemoEntry = Option<(HistoryRule, f64, f64, StepWeights)>;
-
-thread_local! {
-    /// The last step weights computed on this thread: a finite-element
-    /// assembly evaluates every material point with the same (Δt, τ_k), so
-    /// `exp`/`expm1` are computed once per step and term instead of once per
-    /// point (≈ 5 % of the AFM run). Values are bitwise those of
-    /// [`HistoryRule::weights`]; the key is the exact (rule, Δt, τ).
-    static WEIGHTS: std::cell::RefCell<([MemoEntry; MEMO], usize)> =
-        const { std::cell::RefCell::new(([None; MEMO], 0)) };
+/// The step weights of every term of one Prony series for one (rule, Δt).
+struct MemoEntry {
+    rule: HistoryRule,
+    dt: u64,
+    taus: Vec<u64>,
+    weights: Vec<StepWeights>,
 }
 
-/// [`HistoryRule::weights`] through the per-thread memo.
+thread_local! {
+    /// The step weights of the last series computed on this thread: a
+    /// finite-element assembly evaluates every material point with the same
+    /// Δt and series, so `exp`/`expm1` are computed once per step and term
+    /// instead of once per point (≈ 5 % of the AFM run), and the memo is
+    /// consulted once per point for all terms. Values are bitwise those of
+    /// [`HistoryRule::weights`]; the key is the exact (rule, Δt, τ_1…τ_n).
+    static WEIGHTS: std::cell::RefCell<(Vec<MemoEntry>, usize)> =
+        const { std::cell::RefCell::new((Vec::new(), 0)) };
+}
+
+/// Calls `f` with [`HistoryRule::weights`] of every term of `prony`, in
+/// term order, through the per-thread memo.
 #[inline]
-pub(crate) fn cached_weights(rule: HistoryRule, dt: f64, tau: f64) -> StepWeights {
+pub(crate) fn with_series_weights<R>(
+    rule: HistoryRule,
+    prony: &nlvid_model::Prony,
+    dt: f64,
+    f: impl FnOnce(&[StepWeights]) -> R,
+) -> R {
+    let terms = prony.terms();
+    let dt_bits = dt.to_bits();
     WEIGHTS.with(|memo| {
         let mut memo = memo.borrow_mut();
-        // Newest entry first: the terms of the current step were stored
-        // last, so a hit is found after one or two comparisons.
-        for k in 1..=MEMO {
-            if let Some((r, d, t, w)) = memo.0[(memo.1 + MEMO - k) % MEMO]
-                && r == rule
-                && d.to_bits() == dt.to_bits()
-                && t.to_bits() == tau.to_bits()
+        let (entries, next) = &mut *memo;
+        let n = entries.len();
+        // Newest entry first: the current step's series was stored last.
+        for k in 1..=n {
+            let e = &entries[(*next + n - k) % n];
+            if e.dt == dt_bits
+                && e.rule == rule
+                && e.taus.len() == terms.len()
+                && e.taus
+                    .iter()
+                    .zip(terms)
+                    .all(|(t, term)| *t == term.tau.to_bits())
             {
-                return w;
+                return f(&e.weights);
             }
         }
-        let w = rule.weights(dt, tau);
-        let next = memo.1;
-        memo.0[next] = Some((rule, dt, tau, w));
-        memo.1 = (next + 1) % MEMO;
-        w
+        let entry = MemoEntry {
+            rule,
+            dt: dt_bits,
+            taus: terms.iter().map(|t| t.tau.to_bits()).collect(),
+            weights: terms.iter().map(|t| rule.weights(dt, t.tau)).collect(),
+        };
+        let slot = if n < MEMO {
+            entries.push(entry);
+            n
+        } else {
+            entries[*next] = entry;
+            *next
+        };
+        *next = (slot + 1) % MEMO;
+        f(&entries[slot].weights)
     })
 }
 
@@ -133,12 +170,20 @@ mod tests {
     #[test]
     fn memoised_weights_equal_direct_weights() {
         let rules = [HistoryRule::ExponentialLinear, HistoryRule::Trapezoid];
-        // More distinct keys than memo entries, revisited in another order.
+        // More distinct keys than memo entries (series of 1–3 terms, some
+        // sharing a τ), revisited in another order.
         for pass in 0..3 {
-            for k in 0..(2 * MEMO) {
-                let (dt, tau) = (0.01 * (k % 5) as f64 + 1e-3 * pass as f64, 0.5 + k as f64);
+            for k in 0..(3 * MEMO) {
+                let dt = 0.01 * (k % 5) as f64 + 1e-3 * pass as f64;
+                let pairs: Vec<(f64, f64)> =
+                    (0..=(k % 3)).map(|i| (0.1, 0.5 + (k + i) as f64)).collect();
+                let prony = nlvid_model::Prony::new("G", &pairs).expect("valid");
                 for rule in rules {
-                    assert_eq!(cached_weights(rule, dt, tau), rule.weights(dt, tau));
+                    let direct: Vec<StepWeights> = pairs
+                        .iter()
+                        .map(|&(_, tau)| rule.weights(dt, tau))
+                        .collect();
+                    with_series_weights(rule, &prony, dt, |w| assert_eq!(w, &direct[..]));
                 }
             }
         }

@@ -160,6 +160,10 @@ impl Kernel for PronyViscoelastic {
         self.elastic.bulk()
     }
 
+    /// Always inlined: the F-bar kernel of `nlvid-fem` compiles the point
+    /// update for the CPU's SIMD width (runtime dispatch), which reaches
+    /// only inlined code.
+    #[inline(always)]
     fn eval(
         &self,
         st: &PronyViscoelasticState,
