@@ -164,6 +164,8 @@ where
 {
     type Output = Result<(), PointFailure>;
 
+    /// The body of [`fbar_kernel`], inlined into pulp's entry point for
+    /// the instruction set.
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
         let Self {
@@ -178,169 +180,148 @@ where
             out,
             ..
         } = self;
-        kernel_inline(material, geometry, u, state_n, trial, dt, fbar, part, out)
-    }
-}
-
-/// [`fbar_kernel`], inlined into the caller (the SIMD dispatch).
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn kernel_inline<M, P, const NF: usize, const ND: usize, const NQ: usize>(
-    material: &M,
-    geometry: &[P; NQ],
-    u: &[f64],
-    state_n: &[M::State],
-    trial: &mut [M::State],
-    dt: f64,
-    fbar: bool,
-    part: TangentPart,
-    out: &mut LocalOutput<ND>,
-) -> Result<(), PointFailure>
-where
-    M: Material3,
-    P: FbarPoint<NF, ND>,
-{
-    let u: &[f64; ND] = u.try_into().map_err(|_| bad_length(u.len()))?;
-    let tangent = part != TangentPart::None;
-    let lower = part == TangentPart::Lower;
-    out.r = [0.0; ND];
-    if tangent {
-        out.k = [[0.0; ND]; ND];
-    }
-    let mut f = [[0.0; NF]; NQ];
-    let mut jq = [0.0; NQ];
-    let mut dju = [[0.0; ND]; NQ];
-    let mut vol = 0.0;
-    let mut jbar = 0.0;
-    let mut djbar = [0.0; ND];
-    for q in 0..NQ {
-        let g = &geometry[q];
-        f[q] = g.deformation(u);
-        let (j, dj, _) = P::jacobian(&f[q]);
-        positive_jacobian(q, j)?;
-        jq[q] = j;
-        if fbar {
-            let w = g.weight();
-            dju[q] = g.bt_v(&dj);
-            vol += w;
-            jbar += w * j;
-            for c in 0..ND {
-                djbar[c] += w * dju[q][c];
-            }
-        }
-    }
-    let mut dlnjbar = [0.0; ND];
-    if fbar {
-        jbar /= vol;
-        for c in 0..ND {
-            dlnjbar[c] = djbar[c] / vol / jbar;
-        }
-    }
-    // Pass 1: material response at every point, residual, per-point terms.
-    let mut wa = [[[0.0; NF]; NF]; NQ];
-    let mut alpha = [1.0; NQ];
-    let mut dlnalpha = [[0.0; ND]; NQ];
-    let mut p = [[0.0; NF]; NQ];
-    let mut s_q = [0.0; NQ];
-    let mut bp = [[0.0; ND]; NQ];
-    for q in 0..NQ {
-        let g = &geometry[q];
-        let w = g.weight();
-        if fbar {
-            for c in 0..ND {
-                dlnalpha[q][c] = (dlnjbar[c] - dju[q][c] / jq[q]) / 3.0;
-            }
-            alpha[q] = nlvid_material::cube_root(jbar / jq[q]);
-        }
-        let a = alpha[q];
-        let fbar_q = f[q].map(|x| a * x);
-        let (pq, aq) = P::update(material, &state_n[q], &fbar_q, dt, &mut trial[q], tangent)
-            .map_err(|e| (q, e))?;
-        p[q] = pq;
+        let u: &[f64; ND] = u.try_into().map_err(|_| bad_length(u.len()))?;
+        let tangent = part != TangentPart::None;
+        let lower = part == TangentPart::Lower;
+        out.r = [0.0; ND];
         if tangent {
-            for (mi, ti) in wa[q].iter_mut().zip(&aq) {
-                for (m, t) in mi.iter_mut().zip(ti) {
-                    *m = w * t;
+            out.k = [[0.0; ND]; ND];
+        }
+        let mut f = [[0.0; NF]; NQ];
+        let mut jq = [0.0; NQ];
+        let mut dju = [[0.0; ND]; NQ];
+        let mut vol = 0.0;
+        let mut jbar = 0.0;
+        let mut djbar = [0.0; ND];
+        for q in 0..NQ {
+            let g = &geometry[q];
+            f[q] = g.deformation(u);
+            let (j, dj, _) = P::jacobian(&f[q]);
+            positive_jacobian(q, j)?;
+            jq[q] = j;
+            if fbar {
+                let w = g.weight();
+                dju[q] = g.bt_v(&dj);
+                vol += w;
+                jbar += w * j;
+                for c in 0..ND {
+                    djbar[c] += w * dju[q][c];
                 }
             }
         }
-        // r = w B̄ᵀ P = w α Bᵀ P + w (P : F) ∂α.
-        let gp = g.bt_v(&p[q]);
-        bp[q] = gp;
-        let pf: f64 = (0..NF).map(|i| p[q][i] * f[q][i]).sum();
-        s_q[q] = w * a * pf;
-        for c in 0..ND {
-            out.r[c] += w * a * gp[c] + s_q[q] * dlnalpha[q][c];
+        let mut dlnjbar = [0.0; ND];
+        if fbar {
+            jbar /= vol;
+            for c in 0..ND {
+                dlnjbar[c] = djbar[c] / vol / jbar;
+            }
         }
-    }
-    if !tangent {
-        return Ok(());
-    }
-    let s_total: f64 = s_q.iter().sum();
-    for q in 0..NQ {
-        let g = &geometry[q];
-        let w = g.weight();
-        let a = alpha[q];
-        let waq = &wa[q];
-        let mut mq = [[0.0; NF]; NF];
-        for i in 0..NF {
-            for k in 0..NF {
-                mq[i][k] = a * a * waq[i][k];
+        // Pass 1: material response at every point, residual, per-point terms.
+        let mut wa = [[[0.0; NF]; NF]; NQ];
+        let mut alpha = [1.0; NQ];
+        let mut dlnalpha = [[0.0; ND]; NQ];
+        let mut p = [[0.0; NF]; NQ];
+        let mut s_q = [0.0; NQ];
+        let mut bp = [[0.0; ND]; NQ];
+        for q in 0..NQ {
+            let g = &geometry[q];
+            let w = g.weight();
+            if fbar {
+                for c in 0..ND {
+                    dlnalpha[q][c] = (dlnjbar[c] - dju[q][c] / jq[q]) / 3.0;
+                }
+                alpha[q] = nlvid_material::cube_root(jbar / jq[q]);
+            }
+            let a = alpha[q];
+            let fbar_q = f[q].map(|x| a * x);
+            let (pq, aq) = P::update(material, &state_n[q], &fbar_q, dt, &mut trial[q], tangent)
+                .map_err(|e| (q, e))?;
+            p[q] = pq;
+            if tangent {
+                for (mi, ti) in wa[q].iter_mut().zip(&aq) {
+                    for (m, t) in mi.iter_mut().zip(ti) {
+                        *m = w * t;
+                    }
+                }
+            }
+            // r = w B̄ᵀ P = w α Bᵀ P + w (P : F) ∂α.
+            let gp = g.bt_v(&p[q]);
+            bp[q] = gp;
+            let pf: f64 = (0..NF).map(|i| p[q][i] * f[q][i]).sum();
+            s_q[q] = w * a * pf;
+            for c in 0..ND {
+                out.r[c] += w * a * gp[c] + s_q[q] * dlnalpha[q][c];
+            }
+        }
+        if !tangent {
+            return Ok(());
+        }
+        let s_total: f64 = s_q.iter().sum();
+        for q in 0..NQ {
+            let g = &geometry[q];
+            let w = g.weight();
+            let a = alpha[q];
+            let waq = &wa[q];
+            let mut mq = [[0.0; NF]; NF];
+            for i in 0..NF {
+                for k in 0..NF {
+                    mq[i][k] = a * a * waq[i][k];
+                }
+            }
+            if fbar {
+                let cq = s_total * w / (3.0 * vol * jbar) - s_q[q] / (3.0 * jq[q]);
+                P::add_jacobian_hessian(&f[q], cq, &mut mq);
+            }
+            g.add_bt_m_b(&mut out.k, &mq, lower);
+            if !fbar {
+                continue;
+            }
+            // Fᵀ(wA), (wA)F and Fᵀ(wA)F.
+            let mut af = [0.0; NF];
+            let mut fa = [0.0; NF];
+            for i in 0..NF {
+                for k in 0..NF {
+                    af[i] += waq[i][k] * f[q][k];
+                    fa[k] += f[q][i] * waq[i][k];
+                }
+            }
+            let mut faf = 0.0;
+            for i in 0..NF {
+                faf += f[q][i] * af[i];
+            }
+            let baf = g.bt_v(&af);
+            let bfa = g.bt_v(&fa);
+            let mut v = [0.0; ND];
+            let mut vt = [0.0; ND];
+            for c in 0..ND {
+                v[c] = a * a * baf[c] + w * a * bp[q][c];
+                vt[c] = a * a * bfa[c] + w * a * bp[q][c];
+            }
+            let dl = &dlnalpha[q];
+            let cc = a * a * faf + s_q[q];
+            let cj = s_q[q] / (3.0 * jq[q] * jq[q]);
+            let dj = &dju[q];
+            for r in 0..ND {
+                let (vr, dlr, cdl, cjr) = (v[r], dl[r], cc * dl[r], cj * dj[r]);
+                let row = &mut out.k[r];
+                let end = if lower { r + 1 } else { ND };
+                for c in 0..end {
+                    row[c] += vr * dl[c] + dlr * vt[c] + cdl * dl[c] + cjr * dj[c];
+                }
             }
         }
         if fbar {
-            let cq = s_total * w / (3.0 * vol * jbar) - s_q[q] / (3.0 * jq[q]);
-            P::add_jacobian_hessian(&f[q], cq, &mut mq);
-        }
-        g.add_bt_m_b(&mut out.k, &mq, lower);
-        if !fbar {
-            continue;
-        }
-        // Fᵀ(wA), (wA)F and Fᵀ(wA)F.
-        let mut af = [0.0; NF];
-        let mut fa = [0.0; NF];
-        for i in 0..NF {
-            for k in 0..NF {
-                af[i] += waq[i][k] * f[q][k];
-                fa[k] += f[q][i] * waq[i][k];
+            let w = -s_total / 3.0;
+            for r in 0..ND {
+                let ar = dlnjbar[r] * w;
+                let end = if lower { r + 1 } else { ND };
+                for c in 0..end {
+                    out.k[r][c] += ar * dlnjbar[c];
+                }
             }
         }
-        let mut faf = 0.0;
-        for i in 0..NF {
-            faf += f[q][i] * af[i];
-        }
-        let baf = g.bt_v(&af);
-        let bfa = g.bt_v(&fa);
-        let mut v = [0.0; ND];
-        let mut vt = [0.0; ND];
-        for c in 0..ND {
-            v[c] = a * a * baf[c] + w * a * bp[q][c];
-            vt[c] = a * a * bfa[c] + w * a * bp[q][c];
-        }
-        let dl = &dlnalpha[q];
-        let cc = a * a * faf + s_q[q];
-        let cj = s_q[q] / (3.0 * jq[q] * jq[q]);
-        let dj = &dju[q];
-        for r in 0..ND {
-            let (vr, dlr, cdl, cjr) = (v[r], dl[r], cc * dl[r], cj * dj[r]);
-            let row = &mut out.k[r];
-            let end = if lower { r + 1 } else { ND };
-            for c in 0..end {
-                row[c] += vr * dl[c] + dlr * vt[c] + cdl * dl[c] + cjr * dj[c];
-            }
-        }
+        Ok(())
     }
-    if fbar {
-        let w = -s_total / 3.0;
-        for r in 0..ND {
-            let ar = dlnjbar[r] * w;
-            let end = if lower { r + 1 } else { ND };
-            for c in 0..end {
-                out.k[r][c] += ar * dlnjbar[c];
-            }
-        }
-    }
-    Ok(())
 }
 
 /// The stored energy `Σ_q w_q ψ(F̄_q)` of one element for a strain-energy
