@@ -264,7 +264,9 @@ pub struct Settings {
     pub atol: f64,
     /// Newton iterations allowed per attempt.
     pub max_iterations: usize,
-    /// Step halvings allowed in the line search.
+    /// Step reductions allowed in the line search (each to between 0.1
+    /// and 0.5 of the last trial, by the residual model of
+    /// `backtrack_step`).
     pub line_search: usize,
     /// Contact penalty ε = penalty · G / h (G from the material at F = I,
     /// h the local surface spacing): penetration ≈ p h / (penalty G).
@@ -1508,7 +1510,8 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
     /// the committed state, so the retry of length `dt` < `dt_rejected`
     /// lies inside a known interval. u(dt) is interpolated by the quadratic
     /// through the previous committed state (at −`last_dt`), the committed
-    /// state (0) and the rejected one (linear in the stage's first step).
+    /// state (0) and the rejected one (linear before the model's first
+    /// committed step).
     /// Extrapolating the last increment instead ignores the rejected state;
     /// the tangent predictor is unavailable (the last factors belong to the
     /// rejected attempt).
