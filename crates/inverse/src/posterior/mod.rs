@@ -12,7 +12,10 @@
 //! - sampler: independent affine-invariant ensembles ([`ensemble`]) in u,
 //!   started over-dispersed around the multistart optimum (Laplace shape),
 //!   run in rounds until the split R̂ across ensembles is ≤ [`RHAT_TARGET`]
-//!   or `max_steps`;
+//!   or `max_steps`; a posterior still above the target after
+//!   `temper_after` kept steps is restarted from its walkers' positions
+//!   with parallel tempering inside each ensemble (`rungs`; the
+//!   [`ensemble`] module docs, "Tempering"), the draws before dropped;
 //! - outputs ([`Posterior`]): equal-tailed credible intervals of every
 //!   parameter and of G(0), g1 + g2 and G(t_end) (eq. 5.1 through
 //!   `nlvid_model::Relaxation`), a credible band on G(t), split R̂ and
@@ -352,11 +355,21 @@ fn starts(
 
 /// Samples the posterior of the parameters of `data` (on the surrogate's
 /// grid) given the optimum `x_hat` of a fit (module docs): `ensembles`
-/// independent ensembles in the domain's unit coordinates u, each burnt in and then run `steps` kept steps at a time
-/// until the split R̂ across ensembles of every reported quantity is
-/// ≤ [`RHAT_TARGET`] or `max_steps` kept steps are reached.
+/// independent ensembles in the domain's unit coordinates u, each burnt
+/// in and then run `steps` kept steps at a time until the split R̂ across
+/// ensembles of every reported quantity is ≤ [`RHAT_TARGET`] or
+/// `max_steps` kept steps are reached. Not converged after
+/// `temper_after` kept steps: every ensemble gets `rungs` rungs
+/// ([`Ensemble::temper`]), is burnt in again and run in rounds as before
+/// (kept steps counted from 0), only its β = 1 rung kept. Validity: the
+/// restart is a new chain of the tempered joint target from the current
+/// positions; within it the kernel changes only at the finitely many
+/// refits of the independence proposal (finite adaptation, Roberts &
+/// Rosenthal 2007), and each ensemble is tempered on its own (own rungs,
+/// own random stream), so the ensembles stay independent for R̂.
 ///
-/// Cost: ensembles·walkers·(burn + kept steps) likelihood evaluations,
+/// Cost: ensembles·walkers·(burn + kept steps) likelihood evaluations
+/// (times `rungs` for the tempered restart's burn-in and steps),
 /// each one reduced prediction O(N·q·d) and one Kriging variance O(N²)
 /// (N training runs); the ensembles are stepped together so that each
 /// step's proposals of all ensembles are evaluated in batches of 32–64
