@@ -11,7 +11,7 @@
 //! ```text
 //! cargo run --release -p nlvid-report --example posterior_cells \
 //!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=BOOL] \
-//!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [cell ...]
+//!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [cell ...]
 //! ```
 
 use std::path::Path;
@@ -50,6 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rungs: Option<usize> = opt("rungs").map(|v| v.parse()).transpose()?;
     let ratio: Option<f64> = opt("ratio").map(|v| v.parse()).transpose()?;
     let temper_after: Option<usize> = opt("temper_after").map(|v| v.parse()).transpose()?;
+    let temper_ridge: Option<f64> = opt("temper_ridge").map(|v| v.parse()).transpose()?;
     let demo =
         std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
     let root = std::env::temp_dir().join(format!("nlvid-cells-{}", std::process::id()));
@@ -101,12 +102,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 rungs: rungs.unwrap_or(ps.rungs),
                 rung_ratio: ratio.unwrap_or(ps.rung_ratio),
                 temper_after: temper_after.unwrap_or(ps.temper_after),
+                temper_ridge: temper_ridge.unwrap_or(ps.temper_ridge),
                 ..ps.clone()
             };
             println!(
                 "refresh {refresh_fraction}, refit {refit_proposal}, ridge {}, ridge_time \
-                 {ridge_time}, rungs {} ratio {} after {}:",
-                ps.ridge_fraction, ps.rungs, ps.rung_ratio, ps.temper_after
+                 {ridge_time}, rungs {} ratio {} after {} ridge {}:",
+                ps.ridge_fraction, ps.rungs, ps.rung_ratio, ps.temper_after, ps.temper_ridge
             );
             let (t0, cpu0) = (std::time::Instant::now(), cpu_time::ProcessTime::now());
             let p = sample_posterior(s, &r.data, &x_hat, &ps)?;

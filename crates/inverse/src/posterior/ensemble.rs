@@ -371,6 +371,21 @@ impl Ensemble {
         Ok(())
     }
 
+    /// Sets the probability of a ridge step (`EnsembleSettings::
+    /// ridge_fraction`) for the steps to come.
+    ///
+    /// # Errors
+    /// [`InverseError::InvalidSetting`] for a fraction outside [0, 1].
+    pub fn set_ridge_fraction(&mut self, fraction: f64) -> Result<()> {
+        if !(0.0..=1.0).contains(&fraction) {
+            return Err(InverseError::InvalidSetting(format!(
+                "ensemble: ridge fraction {fraction} must be in [0, 1]"
+            )));
+        }
+        self.settings.ridge_fraction = fraction;
+        Ok(())
+    }
+
     /// Number of rungs (1: untempered).
     pub fn rungs(&self) -> usize {
         self.betas.len()

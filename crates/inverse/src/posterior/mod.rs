@@ -103,6 +103,14 @@ pub struct PosteriorSettings {
     /// dropped).
     #[serde(default = "default_temper_after")]
     pub temper_after: usize,
+    /// `ridge_fraction` of the tempered restart (the ridge move on every
+    /// rung; [`ensemble`] module docs).
+    #[serde(default = "default_temper_ridge")]
+    pub temper_ridge: f64,
+}
+
+fn default_temper_ridge() -> f64 {
+    0.1
 }
 
 fn default_rungs() -> usize {
@@ -168,6 +176,7 @@ impl PosteriorSettings {
             rungs: default_rungs(),
             rung_ratio: default_rung_ratio(),
             temper_after: default_temper_after(),
+            temper_ridge: default_temper_ridge(),
         }
     }
 }
@@ -486,6 +495,7 @@ pub fn sample_posterior_fixed(
             // from 0 ([`ensemble`] module docs, "Tempering").
             for (ens, ch) in ensembles.iter_mut().zip(chains.iter_mut()) {
                 ens.temper(settings.rungs, settings.rung_ratio)?;
+                ens.set_ridge_fraction(settings.temper_ridge)?;
                 *ch = ens.empty_chains();
             }
             burn_in(&mut ensembles, &log_density);
