@@ -11,7 +11,7 @@
 //! ```text
 //! cargo run --release -p nlvid-report --example posterior_cells \
 //!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=BOOL] \
-//!     [threads=N] [cell ...]
+//!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [cell ...]
 //! ```
 
 use std::path::Path;
@@ -47,6 +47,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ridge: Option<f64> = opt("ridge").map(|v| v.parse()).transpose()?;
     let ridge_time: bool = opt("ridge_time").map_or(Ok(false), |v| v.parse())?;
     let threads: usize = opt("threads").map_or(Ok(1), |v| v.parse())?;
+    let rungs: Option<usize> = opt("rungs").map(|v| v.parse()).transpose()?;
+    let ratio: Option<f64> = opt("ratio").map(|v| v.parse()).transpose()?;
+    let temper_after: Option<usize> = opt("temper_after").map(|v| v.parse()).transpose()?;
+    let temper_ridge: Option<f64> = opt("temper_ridge").map(|v| v.parse()).transpose()?;
     let demo =
         std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
     let root = std::env::temp_dir().join(format!("nlvid-cells-{}", std::process::id()));
@@ -89,31 +93,39 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             )],
         };
         for (refresh_fraction, refit_proposal) in configs {
-            let ridge_fraction = ridge.unwrap_or(ps.ridge_fraction);
-            println!(
-                "refresh {refresh_fraction}, refit {refit_proposal}, ridge {ridge_fraction}, \
-                 ridge_time {ridge_time}:"
-            );
             let ps = PosteriorSettings {
                 refresh_fraction,
                 refit_proposal,
-                ridge_fraction,
+                ridge_fraction: ridge.unwrap_or(ps.ridge_fraction),
                 ridge_time,
                 threads,
+                rungs: rungs.unwrap_or(ps.rungs),
+                rung_ratio: ratio.unwrap_or(ps.rung_ratio),
+                temper_after: temper_after.unwrap_or(ps.temper_after),
+                temper_ridge: temper_ridge.unwrap_or(ps.temper_ridge),
                 ..ps.clone()
             };
+            println!(
+                "refresh {refresh_fraction}, refit {refit_proposal}, ridge {}, ridge_time \
+                 {ridge_time}, rungs {} ratio {} after {} ridge {}:",
+                ps.ridge_fraction, ps.rungs, ps.rung_ratio, ps.temper_after, ps.temper_ridge
+            );
             let (t0, cpu0) = (std::time::Instant::now(), cpu_time::ProcessTime::now());
             let p = sample_posterior(s, &r.data, &x_hat, &ps)?;
             let (wall, cpu) = (t0.elapsed(), cpu0.elapsed());
             let n_per = p.draws.len() / ps.ensembles;
             println!(
-                "{} R-hat {:.4} ESS {:.0} acc {:.2} kept {} per walker, {:.2} s wall, {:.2} s CPU \
-                 ({threads} thread(s)); truth u {:?}; fit u {:?}",
+                "{} R-hat {:.4} ESS {:.0} acc {:.2} kept {} per walker, rungs {} (swaps {:.2}), \
+                 {} proposals, {:.2} s wall, {:.2} s CPU ({threads} thread(s)); truth u {:?}; fit \
+                 u {:?}",
                 r.cell,
                 p.rhat_max,
                 p.ess_min,
                 p.acceptance,
-                n_per / ps.walkers,
+                p.kept_steps,
+                p.rungs,
+                p.swap_acceptance,
+                p.proposals,
                 wall.as_secs_f64(),
                 cpu.as_secs_f64(),
                 round(&domain.to_unit(&truth.x)),

@@ -76,6 +76,7 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     let mut rhat3_max = 0.0f64;
     let mut unconverged = 0usize;
     let mut ess_min = f64::INFINITY;
+    let (mut proposals, mut tempered, mut kept) = (0usize, 0usize, Vec::new());
     let mut misses = Vec::new();
     for c in &run.cells {
         let Some(p) = &c.posterior else {
@@ -111,17 +112,30 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
                 ));
             }
         }
-        if p.rhat_max > 1.01 {
+        if p.rhat_max > 1.01 || p.rungs > 1 {
             println!(
-                "  {} R-hat {:.3} ESS {:.0} acceptance {:.2}; truth {:?}; G0 {:?}",
-                c.cell, p.rhat_max, p.ess_min, p.acceptance, truth.x, p.g0
+                "  {} R-hat {:.4} ESS {:.0} acceptance {:.2} kept {} rungs {} (swaps {:.2}); truth \
+                 {:?}; G0 {:?}",
+                c.cell,
+                p.rhat_max,
+                p.ess_min,
+                p.acceptance,
+                p.kept_steps,
+                p.rungs,
+                p.swap_acceptance,
+                truth.x,
+                p.g0
             );
         }
         rhat_max = rhat_max.max(p.rhat_max);
         rhat3_max = rhat3_max.max(p.g0.rhat).max(p.g_sum.rhat).max(p.g_end.rhat);
         unconverged += usize::from(!(p.rhat_max <= 1.01));
         ess_min = ess_min.min(p.ess_min);
+        proposals += p.proposals;
+        tempered += usize::from(p.rungs > 1);
+        kept.push(p.kept_steps);
     }
+    kept.sort_unstable();
     let load = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     println!(
         "{n} cells with posteriors of {} ({} fitted); noise {noise} x peak; seed {seed}",
@@ -145,6 +159,13 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
          above 1.01), {rhat3_max:.4} over G0, g1 + g2, G(t_end); smallest ESS {ess_min:.0}"
     );
     ok &= rhat_max <= 1.01;
+    println!(
+        "sampler: {proposals} proposals in all ({:.0} per cell), {tempered} cells tempered; kept \
+         steps per walker: median {}, largest {}",
+        proposals as f64 / n.max(1) as f64,
+        kept.get(kept.len() / 2).copied().unwrap_or(0),
+        kept.last().copied().unwrap_or(0)
+    );
     println!(
         "cohort (fit + posterior) wall time {seconds:.1} s, {:.2} s per cell on {} threads; CPU \
          {cpu:.1} s ({:.2} s per cell); load average at the end {}",

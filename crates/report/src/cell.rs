@@ -473,6 +473,8 @@ fn posterior(
         seed: p.seed.unwrap_or(settings.seed),
         level: p.level,
         keep: p.keep,
+        rungs: p.rungs,
+        temper_after: p.temper_after,
         ..PosteriorSettings::new(settings.hold_end)
     };
     match sample_posterior_fixed(fitter.surrogate(), fixed, &base.data, x_hat, &ps) {

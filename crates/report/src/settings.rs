@@ -40,7 +40,8 @@
 use std::path::{Path, PathBuf};
 
 use nlvid_inverse::{
-    AfmColumns, Calibration, CompressionColumns, Coordinates, ProtocolTolerance, Segment,
+    AfmColumns, Calibration, CompressionColumns, Coordinates, PosteriorSettings, ProtocolTolerance,
+    Segment,
 };
 use nlvid_study::{Bounds, Dimension, FromSection, Section, Study, StudyError};
 use serde::{Deserialize, Serialize};
@@ -632,6 +633,8 @@ pub struct CohortSettings {
 /// level = 0.9       # credible level of intervals and bands
 /// keep = 200        # thinned draws kept per cell (group bands, p(t) over draws)
 /// seed = 1          # default: fit.seed
+/// rungs = 4         # temperature rungs of the restart of a slow cell (1: none)
+/// temper_after = 500  # kept steps after which a cell with R-hat > 1.01 restarts tempered
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PosteriorStudy {
@@ -653,10 +656,25 @@ pub struct PosteriorStudy {
     pub keep: usize,
     /// Seed (None: the fit's).
     pub seed: Option<u64>,
+    /// Rungs of a tempered restart (`PosteriorSettings::rungs`).
+    #[serde(default = "default_rungs")]
+    pub rungs: usize,
+    /// Kept steps before a tempered restart
+    /// (`PosteriorSettings::temper_after`).
+    #[serde(default = "default_temper_after")]
+    pub temper_after: usize,
 }
 
 fn default_ensembles() -> usize {
     4
+}
+
+fn default_rungs() -> usize {
+    PosteriorSettings::new(1.0).rungs
+}
+
+fn default_temper_after() -> usize {
+    PosteriorSettings::new(1.0).temper_after
 }
 
 struct PosteriorSection(Option<PosteriorStudy>);
@@ -674,6 +692,12 @@ impl FromSection for PosteriorSection {
             level: s.f64_or("level", Bounds::closed(0.5, 0.999), 0.9)?,
             keep: s.usize_or("keep", Bounds::closed(10.0, 1e5), 200)?,
             seed: s.opt_u64("seed")?,
+            rungs: s.usize_or("rungs", Bounds::closed(1.0, 16.0), default_rungs())?,
+            temper_after: s.usize_or(
+                "temper_after",
+                Bounds::closed(0.0, 1e8),
+                default_temper_after(),
+            )?,
         };
         Ok(Self(enabled.then_some(p)))
     }

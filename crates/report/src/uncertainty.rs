@@ -234,6 +234,10 @@ mod tests {
             rhat_max: 1.0,
             ess_min: 1.0,
             acceptance: 0.3,
+            kept_steps: 1,
+            rungs: 1,
+            swap_acceptance: 0.0,
+            proposals: 1,
             draws,
         });
         c

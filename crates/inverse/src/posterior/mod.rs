@@ -12,7 +12,10 @@
 //! - sampler: independent affine-invariant ensembles ([`ensemble`]) in u,
 //!   started over-dispersed around the multistart optimum (Laplace shape),
 //!   run in rounds until the split R̂ across ensembles is ≤ [`RHAT_TARGET`]
-//!   or `max_steps`;
+//!   or `max_steps`; a posterior still above the target after
+//!   `temper_after` kept steps is restarted from its walkers' positions
+//!   with parallel tempering inside each ensemble (`rungs`; the
+//!   [`ensemble`] module docs, "Tempering"), the draws before dropped;
 //! - outputs ([`Posterior`]): equal-tailed credible intervals of every
 //!   parameter and of G(0), g1 + g2 and G(t_end) (eq. 5.1 through
 //!   `nlvid_model::Relaxation`), a credible band on G(t), split R̂ and
@@ -87,9 +90,46 @@ pub struct PosteriorSettings {
     /// posterior at a time — a cohort already runs one cell per core.
     #[serde(default = "default_threads")]
     pub threads: usize,
+    /// Rungs of the temperature ladder of a tempered restart (1: never
+    /// tempered; [`ensemble`] module docs, "Tempering").
+    #[serde(default = "default_rungs")]
+    pub rungs: usize,
+    /// Ratio of adjacent rungs' inverse temperatures (β_r = ratio^r).
+    #[serde(default = "default_rung_ratio")]
+    pub rung_ratio: f64,
+    /// Kept steps per walker after which a posterior with R̂ still above
+    /// [`RHAT_TARGET`] is restarted with `rungs` rungs (a new burn-in and
+    /// rounds of at most `max_steps` kept steps; the draws before are
+    /// dropped).
+    #[serde(default = "default_temper_after")]
+    pub temper_after: usize,
+    /// `ridge_fraction` of the tempered restart (the ridge move on every
+    /// rung; [`ensemble`] module docs).
+    #[serde(default = "default_temper_ridge")]
+    pub temper_ridge: f64,
+}
+
+fn default_temper_ridge() -> f64 {
+    0.1
+}
+
+fn default_rungs() -> usize {
+    4
+}
+
+fn default_rung_ratio() -> f64 {
+    0.5
+}
+
+fn default_temper_after() -> usize {
+    500
 }
 
 fn default_threads() -> usize {
+    1
+}
+
+fn default_one() -> usize {
     1
 }
 
@@ -133,6 +173,10 @@ impl PosteriorSettings {
             ridge_fraction: default_ridge(),
             ridge_time: false,
             threads: default_threads(),
+            rungs: default_rungs(),
+            rung_ratio: default_rung_ratio(),
+            temper_after: default_temper_after(),
+            temper_ridge: default_temper_ridge(),
         }
     }
 }
@@ -195,8 +239,23 @@ pub struct Posterior {
     pub rhat_max: f64,
     /// Smallest effective sample size over the same.
     pub ess_min: f64,
-    /// Acceptance fraction of the sampler.
+    /// Acceptance fraction of the sampler (the β = 1 walkers).
     pub acceptance: f64,
+    /// Kept steps per walker behind the intervals.
+    #[serde(default)]
+    pub kept_steps: usize,
+    /// Rungs of the temperature ladder (1: untempered).
+    #[serde(default = "default_one")]
+    pub rungs: usize,
+    /// Accepted fraction of the swaps between rungs (0 when untempered).
+    #[serde(default)]
+    pub swap_acceptance: f64,
+    /// Points proposed (the starts, and per step one per walker and rung,
+    /// every phase included): the sampler's cost in log-density calls,
+    /// an upper bound on likelihood evaluations (a point outside the
+    /// prior's support costs none).
+    #[serde(default)]
+    pub proposals: usize,
     /// Thinned draws (physical values, domain order).
     pub draws: Vec<Vec<f64>>,
 }
@@ -305,11 +364,21 @@ fn starts(
 
 /// Samples the posterior of the parameters of `data` (on the surrogate's
 /// grid) given the optimum `x_hat` of a fit (module docs): `ensembles`
-/// independent ensembles in the domain's unit coordinates u, each burnt in and then run `steps` kept steps at a time
-/// until the split R̂ across ensembles of every reported quantity is
-/// ≤ [`RHAT_TARGET`] or `max_steps` kept steps are reached.
+/// independent ensembles in the domain's unit coordinates u, each burnt
+/// in and then run `steps` kept steps at a time until the split R̂ across
+/// ensembles of every reported quantity is ≤ [`RHAT_TARGET`] or
+/// `max_steps` kept steps are reached. Not converged after
+/// `temper_after` kept steps: every ensemble gets `rungs` rungs
+/// ([`Ensemble::temper`]), is burnt in again and run in rounds as before
+/// (kept steps counted from 0), only its β = 1 rung kept. Validity: the
+/// restart is a new chain of the tempered joint target from the current
+/// positions; within it the kernel changes only at the finitely many
+/// refits of the independence proposal (finite adaptation, Roberts &
+/// Rosenthal 2007), and each ensemble is tempered on its own (own rungs,
+/// own random stream), so the ensembles stay independent for R̂.
 ///
-/// Cost: ensembles·walkers·(burn + kept steps) likelihood evaluations,
+/// Cost: ensembles·walkers·(burn + kept steps) likelihood evaluations
+/// (times `rungs` for the tempered restart's burn-in and steps),
 /// each one reduced prediction O(N·q·d) and one Kriging variance O(N²)
 /// (N training runs); the ensembles are stepped together so that each
 /// step's proposals of all ensembles are evaluated in batches of 32–64
@@ -405,18 +474,34 @@ pub fn sample_posterior_fixed(
     }
     burn_in(&mut ensembles, &log_density);
     let max_steps = settings.max_steps.max(settings.steps);
+    let per_step = settings.ensembles * settings.walkers;
+    let mut proposals = per_step * (1 + settings.burn);
     loop {
         sample(&mut ensembles, &log_density, settings.steps, &mut chains);
         let kept = chains[0].steps;
+        let rungs = ensembles[0].rungs();
+        proposals += per_step * rungs * settings.steps;
         let draws = to_draws(&domain, chains.iter());
-        let post = summarise(&draws, noise, settings)?;
+        let mut post = summarise(&draws, noise, settings)?;
+        (post.kept_steps, post.rungs, post.proposals) = (kept, rungs, proposals);
+        post.swap_acceptance =
+            ensembles.iter().map(Ensemble::swap_acceptance).sum::<f64>() / ensembles.len() as f64;
         if post.rhat_max <= RHAT_TARGET || kept + settings.steps > max_steps {
             return Ok(post);
         }
-        if settings.refit_proposal {
-            for (ens, ch) in ensembles.iter_mut().zip(&chains) {
-                ens.refit_proposal(ch, settings.steps);
+        if rungs == 1 && settings.rungs > 1 && kept >= settings.temper_after {
+            // A tempered restart from the current positions: a new chain
+            // of the tempered joint target, burnt in, its rounds counted
+            // from 0 ([`ensemble`] module docs, "Tempering").
+            for (ens, ch) in ensembles.iter_mut().zip(chains.iter_mut()) {
+                ens.temper(settings.rungs, settings.rung_ratio)?;
+                ens.set_ridge_fraction(settings.temper_ridge)?;
+                *ch = ens.empty_chains();
             }
+            burn_in(&mut ensembles, &log_density);
+            proposals += per_step * settings.rungs * settings.burn;
+        } else if settings.refit_proposal {
+            ensembles.iter_mut().for_each(Ensemble::refit_proposal);
         }
     }
 }
@@ -616,6 +701,10 @@ fn summarise(draws: &Draws, noise: f64, settings: &PosteriorSettings) -> Result<
         rhat_max,
         ess_min,
         acceptance: draws.acceptance,
+        kept_steps: 0,
+        rungs: 1,
+        swap_acceptance: 0.0,
+        proposals: 0,
         draws: draws.pick(settings.keep),
     })
 }
