@@ -875,6 +875,16 @@ impl TProposal {
 mod tests {
     use super::*;
 
+    /// Mean and variance (1/n) of coordinate `i` over every kept draw.
+    fn moments(ch: &Chains, i: usize) -> (f64, f64) {
+        let n = ch.steps * ch.walkers;
+        let dim = ch.samples.len() / n;
+        let xs = || ch.samples.iter().skip(i).step_by(dim);
+        let mean = xs().sum::<f64>() / n as f64;
+        let var = xs().map(|v| (v - mean).powi(2)).sum::<f64>() / n as f64;
+        (mean, var)
+    }
+
     /// A 3-D Gaussian with correlation 0.9 between the first two axes and
     /// very different scales: mean and covariance of the draws match the
     /// closed form within a few Monte-Carlo standard errors.
@@ -944,15 +954,7 @@ mod tests {
             ..EnsembleSettings::default()
         };
         let ch = sample_ensemble(logp, &init, &s).expect("run");
-        let n = (ch.steps * ch.walkers) as f64;
-        let m = ch.samples.iter().step_by(2).sum::<f64>() / n;
-        let v = ch
-            .samples
-            .iter()
-            .step_by(2)
-            .map(|x| (x - m).powi(2))
-            .sum::<f64>()
-            / n;
+        let (m, v) = moments(&ch, 0);
         assert!((m - 1.0 / 3.0).abs() < 0.01, "mean {m}");
         assert!((v - 1.0 / 18.0).abs() < 0.004, "var {v}");
     }
@@ -994,18 +996,8 @@ mod tests {
             e[0].refit_proposal();
         }
         let [ch] = ch;
-        let n = (ch.steps * ch.walkers) as f64;
-        let mean = |i: usize| ch.samples.iter().skip(i).step_by(2).sum::<f64>() / n;
-        let var = |i: usize| {
-            let m = mean(i);
-            ch.samples
-                .iter()
-                .skip(i)
-                .step_by(2)
-                .map(|v| (v - m).powi(2))
-                .sum::<f64>()
-                / n
-        };
+        let mean = |i: usize| moments(&ch, i).0;
+        let var = |i: usize| moments(&ch, i).1;
         assert!((mean(0) - 0.5).abs() < 0.02, "E[x] {}", mean(0));
         assert!((var(0) - 1.0 / 12.0).abs() < 0.006, "Var[x] {}", var(0));
         assert!((mean(1) - 1.0 / 7.0).abs() < 0.01, "E[y] {}", mean(1));
@@ -1098,18 +1090,8 @@ mod tests {
         let mut ch = [e[0].empty_chains()];
         sample(&mut e, &logp, s.steps, &mut ch);
         let [ch] = ch;
-        let n = (ch.steps * ch.walkers) as f64;
-        let mean = |i: usize| ch.samples.iter().skip(i).step_by(4).sum::<f64>() / n;
-        let var = |i: usize| {
-            let m = mean(i);
-            ch.samples
-                .iter()
-                .skip(i)
-                .step_by(4)
-                .map(|v| (v - m).powi(2))
-                .sum::<f64>()
-                / n
-        };
+        let mean = |i: usize| moments(&ch, i).0;
+        let var = |i: usize| moments(&ch, i).1;
         for i in [0, 3] {
             assert!((mean(i) - 0.5).abs() < 0.015, "E[u_{i}] {}", mean(i));
             assert!((var(i) - 1.0 / 12.0).abs() < 0.005, "Var[u_{i}] {}", var(i));
@@ -1169,18 +1151,8 @@ mod tests {
             (ch, e[0].swap_acceptance())
         };
         let (ch, swaps) = run(true);
-        let n = (ch.steps * ch.walkers) as f64;
-        let mean = |i: usize| ch.samples.iter().skip(i).step_by(2).sum::<f64>() / n;
-        let var = |i: usize| {
-            let m = mean(i);
-            ch.samples
-                .iter()
-                .skip(i)
-                .step_by(2)
-                .map(|v| (v - m).powi(2))
-                .sum::<f64>()
-                / n
-        };
+        let mean = |i: usize| moments(&ch, i).0;
+        let var = |i: usize| moments(&ch, i).1;
         let right = |c: &Chains| {
             c.samples.iter().step_by(2).filter(|&&v| v > 0.0).count() as f64
                 / (c.steps * c.walkers) as f64
