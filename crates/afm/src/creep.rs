@@ -24,7 +24,7 @@
 //! log-spaced and seeded random starts). Terms whose Jₖ is 0 at the optimum are
 //! reported as collapsed.
 
-use nlvid_forward::exp_convolution;
+use nlvid_forward::{exp_convolution, exp_convolutions};
 
 use crate::curve::{ForceCurve, SegmentKind};
 use crate::error::{AfmError, Result};
@@ -239,16 +239,15 @@ pub fn fit_creep(data: &Creep, settings: &CreepSettings) -> Result<CreepFit> {
         ));
     }
     let c = 3.0 / (16.0 * settings.tip_radius.sqrt());
-    let column = |tau: f64| {
-        let h = hereditary(t, f, tau);
-        f.iter()
-            .zip(&h)
-            .map(|(f, h)| c * (f - h))
-            .collect::<Vec<f64>>()
+    let columns = |taus: &[f64]| {
+        exp_convolutions(t, f, taus)
+            .into_iter()
+            .map(|h| f.iter().zip(&h).map(|(f, h)| c * (f - h)).collect())
+            .collect()
     };
     let problem = Separable {
         fixed: f.iter().map(|f| c * f).collect(),
-        column: &column,
+        columns: &columns,
         y: &u,
         ln_tau,
     };

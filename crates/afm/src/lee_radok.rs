@@ -202,10 +202,10 @@ impl Checked {
     /// Runs `search` on the separable Lee–Radok problem of `force`: the
     /// elastic column and one hereditary column per relaxation time.
     fn solve<T>(&self, force: &[f64], search: impl FnOnce(&Separable<'_>) -> T) -> T {
-        let column = |tau: f64| self.kernel.hereditary(tau);
+        let columns = |taus: &[f64]| self.kernel.hereditary_many(taus);
         search(&Separable {
             fixed: self.kernel.elastic(),
-            column: &column,
+            columns: &columns,
             y: force,
             ln_tau: self.ln_tau,
         })

@@ -55,8 +55,8 @@ impl Default for Multistart {
 pub(crate) struct Separable<'a> {
     /// The τ-free column.
     pub fixed: Vec<f64>,
-    /// The column of one term with time τ.
-    pub column: &'a (dyn Fn(f64) -> Vec<f64> + Sync),
+    /// The columns of terms with times τ (one per τ, in order).
+    pub columns: &'a (dyn Fn(&[f64]) -> Vec<Vec<f64>> + Sync),
     /// Data.
     pub y: &'a [f64],
     /// Bounds of ln τ.
@@ -87,20 +87,13 @@ impl Separable<'_> {
 
     /// Coefficients and SSE (summed directly) of the non-negative fit for `taus`.
     pub fn solve(&self, taus: &[f64]) -> (Vec<f64>, f64) {
-        let cols: Vec<Vec<f64>> = std::iter::once(self.fixed.clone())
-            .chain(taus.iter().map(|&t| (self.column)(t)))
+        let hereditary = (self.columns)(taus);
+        let cols: Vec<&[f64]> = std::iter::once(self.fixed.as_slice())
+            .chain(hereditary.iter().map(Vec::as_slice))
             .collect();
         let (gram, rhs) = gram(&cols, self.y);
         let (x, _) = nnls_gram(&gram, &rhs, self.yy());
-        let sse = self
-            .y
-            .iter()
-            .enumerate()
-            .map(|(i, y)| {
-                let m: f64 = cols.iter().zip(&x).map(|(c, xk)| xk * c[i]).sum();
-                (y - m).powi(2)
-            })
-            .sum();
+        let sse = sum_of_squared_residuals(&cols, &x, self.y);
         (x, sse)
     }
 
@@ -184,12 +177,10 @@ impl Separable<'_> {
             .map(|i| (lo + (hi - lo) * i as f64 / (g - 1) as f64).exp())
             .collect();
         if terms <= g {
-            let cols: Vec<Vec<f64>> = std::iter::once(self.fixed.clone())
-                .chain(
-                    grid.par_iter()
-                        .map(|&t| (self.column)(t))
-                        .collect::<Vec<_>>(),
-                )
+            let hereditary: Vec<Vec<f64>> =
+                grid.par_chunks(4).flat_map_iter(self.columns).collect();
+            let cols: Vec<&[f64]> = std::iter::once(self.fixed.as_slice())
+                .chain(hereditary.iter().map(Vec::as_slice))
                 .collect();
             let (gram, rhs) = gram(&cols, self.y);
             let yy = self.yy();
@@ -284,19 +275,90 @@ impl CostFunction for Cost<'_, '_> {
 }
 
 /// Gram matrix `AᵀA` and `Aᵀy` of the columns of A.
-fn gram(cols: &[Vec<f64>], y: &[f64]) -> (Vec<Vec<f64>>, Vec<f64>) {
-    let m = cols.len();
-    let mut g = vec![vec![0.0; m]; m];
-    let mut r = vec![0.0; m];
-    for a in 0..m {
-        for b in a..m {
-            let v: f64 = cols[a].iter().zip(&cols[b]).map(|(x, y)| x * y).sum();
-            g[a][b] = v;
-            g[b][a] = v;
+///
+/// Every entry is the sum over the samples in order, so it rounds exactly as
+/// one dot product at a time. For the few columns of a Nelder–Mead step
+/// (≤ 4: the τ-free one and up to three terms) all entries are summed in one
+/// pass with their accumulators in registers: their additions overlap instead
+/// of waiting on one chain and each sample is read once. This is most of the
+/// cost of a fit (a Lee–Radok fit of a real curve evaluates it ≈ 10⁵ times).
+fn gram(cols: &[&[f64]], y: &[f64]) -> (Vec<Vec<f64>>, Vec<f64>) {
+    match cols {
+        [a] => gram_one_pass([*a], y),
+        [a, b] => gram_one_pass([*a, *b], y),
+        [a, b, c] => gram_one_pass([*a, *b, *c], y),
+        [a, b, c, d] => gram_one_pass([*a, *b, *c, *d], y),
+        _ => {
+            let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(x, y)| x * y).sum() };
+            let m = cols.len();
+            let mut g = vec![vec![0.0; m]; m];
+            for a in 0..m {
+                for b in a..m {
+                    g[a][b] = dot(cols[a], cols[b]);
+                    g[b][a] = g[a][b];
+                }
+            }
+            (g, cols.iter().map(|c| dot(c, y)).collect())
         }
-        r[a] = cols[a].iter().zip(y).map(|(x, y)| x * y).sum();
     }
-    (g, r)
+}
+
+/// [`gram`] of `M` columns in one pass (`-0.0` is the empty sum of `Iterator::sum`).
+fn gram_one_pass<const M: usize>(cols: [&[f64]; M], y: &[f64]) -> (Vec<Vec<f64>>, Vec<f64>) {
+    let n = cols.iter().map(|c| c.len()).fold(y.len(), usize::min);
+    let cols = cols.map(|c| &c[..n]);
+    let y = &y[..n];
+    let mut g = [[-0.0; M]; M];
+    let mut r = [-0.0; M];
+    for i in 0..n {
+        let v: [f64; M] = std::array::from_fn(|a| cols[a][i]);
+        for a in 0..M {
+            for b in a..M {
+                g[a][b] += v[a] * v[b];
+            }
+            r[a] += v[a] * y[i];
+        }
+    }
+    let full = (0..M)
+        .map(|a| (0..M).map(|b| g[a.min(b)][a.max(b)]).collect())
+        .collect();
+    (full, r.to_vec())
+}
+
+/// Σᵢ (yᵢ − Σₖ xₖ Aᵢₖ)², summed directly (the Gram form `yy − xᵀr` cancels near a
+/// perfect fit), in sample order; one pass with the columns in registers for ≤ 4
+/// columns, as [`gram`].
+fn sum_of_squared_residuals(cols: &[&[f64]], x: &[f64], y: &[f64]) -> f64 {
+    match cols {
+        [a] => ssr_one_pass([*a], x, y),
+        [a, b] => ssr_one_pass([*a, *b], x, y),
+        [a, b, c] => ssr_one_pass([*a, *b, *c], x, y),
+        [a, b, c, d] => ssr_one_pass([*a, *b, *c, *d], x, y),
+        _ => y
+            .iter()
+            .enumerate()
+            .map(|(i, y)| {
+                let m: f64 = cols.iter().zip(x).map(|(c, xk)| xk * c[i]).sum();
+                (y - m).powi(2)
+            })
+            .sum(),
+    }
+}
+
+/// [`sum_of_squared_residuals`] of `M` columns.
+fn ssr_one_pass<const M: usize>(cols: [&[f64]; M], x: &[f64], y: &[f64]) -> f64 {
+    let n = cols.iter().map(|c| c.len()).fold(y.len(), usize::min);
+    let cols = cols.map(|c| &c[..n]);
+    let x: [f64; M] = std::array::from_fn(|k| x[k]);
+    let mut sum = -0.0;
+    for (i, y) in y[..n].iter().enumerate() {
+        let mut m = -0.0;
+        for k in 0..M {
+            m += x[k] * cols[k][i];
+        }
+        sum += (y - m).powi(2);
+    }
+    sum
 }
 
 /// Non-negative least squares from the Gram matrix `g = AᵀA`, `r = Aᵀy`, `yy = yᵀy`:
@@ -393,7 +455,7 @@ mod tests {
         let a = [1.0, 2.0, 3.0, 4.0];
         let b = [1.0, 0.0, 1.0, 0.0];
         let y: Vec<f64> = a.iter().zip(&b).map(|(p, q)| 2.0 * p + 3.0 * q).collect();
-        let (g, r) = gram(&[a.to_vec(), b.to_vec()], &y);
+        let (g, r) = gram(&[&a, &b], &y);
         let (x, sse) = nnls_gram(&g, &r, y.iter().map(|v| v * v).sum());
         assert!(
             (x[0] - 2.0).abs() < 1e-12 && (x[1] - 3.0).abs() < 1e-12,
@@ -402,10 +464,31 @@ mod tests {
         assert!(sse.abs() < 1e-9);
         // y = a − b = [0, 2, 2, 4]: the non-negative optimum drops b; x₀ = aᵀy/aᵀa = 26/30
         let y: Vec<f64> = a.iter().zip(&b).map(|(p, q)| p - q).collect();
-        let (g, r) = gram(&[a.to_vec(), b.to_vec()], &y);
+        let (g, r) = gram(&[&a, &b], &y);
         let (x, _) = nnls_gram(&g, &r, y.iter().map(|v| v * v).sum());
         assert_eq!(x[1], 0.0);
         assert!((x[0] - 26.0 / 30.0).abs() < 1e-12, "{x:?}");
+    }
+
+    #[test]
+    fn one_pass_gram_is_every_dot_product_to_the_bit() {
+        // Seeded, irregular columns: the one-pass form must round exactly as
+        // the dot products taken one at a time.
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let n = 1001;
+        let cols: Vec<Vec<f64>> = (0..4)
+            .map(|_| (0..n).map(|_| rng.random::<f64>() * 1e-9 - 3e-10).collect())
+            .collect();
+        let y: Vec<f64> = (0..n).map(|_| rng.random::<f64>()).collect();
+        let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+        let (g, r) = gram(&refs, &y);
+        let dot = |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(x, y)| x * y).sum() };
+        for a in 0..4 {
+            assert_eq!(r[a].to_bits(), dot(&cols[a], &y).to_bits());
+            for b in 0..4 {
+                assert_eq!(g[a][b].to_bits(), dot(&cols[a], &cols[b]).to_bits());
+            }
+        }
     }
 
     #[test]

@@ -174,6 +174,22 @@ impl LeeRadok {
         h.into_iter().map(|v| self.prefactor * v).collect()
     }
 
+    /// [`LeeRadok::hereditary`] for several relaxation times at once, equal to
+    /// it to the bit; a sampled history takes one pass for all of them
+    /// ([`exp_convolutions`]).
+    pub fn hereditary_many(&self, taus: &[f64]) -> Vec<Vec<f64>> {
+        match self.history {
+            History::Sampled => {
+                let mut hs = exp_convolutions(&self.times, &self.eps, taus);
+                for h in &mut hs {
+                    h.iter_mut().for_each(|v| *v *= self.prefactor);
+                }
+                hs
+            }
+            History::RampHold { .. } => taus.iter().map(|&t| self.hereditary(t)).collect(),
+        }
+    }
+
     /// F(t_j) (N) for the relaxation modulus `g` (eq. 5.1).
     pub fn force(&self, g: &Relaxation) -> Vec<f64> {
         let p = g.prony();
@@ -286,6 +302,56 @@ pub fn exp_convolution(
         }
     }
     (h, dh)
+}
+
+/// [`exp_convolution`]'s h for several τ, equal to it to the bit (same
+/// recurrence, same rounding). Up to four τ run in one pass: the recurrence is
+/// a chain of dependent multiply–adds, and interleaving independent chains
+/// hides their latency (a Lee–Radok or creep fit spends most of its time here).
+pub fn exp_convolutions(times: &[f64], x: &[f64], taus: &[f64]) -> Vec<Vec<f64>> {
+    taus.chunks(4)
+        .flat_map(|chunk| match chunk {
+            [a] => Vec::from(exp_convolutions_one_pass(times, x, [*a])),
+            [a, b] => Vec::from(exp_convolutions_one_pass(times, x, [*a, *b])),
+            [a, b, c] => Vec::from(exp_convolutions_one_pass(times, x, [*a, *b, *c])),
+            [a, b, c, d] => Vec::from(exp_convolutions_one_pass(times, x, [*a, *b, *c, *d])),
+            _ => unreachable!("chunks of 1..=4"),
+        })
+        .collect()
+}
+
+/// [`exp_convolutions`] of `M` relaxation times in one pass.
+fn exp_convolutions_one_pass<const M: usize>(
+    times: &[f64],
+    x: &[f64],
+    taus: [f64; M],
+) -> [Vec<f64>; M] {
+    let m = times.len().min(x.len());
+    let mut h: [Vec<f64>; M] = std::array::from_fn(|_| Vec::with_capacity(m));
+    if m == 0 {
+        return h;
+    }
+    let mut state = [x[0]; M];
+    for hk in &mut h {
+        hk.push(x[0]);
+    }
+    let (mut last_dt, mut a, mut b) = (f64::NAN, [0.0; M], [0.0; M]);
+    for j in 0..m - 1 {
+        let dt = times[j + 1] - times[j];
+        let rate = (x[j + 1] - x[j]) / dt;
+        if dt != last_dt {
+            last_dt = dt;
+            for k in 0..M {
+                a[k] = (-dt / taus[k]).exp();
+                b[k] = -taus[k] * (-dt / taus[k]).exp_m1();
+            }
+        }
+        for k in 0..M {
+            state[k] = a[k] * state[k] + rate * b[k];
+            h[k].push(state[k]);
+        }
+    }
+    h
 }
 
 /// φ(x) = ∫₀ˣ e^{−(x−u)} u^{1/2} du and χ(x) = ∫₀ˣ (x − u) e^{−(x−u)} u^{1/2} du
@@ -426,6 +492,45 @@ mod tests {
             let hertz = 16.0 / 3.0 * 1000.0 * 5e-6f64.sqrt() * (1e-6 * t.min(1.0)).powf(1.5);
             assert!((f / hertz - 1.0).abs() < 1e-14, "t = {t}: {f} vs {hertz}");
         }
+    }
+
+    #[test]
+    fn several_taus_in_one_pass_equal_one_tau_at_a_time_to_the_bit() {
+        // An irregular grid with runs of equal steps (the shared-exponential
+        // branch) and a history that is not piecewise linear; 1 to 9 τ cover
+        // every chunk length of the one-pass form.
+        let mut times = vec![0.0];
+        for i in 1..400 {
+            let dt = if i % 50 < 30 {
+                1e-3
+            } else {
+                1e-3 * (1.0 + 0.01 * (i % 7) as f64)
+            };
+            times.push(times[i - 1] + dt);
+        }
+        let x: Vec<f64> = times
+            .iter()
+            .map(|t| (t * 3.0).sin().abs().powf(1.5))
+            .collect();
+        let taus: Vec<f64> = (0..9).map(|k| 1e-3 * 3f64.powi(k)).collect();
+        for n in 1..=taus.len() {
+            let many = exp_convolutions(&times, &x, &taus[..n]);
+            assert_eq!(many.len(), n);
+            for (h, &tau) in many.iter().zip(&taus[..n]) {
+                let (one, _) = exp_convolution(&times, &x, tau, false);
+                let bits = |v: &[f64]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(h), bits(&one), "τ = {tau} of {n}");
+            }
+        }
+        let k = LeeRadok::sampled(2.5e-6, 0.5, times.clone(), &x).expect("kernel");
+        assert_eq!(
+            k.hereditary_many(&taus[..3]),
+            vec![
+                k.hereditary(taus[0]),
+                k.hereditary(taus[1]),
+                k.hereditary(taus[2])
+            ]
+        );
     }
 
     #[test]

@@ -77,7 +77,7 @@ pub use capsule_fe::{
 pub use curves::{CurveJob, Noise, afm_curve, afm_curves, measured_csv};
 pub use error::{ForwardError, Result};
 pub use hertz::{HertzGrid, HertzProny, HertzPronySpec};
-pub use lee_radok::{LeeRadok, exp_convolution};
+pub use lee_radok::{LeeRadok, exp_convolution, exp_convolutions};
 pub use membrane::{
     MembraneModel, MembraneSpec, PARAMETERS as MEMBRANE_PARAMETERS, membrane_failure,
 };
