@@ -61,6 +61,18 @@ fn main() {
     if let Ok(v) = std::env::var("NLVID_FEM_THREADS") {
         setup.settings.threads = v.parse().unwrap();
     }
+    // NLVID_FEM_MESH = "h0,k_r,k_z,q": the graded mesh's element size at
+    // the pole (m), core elements along the surface and in depth, ring
+    // ratio (the accuracy budget of the dome, docs/theory/fem.md).
+    if let Ok(v) = std::env::var("NLVID_FEM_MESH") {
+        let p: Vec<&str> = v.split(',').collect();
+        setup.mesh_layout = afm::MeshLayout::ContactGraded(nlvid_fem::ContactMesh {
+            spacing: p[0].parse().unwrap(),
+            core: p[1].parse().unwrap(),
+            core_depth: p[2].parse().unwrap(),
+            growth: p[3].parse().unwrap(),
+        });
+    }
     if let Ok(v) = std::env::var("NLVID_FEM_REFINE")
         && let afm::MeshLayout::ContactGraded(spec) = setup.mesh_layout
     {
