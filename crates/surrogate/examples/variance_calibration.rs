@@ -100,11 +100,10 @@ fn per_direction(
                     .sum()
             })
             .collect();
-        let var: f64 = (0..q)
+        (0..q)
             .flat_map(|a| (0..q).map(move |b| (a, b)))
             .map(|(a, b)| l[a] * sigma[a * q + b] * l[b])
-            .sum();
-        var
+            .sum::<f64>()
     };
     let (var_last, var_half) = (functional(&last), functional(&half));
     let mut rows: Vec<(f64, Vec<f64>)> = Vec::new();
