@@ -65,7 +65,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             for &a in &after_l {
                 for &t in &tridge_l {
                     // Counts are written as whole numbers.
-                    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
                     tempering.push((r.map(|v| v as usize), q, a.map(|v| v as usize), t));
                 }
             }
