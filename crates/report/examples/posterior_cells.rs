@@ -13,6 +13,8 @@
 //!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=BOOL] \
 //!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [cell ...]
 //! ```
+//! (`rungs`, `ratio`, `temper_after` and `temper_ridge` take comma-separated
+//! lists, e.g. `temper_ridge=0.1,0`: every combination in turn.)
 
 use std::path::Path;
 
@@ -47,10 +49,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ridge: Option<f64> = opt("ridge").map(|v| v.parse()).transpose()?;
     let ridge_time: bool = opt("ridge_time").map_or(Ok(false), |v| v.parse())?;
     let threads: usize = opt("threads").map_or(Ok(1), |v| v.parse())?;
-    let rungs: Option<usize> = opt("rungs").map(|v| v.parse()).transpose()?;
-    let ratio: Option<f64> = opt("ratio").map(|v| v.parse()).transpose()?;
-    let temper_after: Option<usize> = opt("temper_after").map(|v| v.parse()).transpose()?;
-    let temper_ridge: Option<f64> = opt("temper_ridge").map(|v| v.parse()).transpose()?;
+    // The tempering options take comma-separated lists: every
+    // combination is sampled in turn on the same curves (one curve
+    // writing for several settings).
+    let list = |key: &str| -> Result<Vec<Option<f64>>, std::num::ParseFloatError> {
+        opt(key).map_or(Ok(vec![None]), |v| {
+            v.split(',').map(|s| s.parse().map(Some)).collect()
+        })
+    };
+    let (rungs_l, ratio_l) = (list("rungs")?, list("ratio")?);
+    let (after_l, tridge_l) = (list("temper_after")?, list("temper_ridge")?);
+    let mut tempering = Vec::new();
+    for &r in &rungs_l {
+        for &q in &ratio_l {
+            for &a in &after_l {
+                for &t in &tridge_l {
+                    // Counts are written as whole numbers.
+                    tempering.push((r.map(|v| v as usize), q, a.map(|v| v as usize), t));
+                }
+            }
+        }
+    }
     let demo =
         std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
     let root = std::env::temp_dir().join(format!("nlvid-cells-{}", std::process::id()));
@@ -92,7 +111,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 refit.unwrap_or(ps.refit_proposal),
             )],
         };
-        for (refresh_fraction, refit_proposal) in configs {
+        for ((refresh_fraction, refit_proposal), (rungs, ratio, temper_after, temper_ridge)) in
+            configs
+                .iter()
+                .flat_map(|&c| tempering.iter().map(move |&t| (c, t)))
+        {
             let ps = PosteriorSettings {
                 refresh_fraction,
                 refit_proposal,

@@ -63,6 +63,104 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ] {
         table(name, data, &cal);
     }
+    per_direction(&km, &cx, &cy, &cal)?;
+    Ok(())
+}
+
+/// The calibration direction by direction on the held-out checking runs:
+/// per PCA score a, z_a = e_a²/(α v^β Σ_CV,aa) (e = Vᵀ D⁻¹ (y − ŷ), χ²_1
+/// with mean 1 when that direction is calibrated), and for two linear
+/// functionals of the curve w, the force at the last output time and the
+/// mean force over the later half of the outputs (the curve's long-time
+/// level, which sets G(t_end)): (wᵀ(y − ŷ))² / (α v^β wᵀ D V Σ_CV Vᵀ D w).
+/// Means and medians (χ²_1: median 0.455) over all runs and over the runs
+/// with v above and below the median v.
+fn per_direction(
+    km: &KrigingModel,
+    cx: &[Vec<f64>],
+    cy: &[Vec<f64>],
+    cal: &VarianceCalibration,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let Some(pca) = &km.pca else {
+        println!("(no PCA: no per-direction table)");
+        return Ok(());
+    };
+    let m = km.n_outputs;
+    let q = pca.basis.len() / m;
+    let sigma = km.cv_process_covariance()?;
+    let last: Vec<f64> = (0..m).map(|j| f64::from(u8::from(j == m - 1))).collect();
+    let half: Vec<f64> = (0..m).map(|j| if 2 * j >= m { 1.0 } else { 0.0 }).collect();
+    // Per functional w: its score loadings (Vᵀ D w)_a and predicted
+    // variance per unit calibrated v, wᵀ D V Σ Vᵀ D w.
+    let functional = |w: &[f64]| {
+        let l: Vec<f64> = (0..q)
+            .map(|a| {
+                (0..m)
+                    .map(|j| pca.basis[a * m + j] * km.y_std[j] * w[j])
+                    .sum()
+            })
+            .collect();
+        (0..q)
+            .flat_map(|a| (0..q).map(move |b| (a, b)))
+            .map(|(a, b)| l[a] * sigma[a * q + b] * l[b])
+            .sum::<f64>()
+    };
+    let (var_last, var_half) = (functional(&last), functional(&half));
+    let mut rows: Vec<(f64, Vec<f64>)> = Vec::new();
+    for (x, y) in cx.iter().zip(cy) {
+        let yh = km.predict(x)?;
+        let v = km.mse_scale(x)?;
+        let c = cal.apply(v);
+        let d: Vec<f64> = (0..m).map(|j| (y[j] - yh[j]) / km.y_std[j]).collect();
+        let mut z: Vec<f64> = (0..q)
+            .map(|a| {
+                let e: f64 = (0..m).map(|j| pca.basis[a * m + j] * d[j]).sum();
+                e * e / (c * sigma[a * q + a])
+            })
+            .collect();
+        let err = |w: &[f64]| -> f64 { (0..m).map(|j| w[j] * (y[j] - yh[j])).sum() };
+        z.push(err(&last).powi(2) / (c * var_last));
+        z.push(err(&half).powi(2) / (c * var_half));
+        rows.push((v, z));
+    }
+    let mut vs: Vec<f64> = rows.iter().map(|r| r.0).collect();
+    vs.sort_by(f64::total_cmp);
+    let (v_med, v_q3) = (vs[vs.len() / 2], vs[3 * vs.len() / 4]);
+    println!(
+        "per direction, held-out checking runs: mean [median] of e²/(α v^β Σ_aa) (1 [0.455] when \
+         calibrated); split at the median v = {v_med:.2e} and the upper quartile {v_q3:.2e}"
+    );
+    println!(
+        "| direction | all ({}) | v < median | v ≥ median | v ≥ upper quartile |",
+        rows.len()
+    );
+    println!("|---|---|---|---|---|");
+    let stat = |sel: &dyn Fn(f64) -> bool, col: usize| {
+        let mut z: Vec<f64> = rows.iter().filter(|r| sel(r.0)).map(|r| r.1[col]).collect();
+        z.sort_by(f64::total_cmp);
+        let n = z.len();
+        let mean = z.iter().sum::<f64>() / n as f64;
+        let med = if n % 2 == 1 {
+            z[n / 2]
+        } else {
+            0.5 * (z[n / 2 - 1] + z[n / 2])
+        };
+        format!("{mean:.3} [{med:.3}]")
+    };
+    for col in 0..q + 2 {
+        let name = match col {
+            c if c < q => format!("PC {}", c + 1),
+            c if c == q => "force at t_end".to_string(),
+            _ => "mean force, later half".to_string(),
+        };
+        println!(
+            "| {name} | {} | {} | {} | {} |",
+            stat(&|_| true, col),
+            stat(&|v| v < v_med, col),
+            stat(&|v| v >= v_med, col),
+            stat(&|v| v >= v_q3, col)
+        );
+    }
     Ok(())
 }
 
