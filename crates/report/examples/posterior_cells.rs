@@ -11,7 +11,7 @@
 //! ```text
 //! cargo run --release -p nlvid-report --example posterior_cells \
 //!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=BOOL] \
-//!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [cell ...]
+//!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [check=N] [cell ...]
 //! ```
 //! (`rungs`, `ratio`, `temper_after` and `temper_ridge` take comma-separated
 //! lists, e.g. `temper_ridge=0.1,0`: every combination in turn.)
@@ -59,6 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let (rungs_l, ratio_l) = (list("rungs")?, list("ratio")?);
     let (after_l, tridge_l) = (list("temper_after")?, list("temper_ridge")?);
+    let check: Option<usize> = opt("check").map(|v| v.parse()).transpose()?;
     let mut tempering = Vec::new();
     for &r in &rungs_l {
         for &q in &ratio_l {
@@ -126,12 +127,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 rung_ratio: ratio.unwrap_or(ps.rung_ratio),
                 temper_after: temper_after.unwrap_or(ps.temper_after),
                 temper_ridge: temper_ridge.unwrap_or(ps.temper_ridge),
+                check_every: check.unwrap_or(ps.check_every),
                 ..ps.clone()
             };
             println!(
                 "refresh {refresh_fraction}, refit {refit_proposal}, ridge {}, ridge_time \
-                 {ridge_time}, rungs {} ratio {} after {} ridge {}:",
-                ps.ridge_fraction, ps.rungs, ps.rung_ratio, ps.temper_after, ps.temper_ridge
+                 {ridge_time}, rungs {} ratio {} after {} ridge {}, R-hat checked every {}:",
+                ps.ridge_fraction,
+                ps.rungs,
+                ps.rung_ratio,
+                ps.temper_after,
+                ps.temper_ridge,
+                ps.check_every
             );
             let (t0, cpu0) = (std::time::Instant::now(), cpu_time::ProcessTime::now());
             let p = sample_posterior(s, &r.data, &x_hat, &ps)?;

@@ -475,6 +475,7 @@ fn posterior(
         keep: p.keep,
         rungs: p.rungs,
         temper_after: p.temper_after,
+        check_every: p.check_every,
         ..PosteriorSettings::new(settings.hold_end)
     };
     match sample_posterior_fixed(fitter.surrogate(), fixed, &base.data, x_hat, &ps) {

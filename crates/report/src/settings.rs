@@ -635,6 +635,7 @@ pub struct CohortSettings {
 /// seed = 1          # default: fit.seed
 /// rungs = 4         # temperature rungs of the restart of a slow cell (1: none)
 /// temper_after = 500  # kept steps after which a cell with R-hat > 1.01 restarts tempered
+/// check_every = 50  # after the first round, R-hat checked every this many kept steps
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PosteriorStudy {
@@ -663,6 +664,14 @@ pub struct PosteriorStudy {
     /// (`PosteriorSettings::temper_after`).
     #[serde(default = "default_temper_after")]
     pub temper_after: usize,
+    /// Kept steps between R̂ checks after the first round
+    /// (`PosteriorSettings::check_every`).
+    #[serde(default = "default_check_every")]
+    pub check_every: usize,
+}
+
+fn default_check_every() -> usize {
+    PosteriorSettings::new(1.0).check_every
 }
 
 fn default_ensembles() -> usize {
@@ -697,6 +706,11 @@ impl FromSection for PosteriorSection {
                 "temper_after",
                 Bounds::closed(0.0, 1e8),
                 default_temper_after(),
+            )?,
+            check_every: s.usize_or(
+                "check_every",
+                Bounds::closed(1.0, 1e8),
+                default_check_every(),
             )?,
         };
         Ok(Self(enabled.then_some(p)))

@@ -685,7 +685,8 @@ pub fn burn_in(ensembles: &mut [Ensemble], log_density: &impl LogDensity) {
 
 /// `steps` more steps of every ensemble, stepped together, appended to
 /// `out` (one [`Ensemble::empty_chains`] per ensemble, same order; the
-/// β = 1 rung only).
+/// β = 1 rung only). Starts a round: the points the next
+/// [`Ensemble::refit_proposal`] fits are these steps' only.
 pub fn sample(
     ensembles: &mut [Ensemble],
     log_density: &impl LogDensity,
@@ -695,6 +696,18 @@ pub fn sample(
     for e in ensembles.iter_mut() {
         e.recent.iter_mut().for_each(Vec::clear);
     }
+    sample_more(ensembles, log_density, steps, out);
+}
+
+/// [`sample`] continuing the current round: its steps join the points of
+/// the next refit, so a round sampled in parts gives the same chains as in
+/// one call (the stopping rule's checks within a round, [`super`] docs).
+pub fn sample_more(
+    ensembles: &mut [Ensemble],
+    log_density: &impl LogDensity,
+    steps: usize,
+    out: &mut [Chains],
+) {
     for _ in 0..steps {
         step_all(ensembles, log_density, true);
         for (e, c) in ensembles.iter_mut().zip(out.iter_mut()) {
@@ -1195,6 +1208,46 @@ mod tests {
             assert_eq!(&alone, ch);
         }
         assert_ne!(chains[0].samples, chains[1].samples);
+    }
+
+    /// A round sampled in parts ([`sample`] then [`sample_more`], as the
+    /// stopping rule's checks within a round do) gives the chains of the
+    /// round in one call, the refit after it included; restarting the
+    /// round at the part (`sample` twice) changes the refit and the chains.
+    #[test]
+    fn a_round_in_parts_equals_the_round_in_one_call() {
+        let logp = |x: &[f64]| -0.5 * (x[0] * x[0] + 4.0 * (x[1] - x[0]).powi(2));
+        let init: Vec<Vec<f64>> = (0..8).map(|k| vec![k as f64 * 0.1, -0.2]).collect();
+        let settings = EnsembleSettings {
+            walkers: 8,
+            burn: 20,
+            steps: 60,
+            refresh_fraction: 0.1,
+            seed: 5,
+            ..EnsembleSettings::default()
+        };
+        assert!(settings.independence_fraction > 0.0);
+        let run = |parts: &[(usize, bool)]| {
+            let mut e = vec![Ensemble::new(&logp, &init, &settings).expect("e")];
+            burn_in(&mut e, &logp);
+            let mut chains = vec![e[0].empty_chains()];
+            for &(steps, more) in parts {
+                if steps == 0 {
+                    e[0].refit_proposal();
+                } else if more {
+                    sample_more(&mut e, &logp, steps, &mut chains);
+                } else {
+                    sample(&mut e, &logp, steps, &mut chains);
+                }
+            }
+            chains.remove(0)
+        };
+        let whole = run(&[(60, false), (0, false), (60, false)]);
+        let parts = run(&[(20, false), (40, true), (0, false), (25, false), (35, true)]);
+        assert_eq!(whole, parts);
+        let restarted = run(&[(20, false), (40, false), (0, false), (60, false)]);
+        assert_eq!(restarted.steps, whole.steps);
+        assert_ne!(restarted.samples, whole.samples);
     }
 
     #[test]

@@ -12,7 +12,9 @@
 //! - sampler: independent affine-invariant ensembles ([`ensemble`]) in u,
 //!   started over-dispersed around the multistart optimum (Laplace shape),
 //!   run in rounds until the split R̂ across ensembles is ≤ [`RHAT_TARGET`]
-//!   or `max_steps`; a posterior still above the target after
+//!   or `max_steps` (after the first round R̂ is checked every
+//!   `check_every` kept steps, so a posterior stops as soon as it is
+//!   converged; refits and the restart stay at round ends); a posterior still above the target after
 //!   `temper_after` kept steps is restarted from its walkers' positions
 //!   with parallel tempering inside each ensemble (`rungs`; the
 //!   [`ensemble`] module docs, "Tempering"), the draws before dropped;
@@ -32,6 +34,7 @@ use serde::{Deserialize, Serialize};
 
 pub use ensemble::{
     Chains, Ensemble, EnsembleSettings, LogDensity, RidgeMove, burn_in, sample, sample_ensemble,
+    sample_more,
 };
 pub use likelihood::{CurveLikelihood, noise_sd};
 
@@ -107,6 +110,19 @@ pub struct PosteriorSettings {
     /// rung; [`ensemble`] module docs).
     #[serde(default = "default_temper_ridge")]
     pub temper_ridge: f64,
+    /// Kept steps between R̂ checks once a chain has one round (`steps`)
+    /// of kept steps: the posterior stops at the first check with R̂ ≤
+    /// [`RHAT_TARGET`] instead of at the end of its round. The chains are
+    /// those of whole rounds cut short (refits and the tempered restart
+    /// stay at round ends), so a posterior converged at the end of its
+    /// first round is the same draw for draw; `steps` or more: checks at
+    /// round ends only (the sampler before session 13).
+    #[serde(default = "default_check_every")]
+    pub check_every: usize,
+}
+
+fn default_check_every() -> usize {
+    50
 }
 
 fn default_temper_ridge() -> f64 {
@@ -177,6 +193,7 @@ impl PosteriorSettings {
             rung_ratio: default_rung_ratio(),
             temper_after: default_temper_after(),
             temper_ridge: default_temper_ridge(),
+            check_every: default_check_every(),
         }
     }
 }
@@ -476,17 +493,39 @@ pub fn sample_posterior_fixed(
     let max_steps = settings.max_steps.max(settings.steps);
     let per_step = settings.ensembles * settings.walkers;
     let mut proposals = per_step * (1 + settings.burn);
+    let check = settings.check_every.clamp(1, settings.steps);
     loop {
-        sample(&mut ensembles, &log_density, settings.steps, &mut chains);
-        let kept = chains[0].steps;
+        // One round in parts of `check` kept steps; R̂ is checked after
+        // each part once the chain has a whole round, else at the round's
+        // end (the stopping rule, `PosteriorSettings::check_every`).
         let rungs = ensembles[0].rungs();
-        proposals += per_step * rungs * settings.steps;
-        let draws = to_draws(&domain, chains.iter());
-        let mut post = summarise(&draws, noise, settings)?;
-        (post.kept_steps, post.rungs, post.proposals) = (kept, rungs, proposals);
-        post.swap_acceptance =
-            ensembles.iter().map(Ensemble::swap_acceptance).sum::<f64>() / ensembles.len() as f64;
-        if post.rhat_max <= RHAT_TARGET || kept + settings.steps > max_steps {
+        let mut done = 0;
+        let (kept, post) = loop {
+            let part = check.min(settings.steps - done);
+            if done == 0 {
+                sample(&mut ensembles, &log_density, part, &mut chains);
+            } else {
+                sample_more(&mut ensembles, &log_density, part, &mut chains);
+            }
+            done += part;
+            proposals += per_step * rungs * part;
+            let kept = chains[0].steps;
+            if done < settings.steps && kept < settings.steps {
+                continue;
+            }
+            let draws = to_draws(&domain, chains.iter());
+            let mut post = summarise(&draws, noise, settings)?;
+            (post.kept_steps, post.rungs, post.proposals) = (kept, rungs, proposals);
+            post.swap_acceptance = ensembles.iter().map(Ensemble::swap_acceptance).sum::<f64>()
+                / ensembles.len() as f64;
+            if post.rhat_max <= RHAT_TARGET {
+                return Ok(post);
+            }
+            if done == settings.steps {
+                break (kept, post);
+            }
+        };
+        if kept + settings.steps > max_steps {
             return Ok(post);
         }
         if rungs == 1 && settings.rungs > 1 && kept >= settings.temper_after {

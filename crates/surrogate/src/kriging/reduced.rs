@@ -284,17 +284,28 @@ impl KrigingModel {
     /// Σ_k θ_k (xn_k − s_ik)² is accumulated dimension by dimension over
     /// all sites (contiguous in the column-major sites, so vectorised) in
     /// the order of [`KrigingModel::correlation_value`]: the same value bit
-    /// for bit, at a fraction of its instructions.
+    /// for bit, at a fraction of its instructions. The first dimension's
+    /// term is stored, not added to a zeroed column (0 + a = a exactly for
+    /// a ≥ 0: the same sums without a pass that clears `out`).
     pub(super) fn correlation_column(&self, xn: &[f64], out: &mut [f64], dx: &mut [f64]) {
         let n = self.n_sites;
         if self.correlation == Correlation::Gauss {
-            out.fill(0.0);
             for (k, &xk) in xn.iter().enumerate() {
                 let (theta, site) = (self.theta[k], &self.sites[k * n..(k + 1) * n]);
+                if k == 0 {
+                    for (acc, s) in out.iter_mut().zip(site) {
+                        let t = xk - s;
+                        *acc = theta * t * t;
+                    }
+                    continue;
+                }
                 for (acc, s) in out.iter_mut().zip(site) {
                     let t = xk - s;
                     *acc += theta * t * t;
                 }
+            }
+            if xn.is_empty() {
+                out.fill(0.0);
             }
             for r in out.iter_mut() {
                 *r = (-*r).exp();

@@ -1237,7 +1237,8 @@ mod covariance_tests {
 
     /// The correlation column of the batch path equals the per-site
     /// formula bit for bit, for `gauss` (accumulated by dimension) and for
-    /// another family (per site).
+    /// another family (per site), whatever `out` held before (NaN here: no
+    /// entry may be added to instead of written).
     #[test]
     fn correlation_column_equals_the_per_site_formula_bitwise() {
         for corr in [Correlation::Gauss, Correlation::Exp] {
@@ -1245,7 +1246,7 @@ mod covariance_tests {
             m.correlation = corr;
             let (n, d) = (m.n_sites, m.dim);
             let xn = [0.37, -1.21];
-            let mut col = vec![0.0; n];
+            let mut col = vec![f64::NAN; n];
             m.correlation_column(&xn, &mut col, &mut [0.0; 2]);
             for (i, r) in col.iter().enumerate() {
                 let dx: Vec<f64> = (0..d).map(|k| xn[k] - m.sites[k * n + i]).collect();
