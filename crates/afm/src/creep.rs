@@ -245,12 +245,7 @@ pub fn fit_creep(data: &Creep, settings: &CreepSettings) -> Result<CreepFit> {
             .map(|h| f.iter().zip(&h).map(|(f, h)| c * (f - h)).collect())
             .collect()
     };
-    let problem = Separable {
-        fixed: f.iter().map(|f| c * f).collect(),
-        columns: &columns,
-        y: &u,
-        ln_tau,
-    };
+    let problem = Separable::new(f.iter().map(|f| c * f).collect(), &columns, &u, ln_tau);
     let starts = problem.starts(settings.terms, &settings.multistart, (dt_min, span));
     let best = problem
         .best_of(&starts, settings.multistart.max_iters)

@@ -203,12 +203,12 @@ impl Checked {
     /// elastic column and one hereditary column per relaxation time.
     fn solve<T>(&self, force: &[f64], search: impl FnOnce(&Separable<'_>) -> T) -> T {
         let columns = |taus: &[f64]| self.kernel.hereditary_many(taus);
-        search(&Separable {
-            fixed: self.kernel.elastic(),
-            columns: &columns,
-            y: force,
-            ln_tau: self.ln_tau,
-        })
+        search(&Separable::new(
+            self.kernel.elastic(),
+            &columns,
+            force,
+            self.ln_tau,
+        ))
     }
 }
 

@@ -54,13 +54,15 @@ impl Default for Multistart {
 /// The separable least-squares problem.
 pub(crate) struct Separable<'a> {
     /// The τ-free column.
-    pub fixed: Vec<f64>,
+    fixed: Vec<f64>,
     /// The columns of terms with times τ (one per τ, in order).
-    pub columns: &'a (dyn Fn(&[f64]) -> Vec<Vec<f64>> + Sync),
+    columns: &'a (dyn Fn(&[f64]) -> Vec<Vec<f64>> + Sync),
     /// Data.
-    pub y: &'a [f64],
+    y: &'a [f64],
+    /// yᵀy, once (every evaluation needs it).
+    yy: f64,
     /// Bounds of ln τ.
-    pub ln_tau: (f64, f64),
+    ln_tau: (f64, f64),
 }
 
 /// One local (or the global) optimum.
@@ -80,9 +82,23 @@ pub(crate) struct Optimum {
     pub starts: usize,
 }
 
-impl Separable<'_> {
-    fn yy(&self) -> f64 {
-        self.y.iter().map(|v| v * v).sum()
+impl<'a> Separable<'a> {
+    /// The problem of fitting `y` by the τ-free column `fixed` and one column per
+    /// τ from `columns`, with ln τ within `ln_tau`.
+    pub fn new(
+        fixed: Vec<f64>,
+        columns: &'a (dyn Fn(&[f64]) -> Vec<Vec<f64>> + Sync),
+        y: &'a [f64],
+        ln_tau: (f64, f64),
+    ) -> Self {
+        let yy = y.iter().map(|v| v * v).sum();
+        Separable {
+            fixed,
+            columns,
+            y,
+            yy,
+            ln_tau,
+        }
     }
 
     /// Coefficients and SSE (summed directly) of the non-negative fit for `taus`.
@@ -92,7 +108,7 @@ impl Separable<'_> {
             .chain(hereditary.iter().map(Vec::as_slice))
             .collect();
         let (gram, rhs) = gram(&cols, self.y);
-        let (x, _) = nnls_gram(&gram, &rhs, self.yy());
+        let (x, _) = nnls_gram(&gram, &rhs, self.yy);
         let sse = sum_of_squared_residuals(&cols, &x, self.y);
         (x, sse)
     }
@@ -126,7 +142,7 @@ impl Separable<'_> {
             };
             simplex.push(v);
         }
-        let scale = 1.0 / self.yy().max(f64::MIN_POSITIVE);
+        let scale = 1.0 / self.yy.max(f64::MIN_POSITIVE);
         let cost = Cost {
             problem: self,
             scale,
@@ -183,7 +199,7 @@ impl Separable<'_> {
                 .chain(hereditary.iter().map(Vec::as_slice))
                 .collect();
             let (gram, rhs) = gram(&cols, self.y);
-            let yy = self.yy();
+            let yy = self.yy;
             let mut scored: Vec<(f64, Vec<usize>)> = Vec::new();
             let mut combo: Vec<usize> = (0..terms).collect();
             loop {
