@@ -1,7 +1,7 @@
 #!/bin/sh
 # Worked example of `nlvid fit` (run from examples/fit; seconds in a debug
 # build). NLVID=path/to/nlvid overrides the binary on PATH. The same steps
-# run as a test: crates/cli/tests/fit.rs.
+# run as a test: crates/cli/tests/it/fit.rs.
 set -e
 NLVID=${NLVID:-nlvid}
 mkdir -p work

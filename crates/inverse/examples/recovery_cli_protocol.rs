@@ -1,5 +1,5 @@
 //! Is the CLI recovery limited by the protocol or by the surrogate?
-//! The ten seeded cases of `crates/cli/tests/fit.rs::ten_seeded_cases_…`
+//! The ten seeded cases of `crates/cli/tests/it/fit.rs::ten_seeded_cases_…`
 //! (same draws, same noise) fitted on the *real* model — Lee–Radok Hertz,
 //! no surrogate — with the CLI's protocol (R = 5 µm, 1 µm/s for 1 s, hold
 //! to 10 s) and its 100 grid points (0.1 … 10 s, via 0/1 weights on a

@@ -64,7 +64,7 @@ tau2 = "2 s"
 
 # The 3D capsule of thesis §4.3 on a coarse mesh (0.6 mm elements, 2 layers
 # through the wall) and a short ramp-hold, so the run takes seconds; the
-# parameters are §4.4.3's RH set (crates/forward/tests/capsule_fe.rs).
+# parameters are §4.4.3's RH set (crates/forward/tests/it/capsule_fe.rs).
 CAPSULE_FE = """
 title = "coarse capsule-fe"
 [forward]

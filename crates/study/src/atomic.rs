@@ -218,7 +218,7 @@ mod tests {
     /// reach the temporary file, then `ENOSPC`): the final name keeps the
     /// previous complete version (or stays absent), no temporary is left,
     /// and the error is the OS's "no space" error. The real thing (a tiny
-    /// tmpfs) is crates/cli/tests/full_disk.rs.
+    /// tmpfs) is crates/cli/tests/it/full_disk.rs.
     #[test]
     fn a_full_disk_mid_file_keeps_the_previous_version_and_no_temporary() {
         let dir = std::env::temp_dir().join(format!("nlvid-atomic-full-{}", std::process::id()));

@@ -4,7 +4,7 @@ Run:  python3 example.py > example_cases.rs   (numpy + scipy >= 1.11)
 Computes G(t) of eq. 5.1 for every usable cell with numpy, group mean and
 sample sd (ddof=1), and scipy mannwhitneyu p-values (exact and asymptotic)
 on G(t) and G(t)/G(0) between MCF-10A and MCF-7 at a few times. Output is a
-Rust array expression included by tests/example_table.rs.
+Rust array expression included by tests/it/example_table.rs.
 """
 import csv
 import os

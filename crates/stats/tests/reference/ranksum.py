@@ -1,8 +1,8 @@
-"""Reference p-values for crates/stats/tests/scipy_reference.rs.
+"""Reference p-values for crates/stats/tests/it/scipy_reference.rs.
 
 Run:  python3 ranksum.py > ranksum_cases.rs   (scipy >= 1.11)
 The output is a Rust array expression of literals that
-tests/scipy_reference.rs includes; the committed file was produced with
+tests/it/scipy_reference.rs includes; the committed file was produced with
 scipy 1.17.1 (numpy from the same venv, seed 20261122).
 
 For each fixed sample pair (x, y) this prints

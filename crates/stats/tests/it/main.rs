@@ -1,0 +1,9 @@
+//! Every integration test of this crate, one module per topic, built as
+//! one binary: one link instead of one per file, and the test harness
+//! keeps both cores busy across topics (run one topic with
+//! `cargo test -p nlvid-stats --test it <module>::`).
+
+mod effects_groups;
+mod example_table;
+mod results_table;
+mod scipy_reference;
