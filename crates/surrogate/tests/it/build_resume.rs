@@ -4,12 +4,14 @@
 #![allow(clippy::unwrap_used, clippy::type_complexity)]
 
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize};
 
 use nlvid_forward::HertzProny;
 use nlvid_model::{Domain, FailureKind, ForwardModel, Parameter, RunFailure, Scale};
 use nlvid_surrogate::doe::{SampleSettings, sample};
-use nlvid_surrogate::{Admissibility, BuildOptions, RunStore, Shard, build, export, load, merge};
+use nlvid_surrogate::{Admissibility, BuildOptions, Shard, build, export, load, merge};
+
+use crate::common::{Interrupting, records};
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("nlvid-surrogate-{}-{name}", std::process::id()));
@@ -26,51 +28,6 @@ fn cell_domain() -> Domain {
 
 fn model() -> HertzProny {
     HertzProny::new(5e-6, 1e-6, 1.0, 10.0, 40).unwrap()
-}
-
-fn records(dir: &std::path::Path) -> Vec<(usize, Vec<f64>, String)> {
-    RunStore::existing(dir)
-        .unwrap()
-        .all()
-        .unwrap()
-        .into_iter()
-        .map(|r| {
-            (
-                r.index,
-                r.params,
-                serde_json::to_string(&r.outcome).unwrap(),
-            )
-        })
-        .collect()
-}
-
-/// Stops the build (as a kill would) after `after` runs started.
-struct Interrupting<'a> {
-    inner: HertzProny,
-    started: AtomicUsize,
-    after: usize,
-    cancel: &'a AtomicBool,
-}
-
-impl ForwardModel for Interrupting<'_> {
-    fn parameter_names(&self) -> Vec<String> {
-        self.inner.parameter_names()
-    }
-    fn parameter_units(&self) -> Vec<String> {
-        self.inner.parameter_units()
-    }
-    fn time_grid(&self) -> &[f64] {
-        self.inner.time_grid()
-    }
-    fn identity(&self) -> String {
-        self.inner.identity()
-    }
-    fn run(&self, p: &[f64]) -> Result<Vec<f64>, RunFailure> {
-        if self.started.fetch_add(1, Ordering::SeqCst) + 1 >= self.after {
-            self.cancel.store(true, Ordering::SeqCst);
-        }
-        self.inner.run(p)
-    }
 }
 
 #[test]

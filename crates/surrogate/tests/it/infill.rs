@@ -7,15 +7,17 @@
 #![allow(clippy::unwrap_used, clippy::type_complexity)]
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize};
 
 use nlvid_forward::HertzProny;
-use nlvid_model::{Domain, ForwardModel, RunFailure};
+use nlvid_model::{Domain, ForwardModel};
 use nlvid_surrogate::doe::training_and_checking;
 use nlvid_surrogate::infill::{
     InfillSettings, Round, checking_error, checking_set, fit_kept, run_infill,
 };
 use nlvid_surrogate::{Admissibility, BuildOptions, RunStore, build, load};
+
+use crate::common::{Interrupting, records};
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("nlvid-infill-{}-{name}", std::process::id()));
@@ -172,51 +174,6 @@ fn infill_stops_at_the_first_round_that_meets_the_target() {
         assert_eq!(r.added, 5);
     }
     let _ = std::fs::remove_dir_all(&dir);
-}
-
-/// Cancels the build once `after` runs have started (as a kill would).
-struct Interrupting<'a> {
-    inner: HertzProny,
-    started: AtomicUsize,
-    after: usize,
-    cancel: &'a AtomicBool,
-}
-
-impl ForwardModel for Interrupting<'_> {
-    fn parameter_names(&self) -> Vec<String> {
-        self.inner.parameter_names()
-    }
-    fn parameter_units(&self) -> Vec<String> {
-        self.inner.parameter_units()
-    }
-    fn time_grid(&self) -> &[f64] {
-        self.inner.time_grid()
-    }
-    fn identity(&self) -> String {
-        self.inner.identity()
-    }
-    fn contact_index(&self) -> usize {
-        self.inner.contact_index()
-    }
-    fn run(&self, p: &[f64]) -> Result<Vec<f64>, RunFailure> {
-        if self.started.fetch_add(1, Ordering::SeqCst) + 1 >= self.after {
-            self.cancel.store(true, Ordering::SeqCst);
-        }
-        self.inner.run(p)
-    }
-}
-
-fn records(dir: &Path) -> Vec<(usize, Vec<f64>, String)> {
-    RunStore::existing(dir)
-        .unwrap()
-        .all()
-        .unwrap()
-        .into_iter()
-        .map(|r| {
-            let out = serde_json::to_string(&r.outcome).unwrap();
-            (r.index, r.params, out)
-        })
-        .collect()
 }
 
 #[test]

@@ -5,6 +5,7 @@
 
 mod build_resume;
 mod cell_domain_accuracy;
+mod common;
 mod dace_example;
 mod design_section;
 mod forward_build;
