@@ -4,6 +4,7 @@
 //! `cargo test -p nlvid-inverse --test it <module>::`).
 
 mod basis;
+mod common;
 mod fixed_inputs;
 mod identifiability;
 mod measured;

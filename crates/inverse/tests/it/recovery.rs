@@ -6,46 +6,14 @@ use nlvid_inverse::{
     Experiment, LeeRadokHertz, Misfit, Model, MultiStart, ramp_hold_grid, ramp_hold_indentation,
 };
 use nlvid_model::Domain;
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+
+use crate::common::{draw, lee_radok_ramp_hold, normal};
 
 /// m = 5095 samples as in the thesis (§5.4.1): 200 on the ramp, 4895 on the hold.
 const N_RAMP: usize = 200;
 const N_HOLD: usize = 4895;
-
-fn model(domain: Domain) -> LeeRadokHertz {
-    // 10 um/s ramp to 2 um (0.2 s), hold to t = 52 s; sphere R = 2.5 um.
-    let t = ramp_hold_grid(0.2, N_RAMP - 1, 52.0, N_HOLD, 1e-3).expect("grid");
-    let delta = ramp_hold_indentation(&t, 10e-6, 2e-6);
-    LeeRadokHertz::new(domain, t, &delta, 2.5e-6, 0.5).expect("model")
-}
-
-fn normal(rng: &mut ChaCha8Rng) -> f64 {
-    // Box–Muller
-    let u1: f64 = 1.0 - rng.random::<f64>();
-    let u2: f64 = rng.random();
-    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-}
-
-/// A random parameter set inside Table 5.3 with g1 + g2 <= 0.99, drawn
-/// independently of the optimiser's start generator, in the order G0, g1,
-/// g2, tau1, tau2 (random numbers consumed as before the order was
-/// unified: g1, g2, then G0, tau1, tau2 — the same ten cases).
-fn draw(rng: &mut ChaCha8Rng) -> [f64; 5] {
-    let log_uniform = |rng: &mut ChaCha8Rng, lo: f64, hi: f64| {
-        (lo.ln() + rng.random::<f64>() * (hi.ln() - lo.ln())).exp()
-    };
-    loop {
-        let g1 = 0.01 + 0.99 * rng.random::<f64>();
-        let g2 = 0.01 + 0.99 * rng.random::<f64>();
-        if g1 + g2 <= 0.99 {
-            let g0 = log_uniform(rng, 80.0, 4000.0);
-            let tau1 = log_uniform(rng, 0.01, 2.0);
-            let tau2 = log_uniform(rng, 2.0, 40.0);
-            return [g0, g1, g2, tau1, tau2];
-        }
-    }
-}
 
 #[test]
 fn recovers_g0_long_term_weight_and_g52_from_noisy_ramp_hold_curves() {
@@ -57,7 +25,7 @@ fn recovers_g0_long_term_weight_and_g52_from_noisy_ramp_hold_curves() {
     let mut lines = Vec::new();
     for case in 0..10 {
         let x_true = draw(&mut rng);
-        let m = model(domain.clone());
+        let m = lee_radok_ramp_hold(&domain, N_RAMP - 1, N_HOLD);
         let clean = m.response(&x_true).expect("clean");
         let peak = clean.iter().cloned().fold(0.0, f64::max);
         // 2 % Gaussian noise: sigma = 0.02 * peak force, additive.

@@ -15,7 +15,7 @@ use std::path::PathBuf;
 
 use nlvid_inverse::{
     BasisExperiment, BasisMisfit, Coordinates, ForwardFromModel, KrigingSurrogate, LeeRadokHertz,
-    Model, MultiStart, gram, ramp_hold_grid, ramp_hold_indentation, range_normalised_rmse,
+    Model, MultiStart, gram, range_normalised_rmse,
 };
 use nlvid_model::Domain;
 use nlvid_surrogate::doe::{SampleSettings, sample};
@@ -24,41 +24,10 @@ use nlvid_surrogate::{
     Admissibility, BuildOptions, Correlation, KrigingModel, KrigingSettings, OutputScale,
     Regression, build, load,
 };
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-fn real_model(domain: &Domain, n_ramp: usize, n_hold: usize) -> LeeRadokHertz {
-    // 10 um/s ramp to 2 um (0.2 s), hold to t = 52 s; sphere R = 2.5 um.
-    let t = ramp_hold_grid(0.2, n_ramp, 52.0, n_hold, 1e-3).expect("grid");
-    let delta = ramp_hold_indentation(&t, 10e-6, 2e-6);
-    LeeRadokHertz::new(domain.clone(), t, &delta, 2.5e-6, 0.5).expect("model")
-}
-
-fn normal(rng: &mut ChaCha8Rng) -> f64 {
-    let u1: f64 = 1.0 - rng.random::<f64>();
-    let u2: f64 = rng.random();
-    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-}
-
-/// Random parameters inside Table 5.3 with g1 + g2 <= 0.99, drawn
-/// independently of the design and of the optimiser's starts, in the order
-/// G0, g1, g2, tau1, tau2 (random numbers consumed as before the order was
-/// unified: g1, g2, then G0, tau1, tau2 — the same ten cases).
-fn draw(rng: &mut ChaCha8Rng) -> [f64; 5] {
-    let log_uniform = |rng: &mut ChaCha8Rng, lo: f64, hi: f64| {
-        (lo.ln() + rng.random::<f64>() * (hi.ln() - lo.ln())).exp()
-    };
-    loop {
-        let g1 = 0.01 + 0.99 * rng.random::<f64>();
-        let g2 = 0.01 + 0.99 * rng.random::<f64>();
-        if g1 + g2 <= 0.99 {
-            let g0 = log_uniform(rng, 80.0, 4000.0);
-            let tau1 = log_uniform(rng, 0.01, 2.0);
-            let tau2 = log_uniform(rng, 2.0, 40.0);
-            return [g0, g1, g2, tau1, tau2];
-        }
-    }
-}
+use crate::common::{draw, lee_radok_ramp_hold, normal};
 
 struct Outcome {
     passed: usize,
@@ -145,7 +114,7 @@ fn build_surrogate(
 
 fn recovery(name: &str, n_sites: usize, n_ramp: usize, n_hold: usize, g0_scale: bool) -> Outcome {
     let domain = Domain::table_5_3(0.01).expect("domain");
-    let real = real_model(&domain, n_ramp, n_hold);
+    let real = lee_radok_ramp_hold(&domain, n_ramp, n_hold);
     let (sur, max_checking_error) = build_surrogate(name, &domain, &real, n_sites, g0_scale);
     let g = gram(&sur, None).expect("gram");
     let mut rng = ChaCha8Rng::seed_from_u64(20261122);
