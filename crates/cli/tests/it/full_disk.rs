@@ -215,35 +215,7 @@ fn store_writer_on_a_full_disk_leaves_only_complete_records() {
         return;
     }
     let case = common::scratch("full-disk-store");
-    std::fs::create_dir_all(case.join("seed")).unwrap();
-    std::fs::write(
-        case.join("seed/study.toml"),
-        r#"[forward]
-model = "hertz-prony"
-probe_radius = "2.5 um"
-rate = "1 um/s"
-ramp = "1 s"
-hold = "9 s"
-points = 120
-
-[design]
-n_train = 24
-n_check = 6
-seed = 11
-
-[design.parameters]
-G0 = { range = ["80 Pa", "4 kPa"], log = true }
-g1 = { range = [0.01, 0.45] }
-g2 = { range = [0.01, 0.45] }
-tau1 = { range = ["0.01 s", "2 s"], log = true }
-tau2 = { range = ["2 s", "40 s"], log = true }
-
-[build]
-store = "store"
-export = "export"
-"#,
-    )
-    .unwrap();
+    common::build_study(&case.join("seed"));
     let o = run_on_tiny_fs(&case, 16, &case, &["build", "{fs}/study.toml", "--quiet"]);
     assert_failed_for_space(&o, "build");
     let mut json = 0;

@@ -104,41 +104,6 @@ fn assert_resumed(dir: &Path, reference: &BTreeMap<String, Vec<u8>>, what: &str)
     }
 }
 
-/// A small hertz-prony build study (store and export next to it).
-fn build_study(dir: &Path) -> PathBuf {
-    std::fs::create_dir_all(dir).unwrap();
-    let p = dir.join("study.toml");
-    std::fs::write(
-        &p,
-        r#"[forward]
-model = "hertz-prony"
-probe_radius = "2.5 um"
-rate = "1 um/s"
-ramp = "1 s"
-hold = "9 s"
-points = 120
-
-[design]
-n_train = 24
-n_check = 6
-seed = 11
-
-[design.parameters]
-G0 = { range = ["80 Pa", "4 kPa"], log = true }
-g1 = { range = [0.01, 0.45] }
-g2 = { range = [0.01, 0.45] }
-tau1 = { range = ["0.01 s", "2 s"], log = true }
-tau2 = { range = ["2 s", "40 s"], log = true }
-
-[build]
-store = "store"
-export = "export"
-"#,
-    )
-    .unwrap();
-    p
-}
-
 /// The cells' curves are written with the analytic Lee–Radok ramp-hold
 /// (`hertz-prony`, the demo's protocol): the demo's own FE writer costs
 /// seconds per cell, and what is tested here is the run, not the model.
@@ -244,7 +209,7 @@ fn cases(root: &Path, name: &str) -> Vec<Prepared> {
         let make = |dir: &Path| -> (Case, Box<dyn Fn()>) {
             match i {
                 0 => {
-                    let s = build_study(dir);
+                    let s = common::build_study(dir);
                     let d = dir.to_path_buf();
                     (
                         Case {

@@ -33,3 +33,40 @@ pub fn scratch(name: &str) -> PathBuf {
     std::fs::create_dir_all(&d).expect("scratch");
     d
 }
+
+/// A small hertz-prony build study (24 training and 6 checking runs; store
+/// and export next to it), written to `dir/study.toml` (`dir` created);
+/// returns the study's path.
+pub fn build_study(dir: &Path) -> PathBuf {
+    std::fs::create_dir_all(dir).expect("study dir");
+    let p = dir.join("study.toml");
+    std::fs::write(
+        &p,
+        r#"[forward]
+model = "hertz-prony"
+probe_radius = "2.5 um"
+rate = "1 um/s"
+ramp = "1 s"
+hold = "9 s"
+points = 120
+
+[design]
+n_train = 24
+n_check = 6
+seed = 11
+
+[design.parameters]
+G0 = { range = ["80 Pa", "4 kPa"], log = true }
+g1 = { range = [0.01, 0.45] }
+g2 = { range = [0.01, 0.45] }
+tau1 = { range = ["0.01 s", "2 s"], log = true }
+tau2 = { range = ["2 s", "40 s"], log = true }
+
+[build]
+store = "store"
+export = "export"
+"#,
+    )
+    .expect("write study");
+    p
+}
