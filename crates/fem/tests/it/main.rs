@@ -6,6 +6,7 @@
 mod afm;
 mod capsule;
 mod cavity;
+mod common;
 mod contact;
 mod element;
 mod membrane;

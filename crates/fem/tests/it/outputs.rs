@@ -5,15 +5,17 @@
 
 #![allow(clippy::needless_range_loop, clippy::unwrap_used)]
 
-use nlvid_fem::shell::{ShellPart, ShellSpec, ellipsoidal_shell};
+use nlvid_fem::shell::ShellPart;
 use nlvid_fem::vtu::VtuGrid;
 use nlvid_fem::{
-    Axisymmetric, Cavity, Component, Control, Fluid, LiftOff, Membrane, MembraneMesh, Mesh, Model,
-    Parts, PatchSpec, RigidPlane, Settings, Solid, Stage, Support, Symmetry,
+    Cavity, Component, Control, Fluid, LiftOff, Membrane, MembraneMesh, Model, Parts, PatchSpec,
+    RigidPlane, Settings, Solid, Stage, Support, Symmetry,
 };
 use nlvid_material::MooneyRivlin;
 use nlvid_membrane::{Geometry, MembraneSolver, MooneyRivlinMembrane};
 use std::f64::consts::PI;
+
+use crate::common;
 
 fn cavity(boundary: &str) -> Option<Cavity> {
     Some(Cavity {
@@ -159,46 +161,11 @@ fn membrane_patch_agrees_with_the_semi_analytical_solution() {
     });
 }
 
-/// The spherical capsule of `tests/it/capsule.rs` (R = 1 mm, wall 0.1 mm, 4
-/// layers, squeezed 0.15 mm), axisymmetric.
-fn solid_axisymmetric(n_arc: usize) -> Model<MooneyRivlin, Axisymmetric> {
-    let mesh = Mesh::spherical_shell(1e-3, 0.1e-3, 4, n_arc).unwrap();
-    let parts = Parts {
-        supports: vec![
-            Support::fixed("axis", Component::R),
-            Support::fixed("equator", Component::Z),
-        ],
-        planes: vec![RigidPlane::above("outer")],
-        cavity: cavity("inner"),
-        ..Parts::default()
-    };
-    let settings = Settings {
-        residual_growth: 1e6,
-        atol: 1e-12,
-        ..Settings::default()
-    };
-    let material = MooneyRivlin::with_ratio(1e6, 0.2, 2.4e9).unwrap();
-    let mut m = Model::<_, Axisymmetric>::build(mesh, material, &parts, settings).unwrap();
-    let control = |t: f64| Control {
-        plane_z: 1e-3 - 0.15e-3 * t,
-        ..Control::default()
-    };
-    m.run_stage(&Stage {
-        name: "squeeze",
-        end: 1.0,
-        dt_initial: 0.05,
-        dt_max: 0.05,
-        control: &control,
-    })
-    .unwrap();
-    m
-}
-
 #[test]
 fn axisymmetric_capsule_flags_the_lifted_pole_as_lost_contact() {
     // docs/theory/fem.md: the thick-walled sphere's pole lifts off inside
     // the patch (thesis Fig. 4.16).
-    let m = solid_axisymmetric(32);
+    let m = common::squeezed_axisymmetric(32);
     let spec = PatchSpec {
         plane: 0,
         surface: "outer".into(),
@@ -236,70 +203,15 @@ fn axisymmetric_capsule_flags_the_lifted_pole_as_lost_contact() {
     assert!((patch.pressure_area / patch.ellipse_area - 1.0).abs() < 0.15);
 }
 
+/// The 3D capsule of `common::squeezed_solid` (`part`, m divisions per
+/// patch edge) after the squeeze, and the symmetry of that part.
 fn solid(part: ShellPart, m: usize) -> (Model<MooneyRivlin, Solid>, Symmetry) {
-    let (r, squeeze) = (1e-3, 0.15e-3);
-    let size = 0.25 * PI * r / (m as f64 - 0.5);
-    let mesh = ellipsoidal_shell(&ShellSpec::sphere(r, 0.1e-3, 4, size, part)).unwrap();
-    let (supports, planes, travel, symmetry) = match part {
-        ShellPart::Eighth => (
-            vec![
-                Support::fixed("x0", Component::X),
-                Support::fixed("y0", Component::Y),
-                Support::fixed("z0", Component::Z),
-            ],
-            vec![RigidPlane::above("outer")],
-            squeeze,
-            Symmetry::EIGHTH,
-        ),
-        ShellPart::Quarter => (
-            vec![
-                Support::fixed("x0", Component::X),
-                Support::fixed("y0", Component::Y),
-            ],
-            vec![RigidPlane::above("outer"), RigidPlane::below("outer", -r)],
-            2.0 * squeeze,
-            Symmetry::QUARTER,
-        ),
-        ShellPart::Full => (
-            vec![
-                Support::fixed("top", Component::X),
-                Support::fixed("top", Component::Y),
-                Support::fixed("bottom", Component::X),
-                Support::fixed("bottom", Component::Y),
-                Support::fixed("side_y", Component::X),
-            ],
-            vec![RigidPlane::above("outer"), RigidPlane::below("outer", -r)],
-            2.0 * squeeze,
-            Symmetry::FULL,
-        ),
+    let symmetry = match part {
+        ShellPart::Eighth => Symmetry::EIGHTH,
+        ShellPart::Quarter => Symmetry::QUARTER,
+        ShellPart::Full => Symmetry::FULL,
     };
-    let parts = Parts {
-        supports,
-        planes,
-        cavity: cavity("inner"),
-        ..Parts::default()
-    };
-    let settings = Settings {
-        residual_growth: 1e6,
-        atol: 1e-12,
-        ..Settings::default()
-    };
-    let material = MooneyRivlin::with_ratio(1e6, 0.2, 2.4e9).unwrap();
-    let mut model = Model::<_, Solid>::build(mesh, material, &parts, settings).unwrap();
-    let control = |t: f64| Control {
-        plane_z: r - travel * t,
-        ..Control::default()
-    };
-    model
-        .run_stage(&Stage {
-            name: "squeeze",
-            end: 1.0,
-            dt_initial: 0.05,
-            dt_max: 0.05,
-            control: &control,
-        })
-        .unwrap();
-    (model, symmetry)
+    (common::squeezed_solid(part, m), symmetry)
 }
 
 fn spec_3d(plane: usize, symmetry: Symmetry) -> PatchSpec {
@@ -354,7 +266,7 @@ fn eighth_patch_agrees_with_the_axisymmetric_patch() {
     // Same meridian spacing as `tests/it/capsule.rs` at m = 8.
     let (eighth, sym) = solid(ShellPart::Eighth, 8);
     let e = eighth.capsule_record(&spec_3d(0, sym)).unwrap();
-    let axi = solid_axisymmetric(16);
+    let axi = common::squeezed_axisymmetric(16);
     let spec = PatchSpec {
         plane: 0,
         surface: "outer".into(),
@@ -403,7 +315,7 @@ fn vtu_files_read_back_to_the_deformed_mesh() {
     // 3D eighth (hexahedra), axisymmetric solid (quadrilaterals), membrane
     // (lines).
     let (eighth, sym) = solid(ShellPart::Eighth, 4);
-    let axi = solid_axisymmetric(8);
+    let axi = common::squeezed_axisymmetric(8);
     let mut membrane = None;
     membrane_run(32, &[0.28], |m, _| {
         membrane = Some(m.vtu_grid(&[membrane_spec()]).unwrap())
