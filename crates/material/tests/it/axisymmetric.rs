@@ -9,12 +9,11 @@ use nlvid_material::{
 };
 use nlvid_model::{Prony, Relaxation};
 
+use crate::common::{pipkin_rogers, prony_visco};
+
 fn models() -> (MooneyRivlin, Vec<PronyViscoelastic>, Vec<PipkinRogers>) {
     let mr = MooneyRivlin::new(1000.0, 200.0, 3.0e4).expect("ok");
-    let prony = [HistoryRule::ExponentialLinear, HistoryRule::Trapezoid].map(|rule| {
-        PronyViscoelastic::new(mr, Prony::new("G", &[(0.4, 0.3), (0.3, 4.0)]).expect("ok"))
-            .with_rule(rule)
-    });
+    let prony = [HistoryRule::ExponentialLinear, HistoryRule::Trapezoid].map(prony_visco);
     // The AFM cell model as the fem crate builds it (C1 = G0/2, κ = 200 G0).
     // The AFM cell model: G0 = 1 kPa, so C1 = 500 Pa and κ = 400 C1.
     let shear = Relaxation::new(
@@ -24,19 +23,7 @@ fn models() -> (MooneyRivlin, Vec<PronyViscoelastic>, Vec<PipkinRogers>) {
     )
     .expect("ok");
     let cell = PronyViscoelastic::cell(&shear, 2.0e5).expect("ok");
-    let g1 = Relaxation::new(
-        "G1",
-        1000.0,
-        Prony::new("G1", &[(0.3, 0.5), (0.2, 5.0)]).expect("ok"),
-    )
-    .expect("ok");
-    let g2 = Relaxation::new(
-        "G2",
-        150.0,
-        Prony::new("G2", &[(0.6, 0.2), (0.1, 3.0)]).expect("ok"),
-    )
-    .expect("ok");
-    let pr = PipkinRogers::new(g1, g2, 0.4, 3.0e4).expect("ok");
+    let pr = pipkin_rogers(HistoryRule::default());
     let mut visco = prony.to_vec();
     visco.push(cell);
     (mr, visco, vec![pr])

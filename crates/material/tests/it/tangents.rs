@@ -2,36 +2,9 @@
 //! differences of the stress update, with non-trivial history, 3D and
 //! membrane, stretches up to 3.
 
-use crate::common;
+use crate::common::{self, pipkin_rogers, prony_visco};
 
-use nlvid_material::{
-    HistoryRule, Mat3, Material3, MembraneMaterial, MooneyRivlin, PipkinRogers, PronyViscoelastic,
-};
-use nlvid_model::{Prony, Relaxation};
-
-fn pipkin_rogers(rule: HistoryRule) -> PipkinRogers {
-    let g1 = Relaxation::new(
-        "G1",
-        1000.0,
-        Prony::new("G1", &[(0.3, 0.5), (0.2, 5.0)]).expect("ok"),
-    )
-    .expect("ok");
-    let g2 = Relaxation::new(
-        "G2",
-        150.0,
-        Prony::new("G2", &[(0.6, 0.2), (0.1, 3.0)]).expect("ok"),
-    )
-    .expect("ok");
-    PipkinRogers::new(g1, g2, 0.4, 3.0e4)
-        .expect("ok")
-        .with_rule(rule)
-}
-
-fn prony_visco(rule: HistoryRule) -> PronyViscoelastic {
-    let el = MooneyRivlin::new(1000.0, 200.0, 3.0e4).expect("ok");
-    PronyViscoelastic::new(el, Prony::new("G", &[(0.4, 0.3), (0.3, 4.0)]).expect("ok"))
-        .with_rule(rule)
-}
+use nlvid_material::{HistoryRule, Mat3, Material3, MembraneMaterial};
 
 /// Drives `m` through a few steps of a rotating, stretching history so the
 /// state is generic, and returns the converged state.

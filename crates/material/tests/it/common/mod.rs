@@ -1,8 +1,13 @@
 //! Helpers shared by the integration tests: central finite differences of
-//! the stress updates, written independently of the crate's tangents.
+//! the stress updates, written independently of the crate's tangents, and
+//! the viscoelastic models the tangent tests check.
 #![allow(dead_code)]
 
-use nlvid_material::{Mat3, Material3, MembraneMaterial, Tangent3};
+use nlvid_material::{
+    HistoryRule, Mat3, Material3, MembraneMaterial, MooneyRivlin, PipkinRogers, PronyViscoelastic,
+    Tangent3,
+};
+use nlvid_model::{Prony, Relaxation};
 
 /// Deformation gradients with stretches up to 3, shear and rotation.
 pub fn test_gradients() -> Vec<Mat3> {
@@ -98,4 +103,34 @@ pub fn tangent_error_membrane<M: MembraneMaterial>(
         }
     }
     err / scale
+}
+
+/// The Pipkin–Rogers model of the tangent tests: G1(t) from 1 kPa and
+/// G2(t) from 150 Pa, each relaxing by two Prony terms, a = 0.4 (eq. 2.54),
+/// volumetric penalty K = 30 kPa, history integrated with `rule`.
+pub fn pipkin_rogers(rule: HistoryRule) -> PipkinRogers {
+    let g1 = Relaxation::new(
+        "G1",
+        1000.0,
+        Prony::new("G1", &[(0.3, 0.5), (0.2, 5.0)]).expect("ok"),
+    )
+    .expect("ok");
+    let g2 = Relaxation::new(
+        "G2",
+        150.0,
+        Prony::new("G2", &[(0.6, 0.2), (0.1, 3.0)]).expect("ok"),
+    )
+    .expect("ok");
+    PipkinRogers::new(g1, g2, 0.4, 3.0e4)
+        .expect("ok")
+        .with_rule(rule)
+}
+
+/// The ABAQUS-form viscoelastic model of the tangent tests: Mooney–Rivlin
+/// (C1 = 1 kPa, C2 = 200 Pa, K = 30 kPa) relaxing by two Prony
+/// terms, history integrated with `rule`.
+pub fn prony_visco(rule: HistoryRule) -> PronyViscoelastic {
+    let el = MooneyRivlin::new(1000.0, 200.0, 3.0e4).expect("ok");
+    PronyViscoelastic::new(el, Prony::new("G", &[(0.4, 0.3), (0.3, 4.0)]).expect("ok"))
+        .with_rule(rule)
 }
