@@ -39,7 +39,7 @@
 //!   from ≈ 25 steps (DE/stretch in 5-D) to a few. Where the positions
 //!   form two clusters (BIC of a two-Gaussian EM fit below that of one
 //!   Gaussian: a posterior with two arms), q is instead the mixture
-//!   Σ_k ŵ_k t₅(μ̂_k, 1.2²·Σ̂_k) of the clusters ([`Proposal`]), so a
+//!   Σ_k ŵ_k t₅(μ̂_k, 1.2²·Σ̂_k) of the clusters (`Proposal`), so a
 //!   walker can change arm in one accepted step (session 14: seed 19's
 //!   two slowest cells went from R̂ 1.017–1.020 at 2000 kept steps to
 //!   ≤ 1.009 at 450).
