@@ -1036,14 +1036,6 @@ struct TProposal {
 impl TProposal {
     const NU: f64 = 5.0;
 
-    /// Fitted to `points` (mean, covariance × `scale`²); None when the
-    /// covariance is not positive definite (a collapsed ensemble).
-    #[cfg(test)]
-    fn fit(points: &[Vec<f64>], scale: f64) -> Option<Self> {
-        let (mean, cov) = moments(points)?;
-        Self::from_moments(mean, &cov, scale)
-    }
-
     /// Mean `mean`, scale matrix `cov` × `scale`²; None when `cov` is not
     /// positive definite.
     fn from_moments(mean: Vec<f64>, cov: &nalgebra::DMatrix<f64>, scale: f64) -> Option<Self> {
