@@ -108,34 +108,7 @@ fn damaged_study_files_never_panic() {
         let bytes = mutate(&mut rng, &seeds[round % seeds.len()]);
         let p = dir.join(format!("s{}.toml", round % 7));
         std::fs::write(&p, &bytes).unwrap();
-        let results: [Result<(), String>; 5] = [
-            nlvid_study::Study::load(&p)
-                .and_then(|mut s| {
-                    s.lint();
-                    s.opt_read::<nlvid_material::MaterialSpec>("material")
-                        .map(|_| ())
-                })
-                .map_err(|e| e.to_string()),
-            nlvid_study::Study::load(&p)
-                .and_then(|mut s| {
-                    s.opt_read::<nlvid_material::LoadingSpec>("loading")
-                        .map(|_| ())
-                })
-                .map_err(|e| e.to_string()),
-            nlvid_surrogate::BuildStudy::load(&p)
-                .map(|_| ())
-                .map_err(|e| e.to_string()),
-            nlvid_report::settings::CohortSettings::load(&p)
-                .map(|_| ())
-                .map_err(|e| e.to_string()),
-            nlvid_study::Study::load(&p)
-                .map_err(|e| e.to_string())
-                .and_then(|s| {
-                    nlvid_forward::SimulateStudy::from_study(s)
-                        .map(|_| ())
-                        .map_err(|e| e.to_string())
-                }),
-        ];
+        let results = common::read_study_every_way(&p);
         for r in results {
             match r {
                 Ok(()) => ok += 1,

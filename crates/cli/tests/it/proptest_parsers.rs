@@ -146,34 +146,7 @@ fn study_parser_and_stage_readers_never_panic_and_name_where() {
     runner(1000)
         .run(&study(), |text| {
             std::fs::write(&p, &text).unwrap();
-            let results: [Result<(), String>; 5] = [
-                nlvid_study::Study::load(&p)
-                    .and_then(|mut s| {
-                        s.lint();
-                        s.opt_read::<nlvid_material::MaterialSpec>("material")
-                            .map(|_| ())
-                    })
-                    .map_err(|e| e.to_string()),
-                nlvid_study::Study::load(&p)
-                    .and_then(|mut s| {
-                        s.opt_read::<nlvid_material::LoadingSpec>("loading")
-                            .map(|_| ())
-                    })
-                    .map_err(|e| e.to_string()),
-                nlvid_surrogate::BuildStudy::load(&p)
-                    .map(|_| ())
-                    .map_err(|e| e.to_string()),
-                nlvid_report::settings::CohortSettings::load(&p)
-                    .map(|_| ())
-                    .map_err(|e| e.to_string()),
-                nlvid_study::Study::load(&p)
-                    .map_err(|e| e.to_string())
-                    .and_then(|s| {
-                        nlvid_forward::SimulateStudy::from_study(s)
-                            .map(|_| ())
-                            .map_err(|e| e.to_string())
-                    }),
-            ];
+            let results = common::read_study_every_way(&p);
             for r in results {
                 match r {
                     Ok(()) => ok.set(ok.get() + 1),

@@ -880,7 +880,7 @@ impl Proposal {
         }
     }
 
-    /// A draw and its ln q (a single t draws exactly as before the
+    /// A draw and its ln q (a single t uses the same random numbers as before the
     /// mixture existed: no extra random number).
     fn draw(&self, rng: &mut ChaCha8Rng) -> (Vec<f64>, f64) {
         match self {

@@ -70,3 +70,38 @@ export = "export"
     .expect("write study");
     p
 }
+
+/// A study file read by each of the five readers that accept one (the
+/// study with its lint and `[material]`, `[loading]`, a meta-model build
+/// study, cohort settings, a simulate study): `Ok(())` or the reader's
+/// message, for the parser robustness tests.
+pub fn read_study_every_way(p: &Path) -> [Result<(), String>; 5] {
+    [
+        nlvid_study::Study::load(p)
+            .and_then(|mut s| {
+                s.lint();
+                s.opt_read::<nlvid_material::MaterialSpec>("material")
+                    .map(|_| ())
+            })
+            .map_err(|e| e.to_string()),
+        nlvid_study::Study::load(p)
+            .and_then(|mut s| {
+                s.opt_read::<nlvid_material::LoadingSpec>("loading")
+                    .map(|_| ())
+            })
+            .map_err(|e| e.to_string()),
+        nlvid_surrogate::BuildStudy::load(p)
+            .map(|_| ())
+            .map_err(|e| e.to_string()),
+        nlvid_report::settings::CohortSettings::load(p)
+            .map(|_| ())
+            .map_err(|e| e.to_string()),
+        nlvid_study::Study::load(p)
+            .map_err(|e| e.to_string())
+            .and_then(|s| {
+                nlvid_forward::SimulateStudy::from_study(s)
+                    .map(|_| ())
+                    .map_err(|e| e.to_string())
+            }),
+    ]
+}
