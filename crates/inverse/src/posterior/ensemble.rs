@@ -871,10 +871,8 @@ impl Proposal {
         match self {
             Self::Single(t) => t.log_density(y),
             Self::Mixture(parts) => {
-                let terms: Vec<f64> = parts
-                    .iter()
-                    .map(|(lw, t)| lw + t.log_density(y) - t.log_det_l())
-                    .collect();
+                let term = |(lw, t): &(f64, TProposal)| lw + t.log_density(y) - t.log_det_l();
+                let terms = [term(&parts[0]), term(&parts[1])];
                 let top = terms[0].max(terms[1]);
                 top + terms.iter().map(|v| (v - top).exp()).sum::<f64>().ln()
             }
