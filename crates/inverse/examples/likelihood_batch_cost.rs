@@ -2,12 +2,14 @@
 //! (issue 17, docs/theory/inverse.md "Fourth round"): c(x) and v(x) at 64
 //! points of the demo meta-model (N = 970 sites), one point at a time
 //! (`mse_scale` + `output_coordinate_values`, the sampler before session
-//! 10) or in batches (`coordinates_and_mse_scales`). For instruction
+//! 10), in batches (`coordinates_and_mse_scales`) or, with `screen`, the
+//! coordinates alone in batches of 32 (`output_coordinate_batch`, the
+//! screen of delayed acceptance: no variance). For instruction
 //! counts run it under callgrind, collecting the timed function only:
 //!
 //! ```text
 //! valgrind --tool=callgrind '--toggle-collect=likelihood_batch_cost::*_path' \
-//!     target/release/examples/likelihood_batch_cost [one|32|64]
+//!     target/release/examples/likelihood_batch_cost [one|32|64|screen]
 //! ```
 //! Without valgrind it also prints the CPU seconds per point over 20 repeats.
 
@@ -30,6 +32,13 @@ fn batch_path(k: &KrigingModel, pts: &[Vec<f64>], b: usize) -> f64 {
             let (cs, vs) = k.coordinates_and_mse_scales(c, 1).expect("batch");
             vs.iter().sum::<f64>() + cs[0][1]
         })
+        .sum()
+}
+
+#[inline(never)]
+fn screen_path(k: &KrigingModel, pts: &[Vec<f64>]) -> f64 {
+    pts.chunks(32)
+        .map(|c| k.output_coordinate_batch(c).expect("screen")[0][1])
         .sum()
 }
 
@@ -59,6 +68,7 @@ fn main() {
     let _ = k.mse_scale(&pts[0]).expect("v(x)");
     let run = || match mode.as_str() {
         "one" => one_path(k, &pts),
+        "screen" => screen_path(k, &pts),
         b => batch_path(k, &pts, b.parse().unwrap_or(32)),
     };
     let clock = cpu_time::ProcessTime::now();

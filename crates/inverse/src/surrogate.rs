@@ -196,6 +196,25 @@ impl KrigingSurrogate {
         Ok((c.into_iter().map(DVector::from_vec).collect(), v))
     }
 
+    /// The reduced coordinates c(x) alone at many physical points
+    /// ([`KrigingModel::output_coordinate_batch`]: no variance, so no
+    /// O(N²) solve), bit for bit those of
+    /// [`KrigingSurrogate::coordinates_and_mse_scales`].
+    ///
+    /// # Errors
+    /// As [`KrigingSurrogate::coordinates_and_mse_scales`].
+    pub fn coordinate_batch(&self, xs: &[Vec<f64>]) -> Result<Vec<DVector<f64>>> {
+        let inputs = xs
+            .iter()
+            .map(|x| Ok(self.inputs(x)?.0))
+            .collect::<Result<Vec<_>>>()?;
+        let c = self
+            .kriging
+            .output_coordinate_batch(&inputs)
+            .map_err(|e| model_err(xs.first().map_or(&[][..], Vec::as_slice), &e))?;
+        Ok(c.into_iter().map(DVector::from_vec).collect())
+    }
+
     /// The x-dependent calibration of the Kriging variance, v(x) ↦
     /// α·v(x)^β, fitted by maximum likelihood to the model's own
     /// leave-one-out residuals under the K of

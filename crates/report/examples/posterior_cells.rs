@@ -11,10 +11,12 @@
 //! ```text
 //! cargo run --release -p nlvid-report --example posterior_cells \
 //!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=BOOL] \
-//!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [check=N] [cell ...]
+//!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [check=N] \
+//!     [delayed=BOOL,...] [cell ...]
 //! ```
-//! (`rungs`, `ratio`, `temper_after` and `temper_ridge` take comma-separated
-//! lists, e.g. `temper_ridge=0.1,0`: every combination in turn.)
+//! (`rungs`, `ratio`, `temper_after`, `temper_ridge` and `delayed` (delayed
+//! acceptance) take comma-separated lists, e.g. `delayed=true,false`: every
+//! combination in turn, on the same curves and fits.)
 
 use std::path::Path;
 
@@ -60,13 +62,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (rungs_l, ratio_l) = (list("rungs")?, list("ratio")?);
     let (after_l, tridge_l) = (list("temper_after")?, list("temper_ridge")?);
     let check: Option<usize> = opt("check").map(|v| v.parse()).transpose()?;
+    let delayed: Vec<Option<bool>> = opt("delayed").map_or(Ok(vec![None]), |v| {
+        v.split(',')
+            .map(|s| s.parse().map(Some))
+            .collect::<Result<_, _>>()
+    })?;
     let mut tempering = Vec::new();
     for &r in &rungs_l {
         for &q in &ratio_l {
             for &a in &after_l {
                 for &t in &tridge_l {
-                    // Counts are written as whole numbers.
-                    tempering.push((r.map(|v| v as usize), q, a.map(|v| v as usize), t));
+                    for &da in &delayed {
+                        // Counts are written as whole numbers.
+                        tempering.push((r.map(|v| v as usize), q, a.map(|v| v as usize), t, da));
+                    }
                 }
             }
         }
@@ -112,7 +121,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 refit.unwrap_or(ps.refit_proposal),
             )],
         };
-        for ((refresh_fraction, refit_proposal), (rungs, ratio, temper_after, temper_ridge)) in
+        for ((refresh_fraction, refit_proposal), (rungs, ratio, temper_after, temper_ridge, da)) in
             configs
                 .iter()
                 .flat_map(|&c| tempering.iter().map(move |&t| (c, t)))
@@ -128,17 +137,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 temper_after: temper_after.unwrap_or(ps.temper_after),
                 temper_ridge: temper_ridge.unwrap_or(ps.temper_ridge),
                 check_every: check.unwrap_or(ps.check_every),
+                delayed_acceptance: da.unwrap_or(ps.delayed_acceptance),
                 ..ps.clone()
             };
             println!(
                 "refresh {refresh_fraction}, refit {refit_proposal}, ridge {}, ridge_time \
-                 {ridge_time}, rungs {} ratio {} after {} ridge {}, R-hat checked every {}:",
+                 {ridge_time}, rungs {} ratio {} after {} ridge {}, R-hat checked every {}, \
+                 delayed acceptance {}:",
                 ps.ridge_fraction,
                 ps.rungs,
                 ps.rung_ratio,
                 ps.temper_after,
                 ps.temper_ridge,
-                ps.check_every
+                ps.check_every,
+                ps.delayed_acceptance
             );
             let (t0, cpu0) = (std::time::Instant::now(), cpu_time::ProcessTime::now());
             let p = sample_posterior(s, &r.data, &x_hat, &ps)?;
@@ -146,8 +158,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let n_per = p.draws.len() / ps.ensembles;
             println!(
                 "{} R-hat {:.4} ESS {:.0} acc {:.2} kept {} per walker, rungs {} (swaps {:.2}), \
-                 {} proposals, {:.2} s wall, {:.2} s CPU ({threads} thread(s)); truth u {:?}; fit \
-                 u {:?}",
+                 {} proposals ({} evaluated), {:.2} s wall, {:.2} s CPU ({threads} thread(s)); \
+                 truth u {:?}; fit u {:?}",
                 r.cell,
                 p.rhat_max,
                 p.ess_min,
@@ -156,6 +168,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 p.rungs,
                 p.swap_acceptance,
                 p.proposals,
+                p.evaluations,
                 wall.as_secs_f64(),
                 cpu.as_secs_f64(),
                 round(&domain.to_unit(&truth.x)),

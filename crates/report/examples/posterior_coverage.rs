@@ -77,6 +77,7 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     let mut unconverged = 0usize;
     let mut ess_min = f64::INFINITY;
     let (mut proposals, mut tempered, mut kept) = (0usize, 0usize, Vec::new());
+    let mut evaluations = 0usize;
     let mut misses = Vec::new();
     for c in &run.cells {
         let Some(p) = &c.posterior else {
@@ -132,6 +133,7 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
         unconverged += usize::from(!(p.rhat_max <= 1.01));
         ess_min = ess_min.min(p.ess_min);
         proposals += p.proposals;
+        evaluations += p.evaluations;
         tempered += usize::from(p.rungs > 1);
         kept.push(p.kept_steps);
     }
@@ -160,9 +162,10 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     );
     ok &= rhat_max <= 1.01;
     println!(
-        "sampler: {proposals} proposals in all ({:.0} per cell), {tempered} cells tempered; kept \
-         steps per walker: median {}, largest {}",
+        "sampler: {proposals} proposals in all ({:.0} per cell), {evaluations} evaluated in full \
+         ({:.1} %), {tempered} cells tempered; kept steps per walker: median {}, largest {}",
         proposals as f64 / n.max(1) as f64,
+        100.0 * evaluations as f64 / proposals.max(1) as f64,
         kept.get(kept.len() / 2).copied().unwrap_or(0),
         kept.last().copied().unwrap_or(0)
     );

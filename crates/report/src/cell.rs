@@ -476,6 +476,7 @@ fn posterior(
         rungs: p.rungs,
         temper_after: p.temper_after,
         check_every: p.check_every,
+        delayed_acceptance: p.delayed_acceptance,
         ..PosteriorSettings::new(settings.hold_end)
     };
     match sample_posterior_fixed(fitter.surrogate(), fixed, &base.data, x_hat, &ps) {

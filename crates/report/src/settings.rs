@@ -636,6 +636,7 @@ pub struct CohortSettings {
 /// rungs = 4         # temperature rungs of the restart of a slow cell (1: none)
 /// temper_after = 500  # kept steps after which a cell with R-hat > 1.01 restarts tempered
 /// check_every = 50  # after the first round, R-hat checked every this many kept steps
+/// delayed_acceptance = true  # screen proposals on the Kriging mean first (exact)
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PosteriorStudy {
@@ -668,10 +669,17 @@ pub struct PosteriorStudy {
     /// (`PosteriorSettings::check_every`).
     #[serde(default = "default_check_every")]
     pub check_every: usize,
+    /// Delayed acceptance (`PosteriorSettings::delayed_acceptance`).
+    #[serde(default = "default_delayed_acceptance")]
+    pub delayed_acceptance: bool,
 }
 
 fn default_check_every() -> usize {
     PosteriorSettings::new(1.0).check_every
+}
+
+fn default_delayed_acceptance() -> bool {
+    PosteriorSettings::new(1.0).delayed_acceptance
 }
 
 fn default_ensembles() -> usize {
@@ -712,6 +720,9 @@ impl FromSection for PosteriorSection {
                 Bounds::closed(1.0, 1e8),
                 default_check_every(),
             )?,
+            delayed_acceptance: s
+                .opt_bool("delayed_acceptance")?
+                .unwrap_or_else(default_delayed_acceptance),
         };
         Ok(Self(enabled.then_some(p)))
     }

@@ -238,6 +238,7 @@ mod tests {
             rungs: 1,
             swap_acceptance: 0.0,
             proposals: 1,
+            evaluations: 1,
             draws,
         });
         c

@@ -89,6 +89,23 @@
 //! directions the data barely constrain and swaps carry their positions
 //! down. Test: `tempering_keeps_a_two_mode_mixture`.
 //!
+//! *Delayed acceptance* (Christen & Fox 2005, "Markov chain Monte Carlo
+//! using an approximation", J. Comput. Graph. Stat. 14:795; with a
+//! [`LogDensity::screen_log_densities`]): a proposal is first judged on a
+//! cheap approximation p̃ of p, α₁ = min(1, ρ·(p̃(y)/p̃(x))^β) with ρ the
+//! move's own factor, and only if it passes is p(y) computed and the
+//! second stage α₂ = min(1, ((p(y) p̃(x))/(p(x) p̃(y)))^β) applied. Since
+//! α₁(y, x)/α₁(x, y) = 1/(ρ (p̃(y)/p̃(x))^β), the product α₁α₂ satisfies
+//! detailed balance with respect to p^β for every move whose one-stage
+//! form does, whatever p̃ is (p̃ fixed for the run and finite where p is);
+//! a poor p̃ costs acceptance, not correctness. Both stages use the one
+//! uniform drawn with the proposal: accepted when ln u < ln α₁ + ln α₂,
+//! rejected without p(y) when ln u ≥ ln α₁ (α₂ ≤ 1) — the probability of
+//! acceptance is α₁α₂ as with two uniforms, the random stream is that of
+//! the one-stage sampler, and with p̃ = p the chain is the one-stage
+//! chain draw for draw. Swaps between rungs use p itself (it is known at
+//! every walker's position).
+//!
 //! Each step picks the move for the whole ensemble (all its rungs): with probability
 //! `refresh_fraction` the axis refresh; otherwise with probability
 //! `ridge_fraction` the ridge move (when one is set); otherwise after burn-in the
@@ -207,6 +224,14 @@ fn other(rng: &mut ChaCha8Rng, from: std::ops::Range<usize>, not: Option<usize>)
 pub trait LogDensity {
     /// ln p at each point of `xs` in order (−∞ outside the support).
     fn log_densities(&self, xs: &[Vec<f64>]) -> Vec<f64>;
+
+    /// A cheap approximation ln p̃ at each point of `xs`, for delayed
+    /// acceptance (module docs), or None: every proposal is then
+    /// evaluated by [`LogDensity::log_densities`]. ln p̃ must be finite
+    /// wherever ln p is and the same function for the whole run.
+    fn screen_log_densities(&self, _xs: &[Vec<f64>]) -> Option<Vec<f64>> {
+        None
+    }
 }
 
 impl<F: Fn(&[f64]) -> f64> LogDensity for F {
@@ -269,6 +294,9 @@ pub struct Ensemble {
     pos: Vec<Vec<f64>>,
     /// ln p (untempered) at `pos`.
     lp: Vec<f64>,
+    /// ln p̃ (the screen of delayed acceptance, untempered) at `pos`;
+    /// empty without a screen.
+    slp: Vec<f64>,
     /// Inverse temperature of each rung, β_0 = 1 > β_1 > ….
     betas: Vec<f64>,
     rng: ChaCha8Rng,
@@ -333,10 +361,18 @@ impl Ensemble {
         if let Some(k) = lp.iter().position(|v| !v.is_finite()) {
             return bad(format!("ensemble: start {k} has log-density {}", lp[k]));
         }
+        let slp = log_density.screen_log_densities(&pos).unwrap_or_default();
+        if let Some(k) = slp.iter().position(|v| !v.is_finite()) {
+            return bad(format!(
+                "ensemble: start {k} has screened log-density {}",
+                slp[k]
+            ));
+        }
         Ok(Self {
             settings: *settings,
             pos,
             lp,
+            slp,
             betas: vec![1.0],
             rng: ChaCha8Rng::seed_from_u64(settings.seed),
             proposals: vec![None],
@@ -370,6 +406,9 @@ impl Ensemble {
             self.betas.push(ratio.powi(r as i32));
             self.pos.extend_from_within(..w);
             self.lp.extend_from_within(..w);
+            if !self.slp.is_empty() {
+                self.slp.extend_from_within(..w);
+            }
             self.proposals.push(self.proposals[0].clone());
             self.recent.push(Vec::new());
         }
@@ -408,6 +447,22 @@ impl Ensemble {
     pub fn with_ridge(mut self, ridge: RidgeMove) -> Self {
         self.ridge = Some(ridge);
         self
+    }
+
+    /// The positions of every rung's walkers, index rung·W + walker.
+    pub fn positions(&self) -> &[Vec<f64>] {
+        &self.pos
+    }
+
+    /// Recomputes the screened log-densities at the walkers' positions
+    /// after the screen of `log_density` changed (module docs, "Delayed
+    /// acceptance": the screen must stay fixed while moves use it, so it
+    /// may change only between calls, as the independence proposal's
+    /// refits).
+    pub fn rescreen(&mut self, log_density: &impl LogDensity) {
+        self.slp = log_density
+            .screen_log_densities(&self.pos)
+            .unwrap_or_default();
     }
 
     /// Kept draws with nothing in them yet, for [`sample`].
@@ -559,18 +614,54 @@ impl Ensemble {
         }
     }
 
+    /// ln α₁ = min(0, ln ρ + β(ln p̃(y) − ln p̃(x))), the first stage's
+    /// acceptance probability, of proposal `p` with screened log-density
+    /// `sy` at its point (module docs, "Delayed acceptance").
+    fn screen_log_alpha(&self, p: &Pending, sy: f64) -> f64 {
+        let beta = self.betas[p.walker / self.settings.walkers];
+        (p.log_ratio + beta * (sy - self.slp[p.walker])).min(0.0)
+    }
+
+    /// True when proposal `p` passes the screen: its point's full
+    /// log-density is needed.
+    fn passes_screen(&self, p: &Pending, sy: f64) -> bool {
+        sy.is_finite() && p.ln_u < self.screen_log_alpha(p, sy)
+    }
+
     /// Accepts or rejects the proposals `pending` at points `ys` with
     /// log-densities `lps` (Metropolis–Hastings on each walker's rung's
     /// target p^β: the density ratio raised to β, the proposal's own
-    /// ratio not).
-    fn accept(&mut self, pending: &[Pending], ys: Vec<Vec<f64>>, lps: &[f64]) {
+    /// ratio not). With screened log-densities `slps`, delayed acceptance
+    /// (module docs): accepted when ln u < ln α₁ + ln α₂, the same uniform
+    /// as the screen's, so a proposal the screen rejected (its `lps` entry
+    /// −∞) stays rejected.
+    fn accept(
+        &mut self,
+        pending: &[Pending],
+        ys: Vec<Vec<f64>>,
+        lps: &[f64],
+        slps: Option<&[f64]>,
+    ) {
         let w = self.settings.walkers;
-        for ((p, y), &lpy) in pending.iter().zip(ys).zip(lps) {
+        for (i, ((p, y), &lpy)) in pending.iter().zip(ys).zip(lps).enumerate() {
             let beta = self.betas[p.walker / w];
-            // β·lpy − β·lpx: with β = 1 the same operations as untempered.
-            if lpy.is_finite() && p.ln_u < p.log_ratio + beta * lpy - beta * self.lp[p.walker] {
+            let lpx = self.lp[p.walker];
+            let accepted = lpy.is_finite()
+                && match slps {
+                    // β·lpy − β·lpx: with β = 1 the same operations as untempered.
+                    None => p.ln_u < p.log_ratio + beta * lpy - beta * lpx,
+                    Some(s) => {
+                        let (sy, sx) = (s[i], self.slp[p.walker]);
+                        let ln_alpha2 = (beta * ((lpy - lpx) - (sy - sx))).min(0.0);
+                        p.ln_u < self.screen_log_alpha(p, sy) + ln_alpha2
+                    }
+                };
+            if accepted {
                 self.pos[p.walker] = y;
                 self.lp[p.walker] = lpy;
+                if let Some(s) = slps {
+                    self.slp[p.walker] = s[i];
+                }
                 if p.walker < w {
                     self.accepted += 1;
                 }
@@ -599,6 +690,9 @@ impl Ensemble {
                 if ln_u < d_beta * (self.lp[hot] - self.lp[cold]) {
                     self.pos.swap(cold, hot);
                     self.lp.swap(cold, hot);
+                    if !self.slp.is_empty() {
+                        self.slp.swap(cold, hot);
+                    }
                     self.swaps_accepted += 1;
                 }
             }
@@ -639,12 +733,36 @@ fn step_all(ensembles: &mut [Ensemble], log_density: &impl LogDensity, kept: boo
             };
             batches.push((from, pending));
         }
-        let lps = log_density.log_densities(&ys);
+        let screens = log_density.screen_log_densities(&ys);
+        let lps = match &screens {
+            None => log_density.log_densities(&ys),
+            Some(s) => {
+                // Delayed acceptance: only the proposals that pass the
+                // screen are evaluated, in one batch.
+                let mut passed = Vec::new();
+                for (e, (from, pending)) in ensembles.iter().zip(&batches) {
+                    passed.extend(
+                        pending
+                            .iter()
+                            .enumerate()
+                            .filter(|(i, p)| e.passes_screen(p, s[from + i]))
+                            .map(|(i, _)| from + i),
+                    );
+                }
+                let points: Vec<Vec<f64>> = passed.iter().map(|&i| ys[i].clone()).collect();
+                let mut lps = vec![f64::NEG_INFINITY; ys.len()];
+                for (&i, v) in passed.iter().zip(log_density.log_densities(&points)) {
+                    lps[i] = v;
+                }
+                lps
+            }
+        };
         let mut ys = ys.into_iter();
         for (e, (from, pending)) in ensembles.iter_mut().zip(batches) {
             let n = pending.len();
             let mine: Vec<Vec<f64>> = ys.by_ref().take(n).collect();
-            e.accept(&pending, mine, &lps[from..from + n]);
+            let slps = screens.as_ref().map(|s| &s[from..from + n]);
+            e.accept(&pending, mine, &lps[from..from + n], slps);
         }
     }
     for e in ensembles.iter_mut() {
@@ -676,8 +794,14 @@ pub fn burn_in(ensembles: &mut [Ensemble], log_density: &impl LogDensity) {
         for r in 0..e.betas.len() {
             let at = r * w..(r + 1) * w;
             if burn > 0 {
-                let (pos, lp) = (&mut e.pos[at.clone()], &mut e.lp[at]);
-                prune_strays(pos, lp, d, e.betas[r], &mut e.rng);
+                for (k, j) in prune_strays(&e.lp[at.clone()], d, e.betas[r], &mut e.rng) {
+                    let (k, j) = (at.start + k, at.start + j);
+                    e.pos[k] = e.pos[j].clone();
+                    e.lp[k] = e.lp[j];
+                    if !e.slp.is_empty() {
+                        e.slp[k] = e.slp[j];
+                    }
+                }
             }
         }
         if e.settings.independence_fraction > 0.0 {
@@ -799,8 +923,9 @@ impl RidgeMove {
 /// are moved onto randomly chosen walkers of the bulk: a stray walker
 /// would otherwise take thousands of steps to return and dominate R̂
 /// (emcee FAQ, "walkers stuck"). Burn-in only, so the kept chain is
-/// unaffected in law.
-fn prune_strays(pos: &mut [Vec<f64>], lp: &mut [f64], d: usize, beta: f64, rng: &mut ChaCha8Rng) {
+/// unaffected in law. Returns (stray, bulk walker it takes the place of)
+/// for the rung's walkers with log-densities `lp`.
+fn prune_strays(lp: &[f64], d: usize, beta: f64, rng: &mut ChaCha8Rng) -> Vec<(usize, usize)> {
     let mut sorted: Vec<f64> = lp.to_vec();
     sorted.sort_by(f64::total_cmp);
     let median = sorted[sorted.len() / 2];
@@ -808,15 +933,12 @@ fn prune_strays(pos: &mut [Vec<f64>], lp: &mut [f64], d: usize, beta: f64, rng: 
     let cut = median - (half + 6.0 * half.sqrt() + 10.0) / beta;
     let good: Vec<usize> = (0..lp.len()).filter(|&k| lp[k] >= cut).collect();
     if good.is_empty() {
-        return;
+        return Vec::new();
     }
-    for k in 0..lp.len() {
-        if lp[k] < cut {
-            let j = good[rng.random_range(0..good.len())];
-            pos[k] = pos[j].clone();
-            lp[k] = lp[j];
-        }
-    }
+    (0..lp.len())
+        .filter(|&k| lp[k] < cut)
+        .map(|k| (k, good[rng.random_range(0..good.len())]))
+        .collect()
 }
 
 /// The independence proposal of a rung: one multivariate t fitted to the
@@ -1171,6 +1293,188 @@ mod tests {
             "acceptance {}",
             ch.acceptance
         );
+    }
+
+    /// A log-density with a screen for delayed acceptance, counting the
+    /// points whose full log-density is computed.
+    struct Screened<F, G> {
+        exact: F,
+        screen: G,
+        evaluated: std::cell::Cell<usize>,
+    }
+
+    impl<F: Fn(&[f64]) -> f64, G: Fn(&[f64]) -> f64> Screened<F, G> {
+        fn new(exact: F, screen: G) -> Self {
+            Self {
+                exact,
+                screen,
+                evaluated: std::cell::Cell::new(0),
+            }
+        }
+    }
+
+    impl<F: Fn(&[f64]) -> f64, G: Fn(&[f64]) -> f64> LogDensity for Screened<F, G> {
+        fn log_densities(&self, xs: &[Vec<f64>]) -> Vec<f64> {
+            self.evaluated.set(self.evaluated.get() + xs.len());
+            xs.iter().map(|x| (self.exact)(x)).collect()
+        }
+
+        fn screen_log_densities(&self, xs: &[Vec<f64>]) -> Option<Vec<f64>> {
+            Some(xs.iter().map(|x| (self.screen)(x)).collect())
+        }
+    }
+
+    /// Delayed acceptance with the density itself as screen is the
+    /// one-stage sampler draw for draw (same uniforms, α₂ = 1), with every
+    /// move, the independence proposal's refits and tempering; only the
+    /// proposals that pass the screen are evaluated (here: the accepted
+    /// ones).
+    #[test]
+    fn delayed_acceptance_with_an_exact_screen_is_the_one_stage_chain() {
+        let logp = |x: &[f64]| -0.5 * (x[0] * x[0] + 4.0 * (x[1] - 0.3 * x[0]).powi(2));
+        let init: Vec<Vec<f64>> = (0..12)
+            .map(|k| vec![0.1 * k as f64 - 0.5, 0.05 * (k % 5) as f64])
+            .collect();
+        let s = EnsembleSettings {
+            walkers: 12,
+            burn: 100,
+            steps: 200,
+            seed: 21,
+            ..EnsembleSettings::default()
+        };
+        let run = |density: &dyn Fn(&mut [Ensemble], &mut [Chains])| {
+            let mut e = [Ensemble::new(&logp, &init, &s).expect("ensemble")];
+            let mut ch = [e[0].empty_chains()];
+            density(&mut e, &mut ch);
+            let [ch] = ch;
+            ch
+        };
+        let plain = run(&|e, ch| {
+            burn_in(e, &logp);
+            sample(e, &logp, 200, ch);
+            e[0].refit_proposal();
+            e[0].temper(3, 0.5).expect("ladder");
+            sample(e, &logp, 200, ch);
+        });
+        let screened = Screened::new(logp, logp);
+        let delayed = run(&|e, ch| {
+            // The ensemble made with the plain density has no screened
+            // values; start it again with the screened one.
+            e[0] = Ensemble::new(&screened, &init, &s).expect("ensemble");
+            burn_in(e, &screened);
+            sample(e, &screened, 200, ch);
+            e[0].refit_proposal();
+            e[0].temper(3, 0.5).expect("ladder");
+            sample(e, &screened, 200, ch);
+        });
+        assert_eq!(plain.samples, delayed.samples);
+        assert_eq!(plain.acceptance, delayed.acceptance);
+        // Untempered, every proposal that passes an exact screen is
+        // accepted: the full log-density is computed for exactly those.
+        let screened = Screened::new(logp, logp);
+        let mut e = [Ensemble::new(&screened, &init, &s).expect("ensemble")];
+        let mut ch = [e[0].empty_chains()];
+        burn_in(&mut e, &screened);
+        sample(&mut e, &screened, 200, &mut ch);
+        let proposals = 12 * (100 + 200);
+        let evaluated = screened.evaluated.get() - 12;
+        let accepted = (ch[0].acceptance * proposals as f64).round() as usize;
+        assert_eq!(evaluated, accepted, "of {proposals} proposals");
+        assert!(evaluated < proposals * 3 / 4, "{evaluated} of {proposals}");
+    }
+
+    /// Delayed acceptance with a poor screen (a Gaussian with the wrong
+    /// mean, scales and no correlation) still samples the correlated
+    /// Gaussian of `draws_match_a_correlated_gaussian`, within the same
+    /// Monte-Carlo tolerances, and with tempering the two-mode mixture of
+    /// `tempering_keeps_a_two_mode_mixture` (screen: one broad mode in the
+    /// middle).
+    #[test]
+    fn delayed_acceptance_with_a_poor_screen_keeps_the_target() {
+        let sd = [1.0, 100.0, 0.01];
+        let rho = 0.9;
+        let logp = |x: &[f64]| {
+            let (a, b, c) = (x[0] / sd[0], x[1] / sd[1], x[2] / sd[2]);
+            -0.5 * ((a * a - 2.0 * rho * a * b + b * b) / (1.0 - rho * rho) + c * c)
+        };
+        let screen = |x: &[f64]| {
+            let (a, b, c) = (
+                (x[0] - 0.5 * sd[0]) / (2.0 * sd[0]),
+                (x[1] + 0.3 * sd[1]) / (0.7 * sd[1]),
+                x[2] / (1.5 * sd[2]),
+            );
+            -0.5 * (a * a + b * b + c * c)
+        };
+        let density = Screened::new(logp, screen);
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let init: Vec<Vec<f64>> = (0..24)
+            .map(|_| (0..3).map(|i| sd[i] * 0.1 * normal(&mut rng)).collect())
+            .collect();
+        let s = EnsembleSettings {
+            walkers: 24,
+            burn: 500,
+            steps: 3000,
+            seed: 9,
+            ..EnsembleSettings::default()
+        };
+        let mut e = [Ensemble::new(&density, &init, &s).expect("ensemble")];
+        burn_in(&mut e, &density);
+        let mut ch = [e[0].empty_chains()];
+        sample(&mut e, &density, s.steps, &mut ch);
+        let [ch] = ch;
+        let n = (ch.steps * ch.walkers) as f64;
+        let mean = |i: usize| ch.samples.iter().skip(i).step_by(3).sum::<f64>() / n;
+        let cov = |i: usize, j: usize| {
+            let (mi, mj) = (mean(i), mean(j));
+            (0..ch.steps * ch.walkers)
+                .map(|k| (ch.samples[k * 3 + i] - mi) * (ch.samples[k * 3 + j] - mj))
+                .sum::<f64>()
+                / n
+        };
+        for i in 0..3 {
+            assert!(mean(i).abs() < 0.1 * sd[i], "mean {i} = {}", mean(i));
+            let v = cov(i, i) / (sd[i] * sd[i]);
+            assert!((v - 1.0).abs() < 0.12, "var {i} ratio {v}");
+        }
+        let r = cov(0, 1) / (cov(0, 0) * cov(1, 1)).sqrt();
+        assert!((r - rho).abs() < 0.03, "correlation {r}");
+        let proposals = 24 * (500 + 3000);
+        assert!(density.evaluated.get() - 24 < proposals);
+
+        let two_modes = |x: &[f64]| {
+            let mode = |c: f64, w: f64| w.ln() - 2.0 * ((x[0] - c).powi(2) + x[1] * x[1]);
+            let (a, b) = (mode(-5.0, 0.25), mode(5.0, 0.75));
+            a.max(b) + (-(a - b).abs()).exp().ln_1p()
+        };
+        let broad = |x: &[f64]| -0.5 * (x[0] * x[0] / 36.0 + x[1] * x[1]);
+        let density = Screened::new(two_modes, broad);
+        let init: Vec<Vec<f64>> = (0..16)
+            .map(|k| vec![-5.0 + 0.05 * k as f64, 0.1 - 0.01 * k as f64])
+            .collect();
+        let s = EnsembleSettings {
+            walkers: 16,
+            burn: 200,
+            steps: 500,
+            seed: 13,
+            ..EnsembleSettings::default()
+        };
+        let mut e = [Ensemble::new(&density, &init, &s).expect("ensemble")];
+        e[0].temper(5, 0.4).expect("ladder");
+        burn_in(&mut e, &density);
+        let mut ch = [e[0].empty_chains()];
+        for _ in 0..8 {
+            sample(&mut e, &density, 500, &mut ch);
+            e[0].refit_proposal();
+        }
+        let [ch] = ch;
+        let right = ch.samples.iter().step_by(2).filter(|&&v| v > 0.0).count() as f64
+            / (ch.steps * ch.walkers) as f64;
+        let (mean, var) = (|i| moments(&ch, i).0, |i| moments(&ch, i).1);
+        assert!((right - 0.75).abs() < 0.03, "P(x > 0) {right}");
+        assert!((mean(0) - 2.5).abs() < 0.3, "E[x] {}", mean(0));
+        assert!((var(0) - 19.0).abs() < 1.2, "Var[x] {}", var(0));
+        assert!(mean(1).abs() < 0.02, "E[y] {}", mean(1));
+        assert!((var(1) - 0.25).abs() < 0.02, "Var[y] {}", var(1));
     }
 
     /// A uniform density on the triangle x, y ≥ 0, x + y ≤ 1 (the shape of

@@ -79,24 +79,43 @@ pub fn noise_sd(times: &[f64], values: &[f64]) -> Result<f64> {
     }
 }
 
+/// UᵀU = QΛQᵀ diagonalised once, so that M = Q(I + (v/σ²)Λ)Qᵀ:
+/// ln det M = Σ ln(1 + (v/σ²)λ_i) and wᵀM⁻¹w = Σ (Qᵀw)_i²/(1 + (v/σ²)λ_i),
+/// O(k·r) per evaluation.
+struct LowRank {
+    ata: DMatrix<f64>,
+    /// QᵀUᵀA.
+    qta: DMatrix<f64>,
+    /// λ, the eigenvalues of UᵀU (≥ 0).
+    lambda: DVector<f64>,
+    atd: DVector<f64>,
+    /// QᵀUᵀd.
+    qtd: DVector<f64>,
+    dtd: f64,
+}
+
+impl LowRank {
+    /// ln L (module docs, without −(m/2) ln 2π) at reduced coordinates
+    /// `c` with calibrated Kriging variance `v`, noise variance `s2` and
+    /// `m` data points.
+    fn value(&self, c: &DVector<f64>, v: f64, s2: f64, m: f64) -> f64 {
+        let rtr = self.dtd - 2.0 * self.atd.dot(c) + c.dot(&(&self.ata * c));
+        let w = &self.qtd - &self.qta * c;
+        let ratio = v / s2;
+        let (mut logdet_m, mut wmw) = (0.0, 0.0);
+        for (wi, li) in w.iter().zip(&self.lambda) {
+            let e = 1.0 + ratio * li;
+            logdet_m += e.ln();
+            wmw += wi * wi / e;
+        }
+        let quad = (rtr.max(0.0) - ratio * wmw) / s2;
+        -0.5 * (m * s2.ln() + logdet_m + quad)
+    }
+}
+
 enum Form {
-    /// UᵀU = QΛQᵀ diagonalised once, so that M = Q(I + (v/σ²)Λ)Qᵀ:
-    /// ln det M = Σ ln(1 + (v/σ²)λ_i) and wᵀM⁻¹w = Σ (Qᵀw)_i²/(1 + (v/σ²)λ_i),
-    /// O(k·r) per evaluation.
-    LowRank {
-        ata: DMatrix<f64>,
-        /// QᵀUᵀA.
-        qta: DMatrix<f64>,
-        /// λ, the eigenvalues of UᵀU (≥ 0).
-        lambda: DVector<f64>,
-        atd: DVector<f64>,
-        /// QᵀUᵀd.
-        qtd: DVector<f64>,
-        dtd: f64,
-    },
-    Diagonal {
-        k: Vec<f64>,
-    },
+    LowRank(LowRank),
+    Diagonal { k: Vec<f64> },
 }
 
 /// ln L(x) of one curve on a Kriging surrogate (module docs).
@@ -136,14 +155,14 @@ impl<'a> CurveLikelihood<'a> {
                 let a = surrogate.output_map();
                 let eig = (u.transpose() * &u).symmetric_eigen();
                 let qtu = eig.eigenvectors.transpose() * u.transpose();
-                Form::LowRank {
+                Form::LowRank(LowRank {
                     ata: a.transpose() * a,
                     qta: &qtu * a,
                     lambda: eig.eigenvalues.map(|l| l.max(0.0)),
                     atd: a.transpose() * &d,
                     qtd: qtu * &d,
                     dtd: d.dot(&d),
-                }
+                })
             }
             other => Form::Diagonal {
                 k: other.diagonal(),
@@ -192,34 +211,17 @@ impl<'a> CurveLikelihood<'a> {
     /// As [`CurveLikelihood::value`] for any point of the batch.
     pub fn values(&self, xs: &[Vec<f64>]) -> Result<Vec<f64>> {
         let s2 = self.noise_var;
-        let m = self.data.len() as f64;
         match &self.form {
-            Form::LowRank {
-                ata,
-                qta,
-                lambda,
-                atd,
-                qtd,
-                dtd,
-            } => {
+            Form::LowRank(form) => {
                 let (cs, vs) = self
                     .surrogate
                     .coordinates_and_mse_scales(xs, self.threads)?;
-                let mut out = Vec::with_capacity(xs.len());
-                for (c, v) in cs.iter().zip(vs) {
-                    let rtr = dtd - 2.0 * atd.dot(c) + c.dot(&(ata * c));
-                    let w = qtd - qta * c;
-                    let ratio = self.calibration.apply(v) / s2;
-                    let (mut logdet_m, mut wmw) = (0.0, 0.0);
-                    for (wi, li) in w.iter().zip(lambda) {
-                        let e = 1.0 + ratio * li;
-                        logdet_m += e.ln();
-                        wmw += wi * wi / e;
-                    }
-                    let quad = (rtr.max(0.0) - ratio * wmw) / s2;
-                    out.push(-0.5 * (m * s2.ln() + logdet_m + quad));
-                }
-                Ok(out)
+                let m = self.data.len() as f64;
+                Ok(cs
+                    .iter()
+                    .zip(vs)
+                    .map(|(c, v)| form.value(c, self.calibration.apply(v), s2, m))
+                    .collect())
             }
             Form::Diagonal { k } => xs
                 .iter()
@@ -235,6 +237,45 @@ impl<'a> CurveLikelihood<'a> {
                 })
                 .collect(),
         }
+    }
+
+    /// The calibrated Kriging variance α·v(x)^β (the v of the module
+    /// docs) at each of many physical points, computed as by
+    /// [`CurveLikelihood::values`].
+    ///
+    /// # Errors
+    /// As [`KrigingSurrogate::coordinates_and_mse_scales`].
+    pub fn calibrated_variances(&self, xs: &[Vec<f64>]) -> Result<Vec<f64>> {
+        let (_, vs) = self
+            .surrogate
+            .coordinates_and_mse_scales(xs, self.threads)?;
+        Ok(vs.into_iter().map(|v| self.calibration.apply(v)).collect())
+    }
+
+    /// ln L̃(x): ln L with the calibrated Kriging variance given
+    /// (`variances`, one per point) instead of v(x), at each of many
+    /// physical points — the surrogate's mean c(x) only
+    /// ([`KrigingSurrogate::coordinate_batch`], O(N·(q + d)) per point, no
+    /// O(N²) solve). The cheap first stage of the sampler's delayed
+    /// acceptance ([`super::screen`]); equal to ln L where the variance
+    /// given is v(x). None without a PCA (the diagonal form needs the full
+    /// m-point prediction).
+    ///
+    /// # Errors
+    /// As [`CurveLikelihood::value`] for any point of the batch.
+    pub fn screen_values(&self, xs: &[Vec<f64>], variances: &[f64]) -> Result<Option<Vec<f64>>> {
+        let Form::LowRank(form) = &self.form else {
+            return Ok(None);
+        };
+        check_len("screen variances", xs.len(), variances.len())?;
+        let (s2, m) = (self.noise_var, self.data.len() as f64);
+        let cs = self.surrogate.coordinate_batch(xs)?;
+        Ok(Some(
+            cs.iter()
+                .zip(variances)
+                .map(|(c, &v)| form.value(c, v, s2, m))
+                .collect(),
+        ))
     }
 }
 

@@ -28,6 +28,7 @@
 pub mod diagnostics;
 pub mod ensemble;
 mod likelihood;
+pub mod screen;
 
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
@@ -37,6 +38,7 @@ pub use ensemble::{
     sample_more,
 };
 pub use likelihood::{CurveLikelihood, noise_sd};
+use screen::VarianceModel;
 
 use crate::error::{InverseError, Result};
 use crate::fixed::FixedInputs;
@@ -119,6 +121,18 @@ pub struct PosteriorSettings {
     /// round ends only (the sampler before session 13).
     #[serde(default = "default_check_every")]
     pub check_every: usize,
+    /// Delayed acceptance ([`ensemble`] module docs): each proposal is
+    /// first screened with the likelihood's Kriging variance taken from a
+    /// model fitted at the starts ([`screen`]: the surrogate's mean only,
+    /// no O(N²) solve), and only the proposals that pass are evaluated in
+    /// full. Exact (the same posterior); off: every proposal evaluated in
+    /// full.
+    #[serde(default = "default_delayed_acceptance")]
+    pub delayed_acceptance: bool,
+}
+
+fn default_delayed_acceptance() -> bool {
+    true
 }
 
 fn default_check_every() -> usize {
@@ -194,6 +208,7 @@ impl PosteriorSettings {
             temper_after: default_temper_after(),
             temper_ridge: default_temper_ridge(),
             check_every: default_check_every(),
+            delayed_acceptance: default_delayed_acceptance(),
         }
     }
 }
@@ -273,6 +288,11 @@ pub struct Posterior {
     /// prior's support costs none).
     #[serde(default)]
     pub proposals: usize,
+    /// Points whose full likelihood was computed: the starts and the
+    /// proposals, less those delayed acceptance rejected on its screen
+    /// and those outside the prior's support.
+    #[serde(default)]
+    pub evaluations: usize,
     /// Thinned draws (physical values, domain order).
     pub draws: Vec<Vec<f64>>,
 }
@@ -450,12 +470,6 @@ pub fn sample_posterior_fixed(
     let inside = |u: &[f64]| {
         u.iter().all(|v| (0.0..=1.0).contains(v)) && domain.feasible(&domain.from_unit(u), 0.0)
     };
-    let log_density = UnitDensity {
-        lik: &lik,
-        fixed,
-        domain: &domain,
-        inside: &inside,
-    };
     let init = starts(
         surrogate,
         fixed,
@@ -465,6 +479,18 @@ pub fn sample_posterior_fixed(
         settings.seed,
         &inside,
     )?;
+    let mut log_density = UnitDensity {
+        lik: &lik,
+        fixed,
+        domain: &domain,
+        inside: &inside,
+        screen: None,
+        screen_points: (Vec::new(), Vec::new()),
+        evaluations: std::cell::Cell::new(0),
+    };
+    if settings.delayed_acceptance {
+        log_density.refit_screen(init.iter().flatten())?;
+    }
     let mut ensembles = Vec::with_capacity(init.len());
     let mut chains = Vec::with_capacity(init.len());
     for (e, start) in init.iter().enumerate() {
@@ -490,6 +516,7 @@ pub fn sample_posterior_fixed(
         ensembles.push(ens);
     }
     burn_in(&mut ensembles, &log_density);
+    refit_screen(&mut log_density, &mut ensembles)?;
     let max_steps = settings.max_steps.max(settings.steps);
     let per_step = settings.ensembles * settings.walkers;
     let mut proposals = per_step * (1 + settings.burn);
@@ -516,6 +543,7 @@ pub fn sample_posterior_fixed(
             let draws = to_draws(&domain, chains.iter());
             let mut post = summarise(&draws, noise, settings)?;
             (post.kept_steps, post.rungs, post.proposals) = (kept, rungs, proposals);
+            post.evaluations = log_density.evaluations.get();
             post.swap_acceptance = ensembles.iter().map(Ensemble::swap_acceptance).sum::<f64>()
                 / ensembles.len() as f64;
             if post.rhat_max <= RHAT_TARGET {
@@ -538,6 +566,7 @@ pub fn sample_posterior_fixed(
                 *ch = ens.empty_chains();
             }
             burn_in(&mut ensembles, &log_density);
+            refit_screen(&mut log_density, &mut ensembles)?;
             proposals += per_step * settings.rungs * settings.burn;
         } else if settings.refit_proposal {
             ensembles.iter_mut().for_each(Ensemble::refit_proposal);
@@ -548,22 +577,89 @@ pub fn sample_posterior_fixed(
 /// The posterior's log-density in the unit coordinates u of the free
 /// parameters: −∞ outside the prior's support, else ln L at the expanded
 /// physical point, the points of a batch evaluated together
-/// ([`CurveLikelihood::values`]).
+/// ([`CurveLikelihood::values`]); with a `screen`, the screen of delayed
+/// acceptance is ln L with the Kriging variance of that model
+/// ([`CurveLikelihood::screen_values`]).
 struct UnitDensity<'a> {
     lik: &'a CurveLikelihood<'a>,
     fixed: &'a FixedInputs,
     domain: &'a nlvid_model::Domain,
     inside: &'a dyn Fn(&[f64]) -> bool,
+    screen: Option<VarianceModel>,
+    /// The points (u) and calibrated Kriging variances the screen was
+    /// fitted to.
+    screen_points: (Vec<Vec<f64>>, Vec<f64>),
+    /// Points inside the support whose full ln L (or Kriging variance)
+    /// was computed.
+    evaluations: std::cell::Cell<usize>,
 }
 
-impl LogDensity for UnitDensity<'_> {
-    fn log_densities(&self, us: &[Vec<f64>]) -> Vec<f64> {
-        let mut out = vec![f64::NEG_INFINITY; us.len()];
+/// After a burn-in: the screen of delayed acceptance refitted with the
+/// variances at every ensemble's current positions added to its points,
+/// and the walkers' screened values recomputed (module docs of
+/// [`screen`]; nothing without delayed acceptance).
+fn refit_screen(density: &mut UnitDensity, ensembles: &mut [Ensemble]) -> Result<()> {
+    if density.screen.is_none() {
+        return Ok(());
+    }
+    density.refit_screen(ensembles.iter().flat_map(Ensemble::positions))?;
+    ensembles.iter_mut().for_each(|e| e.rescreen(&*density));
+    Ok(())
+}
+
+impl UnitDensity<'_> {
+    /// Adds the calibrated Kriging variances at `us` (those inside the
+    /// support) to the screen's points and refits it ([`VarianceModel::fit`]).
+    fn refit_screen<'u>(&mut self, us: impl Iterator<Item = &'u Vec<f64>>) -> Result<()> {
+        let us: Vec<Vec<f64>> = us.filter(|u| (self.inside)(u)).cloned().collect();
+        let (_, xs) = self.inside_points(&us);
+        let vs = self.lik.calibrated_variances(&xs)?;
+        self.evaluations.set(self.evaluations.get() + xs.len());
+        self.screen_points.0.extend(us);
+        self.screen_points.1.extend(vs);
+        self.screen = VarianceModel::fit(&self.screen_points.0, &self.screen_points.1);
+        Ok(())
+    }
+
+    /// The indices of the points of `us` inside the prior's support and
+    /// their physical points.
+    fn inside_points(&self, us: &[Vec<f64>]) -> (Vec<usize>, Vec<Vec<f64>>) {
         let idx: Vec<usize> = (0..us.len()).filter(|&i| (self.inside)(&us[i])).collect();
-        let xs: Vec<Vec<f64>> = idx
+        let xs = idx
             .iter()
             .map(|&i| self.fixed.expand(&self.domain.from_unit(&us[i])))
             .collect();
+        (idx, xs)
+    }
+}
+
+impl LogDensity for UnitDensity<'_> {
+    fn screen_log_densities(&self, us: &[Vec<f64>]) -> Option<Vec<f64>> {
+        let model = self.screen.as_ref()?;
+        let mut out = vec![f64::NEG_INFINITY; us.len()];
+        let (idx, xs) = self.inside_points(us);
+        let variances: Vec<f64> = idx.iter().map(|&i| model.variance(&us[i])).collect();
+        match self.lik.screen_values(&xs, &variances) {
+            Ok(Some(v)) => idx.iter().zip(v).for_each(|(&i, l)| out[i] = l),
+            Ok(None) => return None,
+            // A point the surrogate refuses: one by one, so that only it
+            // gets −∞ (and so is rejected on the screen).
+            Err(_) => {
+                for ((&i, x), v) in idx.iter().zip(&xs).zip(&variances) {
+                    let one = self.lik.screen_values(std::slice::from_ref(x), &[*v]);
+                    if let Ok(Some(l)) = one {
+                        out[i] = l[0];
+                    }
+                }
+            }
+        }
+        Some(out)
+    }
+
+    fn log_densities(&self, us: &[Vec<f64>]) -> Vec<f64> {
+        let mut out = vec![f64::NEG_INFINITY; us.len()];
+        let (idx, xs) = self.inside_points(us);
+        self.evaluations.set(self.evaluations.get() + xs.len());
         match self.lik.values(&xs) {
             Ok(v) => idx.iter().zip(v).for_each(|(&i, l)| out[i] = l),
             // A point the surrogate refuses: evaluate one by one so that
@@ -744,6 +840,7 @@ fn summarise(draws: &Draws, noise: f64, settings: &PosteriorSettings) -> Result<
         rungs: 1,
         swap_acceptance: 0.0,
         proposals: 0,
+        evaluations: 0,
         draws: draws.pick(settings.keep),
     })
 }

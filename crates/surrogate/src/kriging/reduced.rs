@@ -211,14 +211,50 @@ impl KrigingModel {
         Ok((coords, scales))
     }
 
+    /// c(x) of [`KrigingModel::output_coordinate_values`] at many points at
+    /// once: the correlation columns and one product Z = βᵀF + γᵀR for the
+    /// batch, O(n·(d + q)) per point, without the variance's O(n²) solve
+    /// (the screening stage of the posterior sampler's delayed acceptance,
+    /// issue 17). The values are those of
+    /// [`KrigingModel::coordinates_and_mse_scales`] bit for bit.
+    ///
+    /// # Errors
+    /// As [`KrigingModel::output_coordinates`] for any point of the batch.
+    pub fn output_coordinate_batch(&self, xs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>> {
+        self.check_linear_outputs()?;
+        let (_, _, zm) = self.batch_columns(xs)?;
+        Ok(self.scaled_coordinates(xs, &zm)?.0)
+    }
+
     /// [`KrigingModel::coordinates_and_mse_scales`] of one part, on the
-    /// calling thread.
+    /// calling thread. A part of one point is solved as two copies of it:
+    /// faer's single-column solve sums in another order, and a point's
+    /// values must not depend on the batch it came in (the sampler's
+    /// batches shrink to one point under delayed acceptance).
     fn batch_coordinates_and_mse_scales(
         &self,
         xs: &[Vec<f64>],
     ) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
         self.check_linear_outputs()?;
         self.check_linear_for_variance()?;
+        if let [x] = xs {
+            let (mut c, mut v) = self.batch_coordinates_and_mse_scales(&[x.clone(), x.clone()])?;
+            c.truncate(1);
+            v.truncate(1);
+            return Ok((c, v));
+        }
+        let (rm, fm, zm) = self.batch_columns(xs)?;
+        let phi = self.mse_factors_of(rm, &fm)?;
+        let (coords, scales) = self.scaled_coordinates(xs, &zm)?;
+        Ok((
+            coords,
+            scales.iter().zip(phi).map(|(s, p)| s * s * p).collect(),
+        ))
+    }
+
+    /// The batch's correlation columns R (n × B), regressors F (p × B)
+    /// and kriged outputs Z = βᵀF + γᵀR (q × B).
+    fn batch_columns(&self, xs: &[Vec<f64>]) -> Result<(Mat<f64>, Mat<f64>, Mat<f64>)> {
         let (n, d, p, q) = (self.n_sites, self.dim, self.p(), self.n_kriged());
         let b = xs.len();
         let mut rm = Mat::<f64>::zeros(n, b);
@@ -243,7 +279,6 @@ impl KrigingModel {
                 &mut dx,
             );
         }
-        // Z = βᵀF + γᵀR (q × B).
         let mut zm = Mat::<f64>::zeros(q, b);
         matmul(
             zm.as_mut(),
@@ -261,9 +296,19 @@ impl KrigingModel {
             1.0,
             Par::Seq,
         );
-        let phi = self.mse_factors_of(rm, &fm)?;
-        let mut coords = Vec::with_capacity(b);
-        let mut scales = Vec::with_capacity(b);
+        Ok((rm, fm, zm))
+    }
+
+    /// c(x) = s(x)·[1; z(x)] of each point from the batch's Z, and each
+    /// point's output scale s(x) (1 without).
+    fn scaled_coordinates(
+        &self,
+        xs: &[Vec<f64>],
+        zm: &Mat<f64>,
+    ) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
+        let q = self.n_kriged();
+        let mut coords = Vec::with_capacity(xs.len());
+        let mut scales = Vec::with_capacity(xs.len());
         for (j, x) in xs.iter().enumerate() {
             let s = match self.output_scale {
                 Some(sc) => sc.check(x, "the prediction point")?,
@@ -273,7 +318,7 @@ impl KrigingModel {
             c.push(s);
             c.extend((0..q).map(|k| s * zm[(k, j)]));
             coords.push(c);
-            scales.push(s * s * phi[j]);
+            scales.push(s);
         }
         Ok((coords, scales))
     }

@@ -1204,9 +1204,11 @@ mod covariance_tests {
 
     /// The batch split over threads gives every point bitwise the values
     /// of the whole batch on one thread, for 2 and 3 threads and for every
-    /// cut of the batch into two parts of ≥ 2 points (what the split relies
-    /// on: faer's kernels give a column the same arithmetic in any batch of
-    /// ≥ 2 columns).
+    /// cut of the batch into two parts, parts of one point included (what
+    /// the split relies on: faer's kernels give a column the same
+    /// arithmetic in any batch of ≥ 2 columns, and a part of one point is
+    /// solved as two copies). The coordinates without the variance
+    /// (`output_coordinate_batch`) are the batch's bit for bit.
     #[test]
     fn batch_values_do_not_depend_on_the_thread_count() {
         let pts: Vec<Vec<f64>> = (0..17)
@@ -1225,7 +1227,15 @@ mod covariance_tests {
                 let par = bits(m.coordinates_and_mse_scales(&pts, threads).expect("batch"));
                 assert_eq!(par, one, "{threads} threads");
             }
-            for cut in 2..pts.len() - 1 {
+            let coordinates: Vec<Vec<u64>> = m
+                .output_coordinate_batch(&pts)
+                .expect("coordinates")
+                .iter()
+                .map(|c| c.iter().map(|x| x.to_bits()).collect())
+                .collect();
+            let without_v: Vec<Vec<u64>> = one.iter().map(|p| p[..p.len() - 1].to_vec()).collect();
+            assert_eq!(coordinates, without_v);
+            for cut in 1..pts.len() {
                 let mut parts = bits(m.coordinates_and_mse_scales(&pts[..cut], 1).expect("a"));
                 parts.extend(bits(
                     m.coordinates_and_mse_scales(&pts[cut..], 1).expect("b"),
