@@ -12,11 +12,12 @@
 //! cargo run --release -p nlvid-report --example posterior_cells \
 //!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=BOOL] \
 //!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [check=N] \
-//!     [delayed=BOOL,...] [cell ...]
+//!     [delayed=BOOL,...] [seed=N] [cell ...]
 //! ```
 //! (`rungs`, `ratio`, `temper_after`, `temper_ridge` and `delayed` (delayed
 //! acceptance) take comma-separated lists, e.g. `delayed=true,false`: every
-//! combination in turn, on the same curves and fits.)
+//! combination in turn, on the same curves and fits; `seed` is the
+//! sampler's, the study's fit seed by default.)
 
 use std::path::Path;
 
@@ -62,6 +63,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (rungs_l, ratio_l) = (list("rungs")?, list("ratio")?);
     let (after_l, tridge_l) = (list("temper_after")?, list("temper_ridge")?);
     let check: Option<usize> = opt("check").map(|v| v.parse()).transpose()?;
+    let sampler_seed: Option<u64> = opt("seed").map(|v| v.parse()).transpose()?;
     let delayed: Vec<Option<bool>> = opt("delayed").map_or(Ok(vec![None]), |v| {
         v.split(',')
             .map(|s| s.parse().map(Some))
@@ -108,7 +110,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let x_hat: Vec<f64> = r.parameters.iter().map(|p| p.value).collect();
         let ps = PosteriorSettings {
             max_steps,
-            seed: settings.seed,
+            seed: sampler_seed.unwrap_or(settings.seed),
             keep: usize::MAX / 2,
             ..PosteriorSettings::new(settings.hold_end)
         };

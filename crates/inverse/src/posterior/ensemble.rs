@@ -104,7 +104,8 @@
 //! acceptance is α₁α₂ as with two uniforms, the random stream is that of
 //! the one-stage sampler, and with p̃ = p the chain is the one-stage
 //! chain draw for draw. Swaps between rungs use p itself (it is known at
-//! every walker's position).
+//! every walker's position). The screen may change between calls only
+//! ([`Ensemble::rescreen`]: finite adaptation, as the proposal's refits).
 //!
 //! Each step picks the move for the whole ensemble (all its rungs): with probability
 //! `refresh_fraction` the axis refresh; otherwise with probability
@@ -1253,15 +1254,39 @@ mod tests {
     /// closed form within a few Monte-Carlo standard errors.
     #[test]
     fn draws_match_a_correlated_gaussian() {
-        let sd = [1.0, 100.0, 0.01];
-        let rho = 0.9;
-        let logp = |x: &[f64]| {
-            let (a, b, c) = (x[0] / sd[0], x[1] / sd[1], x[2] / sd[2]);
-            -0.5 * ((a * a - 2.0 * rho * a * b + b * b) / (1.0 - rho * rho) + c * c)
-        };
+        let (init, s) = correlated_gaussian_run();
+        let ch = sample_ensemble(correlated_gaussian, &init, &s).expect("run");
+        assert_correlated_gaussian(&ch);
+        assert!(
+            ch.acceptance > 0.2 && ch.acceptance < 0.9,
+            "acceptance {}",
+            ch.acceptance
+        );
+    }
+
+    /// Per-axis sd of [`correlated_gaussian`].
+    const GAUSS_SD: [f64; 3] = [1.0, 100.0, 0.01];
+    /// Correlation of its first two axes.
+    const GAUSS_RHO: f64 = 0.9;
+
+    /// A 3-D Gaussian with sd [`GAUSS_SD`] and correlation [`GAUSS_RHO`]
+    /// between the first two axes.
+    fn correlated_gaussian(x: &[f64]) -> f64 {
+        let (sd, rho) = (GAUSS_SD, GAUSS_RHO);
+        let (a, b, c) = (x[0] / sd[0], x[1] / sd[1], x[2] / sd[2]);
+        -0.5 * ((a * a - 2.0 * rho * a * b + b * b) / (1.0 - rho * rho) + c * c)
+    }
+
+    /// Starts (24 walkers near the mode) and settings (500 burn-in, 3000
+    /// kept steps) of the runs on [`correlated_gaussian`].
+    fn correlated_gaussian_run() -> (Vec<Vec<f64>>, EnsembleSettings) {
         let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let init: Vec<Vec<f64>> = (0..24)
-            .map(|_| (0..3).map(|i| sd[i] * 0.1 * normal(&mut rng)).collect())
+        let init = (0..24)
+            .map(|_| {
+                (0..3)
+                    .map(|i| GAUSS_SD[i] * 0.1 * normal(&mut rng))
+                    .collect()
+            })
             .collect();
         let s = EnsembleSettings {
             walkers: 24,
@@ -1270,7 +1295,15 @@ mod tests {
             seed: 9,
             ..EnsembleSettings::default()
         };
-        let ch = sample_ensemble(logp, &init, &s).expect("run");
+        (init, s)
+    }
+
+    /// Mean and covariance of the draws of [`correlated_gaussian`] match
+    /// the closed form within a few Monte-Carlo standard errors (24
+    /// walkers × 3000 steps: ESS ≈ 72000/τ with τ ≲ 30, so the standard
+    /// error of a mean is ≲ sd/40).
+    fn assert_correlated_gaussian(ch: &Chains) {
+        let (sd, rho) = (GAUSS_SD, GAUSS_RHO);
         let n = (ch.steps * ch.walkers) as f64;
         let mean = |i: usize| ch.samples.iter().skip(i).step_by(3).sum::<f64>() / n;
         let cov = |i: usize, j: usize| {
@@ -1280,7 +1313,6 @@ mod tests {
                 .sum::<f64>()
                 / n
         };
-        // ESS ≈ 72000/τ with τ ≲ 30: standard error of a mean ≲ sd/40.
         for i in 0..3 {
             assert!(mean(i).abs() < 0.1 * sd[i], "mean {i} = {}", mean(i));
             let v = cov(i, i) / (sd[i] * sd[i]);
@@ -1288,11 +1320,27 @@ mod tests {
         }
         let r = cov(0, 1) / (cov(0, 0) * cov(1, 1)).sqrt();
         assert!((r - rho).abs() < 0.03, "correlation {r}");
-        assert!(
-            ch.acceptance > 0.2 && ch.acceptance < 0.9,
-            "acceptance {}",
-            ch.acceptance
-        );
+    }
+
+    /// Two Gaussian modes in 2-D, weights 0.25 at x = −5 and 0.75 at
+    /// x = 5, sd ½ in each axis, separated by ≈ 20 sd.
+    fn two_modes(x: &[f64]) -> f64 {
+        let mode = |c: f64, w: f64| w.ln() - 2.0 * ((x[0] - c).powi(2) + x[1] * x[1]);
+        let (a, b) = (mode(-5.0, 0.25), mode(5.0, 0.75));
+        a.max(b) + (-(a - b).abs()).exp().ln_1p()
+    }
+
+    /// The draws of [`two_modes`] put 75 % of the mass at x > 0, with
+    /// E[x] = 2.5, Var[x] = 19, E[y] = 0, Var[y] = ¼.
+    fn assert_two_modes(ch: &Chains) {
+        let right = ch.samples.iter().step_by(2).filter(|&&v| v > 0.0).count() as f64
+            / (ch.steps * ch.walkers) as f64;
+        let (mean, var) = (|i| moments(ch, i).0, |i| moments(ch, i).1);
+        assert!((right - 0.75).abs() < 0.03, "P(x > 0) {right}");
+        assert!((mean(0) - 2.5).abs() < 0.3, "E[x] {}", mean(0));
+        assert!((var(0) - 19.0).abs() < 1.2, "Var[x] {}", var(0));
+        assert!(mean(1).abs() < 0.02, "E[y] {}", mean(1));
+        assert!((var(1) - 0.25).abs() < 0.02, "Var[y] {}", var(1));
     }
 
     /// A log-density with a screen for delayed acceptance, counting the
@@ -1391,12 +1439,7 @@ mod tests {
     /// middle).
     #[test]
     fn delayed_acceptance_with_a_poor_screen_keeps_the_target() {
-        let sd = [1.0, 100.0, 0.01];
-        let rho = 0.9;
-        let logp = |x: &[f64]| {
-            let (a, b, c) = (x[0] / sd[0], x[1] / sd[1], x[2] / sd[2]);
-            -0.5 * ((a * a - 2.0 * rho * a * b + b * b) / (1.0 - rho * rho) + c * c)
-        };
+        let sd = GAUSS_SD;
         let screen = |x: &[f64]| {
             let (a, b, c) = (
                 (x[0] - 0.5 * sd[0]) / (2.0 * sd[0]),
@@ -1405,47 +1448,17 @@ mod tests {
             );
             -0.5 * (a * a + b * b + c * c)
         };
-        let density = Screened::new(logp, screen);
-        let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let init: Vec<Vec<f64>> = (0..24)
-            .map(|_| (0..3).map(|i| sd[i] * 0.1 * normal(&mut rng)).collect())
-            .collect();
-        let s = EnsembleSettings {
-            walkers: 24,
-            burn: 500,
-            steps: 3000,
-            seed: 9,
-            ..EnsembleSettings::default()
-        };
+        let density = Screened::new(correlated_gaussian, screen);
+        let (init, s) = correlated_gaussian_run();
         let mut e = [Ensemble::new(&density, &init, &s).expect("ensemble")];
         burn_in(&mut e, &density);
         let mut ch = [e[0].empty_chains()];
         sample(&mut e, &density, s.steps, &mut ch);
         let [ch] = ch;
-        let n = (ch.steps * ch.walkers) as f64;
-        let mean = |i: usize| ch.samples.iter().skip(i).step_by(3).sum::<f64>() / n;
-        let cov = |i: usize, j: usize| {
-            let (mi, mj) = (mean(i), mean(j));
-            (0..ch.steps * ch.walkers)
-                .map(|k| (ch.samples[k * 3 + i] - mi) * (ch.samples[k * 3 + j] - mj))
-                .sum::<f64>()
-                / n
-        };
-        for i in 0..3 {
-            assert!(mean(i).abs() < 0.1 * sd[i], "mean {i} = {}", mean(i));
-            let v = cov(i, i) / (sd[i] * sd[i]);
-            assert!((v - 1.0).abs() < 0.12, "var {i} ratio {v}");
-        }
-        let r = cov(0, 1) / (cov(0, 0) * cov(1, 1)).sqrt();
-        assert!((r - rho).abs() < 0.03, "correlation {r}");
+        assert_correlated_gaussian(&ch);
         let proposals = 24 * (500 + 3000);
         assert!(density.evaluated.get() - 24 < proposals);
 
-        let two_modes = |x: &[f64]| {
-            let mode = |c: f64, w: f64| w.ln() - 2.0 * ((x[0] - c).powi(2) + x[1] * x[1]);
-            let (a, b) = (mode(-5.0, 0.25), mode(5.0, 0.75));
-            a.max(b) + (-(a - b).abs()).exp().ln_1p()
-        };
         let broad = |x: &[f64]| -0.5 * (x[0] * x[0] / 36.0 + x[1] * x[1]);
         let density = Screened::new(two_modes, broad);
         let init: Vec<Vec<f64>> = (0..16)
@@ -1467,14 +1480,7 @@ mod tests {
             e[0].refit_proposal();
         }
         let [ch] = ch;
-        let right = ch.samples.iter().step_by(2).filter(|&&v| v > 0.0).count() as f64
-            / (ch.steps * ch.walkers) as f64;
-        let (mean, var) = (|i| moments(&ch, i).0, |i| moments(&ch, i).1);
-        assert!((right - 0.75).abs() < 0.03, "P(x > 0) {right}");
-        assert!((mean(0) - 2.5).abs() < 0.3, "E[x] {}", mean(0));
-        assert!((var(0) - 19.0).abs() < 1.2, "Var[x] {}", var(0));
-        assert!(mean(1).abs() < 0.02, "E[y] {}", mean(1));
-        assert!((var(1) - 0.25).abs() < 0.02, "Var[y] {}", var(1));
+        assert_two_modes(&ch);
     }
 
     /// A uniform density on the triangle x, y ≥ 0, x + y ≤ 1 (the shape of
@@ -1662,11 +1668,7 @@ mod tests {
     /// tempered P(x > 0) was 0.736–0.760 (mean 0.751).
     #[test]
     fn tempering_keeps_a_two_mode_mixture() {
-        let logp = |x: &[f64]| {
-            let mode = |c: f64, w: f64| w.ln() - 2.0 * ((x[0] - c).powi(2) + x[1] * x[1]);
-            let (a, b) = (mode(-5.0, 0.25), mode(5.0, 0.75));
-            a.max(b) + (-(a - b).abs()).exp().ln_1p()
-        };
+        let logp = two_modes;
         let init: Vec<Vec<f64>> = (0..16)
             .map(|k| vec![-5.0 + 0.05 * k as f64, 0.1 - 0.01 * k as f64])
             .collect();
@@ -1696,20 +1698,11 @@ mod tests {
             (ch, e[0].swap_acceptance())
         };
         let (ch, swaps) = run(true);
-        let mean = |i: usize| moments(&ch, i).0;
-        let var = |i: usize| moments(&ch, i).1;
-        let right = |c: &Chains| {
-            c.samples.iter().step_by(2).filter(|&&v| v > 0.0).count() as f64
-                / (c.steps * c.walkers) as f64
-        };
-        assert!((right(&ch) - 0.75).abs() < 0.03, "P(x > 0) {}", right(&ch));
-        assert!((mean(0) - 2.5).abs() < 0.3, "E[x] {}", mean(0));
-        assert!((var(0) - 19.0).abs() < 1.2, "Var[x] {}", var(0));
-        assert!(mean(1).abs() < 0.02, "E[y] {}", mean(1));
-        assert!((var(1) - 0.25).abs() < 0.02, "Var[y] {}", var(1));
+        assert_two_modes(&ch);
         assert!(swaps > 0.2 && swaps < 0.95, "swap acceptance {swaps}");
         let (cold, none) = run(false);
-        assert_eq!((right(&cold), none), (0.0, 0.0));
+        let right = cold.samples.iter().step_by(2).filter(|&&v| v > 0.0).count();
+        assert_eq!((right, none), (0, 0.0));
     }
 
     /// Points of two separated Gaussian clusters (weights 0.3 / 0.7) are
