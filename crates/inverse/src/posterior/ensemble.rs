@@ -1330,6 +1330,22 @@ mod tests {
         a.max(b) + (-(a - b).abs()).exp().ln_1p()
     }
 
+    /// Starts (16 walkers all in the left mode) and settings of the runs
+    /// on [`two_modes`].
+    fn two_modes_run() -> (Vec<Vec<f64>>, EnsembleSettings) {
+        let init = (0..16)
+            .map(|k| vec![-5.0 + 0.05 * k as f64, 0.1 - 0.01 * k as f64])
+            .collect();
+        let s = EnsembleSettings {
+            walkers: 16,
+            burn: 200,
+            steps: 500,
+            seed: 13,
+            ..EnsembleSettings::default()
+        };
+        (init, s)
+    }
+
     /// The draws of [`two_modes`] put 75 % of the mass at x > 0, with
     /// E[x] = 2.5, Var[x] = 19, E[y] = 0, Var[y] = ¼.
     fn assert_two_modes(ch: &Chains) {
@@ -1461,16 +1477,7 @@ mod tests {
 
         let broad = |x: &[f64]| -0.5 * (x[0] * x[0] / 36.0 + x[1] * x[1]);
         let density = Screened::new(two_modes, broad);
-        let init: Vec<Vec<f64>> = (0..16)
-            .map(|k| vec![-5.0 + 0.05 * k as f64, 0.1 - 0.01 * k as f64])
-            .collect();
-        let s = EnsembleSettings {
-            walkers: 16,
-            burn: 200,
-            steps: 500,
-            seed: 13,
-            ..EnsembleSettings::default()
-        };
+        let (init, s) = two_modes_run();
         let mut e = [Ensemble::new(&density, &init, &s).expect("ensemble")];
         e[0].temper(5, 0.4).expect("ladder");
         burn_in(&mut e, &density);
@@ -1669,16 +1676,7 @@ mod tests {
     #[test]
     fn tempering_keeps_a_two_mode_mixture() {
         let logp = two_modes;
-        let init: Vec<Vec<f64>> = (0..16)
-            .map(|k| vec![-5.0 + 0.05 * k as f64, 0.1 - 0.01 * k as f64])
-            .collect();
-        let s = EnsembleSettings {
-            walkers: 16,
-            burn: 200,
-            steps: 500,
-            seed: 13,
-            ..EnsembleSettings::default()
-        };
+        let (init, s) = two_modes_run();
         let run = |tempered: bool| {
             let mut e = [Ensemble::new(&logp, &init, &s).expect("ensemble")];
             burn_in(&mut e, &logp);
