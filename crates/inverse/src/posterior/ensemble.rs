@@ -407,7 +407,7 @@ impl Ensemble {
             self.betas.push(ratio.powi(r as i32));
             self.pos.extend_from_within(..w);
             self.lp.extend_from_within(..w);
-            if !self.slp.is_empty() {
+            if self.screening() {
                 self.slp.extend_from_within(..w);
             }
             self.proposals.push(self.proposals[0].clone());
@@ -629,6 +629,14 @@ impl Ensemble {
         sy.is_finite() && p.ln_u < self.screen_log_alpha(p, sy)
     }
 
+    /// True when the ensemble holds screened log-densities of its walkers
+    /// (made, or [`Ensemble::rescreen`]ed, with a density that has a
+    /// screen); an ensemble without them takes the one-stage test even
+    /// when the density offers a screen.
+    fn screening(&self) -> bool {
+        !self.slp.is_empty()
+    }
+
     /// Accepts or rejects the proposals `pending` at points `ys` with
     /// log-densities `lps` (Metropolis–Hastings on each walker's rung's
     /// target p^β: the density ratio raised to β, the proposal's own
@@ -691,7 +699,7 @@ impl Ensemble {
                 if ln_u < d_beta * (self.lp[hot] - self.lp[cold]) {
                     self.pos.swap(cold, hot);
                     self.lp.swap(cold, hot);
-                    if !self.slp.is_empty() {
+                    if self.screening() {
                         self.slp.swap(cold, hot);
                     }
                     self.swaps_accepted += 1;
@@ -746,7 +754,7 @@ fn step_all(ensembles: &mut [Ensemble], log_density: &impl LogDensity, kept: boo
                         pending
                             .iter()
                             .enumerate()
-                            .filter(|(i, p)| e.passes_screen(p, s[from + i]))
+                            .filter(|(i, p)| !e.screening() || e.passes_screen(p, s[from + i]))
                             .map(|(i, _)| from + i),
                     );
                 }
@@ -762,7 +770,10 @@ fn step_all(ensembles: &mut [Ensemble], log_density: &impl LogDensity, kept: boo
         for (e, (from, pending)) in ensembles.iter_mut().zip(batches) {
             let n = pending.len();
             let mine: Vec<Vec<f64>> = ys.by_ref().take(n).collect();
-            let slps = screens.as_ref().map(|s| &s[from..from + n]);
+            let slps = screens
+                .as_ref()
+                .filter(|_| e.screening())
+                .map(|s| &s[from..from + n]);
             e.accept(&pending, mine, &lps[from..from + n], slps);
         }
     }
@@ -799,7 +810,7 @@ pub fn burn_in(ensembles: &mut [Ensemble], log_density: &impl LogDensity) {
                     let (k, j) = (at.start + k, at.start + j);
                     e.pos[k] = e.pos[j].clone();
                     e.lp[k] = e.lp[j];
-                    if !e.slp.is_empty() {
+                    if e.screening() {
                         e.slp[k] = e.slp[j];
                     }
                 }

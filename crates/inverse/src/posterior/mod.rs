@@ -123,7 +123,8 @@ pub struct PosteriorSettings {
     pub check_every: usize,
     /// Delayed acceptance ([`ensemble`] module docs): each proposal is
     /// first screened with the likelihood's Kriging variance taken from a
-    /// model fitted at the starts ([`screen`]: the surrogate's mean only,
+    /// model fitted at the starts and after burn-in ([`screen`]: the
+    /// surrogate's mean only,
     /// no O(N²) solve), and only the proposals that pass are evaluated in
     /// full. Exact (the same posterior); off: every proposal evaluated in
     /// full.
@@ -288,9 +289,10 @@ pub struct Posterior {
     /// prior's support costs none).
     #[serde(default)]
     pub proposals: usize,
-    /// Points whose full likelihood was computed: the starts and the
-    /// proposals, less those delayed acceptance rejected on its screen
-    /// and those outside the prior's support.
+    /// Points whose full likelihood (or Kriging variance, for the screen's
+    /// fits) was computed: the starts and the proposals, less those delayed
+    /// acceptance rejected on its screen and those outside the prior's
+    /// support.
     #[serde(default)]
     pub evaluations: usize,
     /// Thinned draws (physical values, domain order).
@@ -489,7 +491,7 @@ pub fn sample_posterior_fixed(
         evaluations: std::cell::Cell::new(0),
     };
     if settings.delayed_acceptance {
-        log_density.refit_screen(init.iter().flatten())?;
+        log_density.add_screen_points(init.iter().flatten())?;
     }
     let mut ensembles = Vec::with_capacity(init.len());
     let mut chains = Vec::with_capacity(init.len());
@@ -516,7 +518,7 @@ pub fn sample_posterior_fixed(
         ensembles.push(ens);
     }
     burn_in(&mut ensembles, &log_density);
-    refit_screen(&mut log_density, &mut ensembles)?;
+    refit_screen_after_burn_in(&mut log_density, &mut ensembles)?;
     let max_steps = settings.max_steps.max(settings.steps);
     let per_step = settings.ensembles * settings.walkers;
     let mut proposals = per_step * (1 + settings.burn);
@@ -566,7 +568,7 @@ pub fn sample_posterior_fixed(
                 *ch = ens.empty_chains();
             }
             burn_in(&mut ensembles, &log_density);
-            refit_screen(&mut log_density, &mut ensembles)?;
+            refit_screen_after_burn_in(&mut log_density, &mut ensembles)?;
             proposals += per_step * settings.rungs * settings.burn;
         } else if settings.refit_proposal {
             ensembles.iter_mut().for_each(Ensemble::refit_proposal);
@@ -598,11 +600,11 @@ struct UnitDensity<'a> {
 /// variances at every ensemble's current positions added to its points,
 /// and the walkers' screened values recomputed (module docs of
 /// [`screen`]; nothing without delayed acceptance).
-fn refit_screen(density: &mut UnitDensity, ensembles: &mut [Ensemble]) -> Result<()> {
+fn refit_screen_after_burn_in(density: &mut UnitDensity, ensembles: &mut [Ensemble]) -> Result<()> {
     if density.screen.is_none() {
         return Ok(());
     }
-    density.refit_screen(ensembles.iter().flat_map(Ensemble::positions))?;
+    density.add_screen_points(ensembles.iter().flat_map(Ensemble::positions))?;
     ensembles.iter_mut().for_each(|e| e.rescreen(&*density));
     Ok(())
 }
@@ -610,12 +612,14 @@ fn refit_screen(density: &mut UnitDensity, ensembles: &mut [Ensemble]) -> Result
 impl UnitDensity<'_> {
     /// Adds the calibrated Kriging variances at `us` (those inside the
     /// support) to the screen's points and refits it ([`VarianceModel::fit`]).
-    fn refit_screen<'u>(&mut self, us: impl Iterator<Item = &'u Vec<f64>>) -> Result<()> {
-        let us: Vec<Vec<f64>> = us.filter(|u| (self.inside)(u)).cloned().collect();
-        let (_, xs) = self.inside_points(&us);
+    fn add_screen_points<'u>(&mut self, us: impl Iterator<Item = &'u Vec<f64>>) -> Result<()> {
+        let us: Vec<Vec<f64>> = us.cloned().collect();
+        let (idx, xs) = self.inside_points(&us);
         let vs = self.lik.calibrated_variances(&xs)?;
         self.evaluations.set(self.evaluations.get() + xs.len());
-        self.screen_points.0.extend(us);
+        self.screen_points
+            .0
+            .extend(idx.iter().map(|&i| us[i].clone()));
         self.screen_points.1.extend(vs);
         self.screen = VarianceModel::fit(&self.screen_points.0, &self.screen_points.1);
         Ok(())

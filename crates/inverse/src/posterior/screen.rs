@@ -1,8 +1,9 @@
 //! The screen of the sampler's delayed acceptance (issue 17;
 //! [`super::ensemble`] module docs, "Delayed acceptance"): ln L̃(u), the
 //! likelihood with the calibrated Kriging variance v(x) replaced by a
-//! quadratic model of ln v in the unit coordinates u, fitted once per
-//! posterior to v at the sampler's start positions.
+//! quadratic model of ln v in the unit coordinates u, fitted to v at the
+//! sampler's start positions and refitted after each burn-in with the
+//! walkers' positions added.
 //!
 //! Why a model of v and not v itself: v(x) costs the O(N²) triangular
 //! solve C⁻¹r(x), ≈ 74 % of a likelihood evaluation's instructions on the
@@ -15,11 +16,14 @@
 //! accepted, docs/theory/inverse.md, "Session 15"). ln v is smooth over a
 //! posterior's bulk, which a quadratic in u follows.
 //!
-//! Fitted to the starts, drawn before any chain moves and independent of
-//! them, the screen is one fixed function for the whole run: no
-//! adaptation, and the same for every ensemble (R̂ compares ensembles run
-//! with the same kernel). Delayed acceptance is exact for any screen; a
-//! poor one costs only evaluations and acceptance.
+//! The screen changes only at the end of a burn-in (once, twice with a
+//! tempered restart): between those, every kernel keeps the posterior
+//! invariant, and the kernel changes a finite number of times (finite
+//! adaptation, as the independence proposal's refits; no kept draw is
+//! taken before the first refit). One screen serves every ensemble, fitted
+//! to all their positions: the ensembles run with the same kernel, as R̂
+//! assumes. Delayed acceptance is exact for any screen; a poor one costs
+//! only evaluations and acceptance.
 
 use nalgebra::{DMatrix, DVector};
 
