@@ -78,6 +78,7 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     let mut ess_min = f64::INFINITY;
     let (mut proposals, mut tempered, mut kept) = (0usize, 0usize, Vec::new());
     let mut evaluations = 0usize;
+    let (mut tempered_proposals, mut tempered_evaluations) = (0usize, 0usize);
     let mut misses = Vec::new();
     for c in &run.cells {
         let Some(p) = &c.posterior else {
@@ -135,6 +136,10 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
         proposals += p.proposals;
         evaluations += p.evaluations;
         tempered += usize::from(p.rungs > 1);
+        if p.rungs > 1 {
+            tempered_proposals += p.proposals;
+            tempered_evaluations += p.evaluations;
+        }
         kept.push(p.kept_steps);
     }
     kept.sort_unstable();
@@ -168,6 +173,12 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
         100.0 * evaluations as f64 / proposals.max(1) as f64,
         kept.get(kept.len() / 2).copied().unwrap_or(0),
         kept.last().copied().unwrap_or(0)
+    );
+    println!(
+        "tempered cells: {tempered_proposals} proposals ({:.1} % of all), {tempered_evaluations} \
+         evaluated in full ({:.1} % of all full evaluations)",
+        100.0 * tempered_proposals as f64 / proposals.max(1) as f64,
+        100.0 * tempered_evaluations as f64 / evaluations.max(1) as f64
     );
     println!(
         "cohort (fit + posterior) wall time {seconds:.1} s, {:.2} s per cell on {} threads; CPU \

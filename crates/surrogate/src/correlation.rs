@@ -233,9 +233,93 @@ impl Correlation {
     }
 }
 
+/// exp(−a) of one a ≥ 0: the Gaussian correlation exp(−Σ_k θ_k d_k²)
+/// from its exponent. Cody–Waite: n = round(−a·log₂e) (by adding and
+/// subtracting 1.5·2⁵²), r = −a − n·ln 2 in two parts (|r| ≤ ln 2 / 2),
+/// exp(r) by its Taylor polynomial to r¹³ (remainder below 4e-18), times
+/// 2ⁿ built from n's bits; within 1 ulp of libm's `exp` (test below), 0 for
+/// a ≥ 708.39 (where exp(−a) < 2.3e-308), NaN for NaN.
+///
+/// Written here rather than called from libm or `wide`: it is
+/// straight-line code that LLVM vectorises inside
+/// `KrigingModel::correlation_column`'s loop, at the CPU's widest SIMD
+/// width once that loop is dispatched at run time (libm's scalar `exp` was
+/// half the instructions of a prediction's mean; `wide`'s four-lane exp
+/// compiles for the baseline's two lanes only; issue 17,
+/// docs/theory/inverse.md "Session 16"). Rust never fuses `a * b + c`, so
+/// every instruction set gives the same bits.
+#[inline(always)]
+pub(crate) fn exp_neg(a: f64) -> f64 {
+    const LN2_HI: f64 = 0.693_145_751_953_125;
+    const LN2_LO: f64 = 1.428_606_820_309_417_232_1e-6;
+    const SHIFT: f64 = 6_755_399_441_055_744.0;
+    // 1/k! for k = 13 down to 2.
+    const INV_FACTORIAL: [f64; 12] = [
+        1.0 / 6_227_020_800.0,
+        1.0 / 479_001_600.0,
+        1.0 / 39_916_800.0,
+        1.0 / 3_628_800.0,
+        1.0 / 362_880.0,
+        1.0 / 40_320.0,
+        1.0 / 5_040.0,
+        1.0 / 720.0,
+        1.0 / 120.0,
+        1.0 / 24.0,
+        1.0 / 6.0,
+        0.5,
+    ];
+    let x = -a;
+    let t = x * std::f64::consts::LOG2_E + SHIFT;
+    let n = t - SHIFT;
+    let r = (x - n * LN2_HI) - n * LN2_LO;
+    let mut p = INV_FACTORIAL[0];
+    for c in &INV_FACTORIAL[1..] {
+        p = p * r + c;
+    }
+    let p = (p * r + 1.0) * r + 1.0;
+    // n + 1023 in the exponent field: 2ⁿ, normal for n ≥ −1022.
+    let biased = t.to_bits().wrapping_sub(SHIFT.to_bits()).wrapping_add(1023);
+    let scaled = p * f64::from_bits(biased << 52);
+    if a >= 708.39 { 0.0 } else { scaled }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// exp(−a) against libm's exp over the exponents a Gaussian
+    /// correlation takes (0 to past underflow): within 1 ulp (of the
+    /// value's binade) below 708.39, 0 from there, NaN for NaN.
+    #[test]
+    fn exp_neg_is_libm_exp_within_one_ulp() {
+        let mut a: Vec<f64> = (0..200_000)
+            .map(|i| 750.0 * (f64::from(i) / 200_000.0).powi(3))
+            .collect();
+        a.extend([
+            0.0,
+            1e-300,
+            1e-17,
+            0.5 * std::f64::consts::LN_2,
+            708.0,
+            708.39,
+            745.2,
+        ]);
+        a.extend([f64::INFINITY]);
+        let mut worst = 0.0f64;
+        for &ai in &a {
+            let e = exp_neg(ai);
+            let want = (-ai).exp();
+            if ai < 708.39 {
+                let ulp = f64::EPSILON * 2f64.powi(want.log2().floor() as i32);
+                worst = worst.max((e - want).abs() / ulp);
+            } else {
+                assert!(e == 0.0 && want < 3e-308, "exp(-{ai}) = {e}, libm {want}");
+            }
+        }
+        assert!(worst <= 1.0, "worst error {worst} ulp");
+        assert_eq!(exp_neg(0.0), 1.0);
+        assert!(exp_neg(f64::NAN).is_nan());
+    }
 
     #[test]
     fn gradients_match_central_differences_for_every_family() {
