@@ -431,6 +431,12 @@ impl Ensemble {
         Ok(())
     }
 
+    /// Sets the burn-in steps of the next [`burn_in`] (e.g. of a tempered
+    /// restart).
+    pub fn set_burn(&mut self, burn: usize) {
+        self.settings.burn = burn;
+    }
+
     /// Number of rungs (1: untempered).
     pub fn rungs(&self) -> usize {
         self.betas.len()
