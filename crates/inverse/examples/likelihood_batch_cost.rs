@@ -38,7 +38,7 @@ fn batch_path(k: &KrigingModel, pts: &[Vec<f64>], b: usize) -> f64 {
 #[inline(never)]
 fn screen_path(k: &KrigingModel, pts: &[Vec<f64>]) -> f64 {
     pts.chunks(32)
-        .map(|c| k.output_coordinate_batch(c).expect("screen")[0][1])
+        .map(|c| k.output_coordinate_batch(c, 1).expect("screen")[0][1])
         .sum()
 }
 

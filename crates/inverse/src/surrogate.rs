@@ -199,18 +199,19 @@ impl KrigingSurrogate {
     /// The reduced coordinates c(x) alone at many physical points
     /// ([`KrigingModel::output_coordinate_batch`]: no variance, so no
     /// O(N²) solve), bit for bit those of
-    /// [`KrigingSurrogate::coordinates_and_mse_scales`].
+    /// [`KrigingSurrogate::coordinates_and_mse_scales`], split over
+    /// `threads` as there.
     ///
     /// # Errors
     /// As [`KrigingSurrogate::coordinates_and_mse_scales`].
-    pub fn coordinate_batch(&self, xs: &[Vec<f64>]) -> Result<Vec<DVector<f64>>> {
+    pub fn coordinate_batch(&self, xs: &[Vec<f64>], threads: usize) -> Result<Vec<DVector<f64>>> {
         let inputs = xs
             .iter()
             .map(|x| Ok(self.inputs(x)?.0))
             .collect::<Result<Vec<_>>>()?;
         let c = self
             .kriging
-            .output_coordinate_batch(&inputs)
+            .output_coordinate_batch(&inputs, threads)
             .map_err(|e| model_err(xs.first().map_or(&[][..], Vec::as_slice), &e))?;
         Ok(c.into_iter().map(DVector::from_vec).collect())
     }

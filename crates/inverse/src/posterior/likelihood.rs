@@ -269,7 +269,7 @@ impl<'a> CurveLikelihood<'a> {
         };
         check_len("screen variances", xs.len(), variances.len())?;
         let (s2, m) = (self.noise_var, self.data.len() as f64);
-        let cs = self.surrogate.coordinate_batch(xs)?;
+        let cs = self.surrogate.coordinate_batch(xs, self.threads)?;
         Ok(Some(
             cs.iter()
                 .zip(variances)

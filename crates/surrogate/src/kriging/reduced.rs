@@ -187,24 +187,11 @@ impl KrigingModel {
         xs: &[Vec<f64>],
         threads: usize,
     ) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
-        let parts = threads.min(xs.len() / 2);
-        if parts <= 1 {
-            return self.batch_coordinates_and_mse_scales(xs);
-        }
-        // Balanced: every part has ⌊B/parts⌋ ≥ 2 or one more point.
-        let (base, extra) = (xs.len() / parts, xs.len() % parts);
-        let bounds: Vec<(usize, usize)> = (0..parts)
-            .map(|j| {
-                let start = j * base + j.min(extra);
-                (start, start + base + usize::from(j < extra))
-            })
-            .collect();
-        let done = bounds
-            .into_par_iter()
-            .map(|(a, b)| self.batch_coordinates_and_mse_scales(&xs[a..b]))
-            .collect::<Result<Vec<_>>>()?;
-        let (mut coords, mut scales) = (Vec::with_capacity(xs.len()), Vec::with_capacity(xs.len()));
-        for (c, v) in done {
+        let mut coords = Vec::with_capacity(xs.len());
+        let mut scales = Vec::with_capacity(xs.len());
+        for (c, v) in in_parts(xs, threads, |part| {
+            self.batch_coordinates_and_mse_scales(part)
+        })? {
             coords.extend(c);
             scales.extend(v);
         }
@@ -216,12 +203,34 @@ impl KrigingModel {
     /// batch, O(n·(d + q)) per point, without the variance's O(n²) solve
     /// (the screening stage of the posterior sampler's delayed acceptance,
     /// issue 17). The values are those of
-    /// [`KrigingModel::coordinates_and_mse_scales`] bit for bit.
+    /// [`KrigingModel::coordinates_and_mse_scales`] bit for bit, for any
+    /// `threads` (split as there). A point alone is computed as two copies
+    /// of it, as there: faer's product of one column sums in another
+    /// order, and the screen must be one function of the point whatever
+    /// batch it comes in.
     ///
     /// # Errors
     /// As [`KrigingModel::output_coordinates`] for any point of the batch.
-    pub fn output_coordinate_batch(&self, xs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>> {
+    pub fn output_coordinate_batch(
+        &self,
+        xs: &[Vec<f64>],
+        threads: usize,
+    ) -> Result<Vec<Vec<f64>>> {
+        Ok(in_parts(xs, threads, |part| self.batch_coordinates(part))?
+            .into_iter()
+            .flatten()
+            .collect())
+    }
+
+    /// [`KrigingModel::output_coordinate_batch`] of one part, on the
+    /// calling thread.
+    fn batch_coordinates(&self, xs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>> {
         self.check_linear_outputs()?;
+        if let [x] = xs {
+            let mut c = self.batch_coordinates(&[x.clone(), x.clone()])?;
+            c.truncate(1);
+            return Ok(c);
+        }
         let (_, _, zm) = self.batch_columns(xs)?;
         Ok(self.scaled_coordinates(xs, &zm)?.0)
     }
@@ -378,6 +387,28 @@ impl KrigingModel {
             Ok(())
         }
     }
+}
+
+/// `f` of `xs` cut into up to `threads` contiguous parts of at least 2
+/// points each (balanced: ⌊B/parts⌋ or one more), run on the rayon pool,
+/// the results in the parts' order; one part on the calling thread.
+fn in_parts<T: Send>(
+    xs: &[Vec<f64>],
+    threads: usize,
+    f: impl Fn(&[Vec<f64>]) -> Result<T> + Sync,
+) -> Result<Vec<T>> {
+    let parts = threads.min(xs.len() / 2);
+    if parts <= 1 {
+        return Ok(vec![f(xs)?]);
+    }
+    let (base, extra) = (xs.len() / parts, xs.len() % parts);
+    (0..parts)
+        .into_par_iter()
+        .map(|j| {
+            let start = j * base + j.min(extra);
+            f(&xs[start..start + base + usize::from(j < extra)])
+        })
+        .collect()
 }
 
 /// The Gaussian correlation column of [`KrigingModel::correlation_column`]

@@ -1208,7 +1208,8 @@ mod covariance_tests {
     /// the split relies on: faer's kernels give a column the same
     /// arithmetic in any batch of ≥ 2 columns, and a part of one point is
     /// solved as two copies). The coordinates without the variance
-    /// (`output_coordinate_batch`) are the batch's bit for bit.
+    /// (`output_coordinate_batch`) are the batch's bit for bit, a point
+    /// alone included.
     #[test]
     fn batch_values_do_not_depend_on_the_thread_count() {
         let pts: Vec<Vec<f64>> = (0..17)
@@ -1227,14 +1228,23 @@ mod covariance_tests {
                 let par = bits(m.coordinates_and_mse_scales(&pts, threads).expect("batch"));
                 assert_eq!(par, one, "{threads} threads");
             }
-            let coordinates: Vec<Vec<u64>> = m
-                .output_coordinate_batch(&pts)
-                .expect("coordinates")
-                .iter()
-                .map(|c| c.iter().map(|x| x.to_bits()).collect())
-                .collect();
             let without_v: Vec<Vec<u64>> = one.iter().map(|p| p[..p.len() - 1].to_vec()).collect();
-            assert_eq!(coordinates, without_v);
+            for threads in [1, 2, 3] {
+                let coordinates: Vec<Vec<u64>> = m
+                    .output_coordinate_batch(&pts, threads)
+                    .expect("coordinates")
+                    .iter()
+                    .map(|c| c.iter().map(|x| x.to_bits()).collect())
+                    .collect();
+                assert_eq!(coordinates, without_v, "coordinates on {threads} threads");
+            }
+            for (p, want) in pts.iter().zip(&without_v) {
+                let alone = m
+                    .output_coordinate_batch(std::slice::from_ref(p), 1)
+                    .expect("one point");
+                let alone: Vec<u64> = alone[0].iter().map(|x| x.to_bits()).collect();
+                assert_eq!(&alone, want, "{p:?} alone");
+            }
             for cut in 1..pts.len() {
                 let mut parts = bits(m.coordinates_and_mse_scales(&pts[..cut], 1).expect("a"));
                 parts.extend(bits(
