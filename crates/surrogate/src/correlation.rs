@@ -251,7 +251,7 @@ impl Correlation {
 #[inline(always)]
 pub(crate) fn exp_neg(a: f64) -> f64 {
     const LN2_HI: f64 = 0.693_145_751_953_125;
-    const LN2_LO: f64 = 1.428_606_820_309_417_232_1e-6;
+    const LN2_LO: f64 = 1.428_606_820_309_417_3e-6;
     const SHIFT: f64 = 6_755_399_441_055_744.0;
     // 1/k! for k = 13 down to 2.
     const INV_FACTORIAL: [f64; 12] = [
