@@ -552,9 +552,15 @@ pub fn sample_posterior_fixed(
     let check = settings.check_every.clamp(1, settings.steps);
     loop {
         // One round in parts of `check` kept steps; R̂ is checked after
-        // each part once the chain has a whole round, else at the round's
+        // each part once the chain has `first_check` kept steps (a whole
+        // round, or `temper_min_steps` when tempered), else at the round's
         // end (the stopping rule, `PosteriorSettings::check_every`).
         let rungs = ensembles[0].rungs();
+        let first_check = if rungs > 1 {
+            settings.temper_min_steps.min(settings.steps)
+        } else {
+            settings.steps
+        };
         let mut done = 0;
         let (kept, post) = loop {
             let part = check.min(settings.steps - done);
@@ -566,11 +572,6 @@ pub fn sample_posterior_fixed(
             done += part;
             proposals += per_step * rungs * part;
             let kept = chains[0].steps;
-            let first_check = if rungs > 1 {
-                settings.temper_min_steps.min(settings.steps)
-            } else {
-                settings.steps
-            };
             if done < settings.steps && kept < first_check {
                 continue;
             }
