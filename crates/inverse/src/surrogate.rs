@@ -17,7 +17,7 @@ use std::sync::OnceLock;
 
 use nalgebra::{DMatrix, DVector};
 use nlvid_model::{Domain, FailureKind, ForwardModel, RunFailure, Scale};
-use nlvid_surrogate::{KrigingModel, SurrogateError, VarianceCalibration};
+use nlvid_surrogate::{CalibrationData, KrigingModel, SurrogateError, VarianceCalibration};
 
 use crate::basis::BasisModel;
 use crate::error::{InverseError, Result};
@@ -45,8 +45,11 @@ pub struct KrigingSurrogate {
     /// Output map A of the reduced form ŷ = A c(x) (m × (q + 1)), built
     /// on first use (without a PCA it is m × (m + 1) and rarely wanted).
     a: OnceLock<DMatrix<f64>>,
-    /// The Kriging variance calibration, computed on first use.
-    calibration: OnceLock<std::result::Result<VarianceCalibration, String>>,
+    /// The leave-one-out data of the Kriging variance calibration and its
+    /// Gaussian and Student-t fits, each computed on first use.
+    calibration_data: OnceLock<std::result::Result<CalibrationData, String>>,
+    gaussian: OnceLock<std::result::Result<VarianceCalibration, String>>,
+    student: OnceLock<std::result::Result<VarianceCalibration, String>>,
     /// The cross-validated output covariance, computed on first use.
     cv_cov: OnceLock<std::result::Result<nlvid_surrogate::OutputCovariance, String>>,
 }
@@ -98,7 +101,9 @@ impl KrigingSurrogate {
             b,
             mu,
             a: OnceLock::new(),
-            calibration: OnceLock::new(),
+            calibration_data: OnceLock::new(),
+            gaussian: OnceLock::new(),
+            student: OnceLock::new(),
             cv_cov: OnceLock::new(),
         };
         s.check_basis_form()?;
@@ -220,22 +225,37 @@ impl KrigingSurrogate {
     /// α·v(x)^β, fitted by maximum likelihood to the model's own
     /// leave-one-out residuals under the K of
     /// [`KrigingSurrogate::output_covariance_cv`]
-    /// ([`KrigingModel::variance_calibration`],
-    /// docs/theory/inverse.md, "Fifth round"). Computed once per surrogate
-    /// (O(N³/3)).
+    /// (docs/theory/inverse.md, "Fifth round"): with `heavy_tails` the
+    /// Student-t scale mixture with its ν
+    /// ([`VarianceCalibration::fit_student`]), else Gaussian
+    /// ([`VarianceCalibration::fit`]). The leave-one-out data are computed
+    /// once per surrogate (O(N³/3)), each fit once.
     ///
     /// # Errors
     /// A process covariance that is not positive semi-definite; LOO data
     /// the fit refuses (e.g. all v equal).
-    pub fn variance_calibration(&self) -> Result<VarianceCalibration> {
-        self.calibration
-            .get_or_init(|| {
-                self.kriging
-                    .variance_calibration()
-                    .map_err(|e| e.to_string())
-            })
-            .clone()
-            .map_err(|e| InverseError::InvalidSetting(format!("Kriging variance calibration: {e}")))
+    pub fn variance_calibration(&self, heavy_tails: bool) -> Result<VarianceCalibration> {
+        let data = || {
+            self.calibration_data
+                .get_or_init(|| {
+                    self.kriging
+                        .loo_calibration_data()
+                        .map_err(|e| e.to_string())
+                })
+                .clone()
+        };
+        let fit =
+            |cell: &OnceLock<std::result::Result<VarianceCalibration, String>>,
+             f: fn(&CalibrationData) -> nlvid_surrogate::Result<VarianceCalibration>| {
+                cell.get_or_init(|| f(&data()?).map_err(|e| e.to_string()))
+                    .clone()
+            };
+        if heavy_tails {
+            fit(&self.student, VarianceCalibration::fit_student)
+        } else {
+            fit(&self.gaussian, VarianceCalibration::fit)
+        }
+        .map_err(|e| InverseError::InvalidSetting(format!("Kriging variance calibration: {e}")))
     }
 
     /// The process covariance K of the outputs with the kriged outputs'

@@ -12,8 +12,10 @@
 //! cargo run --release -p nlvid-report --example posterior_cells \
 //!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=BOOL] \
 //!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [check=N] \
-//!     [delayed=BOOL,...] [seed=N] [cell ...]
+//!     [delayed=BOOL,...] [seed=N] [prior=BOOL] [heavy_tails=BOOL] [cell ...]
 //! ```
+//! (`prior=true`: the cells drawn from the posteriors' prior,
+//! `DemoSpec::from_prior`, as `posterior_coverage … prior`.)
 //! (`rungs`, `ratio`, `temper_after`, `temper_ridge` and `delayed` (delayed
 //! acceptance) take comma-separated lists, e.g. `delayed=true,false`: every
 //! combination in turn, on the same curves and fits; `seed` is the
@@ -52,6 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ridge: Option<f64> = opt("ridge").map(|v| v.parse()).transpose()?;
     let ridge_time: bool = opt("ridge_time").map_or(Ok(false), |v| v.parse())?;
     let threads: usize = opt("threads").map_or(Ok(1), |v| v.parse())?;
+    let heavy_tails: Option<bool> = opt("heavy_tails").map(|v| v.parse()).transpose()?;
     // The tempering options take comma-separated lists: every
     // combination is sampled in turn on the same curves (one curve
     // writing for several settings).
@@ -86,7 +89,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
     let root = std::env::temp_dir().join(format!("nlvid-cells-{}", std::process::id()));
     let study = coverage_cohort::write_study(&root, &demo, "")?;
-    let spec = coverage_cohort::wide_groups(cells, seed, noise);
+    let spec = nlvid_report::demo::DemoSpec {
+        from_prior: opt("prior").map_or(Ok(false), |v| v.parse())?,
+        ..coverage_cohort::wide_groups(cells, seed, noise)
+    };
     let files = write_demo_data(&spec, &study, &demo.join("metamodel.toml"))?;
     let settings = CohortSettings::load(&study)?;
     let model = CellModel::load(&settings)?;
@@ -140,6 +146,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 temper_ridge: temper_ridge.unwrap_or(ps.temper_ridge),
                 check_every: check.unwrap_or(ps.check_every),
                 delayed_acceptance: da.unwrap_or(ps.delayed_acceptance),
+                heavy_tails: heavy_tails.unwrap_or(ps.heavy_tails),
                 ..ps.clone()
             };
             println!(

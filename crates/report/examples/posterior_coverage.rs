@@ -11,9 +11,11 @@
 //!
 //! ```text
 //! cargo run --release -p nlvid-report --example posterior_coverage \
-//!     [cells] [noise] [seed] [key=value ...]
+//!     [cells] [noise] [seed] [prior] [key=value ...]
 //! ```
-//! (defaults 100, 0.02, 17; `key=value` pairs go into the study's
+//! (defaults 100, 0.02, 17; `prior` draws the cells from the posteriors'
+//! prior instead of the two groups' laws (`DemoSpec::from_prior`), where a
+//! credible interval's coverage is nominal by construction; `key=value` pairs go into the study's
 //! `[posterior]` section, e.g. `walkers=16 max_steps=2000`, the section's
 //! own defaults otherwise; see docs/theory/inverse.md, "Posteriors on the
 //! surrogate"). Prints each coverage with its binomial standard error, R̂
@@ -49,12 +51,21 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     let demo = std::fs::canonicalize(&demo)?;
     let dir = std::env::temp_dir().join(format!("nlvid-coverage-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
-    let keys: Vec<String> = args.iter().skip(4).cloned().collect();
+    let from_prior = args.iter().skip(4).any(|k| k == "prior");
+    let keys: Vec<String> = args
+        .iter()
+        .skip(4)
+        .filter(|k| *k != "prior")
+        .cloned()
+        .collect();
     if let Some(bad) = keys.iter().find(|k| !k.contains('=')) {
         return Err(format!("argument {bad}: expected key=value for [posterior]").into());
     }
     let study = write_study(&dir, &demo, &keys)?;
-    let spec = coverage_cohort::wide_groups(cells, seed, noise);
+    let spec = nlvid_report::demo::DemoSpec {
+        from_prior,
+        ..coverage_cohort::wide_groups(cells, seed, noise)
+    };
     let files = write_demo_data(&spec, &study, &demo.join("metamodel.toml"))?;
     let settings = CohortSettings::load(&study)?;
     let inputs = discover(&files.data)?;

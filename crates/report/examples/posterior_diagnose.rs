@@ -63,7 +63,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let u = DMatrix::from_column_slice(m, k, &factor);
     let cv = s.kriging().cv_variance_ratio()?;
-    let cal = s.variance_calibration()?;
+    let cal = s.variance_calibration(false)?;
+    let student = s.variance_calibration(true)?;
     println!(
         "LOO calibration of the Kriging variance sigma2_CV/sigma2_ML = {cv:.3} (k = {k}, N = {}); \
          x-dependent: v_cal = {:.4e} v^{:.4} (± {:.4})",
@@ -71,6 +72,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         cal.alpha,
         cal.beta,
         cal.beta_se
+    );
+    println!(
+        "Student-t surrogate error (the posteriors' default): scale {:.4e} v^{:.4}, nu = {:.3}",
+        student.alpha, student.beta, student.nu
     );
     let inputs = discover(&files.data)?;
     let clean_inputs = discover(&clean_files.data)?;

@@ -477,6 +477,7 @@ fn posterior(
         temper_after: p.temper_after,
         check_every: p.check_every,
         delayed_acceptance: p.delayed_acceptance,
+        heavy_tails: p.heavy_tails,
         ..PosteriorSettings::new(settings.hold_end)
     };
     match sample_posterior_fixed(fitter.surrogate(), fixed, &base.data, x_hat, &ps) {

@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 use nlvid_forward::{ForwardSettings, ForwardSpec, HertzGrid, HertzPronySpec, Noise};
 use nlvid_model::Domain;
 use nlvid_study::Study;
-use rand::SeedableRng;
+use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use crate::cohort::write_atomic;
@@ -65,6 +65,12 @@ pub struct DemoSpec {
     pub fast_until: f64,
     /// Sampling rate after `fast_until`, Hz.
     pub slow_rate: f64,
+    /// Draw every cell from the posteriors' prior — uniform on the Table 5.3
+    /// domain in its own coordinates (log-uniform on log axes), with its
+    /// linear constraint — instead of from its group's law (the groups
+    /// then only name folders): the cohort on which a credible interval's
+    /// coverage is nominal by construction.
+    pub from_prior: bool,
 }
 
 impl Default for DemoSpec {
@@ -98,6 +104,7 @@ impl Default for DemoSpec {
             fast_rate: 100.0,
             fast_until: 2.0,
             slow_rate: 10.0,
+            from_prior: false,
         }
     }
 }
@@ -147,7 +154,28 @@ fn normal(rng: &mut ChaCha8Rng) -> f64 {
 /// The normal deviates are drawn in the order G0, g1, τ1, g2, τ2 (that of
 /// the committed demo data) and returned in the parameter order G0, g1, g2,
 /// τ1, τ2.
-fn draw(g: &GroupSpec, domain: &Domain, rng: &mut ChaCha8Rng) -> Result<[f64; 5]> {
+///
+/// With `from_prior` (the [`DemoSpec`] field) the cell is drawn from the
+/// prior instead: u uniform in [0.02, 0.98]^5, redrawn until inside the
+/// domain's constraints.
+fn draw(
+    g: &GroupSpec,
+    from_prior: bool,
+    domain: &Domain,
+    rng: &mut ChaCha8Rng,
+) -> Result<[f64; 5]> {
+    if from_prior {
+        for _ in 0..1000 {
+            let u: Vec<f64> = (0..5).map(|_| 0.02 + 0.96 * rng.random::<f64>()).collect();
+            let x = domain.from_unit(&u);
+            if domain.contains(&x, 0.0) {
+                return Ok([x[0], x[1], x[2], x[3], x[4]]);
+            }
+        }
+        return Err(ReportError::InvalidSetting(
+            "the prior's constraints leave almost no room in the Table 5.3 domain".into(),
+        ));
+    }
     for _ in 0..1000 {
         let g0 = g.g0.0 * (g.g0.1 * normal(rng)).exp();
         let g1 = g.g1.0 + g.g1.1 * normal(rng);
@@ -288,7 +316,7 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
     let mut cells = Vec::new();
     for g in &spec.groups {
         for i in 0..spec.cells_per_group {
-            let x = draw(g, &domain, &mut rng)?;
+            let x = draw(g, spec.from_prior, &domain, &mut rng)?;
             for _ in &times {
                 normal(&mut rng);
             }
@@ -313,7 +341,7 @@ pub fn write_demo_data(spec: &DemoSpec, study: &Path, forward: &Path) -> Result<
         .flat_map(|g| std::iter::repeat_n(g, spec.cells_per_group))
         .zip(&mut curves)
     {
-        draw(g, &domain, &mut rng)?;
+        draw(g, spec.from_prior, &domain, &mut rng)?;
         nlvid_forward::curves::add_noise_from(curve, spec.noise, &mut rng, k)
             .map_err(|e| ReportError::InvalidSetting(format!("forward model: {e}")))?;
     }

@@ -637,6 +637,7 @@ pub struct CohortSettings {
 /// temper_after = 500  # kept steps after which a cell with R-hat > 1.01 restarts tempered
 /// check_every = 50  # after the first round, R-hat checked every this many kept steps
 /// delayed_acceptance = true  # screen proposals on the Kriging mean first (exact)
+/// heavy_tails = true  # surrogate error Student-t (nu from the meta-model's LOO), else Gaussian
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PosteriorStudy {
@@ -672,6 +673,13 @@ pub struct PosteriorStudy {
     /// Delayed acceptance (`PosteriorSettings::delayed_acceptance`).
     #[serde(default = "default_delayed_acceptance")]
     pub delayed_acceptance: bool,
+    /// Student-t surrogate error (`PosteriorSettings::heavy_tails`).
+    #[serde(default = "default_heavy_tails")]
+    pub heavy_tails: bool,
+}
+
+fn default_heavy_tails() -> bool {
+    PosteriorSettings::new(1.0).heavy_tails
 }
 
 fn default_check_every() -> usize {
@@ -723,6 +731,9 @@ impl FromSection for PosteriorSection {
             delayed_acceptance: s
                 .opt_bool("delayed_acceptance")?
                 .unwrap_or_else(default_delayed_acceptance),
+            heavy_tails: s
+                .opt_bool("heavy_tails")?
+                .unwrap_or_else(default_heavy_tails),
         };
         Ok(Self(enabled.then_some(p)))
     }

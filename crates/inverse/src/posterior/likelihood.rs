@@ -26,6 +26,7 @@
 use nalgebra::{DMatrix, DVector};
 use nlvid_surrogate::{OutputCovariance, VarianceCalibration};
 
+use super::error_scale::{ErrorScale, Spectrum};
 use crate::error::{InverseError, Result};
 use crate::model::{Model, check_len};
 use crate::reduced::ReducedModel;
@@ -97,19 +98,18 @@ struct LowRank {
 impl LowRank {
     /// ln L (module docs, without −(m/2) ln 2π) at reduced coordinates
     /// `c` with calibrated Kriging variance `v`, noise variance `s2` and
-    /// `m` data points.
-    fn value(&self, c: &DVector<f64>, v: f64, s2: f64, m: f64) -> f64 {
+    /// `m` data points, the error's scale as `scale` says.
+    fn value(&self, c: &DVector<f64>, v: f64, s2: f64, m: f64, scale: &ErrorScale) -> f64 {
         let rtr = self.dtd - 2.0 * self.atd.dot(c) + c.dot(&(&self.ata * c));
         let w = &self.qtd - &self.qta * c;
-        let ratio = v / s2;
-        let (mut logdet_m, mut wmw) = (0.0, 0.0);
-        for (wi, li) in w.iter().zip(&self.lambda) {
-            let e = 1.0 + ratio * li;
-            logdet_m += e.ln();
-            wmw += wi * wi / e;
-        }
-        let quad = (rtr.max(0.0) - ratio * wmw) / s2;
-        -0.5 * (m * s2.ln() + logdet_m + quad)
+        let spectrum = Spectrum {
+            lambda: self.lambda.as_slice(),
+            z: w.as_slice(),
+            rtr,
+            s2,
+            m,
+        };
+        scale.ln_likelihood(&spectrum, v / s2)
     }
 }
 
@@ -125,6 +125,8 @@ pub struct CurveLikelihood<'a> {
     noise_var: f64,
     /// v ↦ α v^β applied to the Kriging variance.
     calibration: VarianceCalibration,
+    /// Gaussian or Student-t surrogate error (the calibration's ν).
+    scale: ErrorScale,
     form: Form,
     /// Threads over which a batch's surrogate values are split (1:
     /// the calling thread only).
@@ -133,12 +135,19 @@ pub struct CurveLikelihood<'a> {
 
 impl<'a> CurveLikelihood<'a> {
     /// Prepares the likelihood of `data` (on the surrogate's grid) with
-    /// measurement noise sd `noise` (e.g. [`noise_sd`]).
+    /// measurement noise sd `noise` (e.g. [`noise_sd`]) and the surrogate
+    /// error Student-t (`heavy_tails`) or Gaussian
+    /// ([`KrigingSurrogate::variance_calibration`]).
     ///
     /// # Errors
     /// Data of the wrong length or not finite, σ ≤ 0, a surrogate without
     /// a linear predictor or Kriging variance.
-    pub fn new(surrogate: &'a KrigingSurrogate, data: &[f64], noise: f64) -> Result<Self> {
+    pub fn new(
+        surrogate: &'a KrigingSurrogate,
+        data: &[f64],
+        noise: f64,
+        heavy_tails: bool,
+    ) -> Result<Self> {
         let m = Model::times(surrogate).len();
         check_len("likelihood data", m, data.len())?;
         if data.iter().any(|v| !v.is_finite()) || !(noise > 0.0 && noise.is_finite()) {
@@ -147,7 +156,7 @@ impl<'a> CurveLikelihood<'a> {
             )));
         }
         let cov = surrogate.output_covariance_cv()?;
-        let calibration = surrogate.variance_calibration()?;
+        let calibration = surrogate.variance_calibration(heavy_tails)?;
         let d = DVector::from_column_slice(data);
         let form = match cov {
             OutputCovariance::LowRank { m: mm, k, factor } if surrogate.is_reduced() => {
@@ -172,6 +181,7 @@ impl<'a> CurveLikelihood<'a> {
             surrogate,
             data: data.to_vec(),
             noise_var: noise * noise,
+            scale: ErrorScale::new(calibration.nu),
             calibration,
             form,
             threads: 1,
@@ -220,7 +230,7 @@ impl<'a> CurveLikelihood<'a> {
                 Ok(cs
                     .iter()
                     .zip(vs)
-                    .map(|(c, v)| form.value(c, self.calibration.apply(v), s2, m))
+                    .map(|(c, v)| form.value(c, self.calibration.apply(v), s2, m, &self.scale))
                     .collect())
             }
             Form::Diagonal { k } => xs
@@ -228,12 +238,17 @@ impl<'a> CurveLikelihood<'a> {
                 .map(|x| {
                     let v = self.calibration.apply(self.surrogate.mse_scale(x)?);
                     let y = Model::response(self.surrogate, x)?;
-                    let mut sum = 0.0;
-                    for ((yj, dj), kj) in y.iter().zip(&self.data).zip(k) {
-                        let var = s2 + v * kj;
-                        sum += var.ln() + (dj - yj).powi(2) / var;
-                    }
-                    Ok(-0.5 * sum)
+                    // The spectrum of a diagonal K: λ_j = K_jj, z_j = r_j √K_jj.
+                    let r: Vec<f64> = self.data.iter().zip(&y).map(|(d, y)| d - y).collect();
+                    let z: Vec<f64> = r.iter().zip(k).map(|(r, kj)| r * kj.sqrt()).collect();
+                    let spectrum = Spectrum {
+                        lambda: k,
+                        z: &z,
+                        rtr: r.iter().map(|r| r * r).sum(),
+                        s2,
+                        m: self.data.len() as f64,
+                    };
+                    Ok(self.scale.ln_likelihood(&spectrum, v / s2))
                 })
                 .collect(),
         }
@@ -273,7 +288,7 @@ impl<'a> CurveLikelihood<'a> {
         Ok(Some(
             cs.iter()
                 .zip(variances)
-                .map(|(c, &v)| form.value(c, v, s2, m))
+                .map(|(c, &v)| form.value(c, v, s2, m, &self.scale))
                 .collect(),
         ))
     }
@@ -313,14 +328,14 @@ mod tests {
             .enumerate()
             .map(|(j, y)| y + noise * ((j * 7919 % 101) as f64 / 50.0 - 1.0))
             .collect();
-        let lik = CurveLikelihood::new(&s, &data, noise).expect("lik");
+        let lik = CurveLikelihood::new(&s, &data, noise, false).expect("lik");
         let OutputCovariance::LowRank { m, k, factor } =
             s.kriging().output_covariance_cv().unwrap()
         else {
             panic!("PCA model");
         };
         let u = DMatrix::from_column_slice(m, k, &factor);
-        let cal = s.variance_calibration().unwrap();
+        let cal = s.variance_calibration(false).unwrap();
         // A calibration that differs from v ↦ v, or the test would not
         // see it applied.
         assert!((cal.beta - 1.0).abs() > 0.05, "{cal:?}");
@@ -355,8 +370,8 @@ mod tests {
         let s = demo_surrogate();
         let x0 = [1500.0, 0.3, 0.25, 0.5, 10.0];
         let data = s.response(&x0).expect("y");
-        let one = CurveLikelihood::new(&s, &data, 1e-10).expect("lik");
-        let two = CurveLikelihood::new(&s, &data, 1e-10)
+        let one = CurveLikelihood::new(&s, &data, 1e-10, true).expect("lik");
+        let two = CurveLikelihood::new(&s, &data, 1e-10, true)
             .expect("lik")
             .with_threads(2);
         let xs: Vec<Vec<f64>> = (0..64)

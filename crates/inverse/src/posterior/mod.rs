@@ -29,6 +29,7 @@
 
 pub mod diagnostics;
 pub mod ensemble;
+mod error_scale;
 mod likelihood;
 pub mod screen;
 
@@ -146,9 +147,19 @@ pub struct PosteriorSettings {
     /// full.
     #[serde(default = "default_delayed_acceptance")]
     pub delayed_acceptance: bool,
+    /// The surrogate error as a Student-t scale mixture with ν fitted to
+    /// the meta-model's leave-one-out residuals
+    /// (`VarianceCalibration::fit_student`; [`CurveLikelihood`]); off:
+    /// Gaussian (`VarianceCalibration::fit`).
+    #[serde(default = "default_heavy_tails")]
+    pub heavy_tails: bool,
 }
 
 fn default_delayed_acceptance() -> bool {
+    true
+}
+
+fn default_heavy_tails() -> bool {
     true
 }
 
@@ -236,6 +247,7 @@ impl PosteriorSettings {
             temper_ridge: default_temper_ridge(),
             check_every: default_check_every(),
             delayed_acceptance: default_delayed_acceptance(),
+            heavy_tails: default_heavy_tails(),
         }
     }
 }
@@ -495,7 +507,8 @@ pub fn sample_posterior_fixed(
     }
     let domain = fixed.free_domain().clone();
     let noise = noise_sd(Model::times(surrogate), data)?;
-    let lik = CurveLikelihood::new(surrogate, data, noise)?.with_threads(settings.threads);
+    let lik = CurveLikelihood::new(surrogate, data, noise, settings.heavy_tails)?
+        .with_threads(settings.threads);
     let inside = |u: &[f64]| {
         u.iter().all(|v| (0.0..=1.0).contains(v)) && domain.feasible(&domain.from_unit(u), 0.0)
     };
