@@ -4,18 +4,21 @@
 //! (`mse_scale` + `output_coordinate_values`, the sampler before session
 //! 10), in batches (`coordinates_and_mse_scales`) or, with `screen`, the
 //! coordinates alone in batches of 32 (`output_coordinate_batch`, the
-//! screen of delayed acceptance: no variance). For instruction
+//! screen of delayed acceptance: no variance); `lik-gauss` / `lik-student`:
+//! the screen with the likelihood's Woodbury form, Gaussian or with the
+//! Student-t surrogate error integrated out. For instruction
 //! counts run it under callgrind, collecting the timed function only:
 //!
 //! ```text
 //! valgrind --tool=callgrind '--toggle-collect=likelihood_batch_cost::*_path' \
-//!     target/release/examples/likelihood_batch_cost [one|32|64|screen]
+//!     target/release/examples/likelihood_batch_cost [one|32|64|screen|lik-gauss|lik-student]
 //! ```
 //! Without valgrind it also prints the CPU seconds per point over 20 repeats.
 
 use std::path::Path;
 
-use nlvid_inverse::{Coordinates, load_kriging_surrogate};
+use nlvid_inverse::posterior::CurveLikelihood;
+use nlvid_inverse::{Coordinates, Model, load_kriging_surrogate};
 use nlvid_surrogate::KrigingModel;
 
 #[inline(never)]
@@ -32,6 +35,17 @@ fn batch_path(k: &KrigingModel, pts: &[Vec<f64>], b: usize) -> f64 {
             let (cs, vs) = k.coordinates_and_mse_scales(c, 1).expect("batch");
             vs.iter().sum::<f64>() + cs[0][1]
         })
+        .sum()
+}
+
+/// The whole screen stage of delayed acceptance: c(x) in batches of 32
+/// and the likelihood's Woodbury form, Gaussian or with the Student-t
+/// error integrated out (`heavy_tails`).
+#[inline(never)]
+fn lik_screen_path(lik: &CurveLikelihood<'_>, pts: &[Vec<f64>], v: &[f64]) -> f64 {
+    pts.chunks(32)
+        .zip(v.chunks(32))
+        .map(|(c, v)| lik.screen_values(c, v).expect("screen").expect("PCA")[0])
         .sum()
 }
 
@@ -66,9 +80,16 @@ fn main() {
         .collect();
     // The MSE factors (Cholesky of R) are built once, outside the count.
     let _ = k.mse_scale(&pts[0]).expect("v(x)");
+    let data = s.response(&pts[7]).expect("curve");
+    let noise = 0.02 * data.iter().fold(0.0f64, |a, &b| a.max(b));
+    let gauss = CurveLikelihood::new(&s, &data, noise, false).expect("likelihood");
+    let student = CurveLikelihood::new(&s, &data, noise, true).expect("likelihood");
+    let variances = gauss.calibrated_variances(&pts).expect("v");
     let run = || match mode.as_str() {
         "one" => one_path(k, &pts),
         "screen" => screen_path(k, &pts),
+        "lik-gauss" => lik_screen_path(&gauss, &pts, &variances),
+        "lik-student" => lik_screen_path(&student, &pts, &variances),
         b => batch_path(k, &pts, b.parse().unwrap_or(32)),
     };
     let clock = cpu_time::ProcessTime::now();

@@ -23,8 +23,9 @@
 //!   after.
 //!
 //! ```text
-//! cargo run --release -p nlvid-report --example posterior_diagnose [cells] [noise] [seed]
+//! cargo run --release -p nlvid-report --example posterior_diagnose [cells] [noise] [seed] [prior]
 //! ```
+//! (`prior`: the cells drawn from the posteriors' prior, `DemoSpec::from_prior`.)
 
 use std::path::Path;
 
@@ -47,7 +48,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let demo =
         std::fs::canonicalize(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo"))?;
     let root = std::env::temp_dir().join(format!("nlvid-diagnose-{}", std::process::id()));
-    let spec = |noise: f64| coverage_cohort::wide_groups(cells, seed, noise);
+    let from_prior = args.get(4).is_some_and(|a| a == "prior");
+    let spec = |noise: f64| nlvid_report::demo::DemoSpec {
+        from_prior,
+        ..coverage_cohort::wide_groups(cells, seed, noise)
+    };
     let noisy_study = coverage_cohort::write_study(&root.join("noisy"), &demo, "")?;
     let clean_study = coverage_cohort::write_study(&root.join("clean"), &demo, "")?;
     let files = write_demo_data(&spec(noise), &noisy_study, &demo.join("metamodel.toml"))?;

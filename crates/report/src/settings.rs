@@ -637,7 +637,7 @@ pub struct CohortSettings {
 /// temper_after = 500  # kept steps after which a cell with R-hat > 1.01 restarts tempered
 /// check_every = 50  # after the first round, R-hat checked every this many kept steps
 /// delayed_acceptance = true  # screen proposals on the Kriging mean first (exact)
-/// heavy_tails = true  # surrogate error Student-t (nu from the meta-model's LOO), else Gaussian
+/// heavy_tails = false  # true: surrogate error Student-t (nu from the meta-model's LOO)
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PosteriorStudy {
