@@ -37,7 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n: usize = args.get(1).map_or(Ok(20), |s| s.parse())?;
     let seed: u64 = args.get(2).map_or(Ok(5), |s| s.parse())?;
     let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo");
-    let mut study = Study::load(&demo.join("metamodel.toml"))?;
+    let mut study = Study::load(demo.join("metamodel.toml"))?;
     let fwd = ForwardSettings::from_study(&mut study)?;
     let k = 0.12;
     let dir = demo.join("metamodel");
@@ -103,7 +103,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n_half = &nh.eigenvectors
         * nalgebra::DMatrix::from_diagonal(&nh.eigenvalues.map(f64::sqrt))
         * nh.eigenvectors.transpose();
-    let mut infl: Vec<f64> = (&n_half * full * &n_half).symmetric_eigen().eigenvalues.iter().copied().collect();
+    let mut infl: Vec<f64> = (&n_half * full * &n_half)
+        .symmetric_eigen()
+        .eigenvalues
+        .iter()
+        .copied()
+        .collect();
     infl.sort_by(f64::total_cmp);
     println!("variance inflation of the PCA-coordinate statistic per direction: {infl:.3?}");
     let domain = s.domain().clone();
@@ -146,13 +151,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         // outputs, e = Vᵀ D⁻¹ (ŷ − y), Σ_CV-whitened): the truncation
         // residual is orthogonal to V there, not in the likelihood's metric.
         let e_pca: Vec<f64> = (0..rank)
-            .map(|i| (0..m).map(|j| pca.basis[i * m + j] * e[j] / kr.y_std[j]).sum())
+            .map(|i| {
+                (0..m)
+                    .map(|j| pca.basis[i * m + j] * e[j] / kr.y_std[j])
+                    .sum()
+            })
             .collect();
         let ep = nalgebra::DVector::from_vec(e_pca);
-        let mahal_pca = ep.dot(&sig_cv.clone().lu().solve(&ep).ok_or("Sigma_CV")?) / v / rank as f64;
+        let mahal_pca =
+            ep.dot(&sig_cv.clone().lu().solve(&ep).ok_or("Sigma_CV")?) / v / rank as f64;
         println!(
             "u {:?}: {:.4} {:.4} {:.4}  outside-span {:.3}  in-span mahal/k {:.3} (PCA metric {:.3}; isotropic truncation leak would give {:.3})",
-            u.iter().map(|v| (v * 1000.0).round() / 1000.0).collect::<Vec<_>>(),
+            u.iter()
+                .map(|v| (v * 1000.0).round() / 1000.0)
+                .collect::<Vec<_>>(),
             dw / scale,
             ds / scale,
             sd / scale,

@@ -1,5 +1,5 @@
 //! The surrogate error's scale in the likelihood (issue 17;
-//! docs/theory/inverse.md, "Heavy-tailed surrogate error").
+//! docs/theory/inverse.md, "Session 17").
 //!
 //! A curve's likelihood under Σ(ρ) = σ²(I + ρK̃) depends on the data only
 //! through a spectrum: eigenvalues λ_i of the surrogate covariance in
@@ -43,20 +43,32 @@ pub(crate) struct Spectrum<'a> {
 impl Spectrum<'_> {
     /// ln f(ρ) (module docs), without −(m/2) ln 2π.
     pub fn ln_f(&self, rho: f64) -> f64 {
-        // ln det as the ln of one product (one ln per evaluation instead
-        // of one per eigenvalue: the mixture evaluates ln f at 32 nodes),
-        // as a sum of lns where the product would leave f64's range.
-        let (mut det, mut zez) = (1.0, 0.0);
+        self.ln_f_with(rho, false)
+    }
+
+    /// ln f(ρ) with ln det as a sum of lns, or (`one_ln`, the mixture's
+    /// 32 nodes) as the ln of one product — 1.8× → 1.5× the Gaussian
+    /// screen's cost — falling back to the sum where the product would
+    /// leave f64's range. The Gaussian keeps the sum: the same bits as
+    /// before the mixture existed.
+    fn ln_f_with(&self, rho: f64, one_ln: bool) -> f64 {
+        let (mut logdet, mut det, mut zez) = (0.0, 1.0, 0.0);
         for (zi, li) in self.z.iter().zip(self.lambda) {
             let e = 1.0 + rho * li;
-            det *= e;
+            if one_ln {
+                det *= e;
+            } else {
+                logdet += e.ln();
+            }
             zez += zi * zi / e;
         }
-        let logdet = if det.is_finite() && det > 1e-300 {
-            det.ln()
-        } else {
-            self.lambda.iter().map(|li| (1.0 + rho * li).ln()).sum()
-        };
+        if one_ln {
+            logdet = if det.is_finite() && det > 1e-300 {
+                det.ln()
+            } else {
+                self.lambda.iter().map(|li| (1.0 + rho * li).ln()).sum()
+            };
+        }
         let quad = (self.rtr.max(0.0) - rho * zez) / self.s2;
         -0.5 * (self.m * self.s2.ln() + logdet + quad)
     }
@@ -122,7 +134,9 @@ impl ErrorScale {
         if !(rho0 > 0.0) {
             return spectrum.ln_f(0.0);
         }
-        let h = |u: f64| spectrum.ln_f(rho0 * u.exp()) + ln_prior_norm - half_nu * (u + (-u).exp());
+        let h = |u: f64| {
+            spectrum.ln_f_with(rho0 * u.exp(), true) + ln_prior_norm - half_nu * (u + (-u).exp())
+        };
         // h′ and h″ in u.
         let slopes = |u: f64| {
             let (d1, d2) = spectrum.ln_f_slopes(rho0 * u.exp());

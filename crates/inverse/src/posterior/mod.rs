@@ -152,7 +152,7 @@ pub struct PosteriorSettings {
     /// (`VarianceCalibration::fit_student`; [`CurveLikelihood`]); off (the
     /// default): Gaussian (`VarianceCalibration::fit`). Off by default:
     /// on seeds 17 and 18 the coverage was the same within 1 point and the
-    /// screen costs 1.47× (docs/theory/inverse.md, "Session 17").
+    /// screen costs 1.46× (docs/theory/inverse.md, "Session 17").
     #[serde(default = "default_heavy_tails")]
     pub heavy_tails: bool,
 }
