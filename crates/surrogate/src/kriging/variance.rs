@@ -532,7 +532,7 @@ impl KrigingModel {
     /// # Errors
     /// As those two.
     pub fn variance_calibration(&self) -> Result<VarianceCalibration> {
-        VarianceCalibration::fit_student(&self.loo_calibration_data()?)
+        VarianceCalibration::fit(&self.loo_calibration_data()?)
     }
 
     /// Physical coordinates of training site i (the inverse of the input
