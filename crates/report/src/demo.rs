@@ -473,6 +473,34 @@ pub fn run_demo(
 mod tests {
     use super::*;
 
+    /// Cells drawn from the prior fill the domain in its own coordinates:
+    /// every u inside [0.02, 0.98], g1 + g2 within the constraint, each
+    /// axis's mean near ½ and its range near the margins (2000 draws;
+    /// uniform on a box cut by g1 + g2 ≤ 0.99 keeps G0, τ1, τ2 uniform);
+    /// the group's own law is not used.
+    #[test]
+    fn cells_from_the_prior_are_uniform_on_the_domain() {
+        let domain = Domain::table_5_3(0.01).unwrap();
+        let group = DemoSpec::default().groups[0].clone();
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let n = 2000;
+        let us: Vec<Vec<f64>> = (0..n)
+            .map(|_| domain.to_unit(&draw(&group, true, &domain, &mut rng).unwrap()))
+            .collect();
+        for u in &us {
+            assert!(u.iter().all(|u| (0.02..=0.98).contains(u)), "{u:?}");
+            assert!(domain.contains(&domain.from_unit(u), 0.0), "{u:?}");
+        }
+        for axis in [0, 3, 4] {
+            let mean = us.iter().map(|u| u[axis]).sum::<f64>() / n as f64;
+            // sd of the mean of U(0.02, 0.98): 0.96/√(12 n) = 0.0062.
+            assert!((mean - 0.5).abs() < 0.025, "axis {axis}: mean {mean}");
+            let lo = us.iter().map(|u| u[axis]).fold(1.0, f64::min);
+            let hi = us.iter().map(|u| u[axis]).fold(0.0, f64::max);
+            assert!(lo < 0.03 && hi > 0.97, "axis {axis}: [{lo}, {hi}]");
+        }
+    }
+
     #[test]
     fn sampling_keeps_every_fast_sample_then_every_tenth() {
         let spec = DemoSpec::default();
