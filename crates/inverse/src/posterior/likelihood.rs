@@ -21,7 +21,10 @@
 //! diagonalised once per curve, ln det M and wᵀM⁻¹w are sums over its k
 //! eigenvalues — O(k·r + r²) per evaluation after O(m·(k + r)²) once per
 //! curve. Otherwise K is diagonal
-//! and the sum runs over the m points.
+//! and the sum runs over the m points. Both forms reduce to a spectrum
+//! (λ_i, the residual's coordinates z_i, rᵀr; [`super::error_scale`]),
+//! where a Student-t surrogate error (`heavy_tails`) integrates its scale
+//! out.
 
 use nalgebra::{DMatrix, DVector};
 use nlvid_surrogate::{OutputCovariance, VarianceCalibration};
