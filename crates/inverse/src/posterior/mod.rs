@@ -151,8 +151,9 @@ pub struct PosteriorSettings {
     /// the meta-model's leave-one-out residuals
     /// (`VarianceCalibration::fit_student`; [`CurveLikelihood`]); off (the
     /// default): Gaussian (`VarianceCalibration::fit`). Off by default:
-    /// on seeds 17 and 18 the coverage was the same within 1 point and the
-    /// screen costs 1.46× (docs/theory/inverse.md, "Session 17").
+    /// on seeds 17 and 18 the coverage was the same within 1 point, on
+    /// seed 19 worse, and the screen costs 1.46× (docs/theory/inverse.md,
+    /// "Session 17").
     #[serde(default = "default_heavy_tails")]
     pub heavy_tails: bool,
 }
