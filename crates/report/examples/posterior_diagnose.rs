@@ -79,7 +79,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         cal.beta_se
     );
     println!(
-        "Student-t surrogate error (the posteriors' default): scale {:.4e} v^{:.4}, nu = {:.3}",
+        "Student-t surrogate error (`[posterior] heavy_tails = true`): scale {:.4e} v^{:.4}, nu = {:.3}",
         student.alpha, student.beta, student.nu
     );
     let inputs = discover(&files.data)?;

@@ -747,19 +747,14 @@ impl VarianceCalibration {
         // EM for (α, β) at fixed ν from `start`.
         let at = |nu: f64, start: Self| -> Result<Self> {
             let mut cal = Self { nu, ..start };
+            let mut weighted = vec![0.0; data.energy.len()];
             for _ in 0..2000 {
-                let weighted = CalibrationData {
-                    energy: data
-                        .v
-                        .iter()
-                        .zip(&data.energy)
-                        .map(|(&v, &e)| e * (nu + k) / (nu + e / cal.apply(v)))
-                        .collect(),
-                    ..data.clone()
-                };
+                for ((w, &v), &e) in weighted.iter_mut().zip(&data.v).zip(&data.energy) {
+                    *w = e * (nu + k) / (nu + e / cal.apply(v));
+                }
                 let next = Self {
                     nu,
-                    ..Self::fit(&weighted)?
+                    ..Self::fit_energies(&data.v, &weighted, data.dof)?
                 };
                 let done = (next.beta - cal.beta).abs() < 1e-9
                     && (next.alpha / cal.alpha).ln().abs() < 1e-9;
@@ -848,21 +843,28 @@ impl VarianceCalibration {
     /// Fewer than 3 points, a v ≤ 0 or non-finite value, all energies
     /// zero, all v equal, or an optimum beyond |β| ≤ 20.
     pub fn fit(data: &CalibrationData) -> Result<Self> {
+        Self::fit_energies(&data.v, &data.energy, data.dof)
+    }
+
+    /// [`VarianceCalibration::fit`] of energies `energy` at variances `v`
+    /// with `dof` degrees of freedom (the EM of
+    /// [`VarianceCalibration::fit_student`] refits reweighted energies).
+    fn fit_energies(v: &[f64], energy: &[f64], dof: usize) -> Result<Self> {
         let bad = |m: &str| {
             Err(SurrogateError::InvalidInput(format!(
                 "variance calibration: {m}"
             )))
         };
-        let n = data.v.len();
-        if n < 3 || data.energy.len() != n || data.dof == 0 {
+        let n = v.len();
+        if n < 3 || energy.len() != n || dof == 0 {
             return bad("needs at least 3 points with energies and k ≥ 1");
         }
-        if data.v.iter().any(|v| !(*v > 0.0 && v.is_finite()))
-            || data.energy.iter().any(|e| !(*e >= 0.0 && e.is_finite()))
+        if v.iter().any(|v| !(*v > 0.0 && v.is_finite()))
+            || energy.iter().any(|e| !(*e >= 0.0 && e.is_finite()))
         {
             return bad("v must be > 0 and finite, energies ≥ 0 and finite");
         }
-        let ln_v: Vec<f64> = data.v.iter().map(|v| v.ln()).collect();
+        let ln_v: Vec<f64> = v.iter().map(|v| v.ln()).collect();
         let mean = ln_v.iter().sum::<f64>() / n as f64;
         let l: Vec<f64> = ln_v.iter().map(|x| x - mean).collect();
         if l.iter().all(|x| x.abs() < 1e-12) {
@@ -870,7 +872,7 @@ impl VarianceCalibration {
         }
         let pos: Vec<(f64, f64)> = l
             .iter()
-            .zip(&data.energy)
+            .zip(energy)
             .filter(|(_, e)| **e > 0.0)
             .map(|(&li, &e)| (li, e.ln()))
             .collect();
@@ -920,7 +922,7 @@ impl VarianceCalibration {
             }
         }
         let (_, var, ln_sw) = moments(beta);
-        let nk = (n * data.dof) as f64;
+        let nk = (n * dof) as f64;
         // α̂ = Σ E v^{−β}/(nk) with v^{−β} = exp(−β(ℓ + mean)).
         let alpha = (ln_sw - beta * mean - nk.ln()).exp();
         let beta_se = if var > 0.0 {
