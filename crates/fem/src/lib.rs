@@ -58,6 +58,7 @@ mod fbar;
 pub mod hex;
 mod history;
 mod kind;
+mod ldlt;
 pub mod membrane;
 pub mod mesh;
 pub mod mesh3;

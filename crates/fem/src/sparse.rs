@@ -15,18 +15,15 @@
 //! storage and workspace are allocated once. A material with a
 //! non-symmetric tangent should set `Settings::symmetric = false`.
 
+use crate::ldlt::SupernodalLdlt;
 use crate::{FemError, Result};
-use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, LdltRef, SymbolicCholesky, SymmetricOrdering,
-    factorize_symbolic_cholesky,
+    CholeskySymbolicParams, SymbolicCholeskyRaw, SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
-use faer::{Conj, Par};
 
 /// Slot marking an entry that belongs to an eliminated (prescribed) dof.
 pub(crate) const NO_SLOT: usize = usize::MAX;
@@ -63,15 +60,14 @@ pub(crate) struct SparseSystem {
     to_stored: Vec<usize>,
     from_stored: Vec<usize>,
     lu_symbolic: SymbolicLu<usize>,
-    chol_symbolic: Option<SymbolicCholesky<usize>>,
-    l_values: Vec<f64>,
-    stack: MemBuffer,
+    /// Symmetric mode: the numeric LDLᵀ on faer's supernodal structure.
+    ldlt: Option<SupernodalLdlt>,
     rhs_copy: Vec<f64>,
     work: Vec<f64>,
     kx: Vec<f64>,
     knorm: Vec<f64>,
     symmetric: bool,
-    /// `l_values` holds the LDLᵀ factors of the last factorised tangent
+    /// `ldlt` holds the LDLᵀ factors of the last factorised tangent
     /// (false before the first one and after an LU fallback).
     factored: bool,
     /// The LU factors of the last factorised tangent, if LU did it.
@@ -85,7 +81,7 @@ impl std::fmt::Debug for SparseSystem {
             "SparseSystem(n = {}, stored nnz = {}, nnz(L) = {}, symmetric = {})",
             self.n,
             self.values.len(),
-            self.l_values.len(),
+            self.ldlt.as_ref().map_or(0, |f| f.values().len()),
             self.symmetric
         )
     }
@@ -114,6 +110,16 @@ fn find(s: &SymbolicSparseColMat<usize>, row: usize, col: usize) -> Option<usize
         .map(|k| start + k)
 }
 
+/// faer's symbolic analysis, always supernodal: supernodes (dense-block
+/// kernels) measured 2.5× faster than simplicial on the 2500-equation cell
+/// model (docs/theory/fem.md), and [`SupernodalLdlt`] needs them.
+fn supernodal_params() -> CholeskySymbolicParams<'static> {
+    CholeskySymbolicParams {
+        supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+        ..Default::default()
+    }
+}
+
 impl SparseSystem {
     /// Builds the pattern from lists of coupled equations (each list is a
     /// dense block: every pair in it is a nonzero); `symmetric` selects
@@ -134,13 +140,8 @@ impl SparseSystem {
         let full = csc(n, &mut cols);
         let lu_symbolic = SymbolicLu::try_new(full.as_ref())
             .map_err(|e| FemError::Solver(format!("symbolic LU: {e:?}")))?;
-        let params = CholeskySymbolicParams {
-            // Supernodal (dense-block kernels) measured 2.5× faster than
-            // simplicial on the 2500-equation cell model (docs/theory/fem.md).
-            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-            ..Default::default()
-        };
-        let (symbolic, chol_symbolic, to_stored, from_stored, full_from_stored) = if symmetric {
+        let params = supernodal_params();
+        let (symbolic, ldlt, to_stored, from_stored, full_from_stored) = if symmetric {
             // The AMD ordering, once; then the lower triangle in that order.
             let amd = factorize_symbolic_cholesky(
                 full.as_ref(),
@@ -188,19 +189,16 @@ impl SparseSystem {
                     map.push(k);
                 }
             }
-            (stored, Some(chol), to_stored, from_stored, map)
+            let SymbolicCholeskyRaw::Supernodal(structure) = chol.raw() else {
+                return Err(FemError::Solver(
+                    "symbolic Cholesky: supernodal structure expected".into(),
+                ));
+            };
+            let ldlt = SupernodalLdlt::new(structure, stored.as_ref())?;
+            (stored, Some(ldlt), to_stored, from_stored, map)
         } else {
             (full.clone(), None, Vec::new(), Vec::new(), Vec::new())
         };
-        let mut req = StackReq::EMPTY;
-        let mut l_len = 0;
-        if let Some(ch) = &chol_symbolic {
-            req = StackReq::any_of(&[
-                ch.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
-                ch.solve_in_place_scratch::<f64>(1, Par::Seq),
-            ]);
-            l_len = ch.len_val();
-        }
         let nnz = symbolic.as_ref().row_idx().len();
         let full_nnz = full.as_ref().row_idx().len();
         Ok(Self {
@@ -217,9 +215,7 @@ impl SparseSystem {
             to_stored,
             from_stored,
             lu_symbolic,
-            l_values: vec![0.0; l_len],
-            chol_symbolic,
-            stack: MemBuffer::new(req),
+            ldlt,
             rhs_copy: vec![0.0; n],
             work: vec![0.0; n],
             kx: vec![0.0; n],
@@ -311,13 +307,13 @@ impl SparseSystem {
             lu.solve_in_place(col.as_mat_mut());
             return rhs.iter().all(|x| x.is_finite());
         }
-        let Some(chol) = self.chol_symbolic.as_ref().filter(|_| self.factored) else {
+        let Some(ldlt) = self.ldlt.as_mut().filter(|_| self.factored) else {
             return false;
         };
         for (w, &i) in self.work.iter_mut().zip(&self.from_stored) {
             *w = rhs[i];
         }
-        ldlt_solve(chol, &self.l_values, &mut self.work, &mut self.stack);
+        ldlt.solve_in_place(&mut self.work);
         if !self.work.iter().all(|v| v.is_finite()) {
             return false;
         }
@@ -335,25 +331,13 @@ impl SparseSystem {
     pub(crate) fn solve(&mut self, rhs: &mut [f64]) -> Result<bool> {
         self.factored = false;
         self.last_lu = None;
-        if let Some(chol) = &self.chol_symbolic {
+        if let Some(ldlt) = &mut self.ldlt {
             for (w, &i) in self.work.iter_mut().zip(&self.from_stored) {
                 *w = rhs[i];
             }
             self.rhs_copy.copy_from_slice(&self.work);
-            let mat = SparseColMatRef::new(self.symbolic.as_ref(), &self.values);
-            let ok = chol
-                .factorize_numeric_ldlt(
-                    &mut self.l_values,
-                    mat,
-                    faer::Side::Lower,
-                    LdltRegularization::default(),
-                    Par::Seq,
-                    MemStack::new(&mut self.stack),
-                    Default::default(),
-                )
-                .is_ok();
-            if ok {
-                ldlt_solve(chol, &self.l_values, &mut self.work, &mut self.stack);
+            if ldlt.factorize(&self.values) {
+                ldlt.solve_in_place(&mut self.work);
                 let x = std::mem::take(&mut self.work);
                 let b = std::mem::take(&mut self.rhs_copy);
                 let good = x.iter().all(|v| v.is_finite())
@@ -391,20 +375,6 @@ impl SparseSystem {
             ))
         }
     }
-}
-
-/// Solves `L D Lᵀ x = b` in place (`work` holds b in the factor's
-/// numbering on entry, x on return) with the numeric factors `l_values` of
-/// the symbolic `chol`: one place for fresh and reused factors.
-fn ldlt_solve(
-    chol: &SymbolicCholesky<usize>,
-    l_values: &[f64],
-    work: &mut [f64],
-    stack: &mut MemBuffer,
-) {
-    let ldlt = LdltRef::new(chol, l_values);
-    let col = faer::ColMut::from_slice_mut(work);
-    ldlt.solve_in_place_with_conj(Conj::No, col.as_mat_mut(), Par::Seq, MemStack::new(stack));
 }
 
 #[cfg(test)]
@@ -524,6 +494,186 @@ mod tests {
         let kx = matvec(&full, &a);
         for i in 0..n {
             assert!((kx[i] - rhs[i]).abs() < 1e-12, "{i}");
+        }
+    }
+
+    /// FE-like blocks (Q4 elements on an nx × ny node grid, two dofs per
+    /// node), seeded values, a diagonal made indefinite on every 7th dof.
+    fn fe_like_system(nx: usize, ny: usize) -> SparseSystem {
+        let node = |i: usize, j: usize| j * nx + i;
+        let mut blocks = Vec::new();
+        for j in 0..ny - 1 {
+            for i in 0..nx - 1 {
+                let nodes = [
+                    node(i, j),
+                    node(i + 1, j),
+                    node(i + 1, j + 1),
+                    node(i, j + 1),
+                ];
+                blocks.push(nodes.iter().flat_map(|&p| [2 * p, 2 * p + 1]).collect());
+            }
+        }
+        let n = 2 * nx * ny;
+        let mut s = SparseSystem::new(n, &blocks, true).unwrap();
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        for v in s.values.iter_mut() {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            *v = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+        }
+        for c in 0..n {
+            let k = s.slot(c, c).unwrap();
+            s.values[k] += if c % 7 == 0 { -8.0 } else { 8.0 };
+        }
+        s
+    }
+
+    /// faer's symbolic factorisation of the stored pattern (as `new` makes
+    /// it), for faer's own numeric factorisation.
+    fn faer_symbolic(s: &SparseSystem) -> faer::sparse::linalg::cholesky::SymbolicCholesky<usize> {
+        let stored = s.symbolic.as_ref();
+        let mut upper: Vec<Vec<usize>> = vec![Vec::new(); s.n];
+        for c in 0..s.n {
+            for r in stored.row_idx_of_col(c) {
+                upper[r].push(c);
+            }
+        }
+        factorize_symbolic_cholesky(
+            csc(s.n, &mut upper).as_ref(),
+            faer::Side::Lower,
+            SymmetricOrdering::Identity,
+            supernodal_params(),
+        )
+        .unwrap()
+    }
+
+    /// The numeric LDLᵀ of `crate::ldlt` against faer's own numeric
+    /// factorisation on the same structure (a second implementation).
+    #[test]
+    fn supernodal_factors_and_solution_equal_faers() {
+        use faer::dyn_stack::{MemBuffer, MemStack};
+        use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+        use faer::sparse::linalg::cholesky::LdltRef;
+        use faer::{Conj, Par, Side};
+
+        let mut s = fe_like_system(14, 11);
+        let n = s.n;
+        let chol = faer_symbolic(&s);
+        let SymbolicCholeskyRaw::Supernodal(structure) = chol.raw() else {
+            panic!("supernodal expected");
+        };
+        assert!(
+            structure.n_supernodes() > 20,
+            "{}",
+            structure.n_supernodes()
+        );
+        let mut faer_values = vec![0.0; chol.len_val()];
+        let mut stack = MemBuffer::new(faer::dyn_stack::StackReq::any_of(&[
+            chol.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
+            chol.solve_in_place_scratch::<f64>(1, Par::Seq),
+        ]));
+        chol.factorize_numeric_ldlt(
+            &mut faer_values,
+            SparseColMatRef::new(s.symbolic.as_ref(), &s.values),
+            Side::Lower,
+            LdltRegularization::default(),
+            Par::Seq,
+            MemStack::new(&mut stack),
+            Default::default(),
+        )
+        .unwrap();
+
+        let ours = s.ldlt.as_mut().unwrap();
+        assert!(ours.factorize(&s.values));
+        let scale = faer_values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (k, (a, b)) in ours.values().iter().zip(&faer_values).enumerate() {
+            assert!((a - b).abs() <= 1e-12 * scale, "entry {k}: {a} vs {b}");
+        }
+        let rhs: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).sin()).collect();
+        let mut x = rhs.clone();
+        ours.solve_in_place(&mut x);
+        let mut y = rhs.clone();
+        LdltRef::new(&chol, &faer_values).solve_in_place_with_conj(
+            Conj::No,
+            faer::ColMut::from_slice_mut(&mut y).as_mat_mut(),
+            Par::Seq,
+            MemStack::new(&mut stack),
+        );
+        let ymax = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for i in 0..n {
+            assert!(
+                (x[i] - y[i]).abs() <= 1e-11 * ymax,
+                "{i}: {} vs {}",
+                x[i],
+                y[i]
+            );
+        }
+    }
+
+    /// Side by side, in one process: faer's numeric LDLᵀ and solve against
+    /// `crate::ldlt`'s on the same structure (fastest of many repetitions,
+    /// alternated; FE-like matrices of the cell model's size).
+    #[test]
+    #[ignore = "timing probe: cargo test -p nlvid-fem --release --lib ldlt_against_faer_timing -- --ignored --nocapture"]
+    fn ldlt_against_faer_timing() {
+        use faer::dyn_stack::{MemBuffer, MemStack};
+        use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+        use faer::sparse::linalg::cholesky::LdltRef;
+        use faer::{Conj, Par, Side};
+        use std::time::Instant;
+
+        for (nx, ny) in [(20, 20), (31, 31), (45, 45)] {
+            let mut s = fe_like_system(nx, ny);
+            let chol = faer_symbolic(&s);
+            let mut faer_values = vec![0.0; chol.len_val()];
+            let mut stack = MemBuffer::new(faer::dyn_stack::StackReq::any_of(&[
+                chol.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
+                chol.solve_in_place_scratch::<f64>(1, Par::Seq),
+            ]));
+            let mut x = vec![1.0; s.n];
+            let (mut faer_best, mut ours_best) = ([f64::INFINITY; 2], [f64::INFINITY; 2]);
+            for _ in 0..200 {
+                let t = Instant::now();
+                chol.factorize_numeric_ldlt(
+                    &mut faer_values,
+                    SparseColMatRef::new(s.symbolic.as_ref(), &s.values),
+                    Side::Lower,
+                    LdltRegularization::default(),
+                    Par::Seq,
+                    MemStack::new(&mut stack),
+                    Default::default(),
+                )
+                .unwrap();
+                let t1 = Instant::now();
+                LdltRef::new(&chol, &faer_values).solve_in_place_with_conj(
+                    Conj::No,
+                    faer::ColMut::from_slice_mut(&mut x).as_mat_mut(),
+                    Par::Seq,
+                    MemStack::new(&mut stack),
+                );
+                let t2 = Instant::now();
+                faer_best[0] = faer_best[0].min((t1 - t).as_secs_f64());
+                faer_best[1] = faer_best[1].min((t2 - t1).as_secs_f64());
+                let ours = s.ldlt.as_mut().unwrap();
+                let t = Instant::now();
+                assert!(ours.factorize(&s.values));
+                let t1 = Instant::now();
+                ours.solve_in_place(&mut x);
+                let t2 = Instant::now();
+                ours_best[0] = ours_best[0].min((t1 - t).as_secs_f64());
+                ours_best[1] = ours_best[1].min((t2 - t1).as_secs_f64());
+            }
+            eprintln!(
+                "n = {}: factorise {:.1} µs (faer {:.1} µs, ratio {:.3}); solve {:.1} µs (faer {:.1} µs, ratio {:.3})",
+                s.n,
+                ours_best[0] * 1e6,
+                faer_best[0] * 1e6,
+                ours_best[0] / faer_best[0],
+                ours_best[1] * 1e6,
+                faer_best[1] * 1e6,
+                ours_best[1] / faer_best[1],
+            );
         }
     }
 

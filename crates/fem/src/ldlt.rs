@@ -1,0 +1,545 @@
+//! Numeric supernodal LDLᵀ factorisation and solve on a fixed symbolic
+//! structure: faer's supernodal analysis of the AMD-ordered tangent.
+//!
+//! Why our own numeric phase: the cell model's tangent (≈ 1900 equations,
+//! ≈ 260 supernodes of 7 columns on average) is factorised hundreds of times
+//! per run with one pattern, and faer's general numeric factorisation spends
+//! about half of each call on work per supernode that depends only on the
+//! pattern (docs/theory/fem.md, "Session 17 (ordering)": ≈ 15.8 k
+//! instructions per supernode and factorisation). Here every such index —
+//! where each stored entry of K lands in the factor, where each entry of a
+//! supernode's update lands in its ancestor — is computed once when the
+//! system is built ([`SupernodalLdlt::new`]), so a factorisation is the
+//! dense arithmetic plus one indexed subtraction per update entry.
+//!
+//! The values are stored as faer stores them: supernode s owns a
+//! column-major block of (n_s + m_s) rows × n_s columns — its own columns,
+//! then its m_s off-diagonal rows — with D on the block's diagonal and the
+//! unit lower factor L below it. The algorithm is right-looking: once a
+//! supernode's block is factorised, its Schur complement update
+//! L₂₁ D L₂₁ᵀ is subtracted from the ancestors' blocks, so every supernode
+//! has received all its updates when its turn comes.
+//!
+//! No pivoting: a zero or non-finite pivot makes [`SupernodalLdlt::factorize`]
+//! return false, and the caller solves by LU instead (crates/fem/src/sparse.rs).
+
+use crate::{FemError, Result};
+use faer::sparse::SymbolicSparseColMatRef;
+use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
+
+/// One ancestor that receives part of a supernode's update: the source's
+/// off-diagonal rows `first..end` are columns of `supernode`.
+#[derive(Debug, Clone, Copy)]
+struct UpdateTarget {
+    supernode: usize,
+    first: usize,
+    end: usize,
+    /// Start in [`SupernodalLdlt::row_in_target`] of the positions of the
+    /// source's off-diagonal rows `first..m` within the target's block.
+    rel_start: usize,
+}
+
+/// Numeric LDLᵀ factors on a fixed supernodal structure, with every
+/// pattern-only index precomputed (module docs).
+#[derive(Debug)]
+pub(crate) struct SupernodalLdlt {
+    /// First column of each supernode, then n (length S + 1).
+    begin: Vec<usize>,
+    /// Off-diagonal rows of supernode s: `rows[row_ptr[s]..row_ptr[s + 1]]`.
+    row_ptr: Vec<usize>,
+    rows: Vec<usize>,
+    /// Values of supernode s: `values[val_ptr[s]..val_ptr[s + 1]]`.
+    val_ptr: Vec<usize>,
+    /// For each stored entry of the matrix, its position in `values`.
+    entry_to_factor: Vec<usize>,
+    /// Targets of supernode s: `targets[target_ptr[s]..target_ptr[s + 1]]`.
+    target_ptr: Vec<usize>,
+    targets: Vec<UpdateTarget>,
+    /// Row positions, within their target's block, of update rows.
+    row_in_target: Vec<usize>,
+    /// The factors (faer's layout, module docs).
+    values: Vec<f64>,
+    /// Scratch of one supernode: its working panel ([`Panel`]), L₂₁ D
+    /// (column-major, m rounded up to 4 rows), the update's lower tiles;
+    /// one column of a product (longest panel), coefficients (4 × widest
+    /// supernode).
+    panel: Vec<f64>,
+    scaled: Vec<f64>,
+    update: Vec<f64>,
+    column: Vec<f64>,
+    coefficients: Vec<f64>,
+}
+
+impl SupernodalLdlt {
+    /// Precomputes the scatter maps of the lower-triangular `pattern`
+    /// (already in the factor's numbering) into the supernodal
+    /// `structure` of its factor.
+    ///
+    /// # Errors
+    /// An entry of the pattern, or of an update, that the structure does not
+    /// hold (a structure that was not computed from this pattern).
+    pub(crate) fn new(
+        structure: &SymbolicSupernodalCholesky<usize>,
+        pattern: SymbolicSparseColMatRef<'_, usize>,
+    ) -> Result<Self> {
+        let n = structure.nrows();
+        let n_super = structure.n_supernodes();
+        let mut begin = structure.supernode_begin().to_vec();
+        begin.push(n);
+        let mut row_ptr = Vec::with_capacity(n_super + 1);
+        let mut rows = Vec::new();
+        let mut val_ptr = Vec::with_capacity(n_super + 1);
+        row_ptr.push(0);
+        val_ptr.push(0);
+        let mut supernode_of = vec![0; n];
+        for s in 0..n_super {
+            rows.extend_from_slice(structure.supernode(s).pattern());
+            row_ptr.push(rows.len());
+            let ns = begin[s + 1] - begin[s];
+            let ld = ns + row_ptr[s + 1] - row_ptr[s];
+            val_ptr.push(val_ptr[s] + ld * ns);
+            supernode_of[begin[s]..begin[s + 1]].fill(s);
+        }
+        if val_ptr[n_super] != structure.len_val() {
+            return Err(FemError::Solver(
+                "supernodal structure: value layout differs from faer's".into(),
+            ));
+        }
+        let missing =
+            |r: usize, c: usize| FemError::Solver(format!("factor structure lacks ({r}, {c})"));
+        // Position of row r in supernode t's block.
+        let row_position = |t: usize, r: usize| -> Option<usize> {
+            if (begin[t]..begin[t + 1]).contains(&r) {
+                Some(r - begin[t])
+            } else {
+                rows[row_ptr[t]..row_ptr[t + 1]]
+                    .binary_search(&r)
+                    .ok()
+                    .map(|k| begin[t + 1] - begin[t] + k)
+            }
+        };
+        let leading = |t: usize| begin[t + 1] - begin[t] + row_ptr[t + 1] - row_ptr[t];
+
+        let mut entry_to_factor = Vec::with_capacity(pattern.row_idx().len());
+        for c in 0..n {
+            let t = supernode_of[c];
+            for r in pattern.row_idx_of_col(c) {
+                let pos = row_position(t, r)
+                    .filter(|_| r >= c)
+                    .ok_or_else(|| missing(r, c))?;
+                entry_to_factor.push(val_ptr[t] + (c - begin[t]) * leading(t) + pos);
+            }
+        }
+
+        let mut target_ptr = vec![0];
+        let mut targets = Vec::new();
+        let mut row_in_target = Vec::new();
+        let (mut max_ld, mut max_ns, mut max_scaled, mut max_update, mut max_panel) =
+            (0, 0, 0, 0, 0);
+        for s in 0..n_super {
+            let own = &rows[row_ptr[s]..row_ptr[s + 1]];
+            let m = own.len();
+            let ns = begin[s + 1] - begin[s];
+            max_ld = max_ld.max(Panel::new(ns, m).rows);
+            max_ns = max_ns.max(ns);
+            max_scaled = max_scaled.max(m.next_multiple_of(4) * ns);
+            max_panel = max_panel.max(Panel::new(ns, m).rows * ns);
+            max_update = max_update.max(m.next_multiple_of(4).pow(2));
+            let mut first = 0;
+            while first < m {
+                let t = supernode_of[own[first]];
+                let end = first + own[first..].partition_point(|&r| r < begin[t + 1]);
+                let rel_start = row_in_target.len();
+                for &r in &own[first..] {
+                    row_in_target.push(row_position(t, r).ok_or_else(|| missing(r, begin[t]))?);
+                }
+                targets.push(UpdateTarget {
+                    supernode: t,
+                    first,
+                    end,
+                    rel_start,
+                });
+                first = end;
+            }
+            target_ptr.push(targets.len());
+        }
+        Ok(Self {
+            values: vec![0.0; val_ptr[n_super]],
+            begin,
+            row_ptr,
+            rows,
+            val_ptr,
+            entry_to_factor,
+            target_ptr,
+            targets,
+            row_in_target,
+            panel: vec![0.0; max_panel],
+            scaled: vec![0.0; max_scaled],
+            update: vec![0.0; max_update],
+            column: vec![0.0; max_ld],
+            coefficients: vec![0.0; 4 * max_ns],
+        })
+    }
+
+    /// The factor values, in faer's supernodal layout (module docs).
+    pub(crate) fn values(&self) -> &[f64] {
+        &self.values
+    }
+
+    /// Factorises the matrix whose stored entries (the pattern given to
+    /// [`SupernodalLdlt::new`], in its order) are `matrix`. false on a zero
+    /// or non-finite pivot (the factors are then not usable).
+    pub(crate) fn factorize(&mut self, matrix: &[f64]) -> bool {
+        debug_assert_eq!(matrix.len(), self.entry_to_factor.len());
+        self.values.fill(0.0);
+        for (&k, &v) in self.entry_to_factor.iter().zip(matrix) {
+            self.values[k] = v;
+        }
+        pulp::Arch::new().dispatch(Factorize(self))
+    }
+
+    /// Solves L D Lᵀ x = b in place (`x` holds b on entry, in the factor's
+    /// numbering) with the factors of the last successful
+    /// [`SupernodalLdlt::factorize`].
+    pub(crate) fn solve_in_place(&mut self, x: &mut [f64]) {
+        pulp::Arch::new().dispatch(Solve { ldlt: self, x });
+    }
+}
+
+/// [`SupernodalLdlt::factorize`]'s arithmetic as a `pulp::WithSimd`
+/// operation, so its loops are compiled for the CPU's SIMD width (as the
+/// element kernel, crates/fem/src/fbar.rs). Products and sums are never
+/// fused and their order does not depend on that width, so the factors are
+/// bitwise the same on every x86-64.
+struct Factorize<'a>(&'a mut SupernodalLdlt);
+
+impl pulp::WithSimd for Factorize<'_> {
+    type Output = bool;
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) -> bool {
+        let f = self.0;
+        for s in 0..f.begin.len() - 1 {
+            let ns = f.begin[s + 1] - f.begin[s];
+            let m = f.row_ptr[s + 1] - f.row_ptr[s];
+            let (head, tail) = f.values.split_at_mut(f.val_ptr[s + 1]);
+            let block = &mut head[f.val_ptr[s]..];
+            let panel = Panel::new(ns, m);
+            let q = &mut f.panel[..panel.rows * ns];
+            panel.load(q, block);
+            if !panel.factorize(q, &mut f.coefficients, &mut f.column) {
+                return false;
+            }
+            panel.store(q, block);
+            if m == 0 {
+                continue;
+            }
+            // The update W = L₂₁ D L₂₁ᵀ in lower tiles of 4 × 4
+            // (column-major m4 × m4).
+            let m4 = panel.rows - panel.top;
+            let scaled = &mut f.scaled[..m4 * ns];
+            for k in 0..ns {
+                let d = q[k * panel.rows + k];
+                let l = &q[k * panel.rows + panel.top..(k + 1) * panel.rows];
+                for (w, &v) in scaled[k * m4..(k + 1) * m4].iter_mut().zip(l) {
+                    *w = v * d;
+                }
+            }
+            let update = &mut f.update[..m4 * m4];
+            for j0 in (0..m4).step_by(4) {
+                for i0 in (j0..m4).step_by(4) {
+                    let tile = tile_product(q, panel.rows, scaled, m4, panel.top + i0, j0);
+                    for (jj, column) in tile.iter().enumerate() {
+                        update[(j0 + jj) * m4 + i0..][..4].copy_from_slice(column);
+                    }
+                }
+            }
+            let offset = f.val_ptr[s + 1];
+            let own = &f.rows[f.row_ptr[s]..f.row_ptr[s + 1]];
+            for target in &f.targets[f.target_ptr[s]..f.target_ptr[s + 1]] {
+                let t = target.supernode;
+                let ld_t = f.begin[t + 1] - f.begin[t] + f.row_ptr[t + 1] - f.row_ptr[t];
+                for j in target.first..target.end {
+                    let base = f.val_ptr[t] + (own[j] - f.begin[t]) * ld_t - offset;
+                    let rel = &f.row_in_target[target.rel_start + (j - target.first)..][..m - j];
+                    for (&u, &p) in update[j * m4 + j..j * m4 + m].iter().zip(rel) {
+                        tail[base + p] -= u;
+                    }
+                }
+            }
+        }
+        true
+    }
+}
+
+/// One supernode's block copied into a zero-padded working panel whose
+/// row counts are multiples of 4, so the tiles need no remainder loops:
+/// rows `0..ns` the diagonal block, `top..top + m` the off-diagonal rows
+/// (`top` = ns rounded up to 4), `rows` = top + m rounded up to 4. The
+/// padding rows stay zero through the factorisation.
+struct Panel {
+    ns: usize,
+    m: usize,
+    top: usize,
+    rows: usize,
+}
+
+impl Panel {
+    #[inline(always)]
+    fn new(ns: usize, m: usize) -> Self {
+        let top = ns.next_multiple_of(4);
+        Self {
+            ns,
+            m,
+            top,
+            rows: top + m.next_multiple_of(4),
+        }
+    }
+
+    #[inline(always)]
+    fn load(&self, q: &mut [f64], block: &[f64]) {
+        let (ns, ld) = (self.ns, self.ns + self.m);
+        for (dst, src) in q.chunks_exact_mut(self.rows).zip(block.chunks_exact(ld)) {
+            dst[..ns].copy_from_slice(&src[..ns]);
+            dst[ns..self.top].fill(0.0);
+            dst[self.top..self.top + self.m].copy_from_slice(&src[ns..]);
+            dst[self.top + self.m..].fill(0.0);
+        }
+    }
+
+    /// Writes the lower triangle of the diagonal block and the off-diagonal
+    /// rows back (the rest of the block is not touched).
+    #[inline(always)]
+    fn store(&self, q: &[f64], block: &mut [f64]) {
+        let (ns, ld) = (self.ns, self.ns + self.m);
+        for (k, (src, dst)) in q
+            .chunks_exact(self.rows)
+            .zip(block.chunks_exact_mut(ld))
+            .enumerate()
+        {
+            dst[k..ns].copy_from_slice(&src[k..ns]);
+            dst[ns..].copy_from_slice(&src[self.top..self.top + self.m]);
+        }
+    }
+
+    /// Dense LDLᵀ of the panel, blocked by 4 columns, left-looking: each
+    /// block of columns less the earlier columns' contribution (4 × 4
+    /// tiles), then its own columns one by one, each scaled by its pivot.
+    /// Entries above the diagonal of the diagonal block are left as
+    /// garbage (never read). false on a zero or non-finite pivot.
+    #[inline(always)]
+    fn factorize(&self, q: &mut [f64], coefficients: &mut [f64], column: &mut [f64]) -> bool {
+        let (ns, lq) = (self.ns, self.rows);
+        for k0 in (0..ns).step_by(4) {
+            let k1 = (k0 + 4).min(ns);
+            if k0 > 0 {
+                // C[kk, j] = L[k0 + kk, j] d_j (4 × k0, column-major).
+                let c = &mut coefficients[..4 * k0];
+                for j in 0..k0 {
+                    let d = q[j * lq + j];
+                    for kk in 0..4 {
+                        c[j * 4 + kk] = if k0 + kk < k1 {
+                            q[j * lq + k0 + kk] * d
+                        } else {
+                            0.0
+                        };
+                    }
+                }
+                let (left, right) = q.split_at_mut(k0 * lq);
+                for i0 in (k0..lq).step_by(4) {
+                    let tile = tile_product(left, lq, c, 4, i0, 0);
+                    for (kk, t) in tile.iter().enumerate().take(k1 - k0) {
+                        for (u, &v) in right[kk * lq + i0..][..4].iter_mut().zip(t) {
+                            *u -= v;
+                        }
+                    }
+                }
+            }
+            for k in k0..k1 {
+                let (left, right) = q.split_at_mut(k * lq);
+                let col_k = &mut right[..lq];
+                if k > k0 {
+                    let c = &mut coefficients[..k - k0];
+                    for (j, cj) in (k0..k).zip(c.iter_mut()) {
+                        *cj = left[j * lq + k] * left[j * lq + j];
+                    }
+                    let t = &mut column[..lq - k0];
+                    product(t, &left[k0 * lq..], lq, k0, c);
+                    for (u, &v) in col_k[k0..].iter_mut().zip(t.iter()) {
+                        *u -= v;
+                    }
+                }
+                let d = col_k[k];
+                if d == 0.0 || !d.is_finite() {
+                    return false;
+                }
+                let inv = 1.0 / d;
+                for u in &mut col_k[k + 1..] {
+                    *u *= inv;
+                }
+            }
+        }
+        true
+    }
+}
+
+/// One 4 × 4 tile of A Bᵀ: `tile[jj][ii] = Σ_k A[i0 + ii, k] ·
+/// B[j0 + jj, k]`, A and B column-major with leading dimensions `lda`,
+/// `ldb` and as many columns as both hold (their lengths are whole
+/// columns): sixteen independent sums in four SIMD registers. (Columns by
+/// `chunks_exact`, so the bounds checks are loop-invariant and hoisted.)
+#[inline(always)]
+fn tile_product(
+    a: &[f64],
+    lda: usize,
+    b: &[f64],
+    ldb: usize,
+    i0: usize,
+    j0: usize,
+) -> [[f64; 4]; 4] {
+    let mut tile = [[0.0; 4]; 4];
+    for (ac, bc) in a.chunks_exact(lda).zip(b.chunks_exact(ldb)) {
+        let av: &[f64; 4] = ac[i0..i0 + 4].try_into().expect("four rows");
+        let bv: &[f64; 4] = bc[j0..j0 + 4].try_into().expect("four rows");
+        for (column, &bj) in tile.iter_mut().zip(bv) {
+            for (t, &ai) in column.iter_mut().zip(av) {
+                *t += ai * bj;
+            }
+        }
+    }
+    tile
+}
+
+/// `out[i] = Σ_k A[row0 + i, k] · c[k]` for i < out.len(), A column-major
+/// with leading dimension `lda` (whole columns; k over as many as both
+/// `a` and `c` hold): sixteen rows at a time so four independent sums hide
+/// the additions' latency, then four, then one.
+#[inline(always)]
+fn product(out: &mut [f64], a: &[f64], lda: usize, row0: usize, c: &[f64]) {
+    let mut wide = out.chunks_exact_mut(16);
+    let mut i = row0;
+    for o in &mut wide {
+        let mut acc = [0.0; 16];
+        for (col, &ck) in a.chunks_exact(lda).zip(c) {
+            let v: &[f64; 16] = col[i..i + 16].try_into().expect("sixteen rows");
+            for l in 0..16 {
+                acc[l] += v[l] * ck;
+            }
+        }
+        o.copy_from_slice(&acc);
+        i += 16;
+    }
+    let mut chunks = wide.into_remainder().chunks_exact_mut(4);
+    for o in &mut chunks {
+        let mut acc = [0.0; 4];
+        for (col, &ck) in a.chunks_exact(lda).zip(c) {
+            let v: &[f64; 4] = col[i..i + 4].try_into().expect("four rows");
+            for l in 0..4 {
+                acc[l] += v[l] * ck;
+            }
+        }
+        o.copy_from_slice(&acc);
+        i += 4;
+    }
+    for o in chunks.into_remainder() {
+        let mut acc = 0.0;
+        for (col, &ck) in a.chunks_exact(lda).zip(c) {
+            acc += col[i] * ck;
+        }
+        *o = acc;
+        i += 1;
+    }
+}
+
+/// [`SupernodalLdlt::solve_in_place`] as a `pulp::WithSimd` operation.
+struct Solve<'a, 'b> {
+    ldlt: &'a mut SupernodalLdlt,
+    x: &'b mut [f64],
+}
+
+impl pulp::WithSimd for Solve<'_, '_> {
+    type Output = ();
+
+    #[inline(always)]
+    fn with_simd<S: pulp::Simd>(self, _: S) {
+        let Self { ldlt: f, x } = self;
+        let n_super = f.begin.len() - 1;
+        // L y = b: the diagonal block, then the off-diagonal rows less
+        // L₂₁ y_s.
+        for s in 0..n_super {
+            let (b, ns) = (f.begin[s], f.begin[s + 1] - f.begin[s]);
+            let own = &f.rows[f.row_ptr[s]..f.row_ptr[s + 1]];
+            let ld = ns + own.len();
+            let values = &f.values[f.val_ptr[s]..f.val_ptr[s + 1]];
+            for k in 0..ns {
+                let xk = x[b + k];
+                for (xi, &l) in x[b + k + 1..b + ns]
+                    .iter_mut()
+                    .zip(&values[k * ld + k + 1..])
+                {
+                    *xi -= l * xk;
+                }
+            }
+            if !own.is_empty() {
+                let t = &mut f.column[..own.len()];
+                product(t, values, ld, ns, &x[b..b + ns]);
+                for (&r, &v) in own.iter().zip(t.iter()) {
+                    x[r] -= v;
+                }
+            }
+        }
+        // D z = y.
+        for s in 0..n_super {
+            let (b, ns) = (f.begin[s], f.begin[s + 1] - f.begin[s]);
+            let ld = ns + f.row_ptr[s + 1] - f.row_ptr[s];
+            let values = &f.values[f.val_ptr[s]..f.val_ptr[s + 1]];
+            for k in 0..ns {
+                x[b + k] /= values[k * ld + k];
+            }
+        }
+        // Lᵀ x = z: the off-diagonal rows' part L₂₁ᵀ x, then the diagonal
+        // block backwards.
+        for s in (0..n_super).rev() {
+            let (b, ns) = (f.begin[s], f.begin[s + 1] - f.begin[s]);
+            let own = &f.rows[f.row_ptr[s]..f.row_ptr[s + 1]];
+            let ld = ns + own.len();
+            let values = &f.values[f.val_ptr[s]..f.val_ptr[s + 1]];
+            if !own.is_empty() {
+                let g = &mut f.column[..own.len()];
+                for (gi, &r) in g.iter_mut().zip(own) {
+                    *gi = x[r];
+                }
+                for k in 0..ns {
+                    x[b + k] -= dot(&values[k * ld + ns..(k + 1) * ld], g);
+                }
+            }
+            for k in (0..ns).rev() {
+                let col = &values[k * ld + k + 1..k * ld + ns];
+                let mut sum = x[b + k];
+                for (&l, &xi) in col.iter().zip(&x[b + k + 1..b + ns]) {
+                    sum -= l * xi;
+                }
+                x[b + k] = sum;
+            }
+        }
+    }
+}
+
+/// Σ a_i b_i in four interleaved partial sums (a fixed order, whatever the
+/// SIMD width).
+#[inline(always)]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0; 4];
+    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (a4.remainder(), b4.remainder());
+    for (p, q) in a4.zip(b4) {
+        for l in 0..4 {
+            acc[l] += p[l] * q[l];
+        }
+    }
+    let mut sum = (acc[0] + acc[2]) + (acc[1] + acc[3]);
+    for (p, q) in ra.iter().zip(rb) {
+        sum += p * q;
+    }
+    sum
+}
