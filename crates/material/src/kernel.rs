@@ -230,7 +230,7 @@ impl IsoStress {
     /// [`crate::AXISYMMETRIC_COMPONENTS`] (a 5×5 block of the 9×9 matrix),
     /// term by term the same formula restricted to those rows and columns.
     /// Exact for any `H`; `F` must be axisymmetric (zero off-block entries).
-    #[inline]
+    #[inline(always)]
     pub fn tangent_axisymmetric(&self, k: &Kin, s: &Mat3) -> [[f64; 5]; 5] {
         use crate::AXISYMMETRIC_COMPONENTS as IDX;
         let pick = |m: &Mat3| IDX.map(|(i, j)| m[(i, j)]);
