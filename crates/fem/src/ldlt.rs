@@ -416,39 +416,38 @@ fn tile_product(
 /// the additions' latency, then four, then one.
 #[inline(always)]
 fn product(out: &mut [f64], a: &[f64], lda: usize, row0: usize, c: &[f64]) {
-    let mut wide = out.chunks_exact_mut(16);
+    let n = out.len();
+    let rest = product_rows::<16>(out, a, lda, row0, c);
+    let rest_start = row0 + n - rest.len();
+    let rest = product_rows::<4>(rest, a, lda, rest_start, c);
+    let rest_start = row0 + n - rest.len();
+    product_rows::<1>(rest, a, lda, rest_start, c);
+}
+
+/// [`product`] on the leading whole blocks of `W` rows of `out`; returns
+/// the rows left over.
+#[inline(always)]
+fn product_rows<'o, const W: usize>(
+    out: &'o mut [f64],
+    a: &[f64],
+    lda: usize,
+    row0: usize,
+    c: &[f64],
+) -> &'o mut [f64] {
+    let mut blocks = out.chunks_exact_mut(W);
     let mut i = row0;
-    for o in &mut wide {
-        let mut acc = [0.0; 16];
+    for o in &mut blocks {
+        let mut acc = [0.0; W];
         for (col, &ck) in a.chunks_exact(lda).zip(c) {
-            let v: &[f64; 16] = col[i..i + 16].try_into().expect("sixteen rows");
-            for l in 0..16 {
+            let v: &[f64; W] = col[i..i + W].try_into().expect("W rows");
+            for l in 0..W {
                 acc[l] += v[l] * ck;
             }
         }
         o.copy_from_slice(&acc);
-        i += 16;
+        i += W;
     }
-    let mut chunks = wide.into_remainder().chunks_exact_mut(4);
-    for o in &mut chunks {
-        let mut acc = [0.0; 4];
-        for (col, &ck) in a.chunks_exact(lda).zip(c) {
-            let v: &[f64; 4] = col[i..i + 4].try_into().expect("four rows");
-            for l in 0..4 {
-                acc[l] += v[l] * ck;
-            }
-        }
-        o.copy_from_slice(&acc);
-        i += 4;
-    }
-    for o in chunks.into_remainder() {
-        let mut acc = 0.0;
-        for (col, &ck) in a.chunks_exact(lda).zip(c) {
-            acc += col[i] * ck;
-        }
-        *o = acc;
-        i += 1;
-    }
+    blocks.into_remainder()
 }
 
 /// [`SupernodalLdlt::solve_in_place`] as a `pulp::WithSimd` operation.

@@ -529,38 +529,77 @@ mod tests {
         s
     }
 
-    /// faer's symbolic factorisation of the stored pattern (as `new` makes
-    /// it), for faer's own numeric factorisation.
-    fn faer_symbolic(s: &SparseSystem) -> faer::sparse::linalg::cholesky::SymbolicCholesky<usize> {
-        let stored = s.symbolic.as_ref();
-        let mut upper: Vec<Vec<usize>> = vec![Vec::new(); s.n];
-        for c in 0..s.n {
-            for r in stored.row_idx_of_col(c) {
-                upper[r].push(c);
+    /// faer's own numeric LDLᵀ on the structure `new` makes (faer's
+    /// symbolic factorisation of the stored pattern): the second
+    /// implementation the tests and the timing probe compare against.
+    struct FaerLdlt {
+        chol: faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
+        values: Vec<f64>,
+        stack: faer::dyn_stack::MemBuffer,
+    }
+
+    impl FaerLdlt {
+        fn new(s: &SparseSystem) -> Self {
+            use faer::Par;
+            let stored = s.symbolic.as_ref();
+            let mut upper: Vec<Vec<usize>> = vec![Vec::new(); s.n];
+            for c in 0..s.n {
+                for r in stored.row_idx_of_col(c) {
+                    upper[r].push(c);
+                }
+            }
+            let chol = factorize_symbolic_cholesky(
+                csc(s.n, &mut upper).as_ref(),
+                faer::Side::Lower,
+                SymmetricOrdering::Identity,
+                supernodal_params(),
+            )
+            .unwrap();
+            let stack = faer::dyn_stack::MemBuffer::new(faer::dyn_stack::StackReq::any_of(&[
+                chol.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
+                chol.solve_in_place_scratch::<f64>(1, Par::Seq),
+            ]));
+            Self {
+                values: vec![0.0; chol.len_val()],
+                chol,
+                stack,
             }
         }
-        factorize_symbolic_cholesky(
-            csc(s.n, &mut upper).as_ref(),
-            faer::Side::Lower,
-            SymmetricOrdering::Identity,
-            supernodal_params(),
-        )
-        .unwrap()
+
+        fn factorize(&mut self, s: &SparseSystem) {
+            use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
+            self.chol
+                .factorize_numeric_ldlt(
+                    &mut self.values,
+                    SparseColMatRef::new(s.symbolic.as_ref(), &s.values),
+                    faer::Side::Lower,
+                    LdltRegularization::default(),
+                    faer::Par::Seq,
+                    faer::dyn_stack::MemStack::new(&mut self.stack),
+                    Default::default(),
+                )
+                .unwrap();
+        }
+
+        fn solve(&mut self, x: &mut [f64]) {
+            faer::sparse::linalg::cholesky::LdltRef::new(&self.chol, &self.values)
+                .solve_in_place_with_conj(
+                    faer::Conj::No,
+                    faer::ColMut::from_slice_mut(x).as_mat_mut(),
+                    faer::Par::Seq,
+                    faer::dyn_stack::MemStack::new(&mut self.stack),
+                );
+        }
     }
 
     /// The numeric LDLᵀ of `crate::ldlt` against faer's own numeric
     /// factorisation on the same structure (a second implementation).
     #[test]
     fn supernodal_factors_and_solution_equal_faers() {
-        use faer::dyn_stack::{MemBuffer, MemStack};
-        use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
-        use faer::sparse::linalg::cholesky::LdltRef;
-        use faer::{Conj, Par, Side};
-
         let mut s = fe_like_system(14, 11);
         let n = s.n;
-        let chol = faer_symbolic(&s);
-        let SymbolicCholeskyRaw::Supernodal(structure) = chol.raw() else {
+        let mut faer = FaerLdlt::new(&s);
+        let SymbolicCholeskyRaw::Supernodal(structure) = faer.chol.raw() else {
             panic!("supernodal expected");
         };
         assert!(
@@ -568,38 +607,19 @@ mod tests {
             "{}",
             structure.n_supernodes()
         );
-        let mut faer_values = vec![0.0; chol.len_val()];
-        let mut stack = MemBuffer::new(faer::dyn_stack::StackReq::any_of(&[
-            chol.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
-            chol.solve_in_place_scratch::<f64>(1, Par::Seq),
-        ]));
-        chol.factorize_numeric_ldlt(
-            &mut faer_values,
-            SparseColMatRef::new(s.symbolic.as_ref(), &s.values),
-            Side::Lower,
-            LdltRegularization::default(),
-            Par::Seq,
-            MemStack::new(&mut stack),
-            Default::default(),
-        )
-        .unwrap();
+        faer.factorize(&s);
 
         let ours = s.ldlt.as_mut().unwrap();
         assert!(ours.factorize(&s.values));
-        let scale = faer_values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for (k, (a, b)) in ours.values().iter().zip(&faer_values).enumerate() {
+        let scale = faer.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (k, (a, b)) in ours.values().iter().zip(&faer.values).enumerate() {
             assert!((a - b).abs() <= 1e-12 * scale, "entry {k}: {a} vs {b}");
         }
         let rhs: Vec<f64> = (0..n).map(|i| (0.37 * i as f64).sin()).collect();
         let mut x = rhs.clone();
         ours.solve_in_place(&mut x);
         let mut y = rhs.clone();
-        LdltRef::new(&chol, &faer_values).solve_in_place_with_conj(
-            Conj::No,
-            faer::ColMut::from_slice_mut(&mut y).as_mat_mut(),
-            Par::Seq,
-            MemStack::new(&mut stack),
-        );
+        faer.solve(&mut y);
         let ymax = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         for i in 0..n {
             assert!(
@@ -617,41 +637,17 @@ mod tests {
     #[test]
     #[ignore = "timing probe: cargo test -p nlvid-fem --release --lib ldlt_against_faer_timing -- --ignored --nocapture"]
     fn ldlt_against_faer_timing() {
-        use faer::dyn_stack::{MemBuffer, MemStack};
-        use faer::linalg::cholesky::ldlt::factor::LdltRegularization;
-        use faer::sparse::linalg::cholesky::LdltRef;
-        use faer::{Conj, Par, Side};
         use std::time::Instant;
-
         for (nx, ny) in [(20, 20), (31, 31), (45, 45)] {
             let mut s = fe_like_system(nx, ny);
-            let chol = faer_symbolic(&s);
-            let mut faer_values = vec![0.0; chol.len_val()];
-            let mut stack = MemBuffer::new(faer::dyn_stack::StackReq::any_of(&[
-                chol.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
-                chol.solve_in_place_scratch::<f64>(1, Par::Seq),
-            ]));
+            let mut faer = FaerLdlt::new(&s);
             let mut x = vec![1.0; s.n];
             let (mut faer_best, mut ours_best) = ([f64::INFINITY; 2], [f64::INFINITY; 2]);
             for _ in 0..200 {
                 let t = Instant::now();
-                chol.factorize_numeric_ldlt(
-                    &mut faer_values,
-                    SparseColMatRef::new(s.symbolic.as_ref(), &s.values),
-                    Side::Lower,
-                    LdltRegularization::default(),
-                    Par::Seq,
-                    MemStack::new(&mut stack),
-                    Default::default(),
-                )
-                .unwrap();
+                faer.factorize(&s);
                 let t1 = Instant::now();
-                LdltRef::new(&chol, &faer_values).solve_in_place_with_conj(
-                    Conj::No,
-                    faer::ColMut::from_slice_mut(&mut x).as_mat_mut(),
-                    Par::Seq,
-                    MemStack::new(&mut stack),
-                );
+                faer.solve(&mut x);
                 let t2 = Instant::now();
                 faer_best[0] = faer_best[0].min((t1 - t).as_secs_f64());
                 faer_best[1] = faer_best[1].min((t2 - t1).as_secs_f64());
