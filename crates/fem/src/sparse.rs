@@ -500,8 +500,14 @@ mod tests {
     /// FE-like blocks (Q4 elements on an nx × ny node grid, two dofs per
     /// node), seeded values, a diagonal made indefinite on every 7th dof.
     fn fe_like_system(nx: usize, ny: usize) -> SparseSystem {
+        fe_like_system_with(nx, ny, &[])
+    }
+
+    /// [`fe_like_system`] with one more dense block over the equations
+    /// `dense` (like a fluid cavity coupling a capsule's wall).
+    fn fe_like_system_with(nx: usize, ny: usize, dense: &[usize]) -> SparseSystem {
         let node = |i: usize, j: usize| j * nx + i;
-        let mut blocks = Vec::new();
+        let mut blocks = vec![dense.to_vec()];
         for j in 0..ny - 1 {
             for i in 0..nx - 1 {
                 let nodes = [
@@ -628,6 +634,24 @@ mod tests {
                 x[i],
                 y[i]
             );
+        }
+    }
+
+    /// Supernodes large enough for faer's dense kernels (here a dense
+    /// coupling of 160 equations) give the same factors as faer's own
+    /// numeric factorisation, next to the tiled small ones.
+    #[test]
+    fn large_supernodes_equal_faers() {
+        let dense: Vec<usize> = (0..160).map(|k| 3 * k + 1).collect();
+        let mut s = fe_like_system_with(20, 20, &dense);
+        let mut faer = FaerLdlt::new(&s);
+        faer.factorize(&s);
+        let ours = s.ldlt.as_mut().unwrap();
+        assert!(ours.large_supernodes() >= 1, "{ours:?}");
+        assert!(ours.factorize(&s.values));
+        let scale = faer.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (k, (a, b)) in ours.values().iter().zip(&faer.values).enumerate() {
+            assert!((a - b).abs() <= 1e-11 * scale, "entry {k}: {a} vs {b}");
         }
     }
 
