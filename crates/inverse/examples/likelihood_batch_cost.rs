@@ -82,8 +82,8 @@ fn main() {
     let _ = k.mse_scale(&pts[0]).expect("v(x)");
     let data = s.response(&pts[7]).expect("curve");
     let noise = 0.02 * data.iter().fold(0.0f64, |a, &b| a.max(b));
-    let gauss = CurveLikelihood::new(&s, &data, noise, false).expect("likelihood");
-    let student = CurveLikelihood::new(&s, &data, noise, true).expect("likelihood");
+    let gauss = CurveLikelihood::new(&s, &data, noise, false, false).expect("likelihood");
+    let student = CurveLikelihood::new(&s, &data, noise, true, false).expect("likelihood");
     let variances = gauss.calibrated_variances(&pts).expect("v");
     let run = || match mode.as_str() {
         "one" => one_path(k, &pts),

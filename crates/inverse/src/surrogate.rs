@@ -52,7 +52,16 @@ pub struct KrigingSurrogate {
     student: OnceLock<std::result::Result<VarianceCalibration, String>>,
     /// The cross-validated output covariance, computed on first use.
     cv_cov: OnceLock<std::result::Result<nlvid_surrogate::OutputCovariance, String>>,
+    /// The per-direction calibration and its output covariance, computed
+    /// on first use.
+    directions: OnceLock<std::result::Result<DirectionCalibration, String>>,
 }
+
+/// A per-direction calibration of the Kriging variance
+/// ([`VarianceCalibration::fit_directions`]) with the output covariance
+/// whose eigen-directions it scales
+/// ([`KrigingModel::output_covariance_cv_scaled`]).
+type DirectionCalibration = (VarianceCalibration, nlvid_surrogate::OutputCovariance);
 
 fn model_err(x: &[f64], e: &SurrogateError) -> InverseError {
     InverseError::Model {
@@ -105,6 +114,7 @@ impl KrigingSurrogate {
             gaussian: OnceLock::new(),
             student: OnceLock::new(),
             cv_cov: OnceLock::new(),
+            directions: OnceLock::new(),
         };
         s.check_basis_form()?;
         Ok(s)
@@ -256,6 +266,41 @@ impl KrigingSurrogate {
             fit(&self.gaussian, VarianceCalibration::fit)
         }
         .map_err(|e| InverseError::InvalidSetting(format!("Kriging variance calibration: {e}")))
+    }
+
+    /// The per-direction calibration of the Kriging variance, a scale per
+    /// eigen-direction of the cross-validated Σ with one exponent β
+    /// ([`VarianceCalibration::fit_directions`] on the same leave-one-out
+    /// data as [`KrigingSurrogate::variance_calibration`]), with the output
+    /// covariance K it scales
+    /// ([`KrigingModel::output_covariance_cv_scaled`]): the surrogate
+    /// error is N(0, α v(x)^β K). Computed once per surrogate.
+    ///
+    /// # Errors
+    /// As [`KrigingSurrogate::variance_calibration`] and
+    /// [`KrigingSurrogate::output_covariance_cv`].
+    pub fn direction_calibration(
+        &self,
+    ) -> Result<(VarianceCalibration, nlvid_surrogate::OutputCovariance)> {
+        self.directions
+            .get_or_init(|| {
+                let data = self
+                    .calibration_data
+                    .get_or_init(|| {
+                        self.kriging
+                            .loo_calibration_data()
+                            .map_err(|e| e.to_string())
+                    })
+                    .clone()?;
+                let cal = VarianceCalibration::fit_directions(&data).map_err(|e| e.to_string())?;
+                let cov = self
+                    .kriging
+                    .output_covariance_cv_scaled(&cal.directions)
+                    .map_err(|e| e.to_string())?;
+                Ok((cal, cov))
+            })
+            .clone()
+            .map_err(|e| InverseError::InvalidSetting(format!("Kriging variance calibration: {e}")))
     }
 
     /// The process covariance K of the outputs with the kriged outputs'

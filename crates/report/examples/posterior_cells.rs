@@ -12,7 +12,8 @@
 //! cargo run --release -p nlvid-report --example posterior_cells \
 //!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=BOOL] \
 //!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [check=N] \
-//!     [delayed=BOOL,...] [seed=N] [prior=BOOL] [heavy_tails=BOOL] [cell ...]
+//!     [delayed=BOOL,...] [seed=N] [prior=BOOL] [heavy_tails=BOOL] \
+//!     [direction_scales=BOOL] [cell ...]
 //! ```
 //! (`prior=true`: the cells drawn from the posteriors' prior,
 //! `DemoSpec::from_prior`, as `posterior_coverage … prior`.)
@@ -55,6 +56,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ridge_time: bool = opt("ridge_time").map_or(Ok(false), |v| v.parse())?;
     let threads: usize = opt("threads").map_or(Ok(1), |v| v.parse())?;
     let heavy_tails: Option<bool> = opt("heavy_tails").map(|v| v.parse()).transpose()?;
+    let direction_scales: Option<bool> = opt("direction_scales").map(|v| v.parse()).transpose()?;
     // The tempering options take comma-separated lists: every
     // combination is sampled in turn on the same curves (one curve
     // writing for several settings).
@@ -147,6 +149,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 check_every: check.unwrap_or(ps.check_every),
                 delayed_acceptance: da.unwrap_or(ps.delayed_acceptance),
                 heavy_tails: heavy_tails.unwrap_or(ps.heavy_tails),
+                direction_scales: direction_scales.unwrap_or(ps.direction_scales),
                 ..ps.clone()
             };
             println!(

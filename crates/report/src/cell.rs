@@ -478,6 +478,7 @@ fn posterior(
         check_every: p.check_every,
         delayed_acceptance: p.delayed_acceptance,
         heavy_tails: p.heavy_tails,
+        direction_scales: p.direction_scales,
         ..PosteriorSettings::new(settings.hold_end)
     };
     match sample_posterior_fixed(fitter.surrogate(), fixed, &base.data, x_hat, &ps) {

@@ -638,6 +638,7 @@ pub struct CohortSettings {
 /// check_every = 50  # after the first round, R-hat checked every this many kept steps
 /// delayed_acceptance = true  # screen proposals on the Kriging mean first (exact)
 /// heavy_tails = false  # true: surrogate error Student-t (nu from the meta-model's LOO)
+/// direction_scales = false  # true: a Gaussian surrogate error scale per direction (LOO)
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PosteriorStudy {
@@ -676,6 +677,10 @@ pub struct PosteriorStudy {
     /// Student-t surrogate error (`PosteriorSettings::heavy_tails`).
     #[serde(default = "default_heavy_tails")]
     pub heavy_tails: bool,
+    /// A surrogate error scale per direction
+    /// (`PosteriorSettings::direction_scales`).
+    #[serde(default)]
+    pub direction_scales: bool,
 }
 
 fn default_heavy_tails() -> bool {
@@ -734,6 +739,7 @@ impl FromSection for PosteriorSection {
             heavy_tails: s
                 .opt_bool("heavy_tails")?
                 .unwrap_or_else(default_heavy_tails),
+            direction_scales: s.opt_bool("direction_scales")?.unwrap_or(false),
         };
         Ok(Self(enabled.then_some(p)))
     }

@@ -140,16 +140,20 @@ impl<'a> CurveLikelihood<'a> {
     /// Prepares the likelihood of `data` (on the surrogate's grid) with
     /// measurement noise sd `noise` (e.g. [`noise_sd`]) and the surrogate
     /// error Student-t (`heavy_tails`) or Gaussian
-    /// ([`KrigingSurrogate::variance_calibration`]).
+    /// ([`KrigingSurrogate::variance_calibration`]); Gaussian with a scale
+    /// per eigen-direction of the cross-validated Σ with `direction_scales`
+    /// ([`KrigingSurrogate::direction_calibration`]).
     ///
     /// # Errors
     /// Data of the wrong length or not finite, σ ≤ 0, a surrogate without
-    /// a linear predictor or Kriging variance.
+    /// a linear predictor or Kriging variance, `heavy_tails` together with
+    /// `direction_scales`.
     pub fn new(
         surrogate: &'a KrigingSurrogate,
         data: &[f64],
         noise: f64,
         heavy_tails: bool,
+        direction_scales: bool,
     ) -> Result<Self> {
         let m = Model::times(surrogate).len();
         check_len("likelihood data", m, data.len())?;
@@ -158,8 +162,21 @@ impl<'a> CurveLikelihood<'a> {
                 "likelihood: data must be finite and the noise sd > 0 (got {noise})"
             )));
         }
-        let cov = surrogate.output_covariance_cv()?;
-        let calibration = surrogate.variance_calibration(heavy_tails)?;
+        let (cov, calibration) = if direction_scales {
+            if heavy_tails {
+                return Err(InverseError::InvalidSetting(
+                    "likelihood: per-direction scales are Gaussian only (not with heavy_tails)"
+                        .into(),
+                ));
+            }
+            let (cal, cov) = surrogate.direction_calibration()?;
+            (cov, cal)
+        } else {
+            (
+                surrogate.output_covariance_cv()?,
+                surrogate.variance_calibration(heavy_tails)?,
+            )
+        };
         let d = DVector::from_column_slice(data);
         let form = match cov {
             OutputCovariance::LowRank { m: mm, k, factor } if surrogate.is_reduced() => {
@@ -331,7 +348,7 @@ mod tests {
             .enumerate()
             .map(|(j, y)| y + noise * ((j * 7919 % 101) as f64 / 50.0 - 1.0))
             .collect();
-        let lik = CurveLikelihood::new(&s, &data, noise, false).expect("lik");
+        let lik = CurveLikelihood::new(&s, &data, noise, false, false).expect("lik");
         let OutputCovariance::LowRank { m, k, factor } =
             s.kriging().output_covariance_cv().unwrap()
         else {
@@ -365,6 +382,65 @@ mod tests {
         }
     }
 
+    /// With `direction_scales` the likelihood is the dense Gaussian with
+    /// Σ = σ²I + α v(x)^β·diag(σ_y) V Σ' Vᵀ diag(σ_y), Σ' = Σ_k a_k λ_k q_k q_kᵀ
+    /// over the eigenpairs of Σ_CV taken here by nalgebra (second method;
+    /// the scales in descending order of λ), at three points. Not with
+    /// `heavy_tails`.
+    #[test]
+    fn per_direction_likelihood_equals_the_dense_gaussian() {
+        let s = demo_surrogate();
+        let km = s.kriging();
+        let pca = km.pca.as_ref().expect("PCA model");
+        let (m, q) = (km.n_outputs, km.n_kriged());
+        let x0 = [1500.0, 0.3, 0.25, 0.5, 10.0];
+        let y0 = s.response(&x0).expect("y");
+        let noise = 0.02 * y0.iter().fold(0.0f64, |a, &b| a.max(b));
+        let data: Vec<f64> = y0
+            .iter()
+            .enumerate()
+            .map(|(j, y)| y + noise * ((j * 7919 % 101) as f64 / 50.0 - 1.0))
+            .collect();
+        let lik = CurveLikelihood::new(&s, &data, noise, false, true).expect("lik");
+        assert!(CurveLikelihood::new(&s, &data, noise, true, true).is_err());
+        let (cal, _) = s.direction_calibration().unwrap();
+        assert!(
+            cal.directions.iter().any(|a| (a - 1.0).abs() > 0.1),
+            "{cal:?}"
+        );
+        let eig = DMatrix::from_column_slice(q, q, &km.cv_process_covariance().unwrap())
+            .symmetric_eigen();
+        let mut order: Vec<usize> = (0..q).collect();
+        order.sort_by(|&i, &j| eig.eigenvalues[j].total_cmp(&eig.eigenvalues[i]));
+        let mut scaled = DMatrix::<f64>::zeros(q, q);
+        for (c, &e) in order.iter().enumerate() {
+            let qe = eig.eigenvectors.column(e);
+            scaled += qe * qe.transpose() * (cal.directions[c] * eig.eigenvalues[e]);
+        }
+        let dv = DMatrix::from_fn(m, q, |j, a| km.y_std[j] * pca.basis[a * m + j]);
+        let k = &dv * scaled * dv.transpose();
+        for x in [
+            x0,
+            [1400.0, 0.35, 0.2, 0.3, 14.0],
+            [3000.0, 0.1, 0.6, 1.5, 5.0],
+        ] {
+            let mut sigma = &k * cal.apply(s.mse_scale(&x).unwrap());
+            for j in 0..m {
+                sigma[(j, j)] += noise * noise;
+            }
+            let y = s.response(&x).unwrap();
+            let r = DVector::from_iterator(m, data.iter().zip(&y).map(|(d, y)| d - y));
+            let chol = sigma.cholesky().expect("spd");
+            let logdet: f64 = 2.0 * chol.l().diagonal().iter().map(|l| l.ln()).sum::<f64>();
+            let dense = -0.5 * (logdet + r.dot(&chol.solve(&r)));
+            let ours = lik.value(&x).unwrap();
+            assert!(
+                (ours - dense).abs() < 1e-7 * dense.abs().max(1.0),
+                "x {x:?}: {ours} vs {dense}"
+            );
+        }
+    }
+
     /// ln L of a batch on the demo meta-model (n = 970 sites) is bitwise
     /// the same on 1 and 2 threads, for the batch sizes the sampler makes
     /// (up to 64; fewer when proposals fall outside the prior).
@@ -373,8 +449,8 @@ mod tests {
         let s = demo_surrogate();
         let x0 = [1500.0, 0.3, 0.25, 0.5, 10.0];
         let data = s.response(&x0).expect("y");
-        let one = CurveLikelihood::new(&s, &data, 1e-10, true).expect("lik");
-        let two = CurveLikelihood::new(&s, &data, 1e-10, true)
+        let one = CurveLikelihood::new(&s, &data, 1e-10, true, false).expect("lik");
+        let two = CurveLikelihood::new(&s, &data, 1e-10, true, false)
             .expect("lik")
             .with_threads(2);
         let xs: Vec<Vec<f64>> = (0..64)

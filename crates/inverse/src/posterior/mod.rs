@@ -156,6 +156,13 @@ pub struct PosteriorSettings {
     /// "Session 17").
     #[serde(default = "default_heavy_tails")]
     pub heavy_tails: bool,
+    /// The Gaussian surrogate error with a scale per eigen-direction of
+    /// the cross-validated output covariance and one exponent β
+    /// (`VarianceCalibration::fit_directions`; [`CurveLikelihood`]); off
+    /// (the default): one scale over all directions. Not with
+    /// `heavy_tails`. A study key (docs/theory/inverse.md, "Session 18").
+    #[serde(default)]
+    pub direction_scales: bool,
 }
 
 fn default_delayed_acceptance() -> bool {
@@ -251,6 +258,7 @@ impl PosteriorSettings {
             check_every: default_check_every(),
             delayed_acceptance: default_delayed_acceptance(),
             heavy_tails: default_heavy_tails(),
+            direction_scales: false,
         }
     }
 }
@@ -510,8 +518,14 @@ pub fn sample_posterior_fixed(
     }
     let domain = fixed.free_domain().clone();
     let noise = noise_sd(Model::times(surrogate), data)?;
-    let lik = CurveLikelihood::new(surrogate, data, noise, settings.heavy_tails)?
-        .with_threads(settings.threads);
+    let lik = CurveLikelihood::new(
+        surrogate,
+        data,
+        noise,
+        settings.heavy_tails,
+        settings.direction_scales,
+    )?
+    .with_threads(settings.threads);
     let inside = |u: &[f64]| {
         u.iter().all(|v| (0.0..=1.0).contains(v)) && domain.feasible(&domain.from_unit(u), 0.0)
     };
