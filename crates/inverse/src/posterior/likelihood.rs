@@ -331,6 +331,26 @@ mod tests {
         .expect("demo meta-model")
     }
 
+    /// ln N(data; s(x), Σ + σ² I) up to the constant, with Σ + σ² I built
+    /// and factorised as an m × m matrix (the tests' second method).
+    fn dense_gaussian_ln_l(
+        mut sigma: DMatrix<f64>,
+        noise: f64,
+        data: &[f64],
+        s: &KrigingSurrogate,
+        x: &[f64],
+    ) -> f64 {
+        let m = data.len();
+        for j in 0..m {
+            sigma[(j, j)] += noise * noise;
+        }
+        let y = s.response(x).unwrap();
+        let r = DVector::from_iterator(m, data.iter().zip(&y).map(|(d, y)| d - y));
+        let chol = sigma.cholesky().expect("spd");
+        let logdet: f64 = 2.0 * chol.l().diagonal().iter().map(|l| l.ln()).sum::<f64>();
+        -0.5 * (logdet + r.dot(&chol.solve(&r)))
+    }
+
     /// The Woodbury form equals the dense Gaussian log-density with
     /// Σ = σ²I + α v(x)^β·diag(σ_y) V Σ_z Vᵀ diag(σ_y) (the calibrated
     /// Kriging variance) built and factorised as an m × m matrix (second
@@ -365,15 +385,7 @@ mod tests {
             [3000.0, 0.1, 0.6, 1.5, 5.0],
         ] {
             let v = cal.alpha * s.mse_scale(&x).unwrap().powf(cal.beta);
-            let mut sigma = &u * u.transpose() * v;
-            for j in 0..m {
-                sigma[(j, j)] += noise * noise;
-            }
-            let y = s.response(&x).unwrap();
-            let r = DVector::from_iterator(m, data.iter().zip(&y).map(|(d, y)| d - y));
-            let chol = sigma.cholesky().expect("spd");
-            let logdet: f64 = 2.0 * chol.l().diagonal().iter().map(|l| l.ln()).sum::<f64>();
-            let dense = -0.5 * (logdet + r.dot(&chol.solve(&r)));
+            let dense = dense_gaussian_ln_l(&u * u.transpose() * v, noise, &data, &s, &x);
             let ours = lik.value(&x).unwrap();
             assert!(
                 (ours - dense).abs() < 1e-7 * dense.abs().max(1.0),
@@ -424,15 +436,8 @@ mod tests {
             [1400.0, 0.35, 0.2, 0.3, 14.0],
             [3000.0, 0.1, 0.6, 1.5, 5.0],
         ] {
-            let mut sigma = &k * cal.apply(s.mse_scale(&x).unwrap());
-            for j in 0..m {
-                sigma[(j, j)] += noise * noise;
-            }
-            let y = s.response(&x).unwrap();
-            let r = DVector::from_iterator(m, data.iter().zip(&y).map(|(d, y)| d - y));
-            let chol = sigma.cholesky().expect("spd");
-            let logdet: f64 = 2.0 * chol.l().diagonal().iter().map(|l| l.ln()).sum::<f64>();
-            let dense = -0.5 * (logdet + r.dot(&chol.solve(&r)));
+            let sigma = &k * cal.apply(s.mse_scale(&x).unwrap());
+            let dense = dense_gaussian_ln_l(sigma, noise, &data, &s, &x);
             let ours = lik.value(&x).unwrap();
             assert!(
                 (ours - dense).abs() < 1e-7 * dense.abs().max(1.0),
