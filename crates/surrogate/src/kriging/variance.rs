@@ -1182,6 +1182,21 @@ mod tests {
     use crate::{Correlation, Regression};
     use faer::Mat;
 
+    /// A seeded source of pairs (standard normal by Box–Muller, uniform on
+    /// [0, 1)).
+    fn seeded_normal(seed: u64) -> impl FnMut() -> (f64, f64) {
+        use rand::{RngExt, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        move || {
+            let u1: f64 = 1.0 - rng.random::<f64>();
+            let u2: f64 = rng.random();
+            (
+                (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos(),
+                rng.random::<f64>(),
+            )
+        }
+    }
+
     /// n sites of a seeded 2-D Latin hypercube on [0.5, 2] × [-1, 1] and
     /// three smooth outputs.
     fn model(scale: bool) -> KrigingModel {
@@ -1365,16 +1380,7 @@ mod tests {
     /// (w = 1) it finds ν large (or ∞) with the Gaussian's (α, β).
     #[test]
     fn student_calibration_recovers_a_known_heavy_tail() {
-        use rand::{RngExt, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
-        let mut normal = move || {
-            let u1: f64 = 1.0 - rng.random::<f64>();
-            let u2: f64 = rng.random();
-            (
-                (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos(),
-                rng.random::<f64>(),
-            )
-        };
+        let mut normal = seeded_normal(21);
         let (n, k, alpha, beta) = (3000, 8, 0.05, 0.85);
         for nu in [Some(3usize), Some(6), None] {
             let mut data = CalibrationData {
@@ -1425,16 +1431,7 @@ mod tests {
     /// [`VarianceCalibration::fit`]; data without directions are refused.
     #[test]
     fn direction_calibration_recovers_known_scales() {
-        use rand::{RngExt, SeedableRng};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(18);
-        let mut normal = move || {
-            let u1: f64 = 1.0 - rng.random::<f64>();
-            let u2: f64 = rng.random();
-            (
-                (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos(),
-                rng.random::<f64>(),
-            )
-        };
+        let mut normal = seeded_normal(18);
         let (n, alpha, beta) = (3000, 0.1, 0.85);
         for rel in [[0.3, 1.0, 1.0, 3.0], [1.0; 4]] {
             let k = rel.len();
