@@ -20,6 +20,11 @@
 //! L₂₁ D L₂₁ᵀ is subtracted from the ancestors' blocks, so every supernode
 //! has received all its updates when its turn comes.
 //!
+//! The dense work of a small supernode runs in zero-padded 4 × 4 register
+//! tiles ([`Panel`], [`tile_product`]); a large one ([`LARGE_BLOCK`], e.g.
+//! the 3D capsule's) goes to faer's cache-blocked dense kernels, which win
+//! there (docs/theory/fem.md "Session 18").
+//!
 //! No pivoting: a zero or non-finite pivot makes [`SupernodalLdlt::factorize`]
 //! return false, and the caller solves by LU instead (crates/fem/src/sparse.rs).
 
