@@ -76,16 +76,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .map_err(|e| format!("{e:?}"))?;
     let m = km.n_outputs;
     let shares = |w: &[f64]| -> Vec<f64> {
-        let Some(pca) = &km.pca else {
+        let Some(l) = km.score_loadings(w) else {
             return vec![f64::NAN; k];
         };
-        let l: Vec<f64> = (0..q)
-            .map(|a| {
-                (0..m)
-                    .map(|j| pca.basis[a * m + j] * km.y_std[j] * w[j])
-                    .sum()
-            })
-            .collect();
         let parts: Vec<f64> = (0..k)
             .map(|c| {
                 let e = q - 1 - c; // descending

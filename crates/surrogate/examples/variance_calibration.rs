@@ -93,13 +93,7 @@ fn per_direction(
     // Per functional w: its score loadings (Vᵀ D w)_a and predicted
     // variance per unit calibrated v, wᵀ D V Σ Vᵀ D w.
     let functional = |w: &[f64]| {
-        let l: Vec<f64> = (0..q)
-            .map(|a| {
-                (0..m)
-                    .map(|j| pca.basis[a * m + j] * km.y_std[j] * w[j])
-                    .sum()
-            })
-            .collect();
+        let l = km.score_loadings(w).expect("a PCA model");
         (0..q)
             .flat_map(|a| (0..q).map(move |b| (a, b)))
             .map(|(a, b)| l[a] * sigma[a * q + b] * l[b])

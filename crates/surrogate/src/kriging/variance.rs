@@ -261,6 +261,26 @@ impl OutputCovariance {
 }
 
 impl KrigingModel {
+    /// Score loadings l = Vᵀ D w of a linear functional wᵀy of the outputs
+    /// (D = diag of the outputs' standard deviations, V the PCA basis): the
+    /// functional's error is lᵀe for an error e in the kriged scores, so its
+    /// variance under a score covariance Σ is lᵀ Σ l. None without a PCA;
+    /// `w` must have one weight per output.
+    pub fn score_loadings(&self, w: &[f64]) -> Option<Vec<f64>> {
+        let pca = self.pca.as_ref()?;
+        let m = self.n_outputs;
+        debug_assert_eq!(w.len(), m);
+        Some(
+            (0..pca.n_components)
+                .map(|a| {
+                    (0..m)
+                        .map(|j| pca.basis[a * m + j] * self.y_std[j] * w[j])
+                        .sum()
+                })
+                .collect(),
+        )
+    }
+
     /// v(x) = s(x)²·φ(x): the factor with which every output's MSE
     /// (report eq. 2.20) scales the process covariance,
     /// `MSE_j(x) = v(x)·K_jj`. Value only, O(n²) (one triangular solve).
@@ -1834,6 +1854,46 @@ mod covariance_tests {
     /// K (U Uᵀ entry by entry), it is linear in the scales
     /// (K(a) + K(b) = K(a + b)), and the LOO data's coordinates per
     /// direction sum to their energies; without a PCA it is refused.
+    /// A functional's variance from its score loadings, lᵀ Σ_CV l, equals
+    /// wᵀ K w with the output covariance K built by
+    /// [`KrigingModel::output_covariance_cv`] (a second path); no PCA: None.
+    #[test]
+    fn score_loadings_give_the_functionals_variance() {
+        let m = model(Some(0.99999), false);
+        let OutputCovariance::LowRank { m: mo, k, factor } = m.output_covariance_cv().expect("cv")
+        else {
+            panic!("a PCA model has a low-rank covariance");
+        };
+        let sigma = m.cv_process_covariance().expect("Σ_CV");
+        let q = m.n_kriged();
+        for w in [
+            (0..mo)
+                .map(|j| f64::from(u8::from(j == mo - 1)))
+                .collect::<Vec<_>>(),
+            (0..mo).map(|j| (0.3 * j as f64).sin()).collect(),
+        ] {
+            let l = m.score_loadings(&w).expect("PCA");
+            assert_eq!(l.len(), q);
+            let via_scores: f64 = (0..q)
+                .flat_map(|a| (0..q).map(move |b| (a, b)))
+                .map(|(a, b)| l[a] * sigma[a * q + b] * l[b])
+                .sum();
+            let via_outputs: f64 = (0..k)
+                .map(|a| {
+                    (0..mo)
+                        .map(|i| factor[a * mo + i] * w[i])
+                        .sum::<f64>()
+                        .powi(2)
+                })
+                .sum();
+            assert!(
+                (via_scores - via_outputs).abs() <= 1e-10 * via_outputs.abs(),
+                "{via_scores} vs {via_outputs}"
+            );
+        }
+        assert!(model(None, false).score_loadings(&[1.0; 40]).is_none());
+    }
+
     #[test]
     fn scaled_output_covariance_is_linear_in_the_direction_scales() {
         let m = model(Some(0.99999), false);
