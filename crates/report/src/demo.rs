@@ -47,6 +47,36 @@ pub struct GroupSpec {
     pub tau2: (f64, f64),
 }
 
+impl GroupSpec {
+    /// Draws a cell of this group inside the Table 5.3 domain (redraws
+    /// otherwise), 2 % (scaled) inside every bound. The normal deviates are
+    /// drawn in the order G0, g1, τ1, g2, τ2 (that of the committed demo
+    /// data) and returned in the parameter order G0, g1, g2, τ1, τ2.
+    ///
+    /// # Errors
+    /// A law that rarely falls inside the domain (1000 draws tried).
+    pub fn draw(&self, domain: &Domain, rng: &mut ChaCha8Rng) -> Result<[f64; 5]> {
+        for _ in 0..1000 {
+            let g0 = self.g0.0 * (self.g0.1 * normal(rng)).exp();
+            let g1 = self.g1.0 + self.g1.1 * normal(rng);
+            let tau1 = self.tau1.0 * (self.tau1.1 * normal(rng)).exp();
+            let g2 = self.g2.0 + self.g2.1 * normal(rng);
+            let tau2 = self.tau2.0 * (self.tau2.1 * normal(rng)).exp();
+            let x = [g0, g1, g2, tau1, tau2];
+            // Stay 2 % (scaled) inside the bounds: a truth on a bound is a
+            // different test.
+            let u = domain.to_unit(&x);
+            if u.iter().all(|u| (0.02..=0.98).contains(u)) && domain.contains(&x, 0.0) {
+                return Ok(x);
+            }
+        }
+        Err(ReportError::InvalidSetting(format!(
+            "group `{}`: its distribution rarely falls inside the Table 5.3 domain",
+            self.name
+        )))
+    }
+}
+
 /// The synthetic cells (the study file holds probe, cantilever, protocol
 /// and forward model).
 #[derive(Debug, Clone, PartialEq)]
@@ -150,12 +180,7 @@ fn normal(rng: &mut ChaCha8Rng) -> f64 {
     nlvid_forward::curves::standard_normal(rng)
 }
 
-/// Draws a cell of `g` inside the Table 5.3 domain (redraws otherwise).
-/// The normal deviates are drawn in the order G0, g1, τ1, g2, τ2 (that of
-/// the committed demo data) and returned in the parameter order G0, g1, g2,
-/// τ1, τ2.
-///
-/// With `from_prior` (the [`DemoSpec`] field) the cell is drawn from the
+/// Draws a cell of `g` ([`GroupSpec::draw`]). With `from_prior` (the [`DemoSpec`] field) the cell is drawn from the
 /// prior instead: u uniform in [0.02, 0.98]^5, redrawn until inside the
 /// domain's constraints.
 fn draw(
@@ -176,24 +201,7 @@ fn draw(
             "the prior's constraints leave almost no room in the Table 5.3 domain".into(),
         ));
     }
-    for _ in 0..1000 {
-        let g0 = g.g0.0 * (g.g0.1 * normal(rng)).exp();
-        let g1 = g.g1.0 + g.g1.1 * normal(rng);
-        let tau1 = g.tau1.0 * (g.tau1.1 * normal(rng)).exp();
-        let g2 = g.g2.0 + g.g2.1 * normal(rng);
-        let tau2 = g.tau2.0 * (g.tau2.1 * normal(rng)).exp();
-        let x = [g0, g1, g2, tau1, tau2];
-        // Stay 2 % (scaled) inside the bounds: a truth on a bound is a
-        // different test.
-        let u = domain.to_unit(&x);
-        if u.iter().all(|u| (0.02..=0.98).contains(u)) && domain.contains(&x, 0.0) {
-            return Ok(x);
-        }
-    }
-    Err(ReportError::InvalidSetting(format!(
-        "group `{}`: its distribution rarely falls inside the Table 5.3 domain",
-        g.name
-    )))
+    g.draw(domain, rng)
 }
 
 /// The `[forward]` section of the study at `path`, read by

@@ -134,6 +134,8 @@ pub struct CurveLikelihood<'a> {
     /// Threads over which a batch's surrogate values are split (1:
     /// the calling thread only).
     threads: usize,
+    /// Whether the surrogate's error enters Σ (else Σ = σ²I).
+    surrogate_error: bool,
 }
 
 impl<'a> CurveLikelihood<'a> {
@@ -205,6 +207,7 @@ impl<'a> CurveLikelihood<'a> {
             calibration,
             form,
             threads: 1,
+            surrogate_error: true,
         })
     }
 
@@ -216,6 +219,24 @@ impl<'a> CurveLikelihood<'a> {
     pub fn with_threads(mut self, threads: usize) -> Self {
         self.threads = threads.max(1);
         self
+    }
+
+    /// With `false`, Σ = σ²I: the surrogate's error left out (its
+    /// calibrated variance taken as 0), the exact likelihood of data made
+    /// by the surrogate itself plus white noise.
+    pub fn with_surrogate_error(mut self, on: bool) -> Self {
+        self.surrogate_error = on;
+        self
+    }
+
+    /// The calibrated Kriging variance α·v^β of a raw v (0 without the
+    /// surrogate's error).
+    fn calibrated(&self, v: f64) -> f64 {
+        if self.surrogate_error {
+            self.calibration.apply(v)
+        } else {
+            0.0
+        }
     }
 
     /// The measurement noise variance σ².
@@ -250,13 +271,13 @@ impl<'a> CurveLikelihood<'a> {
                 Ok(cs
                     .iter()
                     .zip(vs)
-                    .map(|(c, v)| form.value(c, self.calibration.apply(v), s2, m, &self.scale))
+                    .map(|(c, v)| form.value(c, self.calibrated(v), s2, m, &self.scale))
                     .collect())
             }
             Form::Diagonal { k } => xs
                 .iter()
                 .map(|x| {
-                    let v = self.calibration.apply(self.surrogate.mse_scale(x)?);
+                    let v = self.calibrated(self.surrogate.mse_scale(x)?);
                     let y = Model::response(self.surrogate, x)?;
                     // The spectrum of a diagonal K: λ_j = K_jj, z_j = r_j √K_jj.
                     let r: Vec<f64> = self.data.iter().zip(&y).map(|(d, y)| d - y).collect();
@@ -284,7 +305,7 @@ impl<'a> CurveLikelihood<'a> {
         let (_, vs) = self
             .surrogate
             .coordinates_and_mse_scales(xs, self.threads)?;
-        Ok(vs.into_iter().map(|v| self.calibration.apply(v)).collect())
+        Ok(vs.into_iter().map(|v| self.calibrated(v)).collect())
     }
 
     /// ln L̃(x): ln L with the calibrated Kriging variance given
@@ -391,6 +412,44 @@ mod tests {
                 (ours - dense).abs() < 1e-7 * dense.abs().max(1.0),
                 "x {x:?}: {ours} vs {dense}"
             );
+        }
+    }
+
+    /// Without the surrogate's error the likelihood is the white-noise
+    /// Gaussian −½[m ln σ² + rᵀr/σ²] (closed form), for the Gaussian and
+    /// the Student-t error alike, and the calibrated variances are 0.
+    #[test]
+    fn likelihood_without_the_surrogate_error_is_white_noise() {
+        let s = demo_surrogate();
+        let x0 = [1500.0, 0.3, 0.25, 0.5, 10.0];
+        let y0 = s.response(&x0).expect("y");
+        let noise = 0.02 * y0.iter().fold(0.0f64, |a, &b| a.max(b));
+        let data: Vec<f64> = y0
+            .iter()
+            .enumerate()
+            .map(|(j, y)| y + noise * ((j * 7919 % 101) as f64 / 50.0 - 1.0))
+            .collect();
+        let xs = [x0, [3000.0, 0.1, 0.6, 1.5, 5.0]];
+        for heavy_tails in [false, true] {
+            let with = CurveLikelihood::new(&s, &data, noise, heavy_tails, false).expect("lik");
+            let without = CurveLikelihood::new(&s, &data, noise, heavy_tails, false)
+                .expect("lik")
+                .with_surrogate_error(false);
+            for x in xs {
+                let y = s.response(&x).unwrap();
+                let rtr: f64 = data.iter().zip(&y).map(|(d, y)| (d - y).powi(2)).sum();
+                let m = data.len() as f64;
+                let white = -0.5 * (m * (noise * noise).ln() + rtr / (noise * noise));
+                let ours = without.value(&x).unwrap();
+                assert!(
+                    (ours - white).abs() < 1e-9 * white.abs(),
+                    "{x:?}: {ours} vs {white}"
+                );
+                // The error term matters here, or the test would not see it.
+                assert!((with.value(&x).unwrap() - white).abs() > 1e-3);
+            }
+            let xs: Vec<Vec<f64>> = xs.iter().map(|x| x.to_vec()).collect();
+            assert_eq!(without.calibrated_variances(&xs).unwrap(), vec![0.0; 2]);
         }
     }
 

@@ -163,6 +163,17 @@ pub struct PosteriorSettings {
     /// `heavy_tails`. A study key (docs/theory/inverse.md, "Session 18").
     #[serde(default)]
     pub direction_scales: bool,
+    /// The surrogate's error in the likelihood (on, the default); off: the
+    /// noise alone, Σ = σ̂²I — the exact likelihood when the data are the
+    /// surrogate's own curve plus noise, for the simulation-based check of
+    /// the sampler (example `posterior_sbc` of nlvid-report; not a study
+    /// key). Delayed acceptance then has nothing to screen and is off.
+    #[serde(default = "default_true")]
+    pub surrogate_error: bool,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 fn default_delayed_acceptance() -> bool {
@@ -259,6 +270,7 @@ impl PosteriorSettings {
             delayed_acceptance: default_delayed_acceptance(),
             heavy_tails: default_heavy_tails(),
             direction_scales: false,
+            surrogate_error: true,
         }
     }
 }
@@ -525,7 +537,8 @@ pub fn sample_posterior_fixed(
         settings.heavy_tails,
         settings.direction_scales,
     )?
-    .with_threads(settings.threads);
+    .with_threads(settings.threads)
+    .with_surrogate_error(settings.surrogate_error);
     let inside = |u: &[f64]| {
         u.iter().all(|v| (0.0..=1.0).contains(v)) && domain.feasible(&domain.from_unit(u), 0.0)
     };

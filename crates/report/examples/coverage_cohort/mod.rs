@@ -38,6 +38,7 @@ pub fn wide_groups(cells: usize, seed: u64, noise: f64) -> DemoSpec {
 
 /// The demo's cohort study in `dir` with absolute meta-model paths, and
 /// `extra` (e.g. a `[posterior]` section) appended when not empty.
+#[allow(dead_code)] // `posterior_sbc` uses the groups only
 pub fn write_study(
     dir: &Path,
     demo: &Path,

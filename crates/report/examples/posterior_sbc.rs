@@ -1,0 +1,213 @@
+//! Simulation-based check of the posterior sampler (issue 17,
+//! docs/theory/inverse.md "Session 19"): cells whose curves are the
+//! bundled demo meta-model's own prediction ŷ(x) plus white noise, so that
+//! the likelihood without the surrogate's error (`PosteriorSettings::
+//! surrogate_error = false`, Σ = σ̂²I) is the exact one. With truths drawn
+//! from the prior (uniform on the Table 5.3 domain in the unit coordinates
+//! the sampler uses, g1 + g2 ≤ 0.99) a correct sampler gives 90 % intervals
+//! that cover the truth in 90 % of cells up to the binomial noise; with
+//! truths drawn from the coverage cohort's two groups it shows what the
+//! Bayesian intervals of the same likelihood give on cells not drawn from
+//! the prior — the part of a coverage figure no error model can change.
+//!
+//! Each cell is fitted as a cohort cell is (8-start multistart on the
+//! surrogate) and its posterior sampled with the default settings but
+//! `max_steps` 2000 (as `posterior_coverage`), cells in parallel.
+//!
+//! ```text
+//! cargo run --release -p nlvid-report --example posterior_sbc \
+//!     [cells] [noise] [seed] [prior|groups] [key=value ...]
+//! ```
+//! (defaults 100, 0.02, 17, prior; keys `starts` (8), `surrogate_error`
+//! (false) and the sampler's `steps`, `burn`, `max_steps` (2000),
+//! `ridge_fraction`, `refresh_fraction`, `refit_proposal`, `rungs`). Prints the coverage of G0,
+//! g1 + g2 and G(52 s) with binomial standard errors, R̂ and the misses.
+
+use std::path::Path;
+
+use nlvid_inverse::posterior::{CurveLikelihood, noise_sd};
+use nlvid_inverse::{
+    Coordinates, FixedInputs, Model, MultiStart, PosteriorSettings, SurrogateFitter,
+    load_kriging_surrogate, relaxation, sample_posterior,
+};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+mod coverage_cohort;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let cells: usize = args.get(1).map_or(Ok(100), |s| s.parse())?;
+    let noise: f64 = args.get(2).map_or(Ok(0.02), |s| s.parse())?;
+    let seed: u64 = args.get(3).map_or(Ok(17), |s| s.parse())?;
+    let groups = match args.get(4).map(String::as_str) {
+        None | Some("prior") => false,
+        Some("groups") => true,
+        Some(other) => return Err(format!("expected prior or groups, got {other}").into()),
+    };
+    let (mut starts, mut settings) = (8usize, PosteriorSettings::new(0.0));
+    settings.max_steps = 2000;
+    settings.threads = 1;
+    settings.surrogate_error = false;
+    for kv in args.iter().skip(5) {
+        let (k, v) = kv
+            .split_once('=')
+            .ok_or_else(|| format!("expected key=value, got {kv}"))?;
+        match k {
+            "starts" => starts = v.parse()?,
+            "surrogate_error" => settings.surrogate_error = v.parse()?,
+            "steps" => settings.steps = v.parse()?,
+            "burn" => settings.burn = v.parse()?,
+            "max_steps" => settings.max_steps = v.parse()?,
+            "ridge_fraction" => settings.ridge_fraction = v.parse()?,
+            "refresh_fraction" => settings.refresh_fraction = v.parse()?,
+            "refit_proposal" => settings.refit_proposal = v.parse()?,
+            "rungs" => settings.rungs = v.parse()?,
+            _ => return Err(format!("unknown key {k}").into()),
+        }
+    }
+    let surrogate_error = settings.surrogate_error;
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo/metamodel");
+    let surrogate = load_kriging_surrogate(
+        &dir.join("model.json"),
+        &dir.join("meta.json"),
+        Coordinates::Physical,
+    )?;
+    let fitter = SurrogateFitter::new(surrogate, None)?;
+    let s = fitter.surrogate();
+    let domain = s.domain().clone();
+    let t_end = *s.times().last().ok_or("empty grid")?;
+
+    // Truths and noisy curves, one seeded stream in cell order.
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let spec = coverage_cohort::wide_groups(cells, seed, noise);
+    let mut truths = Vec::with_capacity(cells);
+    while truths.len() < cells {
+        let x = if groups {
+            spec.groups[truths.len() % 2]
+                .draw(&domain, &mut rng)?
+                .to_vec()
+        } else {
+            let u: Vec<f64> = (0..domain.len()).map(|_| rng.random::<f64>()).collect();
+            let x = domain.from_unit(&u);
+            if !domain.feasible(&x, 0.0) {
+                continue;
+            }
+            x
+        };
+        let y = s.response(&x)?;
+        let sd = noise * y.iter().fold(0.0f64, |a, &b| a.max(b));
+        let data: Vec<f64> = y
+            .iter()
+            .map(|v| v + sd * nlvid_forward::curves::standard_normal(&mut rng))
+            .collect();
+        truths.push((x, data));
+    }
+
+    let t0 = std::time::Instant::now();
+    let settings = PosteriorSettings {
+        t_end,
+        band_times: PosteriorSettings::new(t_end).band_times,
+        ..settings
+    };
+    let results: Vec<_> = truths
+        .par_iter()
+        .enumerate()
+        .map(|(i, (x, data))| -> Result<_, String> {
+            let ms = MultiStart::new()
+                .with_starts(starts)
+                .map(|m| m.with_seed(1))
+                .map_err(|e| e.to_string())?;
+            let fit = fitter
+                .fit_fixed(
+                    &[("cell", data.as_slice())],
+                    &ms,
+                    &FixedInputs::none(&domain),
+                )
+                .map_err(|e| format!("cell {i}: fit: {e}"))?;
+            let p = sample_posterior(s, data, &fit.fit.best.x, &settings)
+                .map_err(|e| format!("cell {i}: posterior: {e}"))?;
+            // ln L at the truth over ln L at the fit (> 0: the fit missed
+            // a better region).
+            let sigma_hat = noise_sd(s.times(), data).map_err(|e| e.to_string())?;
+            let lik = CurveLikelihood::new(s, data, sigma_hat, false, false)
+                .map_err(|e| e.to_string())?
+                .with_surrogate_error(surrogate_error);
+            let gain = lik.value(x).map_err(|e| e.to_string())?
+                - lik.value(&fit.fit.best.x).map_err(|e| e.to_string())?;
+            Ok((i, x.clone(), p, gain))
+        })
+        .collect();
+    let seconds = t0.elapsed().as_secs_f64();
+
+    let (mut n, mut cover, mut rhat_max, mut above) = (0usize, [0usize; 3], 0.0f64, 0usize);
+    let mut misses = Vec::new();
+    for r in results {
+        let (i, x, p, gain) = match r {
+            Ok(v) => v,
+            Err(e) => {
+                println!("  {e}");
+                continue;
+            }
+        };
+        let g = relaxation(&domain, &x)?;
+        let want = [g.g0(), 1.0 - g.prony().long_term_weight(), g.value(p.t_end)];
+        let got = [&p.g0, &p.g_sum, &p.g_end];
+        n += 1;
+        for k in 0..3 {
+            if got[k].covers(want[k]) {
+                cover[k] += 1;
+            } else {
+                let side = if want[k] < got[k].lower {
+                    "below"
+                } else {
+                    "above"
+                };
+                misses.push(format!(
+                    "cell {i} {}: truth {side} [{:.4e}, {:.4e}] ({:.4e}); ln L(truth) - ln L(fit) \
+                     {gain:.2}; R-hat {:.4}, rungs {}, kept {}; x {:?}",
+                    ["G0", "g_sum", "G_end"][k],
+                    got[k].lower,
+                    got[k].upper,
+                    want[k],
+                    p.rhat_max,
+                    p.rungs,
+                    p.kept_steps,
+                    x.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>()
+                ));
+            }
+        }
+        rhat_max = rhat_max.max(p.rhat_max);
+        above += usize::from(!(p.rhat_max <= 1.01));
+    }
+    println!(
+        "{n} cells drawn from the {} on the surrogate's own curves + {noise} x peak noise, seed \
+         {seed}; likelihood {}",
+        if groups { "two groups" } else { "prior" },
+        if surrogate_error {
+            "with the surrogate's error (not exact here)"
+        } else {
+            "noise only (exact here)"
+        }
+    );
+    for (k, name) in ["G0", "g1 + g2", "G(t_end)"].iter().enumerate() {
+        let frac = cover[k] as f64 / n.max(1) as f64;
+        let se = (0.9 * 0.1 / n.max(1) as f64).sqrt();
+        println!(
+            "coverage of the 90 % interval of {name}: {} / {n} = {:.1} % ({:+.1} se from 90 %)",
+            cover[k],
+            100.0 * frac,
+            (frac - 0.9) / se
+        );
+    }
+    println!(
+        "largest split R-hat {rhat_max:.4} ({above} cells above 1.01); {seconds:.1} s wall on {} \
+         threads",
+        rayon::current_num_threads()
+    );
+    for m in &misses {
+        println!("  miss {m}");
+    }
+    Ok(())
+}
