@@ -101,7 +101,7 @@ pub use misfit::{
     segment_weights,
 };
 pub use model::{FD_STEP_UNIT, Model, check_finite, check_jacobian, check_len, fd_jacobian};
-pub use optimise::{FitResult, LocalOptimum, MultiStart, Verification, verify};
+pub use optimise::{DEFAULT_STARTS, FitResult, LocalOptimum, MultiStart, Verification, verify};
 pub use plausible::{Implausible, MAX_FORCE, MAX_LENGTH};
 pub use plot::{FigureCurve, FitFigure};
 pub use posterior::{Posterior, PosteriorSettings, sample_posterior, sample_posterior_fixed};

@@ -10,15 +10,15 @@
 //! Bayesian intervals of the same likelihood give on cells not drawn from
 //! the prior — the part of a coverage figure no error model can change.
 //!
-//! Each cell is fitted as a cohort cell is (8-start multistart on the
-//! surrogate) and its posterior sampled with the default settings but
+//! Each cell is fitted as a cohort cell is (multistart on the surrogate,
+//! `starts` points) and its posterior sampled with the default settings but
 //! `max_steps` 2000 (as `posterior_coverage`), cells in parallel.
 //!
 //! ```text
 //! cargo run --release -p nlvid-report --example posterior_sbc \
 //!     [cells] [noise] [seed] [prior|groups] [key=value ...]
 //! ```
-//! (defaults 100, 0.02, 17, prior; keys `starts` (8), `surrogate_error`
+//! (defaults 100, 0.02, 17, prior; keys `starts` (`DEFAULT_STARTS`), `surrogate_error`
 //! (false) and the sampler's `steps`, `burn`, `max_steps` (2000),
 //! `ridge_fraction`, `refresh_fraction`, `refit_proposal`, `rungs`). Prints the coverage of G0,
 //! g1 + g2 and G(52 s) with binomial standard errors, R̂ and the misses.
@@ -46,7 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some("groups") => true,
         Some(other) => return Err(format!("expected prior or groups, got {other}").into()),
     };
-    let (mut starts, mut settings) = (8usize, PosteriorSettings::new(0.0));
+    let (mut starts, mut settings) = (nlvid_inverse::DEFAULT_STARTS, PosteriorSettings::new(0.0));
     settings.max_steps = 2000;
     settings.threads = 1;
     settings.surrogate_error = false;

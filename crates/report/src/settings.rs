@@ -16,7 +16,7 @@
 //!                              # a meta-model brings the domain stored in its meta.json)
 //! inputs = "physical"          # or "unit": coordinates the surrogate was fitted on
 //! data = "afm"                 # or "compression"
-//! starts = 8
+//! starts = 64                  # multistart starts (default 64)
 //! seed = 1
 //! ramp = "1 s"                 # cohort: end of the loading ramp (Hertz baseline)
 //! hold_end = "52 s"            # cohort: end of the fitted window
@@ -307,7 +307,11 @@ impl FitSettings {
             constraint_epsilon,
             inputs,
             columns,
-            starts: s.usize_or("starts", Bounds::closed(1.0, 1000.0), 8)?,
+            starts: s.usize_or(
+                "starts",
+                Bounds::closed(1.0, 1000.0),
+                nlvid_inverse::DEFAULT_STARTS,
+            )?,
             seed: s.opt_u64("seed")?.unwrap_or(1),
             modulus_times: s
                 .opt_quantities("modulus_times", Dimension::TIME, Bounds::non_negative())?

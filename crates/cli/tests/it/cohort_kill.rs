@@ -46,10 +46,10 @@ fn killed_cohort_resumes_to_the_same_table() {
         std::fs::copy(repo.join(f), dir.join(f)).expect("copy");
     }
     let study = std::fs::read_to_string(repo.join("study.toml")).expect("study");
-    assert!(study.contains("starts = 8\n"));
+    assert!(study.contains("starts = 64\n"));
     std::fs::write(
         dir.join("study.toml"),
-        study.replace("starts = 8\n", "starts = 24\n"),
+        study.replace("starts = 64\n", "starts = 24\n"),
     )
     .expect("study");
     let spec = DemoSpec {
