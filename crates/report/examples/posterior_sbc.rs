@@ -20,7 +20,8 @@
 //! ```
 //! (defaults 100, 0.02, 17, prior; keys `starts` (`DEFAULT_STARTS`), `surrogate_error`
 //! (false) and the sampler's `steps`, `burn`, `max_steps` (2000),
-//! `ridge_fraction`, `refresh_fraction`, `refit_proposal`, `rungs`). Prints the coverage of G0,
+//! `ridge_fraction`, `refresh_fraction`, `refit_proposal`, `rungs`;
+//! `noise_only=true` prints the noise estimate's σ̂/σ and stops). Prints the coverage of G0,
 //! g1 + g2 and G(52 s) with binomial standard errors, R̂ and the misses.
 
 use std::path::Path;
@@ -64,10 +65,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "refresh_fraction" => settings.refresh_fraction = v.parse()?,
             "refit_proposal" => settings.refit_proposal = v.parse()?,
             "rungs" => settings.rungs = v.parse()?,
+            "noise_only" => {}
             _ => return Err(format!("unknown key {k}").into()),
         }
     }
     let surrogate_error = settings.surrogate_error;
+    let noise_only = args.iter().any(|a| a == "noise_only=true");
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/demo/metamodel");
     let surrogate = load_kriging_surrogate(
         &dir.join("model.json"),
@@ -102,7 +105,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .iter()
             .map(|v| v + sd * nlvid_forward::curves::standard_normal(&mut rng))
             .collect();
-        truths.push((x, data));
+        truths.push((x, data, sd));
+    }
+    // The noise estimate on these curves (the likelihood's σ̂).
+    let ratios: Vec<f64> = truths
+        .iter()
+        .map(|(_, d, sd)| noise_sd(s.times(), d).map(|e| e / sd))
+        .collect::<Result<_, _>>()?;
+    let mean = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    let sd_ratio =
+        (ratios.iter().map(|r| (r - mean).powi(2)).sum::<f64>() / ratios.len() as f64).sqrt();
+    println!("noise estimate sigma_hat/sigma: mean {mean:.4}, sd {sd_ratio:.4}");
+    if noise_only {
+        return Ok(());
     }
 
     let t0 = std::time::Instant::now();
@@ -114,7 +129,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let results: Vec<_> = truths
         .par_iter()
         .enumerate()
-        .map(|(i, (x, data))| -> Result<_, String> {
+        .map(|(i, (x, data, _))| -> Result<_, String> {
             let ms = MultiStart::new()
                 .with_starts(starts)
                 .map(|m| m.with_seed(1))
