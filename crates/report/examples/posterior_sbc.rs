@@ -20,7 +20,7 @@
 //! ```
 //! (defaults 100, 0.02, 17, prior; keys `starts` (`DEFAULT_STARTS`), `surrogate_error`
 //! (false) and the sampler's `steps`, `burn`, `max_steps` (2000),
-//! `ridge_fraction`, `refresh_fraction`, `refit_proposal`, `rungs`, `ridge_time`;
+//! `ridge_fraction`, `refresh_fraction`, `refit_proposal`, `rungs`, `ridge_time`, `ridge_starts`;
 //! `noise_only=true` prints the noise estimate's σ̂/σ and stops;
 //! `is_check=true` checks each missed G0 interval by importance sampling,
 //! `importance_tails`). Prints the coverage of G0,
@@ -68,6 +68,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "refit_proposal" => settings.refit_proposal = v.parse()?,
             "rungs" => settings.rungs = v.parse()?,
             "ridge_time" => settings.ridge_time = v.parse()?,
+            "ridge_starts" => settings.ridge_starts = v.parse()?,
             "noise_only" | "is_check" => {}
             _ => return Err(format!("unknown key {k}").into()),
         }

@@ -479,6 +479,7 @@ fn posterior(
         delayed_acceptance: p.delayed_acceptance,
         heavy_tails: p.heavy_tails,
         direction_scales: p.direction_scales,
+        ridge_starts: p.ridge_starts,
         ..PosteriorSettings::new(settings.hold_end)
     };
     match sample_posterior_fixed(fitter.surrogate(), fixed, &base.data, x_hat, &ps) {

@@ -643,6 +643,7 @@ pub struct CohortSettings {
 /// delayed_acceptance = true  # screen proposals on the Kriging mean first (exact)
 /// heavy_tails = false  # true: surrogate error Student-t (nu from the meta-model's LOO)
 /// direction_scales = false  # true: a Gaussian surrogate error scale per direction (LOO)
+/// ridge_starts = false      # true: half the ensembles start at the ends of the weakest direction
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PosteriorStudy {
@@ -685,6 +686,10 @@ pub struct PosteriorStudy {
     /// (`PosteriorSettings::direction_scales`).
     #[serde(default)]
     pub direction_scales: bool,
+    /// Half the ensembles started at the ridge's ends
+    /// (`PosteriorSettings::ridge_starts`).
+    #[serde(default)]
+    pub ridge_starts: bool,
 }
 
 fn default_heavy_tails() -> bool {
@@ -744,6 +749,7 @@ impl FromSection for PosteriorSection {
                 .opt_bool("heavy_tails")?
                 .unwrap_or_else(default_heavy_tails),
             direction_scales: s.opt_bool("direction_scales")?.unwrap_or(false),
+            ridge_starts: s.opt_bool("ridge_starts")?.unwrap_or(false),
         };
         Ok(Self(enabled.then_some(p)))
     }

@@ -336,7 +336,7 @@ impl<'a> CurveLikelihood<'a> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::surrogate::Coordinates;
     use crate::surrogate_file::load_kriging_surrogate;
@@ -350,6 +350,19 @@ mod tests {
             Coordinates::Physical,
         )
         .expect("demo meta-model")
+    }
+
+    /// The surrogate's curve at `x` plus a deterministic sawtooth of
+    /// amplitude 2 % of its peak (the tests' data), and that amplitude.
+    pub(crate) fn pseudo_noisy_curve(s: &KrigingSurrogate, x: &[f64]) -> (Vec<f64>, f64) {
+        let y = s.response(x).expect("y");
+        let noise = 0.02 * y.iter().fold(0.0f64, |a, &b| a.max(b));
+        let data = y
+            .iter()
+            .enumerate()
+            .map(|(j, v)| v + noise * ((j * 7919 % 101) as f64 / 50.0 - 1.0))
+            .collect();
+        (data, noise)
     }
 
     /// ln N(data; s(x), Σ + σ² I) up to the constant, with Σ + σ² I built
@@ -381,14 +394,7 @@ mod tests {
         let s = demo_surrogate();
         assert!(s.is_reduced());
         let x0 = [1500.0, 0.3, 0.25, 0.5, 10.0];
-        let y0 = s.response(&x0).expect("y");
-        let peak = y0.iter().fold(0.0f64, |a, &b| a.max(b));
-        let noise = 0.02 * peak;
-        let data: Vec<f64> = y0
-            .iter()
-            .enumerate()
-            .map(|(j, y)| y + noise * ((j * 7919 % 101) as f64 / 50.0 - 1.0))
-            .collect();
+        let (data, noise) = pseudo_noisy_curve(&s, &x0);
         let lik = CurveLikelihood::new(&s, &data, noise, false, false).expect("lik");
         let OutputCovariance::LowRank { m, k, factor } =
             s.kriging().output_covariance_cv().unwrap()
@@ -422,13 +428,7 @@ mod tests {
     fn likelihood_without_the_surrogate_error_is_white_noise() {
         let s = demo_surrogate();
         let x0 = [1500.0, 0.3, 0.25, 0.5, 10.0];
-        let y0 = s.response(&x0).expect("y");
-        let noise = 0.02 * y0.iter().fold(0.0f64, |a, &b| a.max(b));
-        let data: Vec<f64> = y0
-            .iter()
-            .enumerate()
-            .map(|(j, y)| y + noise * ((j * 7919 % 101) as f64 / 50.0 - 1.0))
-            .collect();
+        let (data, noise) = pseudo_noisy_curve(&s, &x0);
         let xs = [x0, [3000.0, 0.1, 0.6, 1.5, 5.0]];
         for heavy_tails in [false, true] {
             let with = CurveLikelihood::new(&s, &data, noise, heavy_tails, false).expect("lik");
@@ -465,13 +465,7 @@ mod tests {
         let pca = km.pca.as_ref().expect("PCA model");
         let (m, q) = (km.n_outputs, km.n_kriged());
         let x0 = [1500.0, 0.3, 0.25, 0.5, 10.0];
-        let y0 = s.response(&x0).expect("y");
-        let noise = 0.02 * y0.iter().fold(0.0f64, |a, &b| a.max(b));
-        let data: Vec<f64> = y0
-            .iter()
-            .enumerate()
-            .map(|(j, y)| y + noise * ((j * 7919 % 101) as f64 / 50.0 - 1.0))
-            .collect();
+        let (data, noise) = pseudo_noisy_curve(&s, &x0);
         let lik = CurveLikelihood::new(&s, &data, noise, false, true).expect("lik");
         assert!(CurveLikelihood::new(&s, &data, noise, true, true).is_err());
         let (cal, _) = s.direction_calibration().unwrap();
