@@ -406,7 +406,7 @@ const RIDGE_END_LN_L: f64 = 6.0;
 
 /// The ends of the posterior's weakest direction: the parameter with the
 /// largest share of the least-determined eigenvector of the Laplace
-/// information in u is held at 0.02 and at 0.98 of its range and the
+/// information in u (`information`, [`laplace_information`]) is held at 0.02 and at 0.98 of its range and the
 /// others refitted (`SurrogateFitter::fit_fixed`); an end whose ln L lies
 /// within [`RIDGE_END_LN_L`] of the optimum's is returned (free
 /// parameters), so that the sampler also starts there: a ridge that runs
@@ -419,11 +419,11 @@ fn ridge_ends(
     data: &[f64],
     x_hat: &[f64],
     lik: &CurveLikelihood,
+    information: &DMatrix<f64>,
 ) -> Result<Vec<Vec<f64>>> {
     let domain = fixed.free_domain();
     let u_hat = domain.to_unit(x_hat);
-    let h = laplace_information(surrogate, fixed, x_hat, lik.noise_var())?;
-    let eig = h.symmetric_eigen();
+    let eig = information.clone().symmetric_eigen();
     let weakest = eig.eigenvalues.imin();
     let v = eig.eigenvectors.column(weakest);
     let i = v.iamax();
@@ -477,27 +477,25 @@ fn laplace_information(
     Ok(ju.transpose() * &ju / noise_var)
 }
 
-/// Start positions in u for `ensembles` ensembles of `walkers`: c + c·L ε
-/// with c the multistart optimum û (the first half of the ensembles, all
-/// of them without ridge ends) or a ridge end ([`ridge_ends`], the others
-/// in turn), c = [`OVERDISPERSION`] and L Lᵀ the Gauss–Newton (Laplace)
-/// covariance (JᵤᵀJᵤ/σ²)⁻¹ at û, its sd capped at [`MAX_START_SD`]; each
-/// start redrawn (shrinking the ball every 40 tries) until inside the
+/// Start positions in u for `ensembles` ensembles of `walkers`: u_c + k·L ε
+/// with the centre u_c the multistart optimum û (the first half of the
+/// ensembles, all of them without ridge ends) or a ridge end
+/// ([`ridge_ends`], the others in turn), k = [`OVERDISPERSION`] and L Lᵀ
+/// the Gauss–Newton (Laplace) covariance H⁻¹ at û (`information` = H =
+/// JᵤᵀJᵤ/σ², [`laplace_information`]), its sd capped at [`MAX_START_SD`];
+/// each start redrawn (shrinking the ball every 40 tries) until inside the
 /// prior's support.
 fn starts(
-    surrogate: &KrigingSurrogate,
-    fixed: &FixedInputs,
+    domain: &nlvid_model::Domain,
     (x_hat, ends): (&[f64], &[Vec<f64>]),
-    noise_var: f64,
+    information: &DMatrix<f64>,
     (walkers, ensembles): (usize, usize),
     seed: u64,
     inside: &dyn Fn(&[f64]) -> bool,
 ) -> Result<Vec<Vec<Vec<f64>>>> {
     use rand::SeedableRng;
-    let domain = fixed.free_domain();
     let d = domain.len();
-    let h = laplace_information(surrogate, fixed, x_hat, noise_var)?;
-    let eig = h.symmetric_eigen();
+    let eig = information.clone().symmetric_eigen();
     let floor = 1.0 / (MAX_START_SD * MAX_START_SD);
     let mut l = DMatrix::zeros(d, d);
     for k in 0..d {
@@ -630,16 +628,16 @@ pub fn sample_posterior_fixed(
     let inside = |u: &[f64]| {
         u.iter().all(|v| (0.0..=1.0).contains(v)) && domain.feasible(&domain.from_unit(u), 0.0)
     };
+    let information = laplace_information(surrogate, fixed, x_hat, lik.noise_var())?;
     let ends = if settings.ridge_starts {
-        ridge_ends(surrogate, fixed, data, x_hat, &lik)?
+        ridge_ends(surrogate, fixed, data, x_hat, &lik, &information)?
     } else {
         Vec::new()
     };
     let init = starts(
-        surrogate,
-        fixed,
+        &domain,
         (x_hat, &ends),
-        lik.noise_var(),
+        &information,
         (settings.walkers, settings.ensembles),
         settings.seed,
         &inside,
@@ -1044,7 +1042,8 @@ mod tests {
             let fit = fitter.fit_fixed(&[("cell", &data)], &ms, &none).unwrap();
             let x_hat = fit.fit.best.x;
             let best = lik.value(&x_hat).unwrap();
-            let ends = ridge_ends(&s, &none, &data, &x_hat, &lik).unwrap();
+            let h = laplace_information(&s, &none, &x_hat, lik.noise_var()).unwrap();
+            let ends = ridge_ends(&s, &none, &data, &x_hat, &lik, &h).unwrap();
             for e in &ends {
                 assert!(lik.value(e).unwrap() >= best - RIDGE_END_LN_L);
                 let u = domain.to_unit(e);
