@@ -385,6 +385,30 @@ pub(crate) mod tests {
         -0.5 * (logdet + r.dot(&chol.solve(&r)))
     }
 
+    /// `lik` equals [`dense_gaussian_ln_l`] with the surrogate-error
+    /// covariance `sigma(x)` to 1e-7 (relative) at the curve's point
+    /// (1500 Pa, 0.3, 0.25, 0.5 s, 10 s) and two others.
+    fn assert_equals_dense_gaussian(
+        lik: &CurveLikelihood,
+        s: &KrigingSurrogate,
+        data: &[f64],
+        noise: f64,
+        sigma: impl Fn(&[f64]) -> DMatrix<f64>,
+    ) {
+        for x in [
+            [1500.0, 0.3, 0.25, 0.5, 10.0],
+            [1400.0, 0.35, 0.2, 0.3, 14.0],
+            [3000.0, 0.1, 0.6, 1.5, 5.0],
+        ] {
+            let dense = dense_gaussian_ln_l(sigma(&x), noise, data, s, &x);
+            let ours = lik.value(&x).unwrap();
+            assert!(
+                (ours - dense).abs() < 1e-7 * dense.abs().max(1.0),
+                "x {x:?}: {ours} vs {dense}"
+            );
+        }
+    }
+
     /// The Woodbury form equals the dense Gaussian log-density with
     /// Σ = σ²I + α v(x)^β·diag(σ_y) V Σ_z Vᵀ diag(σ_y) (the calibrated
     /// Kriging variance) built and factorised as an m × m matrix (second
@@ -406,19 +430,10 @@ pub(crate) mod tests {
         // A calibration that differs from v ↦ v, or the test would not
         // see it applied.
         assert!((cal.beta - 1.0).abs() > 0.05, "{cal:?}");
-        for x in [
-            x0,
-            [1400.0, 0.35, 0.2, 0.3, 14.0],
-            [3000.0, 0.1, 0.6, 1.5, 5.0],
-        ] {
-            let v = cal.alpha * s.mse_scale(&x).unwrap().powf(cal.beta);
-            let dense = dense_gaussian_ln_l(&u * u.transpose() * v, noise, &data, &s, &x);
-            let ours = lik.value(&x).unwrap();
-            assert!(
-                (ours - dense).abs() < 1e-7 * dense.abs().max(1.0),
-                "x {x:?}: {ours} vs {dense}"
-            );
-        }
+        let k = &u * u.transpose();
+        assert_equals_dense_gaussian(&lik, &s, &data, noise, |x| {
+            &k * (cal.alpha * s.mse_scale(x).unwrap().powf(cal.beta))
+        });
     }
 
     /// Without the surrogate's error the likelihood is the white-noise
@@ -484,19 +499,9 @@ pub(crate) mod tests {
         }
         let dv = DMatrix::from_fn(m, q, |j, a| km.y_std[j] * pca.basis[a * m + j]);
         let k = &dv * scaled * dv.transpose();
-        for x in [
-            x0,
-            [1400.0, 0.35, 0.2, 0.3, 14.0],
-            [3000.0, 0.1, 0.6, 1.5, 5.0],
-        ] {
-            let sigma = &k * cal.apply(s.mse_scale(&x).unwrap());
-            let dense = dense_gaussian_ln_l(sigma, noise, &data, &s, &x);
-            let ours = lik.value(&x).unwrap();
-            assert!(
-                (ours - dense).abs() < 1e-7 * dense.abs().max(1.0),
-                "x {x:?}: {ours} vs {dense}"
-            );
-        }
+        assert_equals_dense_gaussian(&lik, &s, &data, noise, |x| {
+            &k * cal.apply(s.mse_scale(x).unwrap())
+        });
     }
 
     /// ln L of a batch on the demo meta-model (n = 970 sites) is bitwise

@@ -1202,6 +1202,17 @@ mod tests {
     use crate::{Correlation, Regression};
     use faer::Mat;
 
+    /// Leave-one-out data of sites with Kriging variances `v` and error
+    /// energies `energy` on `dof` degrees of freedom, without directions.
+    fn calibration_data(v: Vec<f64>, energy: Vec<f64>, dof: usize) -> CalibrationData {
+        CalibrationData {
+            v,
+            energy,
+            dof,
+            directions: Vec::new(),
+        }
+    }
+
     /// A seeded source of pairs (standard normal by Box–Muller, uniform on
     /// [0, 1)).
     fn seeded_normal(seed: u64) -> impl FnMut() -> (f64, f64) {
@@ -1336,12 +1347,7 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
         let (n, k) = (3000, 8);
         for (alpha, beta) in [(3.0, 0.4), (0.5, 1.0), (2e3, 1.6)] {
-            let mut data = CalibrationData {
-                v: Vec::new(),
-                energy: Vec::new(),
-                dof: k,
-                directions: Vec::new(),
-            };
+            let mut data = calibration_data(Vec::new(), Vec::new(), k);
             for _ in 0..n {
                 let v = 10f64.powf(-7.0 + 6.0 * rng.random::<f64>());
                 let chi2: f64 = (0..k)
@@ -1377,19 +1383,9 @@ mod tests {
             let mean = z.iter().sum::<f64>() / n as f64;
             assert!((mean - 1.0).abs() < 1e-9, "{mean}");
         }
-        let flat = CalibrationData {
-            v: vec![1.0; 5],
-            energy: vec![1.0; 5],
-            dof: 1,
-            directions: Vec::new(),
-        };
+        let flat = calibration_data(vec![1.0; 5], vec![1.0; 5], 1);
         assert!(VarianceCalibration::fit(&flat).is_err());
-        let zero = CalibrationData {
-            v: vec![1.0, 2.0, 3.0],
-            energy: vec![0.0; 3],
-            dof: 1,
-            directions: Vec::new(),
-        };
+        let zero = calibration_data(vec![1.0, 2.0, 3.0], vec![0.0; 3], 1);
         assert!(VarianceCalibration::fit(&zero).is_err());
         assert_eq!(VarianceCalibration::IDENTITY.apply(0.3), 0.3);
     }
@@ -1403,12 +1399,7 @@ mod tests {
         let mut normal = seeded_normal(21);
         let (n, k, alpha, beta) = (3000, 8, 0.05, 0.85);
         for nu in [Some(3usize), Some(6), None] {
-            let mut data = CalibrationData {
-                v: Vec::new(),
-                energy: Vec::new(),
-                dof: k,
-                directions: Vec::new(),
-            };
+            let mut data = calibration_data(Vec::new(), Vec::new(), k);
             for _ in 0..n {
                 let (_, r) = normal();
                 let v = 10f64.powf(-7.0 + 6.0 * r);
@@ -1455,12 +1446,7 @@ mod tests {
         let (n, alpha, beta) = (3000, 0.1, 0.85);
         for rel in [[0.3, 1.0, 1.0, 3.0], [1.0; 4]] {
             let k = rel.len();
-            let mut data = CalibrationData {
-                v: Vec::new(),
-                energy: Vec::new(),
-                dof: k,
-                directions: Vec::new(),
-            };
+            let mut data = calibration_data(Vec::new(), Vec::new(), k);
             for _ in 0..n {
                 let v = 10f64.powf(-7.0 + 6.0 * normal().1);
                 let z: Vec<f64> = rel
