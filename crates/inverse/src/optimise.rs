@@ -203,13 +203,13 @@ impl MultiStart {
             starts: starts.len(),
             last: "no cluster".into(),
         })?;
-        let alternatives = clusters
-            .filter(|c| c.misfit <= best.misfit + self.misfit_tolerance)
-            .collect();
+        let (alternatives, others) =
+            clusters.partition(|c| c.misfit <= best.misfit + self.misfit_tolerance);
         Ok(FitResult {
             domain: domain.clone(),
             best,
             alternatives,
+            others,
             failed_starts: failures,
             starts: starts.len(),
             evaluations,
@@ -367,6 +367,12 @@ pub struct FitResult {
     pub best: LocalOptimum,
     /// Other distinct optima whose misfit is within the tolerance of the best.
     pub alternatives: Vec<LocalOptimum>,
+    /// The remaining distinct optima (misfit beyond the tolerance), best
+    /// first: not reported, but the posterior starts some ensembles at
+    /// those that fit nearly as well in likelihood terms
+    /// (`posterior::sample_posterior`).
+    #[serde(skip)]
+    pub others: Vec<LocalOptimum>,
     /// Messages of starts that failed (model errors, infeasible ends).
     pub failed_starts: Vec<String>,
     /// Number of starts.
@@ -376,6 +382,16 @@ pub struct FitResult {
 }
 
 impl FitResult {
+    /// The points of every distinct optimum but the best (alternatives,
+    /// then the others), best first within each.
+    pub fn other_optima(&self) -> Vec<Vec<f64>> {
+        self.alternatives
+            .iter()
+            .chain(&self.others)
+            .map(|o| o.x.clone())
+            .collect()
+    }
+
     /// True when the best optimum has a parameter on a bound.
     pub fn on_bound(&self) -> bool {
         !self.best.on_bounds.is_empty()

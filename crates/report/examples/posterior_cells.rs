@@ -10,7 +10,7 @@
 //!
 //! ```text
 //! cargo run --release -p nlvid-report --example posterior_cells \
-//!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=BOOL] \
+//!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=kept|redrawn|viscous] \
 //!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [check=N] \
 //!     [delayed=BOOL,...] [seed=N] [prior=BOOL] [heavy_tails=BOOL] \
 //!     [direction_scales=BOOL] [cell ...]
@@ -25,7 +25,7 @@
 use std::path::Path;
 
 use nlvid_inverse::Model;
-use nlvid_inverse::posterior::{PosteriorSettings, quantile, sample_posterior};
+use nlvid_inverse::posterior::{PosteriorSettings, RidgeTime, quantile, sample_posterior};
 use nlvid_report::cell::{CellModel, fit_cell};
 use nlvid_report::cohort::discover;
 use nlvid_report::demo::write_demo_data;
@@ -53,7 +53,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let refresh: Option<f64> = opt("refresh").map(|v| v.parse()).transpose()?;
     let refit: Option<bool> = opt("refit").map(|v| v.parse()).transpose()?;
     let ridge: Option<f64> = opt("ridge").map(|v| v.parse()).transpose()?;
-    let ridge_time: bool = opt("ridge_time").map_or(Ok(false), |v| v.parse())?;
+    let ridge_time: RidgeTime = opt("ridge_time").map_or(Ok(RidgeTime::Kept), |v| v.parse())?;
     let threads: usize = opt("threads").map_or(Ok(1), |v| v.parse())?;
     let heavy_tails: Option<bool> = opt("heavy_tails").map(|v| v.parse()).transpose()?;
     let direction_scales: Option<bool> = opt("direction_scales").map(|v| v.parse()).transpose()?;
@@ -154,7 +154,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             };
             println!(
                 "refresh {refresh_fraction}, refit {refit_proposal}, ridge {}, ridge_time \
-                 {ridge_time}, rungs {} ratio {} after {} ridge {}, R-hat checked every {}, \
+                 {ridge_time:?}, rungs {} ratio {} after {} ridge {}, R-hat checked every {}, \
                  delayed acceptance {}:",
                 ps.ridge_fraction,
                 ps.rungs,
@@ -165,7 +165,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ps.delayed_acceptance
             );
             let (t0, cpu0) = (std::time::Instant::now(), cpu_time::ProcessTime::now());
-            let p = sample_posterior(s, &r.data, &x_hat, &ps)?;
+            let p = sample_posterior(s, &r.data, (&x_hat, &r.other_optima), &ps)?;
             let (wall, cpu) = (t0.elapsed(), cpu0.elapsed());
             let n_per = p.draws.len() / ps.ensembles;
             println!(

@@ -107,6 +107,11 @@ pub struct CellResult {
     /// Posterior on the meta-model (study `[posterior]`), when sampled.
     #[serde(default)]
     pub posterior: Option<Posterior>,
+    /// The fit's other local optima (free parameters, `FitResult::
+    /// other_optima`): where the posterior starts some ensembles. Not
+    /// written (the posterior is sampled right after the fit).
+    #[serde(skip)]
+    pub other_optima: Vec<Vec<f64>>,
 }
 
 /// The familiar Hertz fit (eq. 1.1, rigid sphere on an elastic half-space,
@@ -147,6 +152,7 @@ impl CellResult {
             cell_height: None,
             base_diameter: None,
             posterior: None,
+            other_optima: Vec::new(),
         }
     }
 
@@ -480,9 +486,12 @@ fn posterior(
         heavy_tails: p.heavy_tails,
         direction_scales: p.direction_scales,
         ridge_starts: p.ridge_starts,
+        ridge_time: p.ridge_time,
+        mode_starts: p.mode_starts,
         ..PosteriorSettings::new(settings.hold_end)
     };
-    match sample_posterior_fixed(fitter.surrogate(), fixed, &base.data, x_hat, &ps) {
+    let optima = (x_hat, base.other_optima.as_slice());
+    match sample_posterior_fixed(fitter.surrogate(), fixed, &base.data, optima, &ps) {
         Ok(post) => {
             if !(post.rhat_max <= 1.01) {
                 base.flags.push(format!(
@@ -512,6 +521,7 @@ fn record_fit(settings: &CohortSettings, base: &mut CellResult, fit: &FitResult,
     base.fit = y;
     base.misfit = Some(fit.best.misfit);
     base.alternatives = fit.alternatives.len();
+    base.other_optima = fit.other_optima();
     for hit in &fit.best.on_bounds {
         let side = match hit.side {
             BoundSide::Lower => "lower",

@@ -43,6 +43,7 @@ use nlvid_inverse::{
     AfmColumns, Calibration, CompressionColumns, Coordinates, PosteriorSettings, ProtocolTolerance,
     Segment,
 };
+use nlvid_inverse::posterior::RidgeTime;
 use nlvid_study::{Bounds, Dimension, FromSection, Section, Study, StudyError};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
@@ -644,6 +645,8 @@ pub struct CohortSettings {
 /// heavy_tails = false  # true: surrogate error Student-t (nu from the meta-model's LOO)
 /// direction_scales = false  # true: a Gaussian surrogate error scale per direction (LOO)
 /// ridge_starts = false      # true: half the ensembles start at the ends of the weakest direction
+/// ridge_time = "kept"       # "viscous": half the ridge steps move τ1 at fixed G0·g1·τ1
+/// mode_starts = true        # half the ensembles start at the fit's other optima within 6 in ln L
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PosteriorStudy {
@@ -690,6 +693,17 @@ pub struct PosteriorStudy {
     /// (`PosteriorSettings::ridge_starts`).
     #[serde(default)]
     pub ridge_starts: bool,
+    /// What the ridge steps do with τ1 (`PosteriorSettings::ridge_time`).
+    #[serde(default)]
+    pub ridge_time: RidgeTime,
+    /// Half the ensembles started at the fit's other optima
+    /// (`PosteriorSettings::mode_starts`).
+    #[serde(default = "default_mode_starts")]
+    pub mode_starts: bool,
+}
+
+fn default_mode_starts() -> bool {
+    PosteriorSettings::new(1.0).mode_starts
 }
 
 fn default_heavy_tails() -> bool {
@@ -750,6 +764,19 @@ impl FromSection for PosteriorSection {
                 .unwrap_or_else(default_heavy_tails),
             direction_scales: s.opt_bool("direction_scales")?.unwrap_or(false),
             ridge_starts: s.opt_bool("ridge_starts")?.unwrap_or(false),
+            ridge_time: s
+                .opt_enum(
+                    "ridge_time",
+                    &[
+                        ("kept", RidgeTime::Kept),
+                        ("redrawn", RidgeTime::Redrawn),
+                        ("viscous", RidgeTime::Viscous),
+                    ],
+                )?
+                .unwrap_or_default(),
+            mode_starts: s
+                .opt_bool("mode_starts")?
+                .unwrap_or_else(default_mode_starts),
         };
         Ok(Self(enabled.then_some(p)))
     }

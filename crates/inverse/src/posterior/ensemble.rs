@@ -65,6 +65,20 @@
 //!   r·φ_G0'(u)/φ_G0'(u') · Π (1/r)·φ_g2'(u)/φ_g2'(u') with φ the axis'
 //!   map u ↦ x (on a log G0 axis and a linear g2 axis |J| = 1/r).
 //!
+//! *Pooled proposals* (`pool_proposals`; [`refit_proposals`]): ensembles
+//! started in different modes (the fit's other optima,
+//! `posterior::sample_posterior`) each hold one mode, and no stretch, DE
+//! or own-draws independence move crosses the gap between them, so R̂
+//! stays high however long they run. With pooling, each rung's proposal
+//! is fitted to that rung's positions in every ensemble — the
+//! two-cluster mixture below then has a component on each mode — and the
+//! same proposal is given to every ensemble: a walker changes mode in one
+//! accepted independence step, in proportion to the modes' masses. Each
+//! ensemble still moves with its own random stream and its own walkers
+//! only; the ensembles interact through the proposal's refits alone (a
+//! finite number, at round ends), so each chain keeps its target by the
+//! finite-adaptation argument below.
+//!
 //! The independence proposal can be refitted between calls of
 //! [`Ensemble::sample`] to the ensemble's own kept draws
 //! ([`Ensemble::refit_proposal`]). Each kernel used keeps the target
@@ -141,6 +155,10 @@ pub struct EnsembleSettings {
     /// Probability that a step uses the ridge move (0: none; only with
     /// [`Ensemble::with_ridge`]).
     pub ridge_fraction: f64,
+    /// Fit one independence proposal per rung to the recent positions of
+    /// every ensemble stepped together ([`burn_in`], [`refit_proposals`];
+    /// module docs, "Pooled proposals"); false: each ensemble its own.
+    pub pool_proposals: bool,
     /// Seed.
     pub seed: u64,
 }
@@ -156,6 +174,7 @@ impl Default for EnsembleSettings {
             independence_fraction: 0.5,
             refresh_fraction: 0.0,
             ridge_fraction: 0.0,
+            pool_proposals: false,
             seed: 1,
         }
     }
@@ -574,9 +593,18 @@ impl Ensemble {
                         continue;
                     };
                     let v: f64 = rng.random();
-                    let time = (ridge.fast_time.is_some() && rng.random::<f64>() < 0.5)
-                        .then(|| rng.random::<f64>());
-                    match ridge.propose(x, v, time) {
+                    let proposed = match ridge.time_move {
+                        RidgeTime::Kept => ridge.propose(x, v, None),
+                        RidgeTime::Redrawn => {
+                            let time = (rng.random::<f64>() < 0.5).then(|| rng.random::<f64>());
+                            ridge.propose(x, v, time)
+                        }
+                        RidgeTime::Viscous if rng.random::<f64>() < 0.5 => {
+                            ridge.propose_viscous(x, v)
+                        }
+                        RidgeTime::Viscous => ridge.propose(x, v, None),
+                    };
+                    match proposed {
                         Some(p) => p,
                         None => {
                             // Rejected; the acceptance uniform is drawn as for any walker.
@@ -822,11 +850,51 @@ pub fn burn_in(ensembles: &mut [Ensemble], log_density: &impl LogDensity) {
                 }
             }
         }
-        if e.settings.independence_fraction > 0.0 {
-            e.record_recent();
-            e.proposals = e.recent.iter().map(|p| Proposal::fit(p, 1.2)).collect();
+        e.record_recent();
+    }
+    if pooled(ensembles) {
+        refit_proposals(ensembles);
+    } else {
+        for e in ensembles.iter_mut() {
+            if e.settings.independence_fraction > 0.0 {
+                e.proposals = e.recent.iter().map(|p| Proposal::fit(p, 1.2)).collect();
+            }
         }
+    }
+    for e in ensembles.iter_mut() {
         e.recent.iter_mut().for_each(Vec::clear);
+    }
+}
+
+/// True when `ensembles` fit one pooled independence proposal per rung
+/// (`EnsembleSettings::pool_proposals`, independence moves on).
+fn pooled(ensembles: &[Ensemble]) -> bool {
+    ensembles
+        .first()
+        .is_some_and(|e| e.settings.pool_proposals && e.settings.independence_fraction > 0.0)
+}
+
+/// Refits the independence proposals of ensembles stepped together to
+/// their positions over the last call of [`sample`]: each ensemble's own
+/// ([`Ensemble::refit_proposal`]), or with `pool_proposals` one proposal
+/// per rung fitted to that rung's positions in every ensemble and given
+/// to all (module docs, "Pooled proposals"). A fit that fails keeps the
+/// old proposals.
+pub fn refit_proposals(ensembles: &mut [Ensemble]) {
+    if !pooled(ensembles) {
+        ensembles.iter_mut().for_each(Ensemble::refit_proposal);
+        return;
+    }
+    for r in 0..ensembles[0].betas.len() {
+        let points: Vec<Vec<f64>> = ensembles
+            .iter()
+            .flat_map(|e| e.recent[r].iter().cloned())
+            .collect();
+        if let Some(q) = Proposal::fit(&points, 1.2) {
+            for e in ensembles.iter_mut() {
+                e.proposals[r] = Some(q.clone());
+            }
+        }
     }
 }
 
@@ -896,10 +964,44 @@ pub struct RidgeMove {
     pub fast: (usize, Parameter),
     /// Indices in u and axes of the weights kept at fixed G0·g_k.
     pub carried: Vec<(usize, Parameter)>,
-    /// Index in u of the fast weight's relaxation time τ1: on half the
-    /// ridge moves it is redrawn uniformly in u as well (the ridge curves
-    /// toward longer τ1 at lower g1); None: never.
-    pub fast_time: Option<usize>,
+    /// Index in u and axis of the fast weight's relaxation time τ1 (None:
+    /// the domain has none).
+    pub fast_time: Option<(usize, Parameter)>,
+    /// What a ridge step does with τ1.
+    pub time_move: RidgeTime,
+}
+
+/// What the ridge move does with the fast relaxation time τ1
+/// ([`RidgeMove::time_move`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RidgeTime {
+    /// τ1 kept: every ridge step is the g1 map ([`RidgeMove::propose`]).
+    #[default]
+    Kept,
+    /// On half the ridge steps τ1 is redrawn uniformly in u as well,
+    /// independently of g1 (measured, not better: docs/theory/inverse.md,
+    /// session 19).
+    Redrawn,
+    /// Half the ridge steps are the viscous map instead
+    /// ([`RidgeMove::propose_viscous`]): τ1 redrawn at fixed fast-term
+    /// viscosity G0·g1·τ1.
+    Viscous,
+}
+
+impl std::str::FromStr for RidgeTime {
+    type Err = String;
+
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "kept" => Ok(Self::Kept),
+            "redrawn" => Ok(Self::Redrawn),
+            "viscous" => Ok(Self::Viscous),
+            _ => Err(format!(
+                "ridge time `{s}`: expected `kept`, `redrawn` or `viscous`"
+            )),
+        }
+    }
 }
 
 impl RidgeMove {
@@ -917,21 +1019,64 @@ impl RidgeMove {
         }
         let mut y = x.to_vec();
         y[i] = v;
-        if let (Some(t), Some(w)) = (self.fast_time, time) {
-            y[t] = w;
+        if let (Some((t, _)), Some(w)) = (&self.fast_time, time) {
+            y[*t] = w;
         }
-        // x' = f·x on one axis: its u' and ln |∂u'/∂u| = ln f + ln φ'(u) − ln φ'(u').
-        let mut scaled = |(j, p): &(usize, Parameter), f: f64| {
-            let u_new = p.to_unit(f * p.from_unit(x[*j]));
-            let lj = f.ln() + p.dx_du(x[*j]).ln() - p.dx_du(u_new).ln();
-            y[*j] = u_new;
-            lj
-        };
-        let mut log_j = scaled(&self.scale, r);
+        let mut log_j = self.rescale(x, &mut y, &self.scale, r);
         for c in &self.carried {
-            log_j += scaled(c, 1.0 / r);
+            log_j += self.rescale(x, &mut y, c, 1.0 / r);
         }
         log_j.is_finite().then_some((y, log_j))
+    }
+
+    /// The viscous map: τ1's u set to `v` (a swap with an auxiliary
+    /// uniform), the fast modulus G0·g1 scaled by τ1/τ1' so that the
+    /// fast term's viscosity η1 = G0·g1·τ1 is kept, with G0·(1 − g1) and
+    /// G0·g_k: G0' = G0(1 − g1) + G0 g1 τ1/τ1', g1' = G0 g1 τ1/(τ1' G0'),
+    /// g_k' = G0 g_k/G0'. A term with τ1 well below the ramp's duration
+    /// acts on the data as a dashpot of viscosity η1 in parallel with the
+    /// rest (eq. 5.1's G(t) integrated against a slow strain rate), so this
+    /// map follows the ridge τ1 ↓, g1 ↑, G0 ↑ that the posterior runs along
+    /// to τ1's bound (docs/theory/inverse.md, session 19). In the
+    /// coordinates (a, b, c_k) = (G0(1 − g1), G0 g1, G0 g_k) the map is
+    /// b ↦ b τ1/τ1', and ∂(a, b, c)/∂(G0, g1, g) has determinant
+    /// G0^{1+n} (n carried weights), so |∂x'/∂x| = (τ1/τ1')·(G0/G0')^{1+n},
+    /// times each axis' φ'(u)/φ'(u'). Returns the image and ln |J|; None
+    /// without a fast time, when a value leaves its axis' range or is not
+    /// finite (the move is then rejected).
+    pub fn propose_viscous(&self, x: &[f64], v: f64) -> Option<(Vec<f64>, f64)> {
+        let (t, ref pt) = *self.fast_time.as_ref()?;
+        let (i, ref pf) = self.fast;
+        let (s, ref ps) = self.scale;
+        let (tau, tau_new) = (pt.from_unit(x[t]), pt.from_unit(v));
+        let (g0, g1) = (ps.from_unit(x[s]), pf.from_unit(x[i]));
+        let fast_new = g0 * g1 * tau / tau_new;
+        let g0_new = g0 * (1.0 - g1) + fast_new;
+        let mut y = x.to_vec();
+        y[t] = v;
+        let mut log_j = (tau / tau_new).ln();
+        // x_j ↦ `new` on axis (j, p): u_j' and ln φ'(u_j) − ln φ'(u_j').
+        let mut set = |(j, p): &(usize, Parameter), new: f64| {
+            let u_new = p.to_unit(new);
+            y[*j] = u_new;
+            p.dx_du(x[*j]).ln() - p.dx_du(u_new).ln()
+        };
+        log_j += set(&self.scale, g0_new) + set(&self.fast, fast_new / g0_new);
+        for c in &self.carried {
+            let gk = c.1.from_unit(x[c.0]);
+            log_j += set(c, g0 * gk / g0_new);
+        }
+        log_j += (1 + self.carried.len()) as f64 * (g0 / g0_new).ln();
+        let inside = y.iter().all(|u| (0.0..=1.0).contains(u));
+        (inside && log_j.is_finite()).then_some((y, log_j))
+    }
+
+    /// Sets u_j in `y` for x_j scaled by f on axis `(j, p)`, returning
+    /// ln |∂u'/∂u| = ln f + ln φ'(u) − ln φ'(u').
+    fn rescale(&self, x: &[f64], y: &mut [f64], (j, p): &(usize, Parameter), f: f64) -> f64 {
+        let u_new = p.to_unit(f * p.from_unit(x[*j]));
+        y[*j] = u_new;
+        f.ln() + p.dx_du(x[*j]).ln() - p.dx_du(u_new).ln()
     }
 }
 
@@ -1587,8 +1732,51 @@ mod tests {
             scale: (0, Parameter::new("G0", "Pa", 1.0, 10.0, Scale::Log)),
             fast: (1, Parameter::new("g1", "1", 0.0, 1.0, Scale::Linear)),
             carried: vec![(2, Parameter::new("g2", "1", 0.0, 1.0, Scale::Linear))],
-            fast_time: None,
+            fast_time: Some((3, Parameter::new("tau1", "s", 0.01, 2.0, Scale::Log))),
+            time_move: RidgeTime::Kept,
         }
+    }
+
+    /// The viscous map keeps G0·(1 − g1), G0·g1·τ1 and G0·g2, is an
+    /// involution (τ1's u and the auxiliary v swap), and its ln |J| is the
+    /// log-determinant of ∂(u_G0', u_g1', u_g2')/∂(u_G0, u_g1, u_g2) by
+    /// central differences (the swapped pair adds |det| 1).
+    #[test]
+    fn viscous_map_is_an_involution_with_its_jacobian() {
+        let m = ridge_3d();
+        let tau = &m.fast_time.as_ref().expect("time").1;
+        let x = [0.3, 0.4, 0.2, 0.6];
+        let v = 0.35;
+        let (y, lj) = m.propose_viscous(&x, v).expect("move");
+        let phys = |u: &[f64]| (10f64.powf(u[0]), u[1], u[2], tau.from_unit(u[3]));
+        let (g, g1, g2, t) = phys(&x);
+        let (h, h1, h2, s) = phys(&y);
+        assert!(s < t, "a shorter τ1: {s} vs {t}");
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-12 * a.abs().max(1.0);
+        assert!(close(g * (1.0 - g1), h * (1.0 - h1)), "G0 (1 − g1)");
+        assert!(close(g * g1 * t, h * h1 * s), "G0 g1 τ1");
+        assert!(close(g * g2, h * h2), "G0 g2");
+        let (back, lj_back) = m.propose_viscous(&y, x[3]).expect("back");
+        for i in 0..4 {
+            assert!((back[i] - x[i]).abs() < 1e-12, "{back:?}");
+        }
+        assert!((lj + lj_back).abs() < 1e-12);
+        let e = 1e-6;
+        let mut jac = nalgebra::Matrix3::zeros();
+        for (c, &k) in [0, 1, 2].iter().enumerate() {
+            let (mut p, mut q) = (x, x);
+            p[k] += e;
+            q[k] -= e;
+            let (yp, yq) = (
+                m.propose_viscous(&p, v).expect("fd").0,
+                m.propose_viscous(&q, v).expect("fd").0,
+            );
+            for r in 0..3 {
+                jac[(r, c)] = (yp[r] - yq[r]) / (2.0 * e);
+            }
+        }
+        let det = jac.determinant();
+        assert!((det.ln() - lj).abs() < 1e-6, "ln det {} vs {lj}", det.ln());
     }
 
     /// The ridge map keeps G0·(1 − g1) and G0·g2, is an involution (v and
@@ -1626,13 +1814,25 @@ mod tests {
 
     /// The ridge move keeps a known density: uniform in u on the prism
     /// u ∈ [0, 1]⁴, u_g1 + u_g2 ≤ 1 (the Table 5.3 prior's shape; the 4th
-    /// axis is τ1, redrawn on half the ridge moves), run with the ridge
-    /// move on 60 % of the steps. Closed forms: E[u_G0] = E[u_τ1] = 1/2,
-    /// Var = 1/12; E[u_g1] = E[u_g2] = 1/3, Var = 1/18. Without the
-    /// Jacobian 1/r in the acceptance this fails (measured: E[u_G0] =
-    /// 0.562).
+    /// axis is τ1, redrawn on half the ridge moves, or moved by the
+    /// viscous map on half of them), run with the ridge move on 60 % of
+    /// the steps. Closed forms: E[u_G0] = E[u_τ1] = 1/2, Var = 1/12;
+    /// E[u_g1] = E[u_g2] = 1/3, Var = 1/18. Without the Jacobian 1/r in
+    /// the acceptance this fails (measured: E[u_G0] = 0.562).
     #[test]
     fn ridge_move_keeps_a_uniform_prism() {
+        ridge_keeps_a_uniform_prism(RidgeTime::Redrawn);
+    }
+
+    /// As [`ridge_move_keeps_a_uniform_prism`] with the viscous map on
+    /// half the ridge steps. Without its Jacobian in the acceptance this
+    /// fails (measured: E[u_τ1] = 0.562).
+    #[test]
+    fn viscous_ridge_keeps_a_uniform_prism() {
+        ridge_keeps_a_uniform_prism(RidgeTime::Viscous);
+    }
+
+    fn ridge_keeps_a_uniform_prism(time_move: RidgeTime) {
         let logp = |x: &[f64]| {
             if x.iter().all(|v| (0.0..=1.0).contains(v)) && x[1] + x[2] <= 1.0 {
                 0.0
@@ -1655,7 +1855,7 @@ mod tests {
             ..EnsembleSettings::default()
         };
         let ridge = RidgeMove {
-            fast_time: Some(3),
+            time_move,
             ..ridge_3d()
         };
         let mut e = [Ensemble::new(&logp, &init, &s)

@@ -37,8 +37,8 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 pub use ensemble::{
-    Chains, Ensemble, EnsembleSettings, LogDensity, RidgeMove, burn_in, sample, sample_ensemble,
-    sample_more,
+    Chains, Ensemble, EnsembleSettings, LogDensity, RidgeMove, RidgeTime, burn_in,
+    refit_proposals, sample, sample_ensemble, sample_more,
 };
 pub use likelihood::{CurveLikelihood, noise_sd};
 use screen::VarianceModel;
@@ -88,10 +88,9 @@ pub struct PosteriorSettings {
     /// off, 0.1 measured in docs/theory/inverse.md).
     #[serde(default = "default_ridge")]
     pub ridge_fraction: f64,
-    /// Redraw the fast weight's τ too on half the ridge steps
-    /// ([`RidgeMove::fast_time`]; measured, not better: docs/theory/inverse.md).
+    /// What the ridge steps do with the fast weight's τ ([`RidgeTime`]).
     #[serde(default)]
-    pub ridge_time: bool,
+    pub ridge_time: RidgeTime,
     /// Threads over which each batch of proposals is evaluated (1: the
     /// calling thread). The draws are bitwise the same for any count
     /// ([`CurveLikelihood::with_threads`]); more than 1 is for one
@@ -180,6 +179,11 @@ pub struct PosteriorSettings {
     /// (docs/theory/inverse.md, "Session 19").
     #[serde(default)]
     pub ridge_starts: bool,
+    /// Half of the ensembles start at the fit's other local optima
+    /// ([`other_modes`]) where those lie within 6 of the optimum's ln L;
+    /// off: every ensemble starts at the optimum (unless `ridge_starts`).
+    #[serde(default = "default_true")]
+    pub mode_starts: bool,
 }
 
 fn default_true() -> bool {
@@ -268,7 +272,7 @@ impl PosteriorSettings {
             refresh_fraction: default_refresh(),
             refit_proposal: default_refit(),
             ridge_fraction: default_ridge(),
-            ridge_time: false,
+            ridge_time: RidgeTime::Kept,
             threads: default_threads(),
             rungs: default_rungs(),
             rung_ratio: default_rung_ratio(),
@@ -282,6 +286,7 @@ impl PosteriorSettings {
             direction_scales: false,
             surrogate_error: true,
             ridge_starts: false,
+            mode_starts: true,
         }
     }
 }
@@ -400,15 +405,46 @@ const OVERDISPERSION: f64 = 2.0;
 /// domain.
 const MAX_START_SD: f64 = 0.25;
 
-/// ln L below the optimum's down to which a ridge end ([`ridge_ends`])
-/// gets ensembles of its own.
-const RIDGE_END_LN_L: f64 = 6.0;
+/// ln L below the optimum's down to which another start centre (one of
+/// the fit's other optima, [`other_modes`], or a ridge end,
+/// [`ridge_ends`]) gets ensembles of its own: about the 95 % point of
+/// χ²₅/2, so that a centre the posterior could hold mass around is kept
+/// and one far out in the tail is not.
+const OTHER_CENTRE_LN_L: f64 = 6.0;
+
+/// The fit's other local optima (`others`, free parameters) whose ln L
+/// lies within [`OTHER_CENTRE_LN_L`] of the optimum's (`best`), highest
+/// first. A multistart clusters its local runs into distinct optima and
+/// reports the lowest misfit; where two basins fit within a few units of
+/// ln L — a fast Prony term at τ1 ≈ 0.02–0.1 s against a term near 1.5 s
+/// of lower weight — the posterior mass may sit mostly in the one that is
+/// not the optimum (the longer basin along the fast-term ridge has the
+/// larger prior volume), and ensembles all started at the optimum agree
+/// with each other there and never see it (docs/theory/inverse.md,
+/// "Session 20"). Started in both, they disagree until they mix, so R̂
+/// sees the second mode and the tempered restart weighs the two.
+fn other_modes(
+    lik: &CurveLikelihood,
+    fixed: &FixedInputs,
+    best: f64,
+    others: &[Vec<f64>],
+) -> Result<Vec<Vec<f64>>> {
+    let mut near = Vec::new();
+    for x in others {
+        let l = lik.value(&fixed.expand(x))?;
+        if l >= best - OTHER_CENTRE_LN_L {
+            near.push((l, x.clone()));
+        }
+    }
+    near.sort_by(|a, b| b.0.total_cmp(&a.0));
+    Ok(near.into_iter().map(|(_, x)| x).collect())
+}
 
 /// The ends of the posterior's weakest direction: the parameter with the
 /// largest share of the least-determined eigenvector of the Laplace
 /// information in u (`information`, [`laplace_information`]) is held at 0.02 and at 0.98 of its range and the
 /// others refitted (`SurrogateFitter::fit_fixed`); an end whose ln L lies
-/// within [`RIDGE_END_LN_L`] of the optimum's is returned (free
+/// within [`OTHER_CENTRE_LN_L`] of the optimum's ln L (`best`) is returned (free
 /// parameters), so that the sampler also starts there: a ridge that runs
 /// to a bound (a fast term at its lower time bound) is otherwise not
 /// reached by ensembles started at the optimum (docs/theory/inverse.md,
@@ -418,7 +454,7 @@ fn ridge_ends(
     fixed: &FixedInputs,
     data: &[f64],
     x_hat: &[f64],
-    lik: &CurveLikelihood,
+    (lik, best): (&CurveLikelihood, f64),
     information: &DMatrix<f64>,
 ) -> Result<Vec<Vec<f64>>> {
     let domain = fixed.free_domain();
@@ -427,7 +463,6 @@ fn ridge_ends(
     let weakest = eig.eigenvalues.imin();
     let v = eig.eigenvectors.column(weakest);
     let i = v.iamax();
-    let best = lik.value(&fixed.expand(x_hat))?;
     let fitter = crate::SurrogateFitter::new(surrogate.clone(), None)?;
     let multistart = crate::MultiStart::new().with_starts(8)?.with_seed(1);
     let mut ends = Vec::new();
@@ -449,7 +484,7 @@ fn ridge_ends(
             continue;
         };
         let full = end_inputs.expand(&fit.fit.best.x);
-        if lik.value(&full)? >= best - RIDGE_END_LN_L {
+        if lik.value(&full)? >= best - OTHER_CENTRE_LN_L {
             ends.push(fixed.restrict(&full));
         }
     }
@@ -479,15 +514,16 @@ fn laplace_information(
 
 /// Start positions in u for `ensembles` ensembles of `walkers`: u_c + k·L ε
 /// with the centre u_c the multistart optimum û (the first half of the
-/// ensembles, all of them without ridge ends) or a ridge end
-/// ([`ridge_ends`], the others in turn), k = [`OVERDISPERSION`] and L Lᵀ
+/// ensembles, all of them without other centres) or another centre (the
+/// fit's other optima, [`other_modes`], then the ridge ends,
+/// [`ridge_ends`]: the other half in turn), k = [`OVERDISPERSION`] and L Lᵀ
 /// the Gauss–Newton (Laplace) covariance H⁻¹ at û (`information` = H =
 /// JᵤᵀJᵤ/σ², [`laplace_information`]), its sd capped at [`MAX_START_SD`];
 /// each start redrawn (shrinking the ball every 40 tries) until inside the
 /// prior's support.
 fn starts(
     domain: &nlvid_model::Domain,
-    (x_hat, ends): (&[f64], &[Vec<f64>]),
+    (x_hat, centres): (&[f64], &[Vec<f64>]),
     information: &DMatrix<f64>,
     (walkers, ensembles): (usize, usize),
     seed: u64,
@@ -508,10 +544,10 @@ fn starts(
     let mut all = Vec::with_capacity(ensembles);
     for e in 0..ensembles {
         let half = ensembles / 2;
-        let u_hat = if ends.is_empty() || e < half {
+        let u_hat = if centres.is_empty() || e < half {
             u_opt.clone()
         } else {
-            domain.to_unit(&ends[(e - half) % ends.len()])
+            domain.to_unit(&centres[(e - half) % centres.len()])
         };
         let center_ok = inside(&u_hat);
         let mut rng =
@@ -577,11 +613,11 @@ fn starts(
 pub fn sample_posterior(
     surrogate: &KrigingSurrogate,
     data: &[f64],
-    x_hat: &[f64],
+    (x_hat, other_optima): (&[f64], &[Vec<f64>]),
     settings: &PosteriorSettings,
 ) -> Result<Posterior> {
     let none = FixedInputs::none(Model::domain(surrogate));
-    sample_posterior_fixed(surrogate, &none, data, x_hat, settings)
+    sample_posterior_fixed(surrogate, &none, data, (x_hat, other_optima), settings)
 }
 
 /// As [`sample_posterior`] with the inputs of `fixed` held at their values
@@ -595,7 +631,7 @@ pub fn sample_posterior_fixed(
     surrogate: &KrigingSurrogate,
     fixed: &FixedInputs,
     data: &[f64],
-    x_hat: &[f64],
+    (x_hat, other_optima): (&[f64], &[Vec<f64>]),
     settings: &PosteriorSettings,
 ) -> Result<Posterior> {
     if !(settings.level > 0.0 && settings.level < 1.0)
@@ -629,14 +665,24 @@ pub fn sample_posterior_fixed(
         u.iter().all(|v| (0.0..=1.0).contains(v)) && domain.feasible(&domain.from_unit(u), 0.0)
     };
     let information = laplace_information(surrogate, fixed, x_hat, lik.noise_var())?;
-    let ends = if settings.ridge_starts {
-        ridge_ends(surrogate, fixed, data, x_hat, &lik, &information)?
-    } else {
-        Vec::new()
-    };
+    let best = lik.value(&fixed.expand(x_hat))?;
+    let mut centres = Vec::new();
+    if settings.mode_starts {
+        centres = other_modes(&lik, fixed, best, other_optima)?;
+    }
+    if settings.ridge_starts {
+        centres.extend(ridge_ends(
+            surrogate,
+            fixed,
+            data,
+            x_hat,
+            (&lik, best),
+            &information,
+        )?);
+    }
     let init = starts(
         &domain,
-        (x_hat, &ends),
+        (x_hat, &centres),
         &information,
         (settings.walkers, settings.ensembles),
         settings.seed,
@@ -666,13 +712,12 @@ pub fn sample_posterior_fixed(
                 .wrapping_add(0x9e37_79b9_7f4a_7c15u64.wrapping_mul(e as u64)),
             refresh_fraction: settings.refresh_fraction,
             ridge_fraction: settings.ridge_fraction,
+            pool_proposals: !centres.is_empty(),
             ..EnsembleSettings::default()
         };
         let mut ens = Ensemble::new(&log_density, start, &es)?;
         if let Some(mut ridge) = ridge_move(&domain) {
-            if !settings.ridge_time {
-                ridge.fast_time = None;
-            }
+            ridge.time_move = settings.ridge_time;
             ens = ens.with_ridge(ridge);
         }
         chains.push(ens.empty_chains());
@@ -739,7 +784,7 @@ pub fn sample_posterior_fixed(
             refit_screen_after_burn_in(&mut log_density, &mut ensembles)?;
             proposals += per_step * settings.rungs * settings.temper_burn;
         } else if settings.refit_proposal {
-            ensembles.iter_mut().for_each(Ensemble::refit_proposal);
+            refit_proposals(&mut ensembles);
         }
     }
 }
@@ -877,7 +922,8 @@ pub fn ridge_move(domain: &nlvid_model::Domain) -> Option<RidgeMove> {
             .filter(|p| p.0 != fast)
             .map(|p| axis(p.0))
             .collect(),
-        fast_time: Some(fast_time),
+        fast_time: Some(axis(fast_time)),
+        time_move: RidgeTime::Kept,
     })
 }
 
@@ -1025,7 +1071,7 @@ mod tests {
     /// on the demo meta-model's 0.1-s grid; session 19's cell where the
     /// sampler missed the ridge's far end): the weakest direction is held
     /// at an end of its range and refitted, and an end within
-    /// [`RIDGE_END_LN_L`] of the optimum's ln L is returned; a curve that
+    /// [`OTHER_CENTRE_LN_L`] of the optimum's ln L is returned; a curve that
     /// determines every parameter has no end within reach.
     #[test]
     fn ridge_ends_reach_the_bound_of_a_fast_term() {
@@ -1043,9 +1089,9 @@ mod tests {
             let x_hat = fit.fit.best.x;
             let best = lik.value(&x_hat).unwrap();
             let h = laplace_information(&s, &none, &x_hat, lik.noise_var()).unwrap();
-            let ends = ridge_ends(&s, &none, &data, &x_hat, &lik, &h).unwrap();
+            let ends = ridge_ends(&s, &none, &data, &x_hat, (&lik, best), &h).unwrap();
             for e in &ends {
-                assert!(lik.value(e).unwrap() >= best - RIDGE_END_LN_L);
+                assert!(lik.value(e).unwrap() >= best - OTHER_CENTRE_LN_L);
                 let u = domain.to_unit(e);
                 assert!(
                     u.iter()
@@ -1070,7 +1116,8 @@ mod tests {
     fn the_ridge_of_table_5_3_redraws_g1_and_carries_g2() {
         let d = nlvid_model::Domain::table_5_3(0.01).expect("domain");
         let r = ridge_move(&d).expect("ridge");
-        assert_eq!((r.scale.0, r.fast.0, r.fast_time), (0, 1, Some(3)));
+        assert_eq!((r.scale.0, r.fast.0), (0, 1));
+        assert_eq!(r.fast_time.map(|t| t.0), Some(3));
         assert_eq!(r.carried.iter().map(|c| c.0).collect::<Vec<_>>(), vec![2]);
         let g = nlvid_model::Parameter::new("G0", "Pa", 1.0, 2.0, nlvid_model::Scale::Log);
         let only = nlvid_model::Domain::new(vec![g]).expect("1-d");

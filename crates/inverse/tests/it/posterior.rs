@@ -63,7 +63,7 @@ fn posterior_of_g0_matches_the_laplace_approximation() {
         heavy_tails: false,
         ..PosteriorSettings::new(52.0)
     };
-    let post = sample_posterior(&s, &data, &x0, &settings).expect("posterior");
+    let post = sample_posterior(&s, &data, (&x0, &[]), &settings).expect("posterior");
     let (_, jac) = s.response_and_jacobian(&x0).expect("jacobian");
     let noise_only: DMatrix<f64> = jac.transpose() * &jac / (est * est);
     let sd_noise_only = noise_only.try_inverse().expect("invertible")[(0, 0)].sqrt();
@@ -123,7 +123,7 @@ fn posteriors_are_deterministic() {
         steps: 40,
         ..PosteriorSettings::new(52.0)
     };
-    let a = sample_posterior(&s, &data, &x0, &settings).expect("a");
-    let b = sample_posterior(&s, &data, &x0, &settings).expect("b");
+    let a = sample_posterior(&s, &data, (&x0, &[]), &settings).expect("a");
+    let b = sample_posterior(&s, &data, (&x0, &[]), &settings).expect("b");
     assert_eq!(a, b);
 }
