@@ -1508,6 +1508,49 @@ mod tests {
         (init, s)
     }
 
+    /// Pooled proposals carry walkers between modes that separate
+    /// ensembles were started in: on [`two_modes`], one ensemble started in
+    /// each mode, no tempering, eight rounds with refits. Pooled, each
+    /// ensemble's draws have the mixture's moments; each fitted to its own
+    /// draws, every ensemble stays in the mode it started in (measured:
+    /// P(x > 0) = 0 and 1).
+    #[test]
+    fn pooled_proposals_carry_walkers_between_modes() {
+        let logp = two_modes;
+        let (left, s) = two_modes_run();
+        let right: Vec<Vec<f64>> = left.iter().map(|p| vec![-p[0], p[1]]).collect();
+        let run = |pool: bool| {
+            let s = EnsembleSettings {
+                pool_proposals: pool,
+                ..s
+            };
+            let s2 = EnsembleSettings { seed: 14, ..s };
+            let mut e = [
+                Ensemble::new(&logp, &left, &s).expect("left"),
+                Ensemble::new(&logp, &right, &s2).expect("right"),
+            ];
+            burn_in(&mut e, &logp);
+            let mut ch = [e[0].empty_chains(), e[1].empty_chains()];
+            for _ in 0..8 {
+                sample(&mut e, &logp, 500, &mut ch);
+                refit_proposals(&mut e);
+            }
+            ch
+        };
+        for ch in &run(true) {
+            assert_two_modes(ch);
+        }
+        let right_share = |ch: &Chains| {
+            ch.samples.iter().step_by(2).filter(|&&v| v > 0.0).count() as f64
+                / (ch.steps * ch.walkers) as f64
+        };
+        let alone = run(false);
+        assert_eq!(
+            (right_share(&alone[0]), right_share(&alone[1])),
+            (0.0, 1.0)
+        );
+    }
+
     /// The draws of [`two_modes`] put 75 % of the mass at x > 0, with
     /// E[x] = 2.5, Var[x] = 19, E[y] = 0, Var[y] = ¼.
     fn assert_two_modes(ch: &Chains) {

@@ -10,8 +10,10 @@
 //!   cross-time covariance (process covariance estimated by leave-one-out)
 //!   folded into the variance;
 //! - sampler: independent affine-invariant ensembles ([`ensemble`]) in u,
-//!   started over-dispersed around the multistart optimum (Laplace shape),
-//!   run in rounds until the split R̂ across ensembles is ≤ [`RHAT_TARGET`]
+//!   started over-dispersed around the multistart optimum (Laplace shape)
+//!   and — half of them — around the fit's other optima within reach
+//!   ([`other_modes`]; the ensembles' independence proposal is then pooled,
+//!   the [`ensemble`] module docs, "Pooled proposals"), run in rounds until the split R̂ across ensembles is ≤ [`RHAT_TARGET`]
 //!   or `max_steps` (after the first round R̂ is checked every
 //!   `check_every` kept steps, so a posterior stops as soon as it is
 //!   converged; refits and the restart stay at round ends); a posterior still above the target after
@@ -1108,6 +1110,46 @@ mod tests {
             "the fast term's time held at its lower end: {fast:?}"
         );
         assert!(ends_of(&[1500.0, 0.3, 0.25, 0.5, 10.0]).is_empty());
+    }
+
+    /// The fit's other optima that become start centres: exactly those
+    /// within [`OTHER_CENTRE_LN_L`] of the optimum's ln L, highest first.
+    /// On the fast-term cell of [`ridge_ends_reach_the_bound_of_a_fast_term`]
+    /// (the session-19 cell whose posterior the sampler missed) the
+    /// 64-start fit has a second basin with a τ1 at least 3× apart from
+    /// the optimum's within reach: the mode the ensembles never visited.
+    #[test]
+    fn other_modes_are_the_optima_within_reach_of_the_best() {
+        let s = likelihood::tests::demo_surrogate();
+        let none = FixedInputs::none(Model::domain(&s));
+        let x = [215.6, 0.1535, 0.2913, 0.0211, 33.74];
+        let (data, sd) = likelihood::tests::pseudo_noisy_curve(&s, &x);
+        let lik = CurveLikelihood::new(&s, &data, sd, false, false)
+            .unwrap()
+            .with_surrogate_error(false);
+        let fitter = crate::SurrogateFitter::new(s.clone(), None).unwrap();
+        let ms = crate::MultiStart::new().with_seed(1);
+        let fit = fitter.fit_fixed(&[("cell", &data)], &ms, &none).unwrap().fit;
+        let best = lik.value(&fit.best.x).unwrap();
+        let others = fit.other_optima();
+        let modes = other_modes(&lik, &none, best, &others).unwrap();
+        let ln_l = |x: &[f64]| lik.value(x).unwrap();
+        for pair in modes.windows(2) {
+            assert!(ln_l(&pair[0]) >= ln_l(&pair[1]), "highest first");
+        }
+        for o in &others {
+            let kept = modes.contains(o);
+            assert_eq!(kept, ln_l(o) >= best - OTHER_CENTRE_LN_L, "{o:?}");
+        }
+        let tau = fit.best.x[3];
+        assert!(
+            modes.iter().any(|m| (m[3] / tau).ln().abs() >= 3f64.ln()),
+            "a second basin along τ1: best τ1 {tau}, modes {modes:?}, all {:?}",
+            others
+                .iter()
+                .map(|o| (ln_l(o) - best, o[3]))
+                .collect::<Vec<_>>()
+        );
     }
 
     /// Table 5.3: scale G0 (index 0), fast weight g1 (τ1 ≥ 0.01 s, below
