@@ -44,8 +44,13 @@ fn bench(c: &mut Criterion) {
             let name = format!("{} ({group}), {threads} thread(s)", fitted.cell);
             g.bench_function(name, |b| {
                 b.iter(|| {
-                    let p = sample_posterior(fitter.surrogate(), &fitted.data, (&x_hat, &fitted.other_optima), &ps)
-                        .expect("posterior");
+                    let p = sample_posterior(
+                        fitter.surrogate(),
+                        &fitted.data,
+                        (&x_hat, &fitted.other_optima),
+                        &ps,
+                    )
+                    .expect("posterior");
                     assert!(p.rhat_max <= 1.01, "R-hat {}", p.rhat_max);
                     p
                 });

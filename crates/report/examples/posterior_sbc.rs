@@ -155,8 +155,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     &FixedInputs::none(&domain),
                 )
                 .map_err(|e| format!("cell {i}: fit: {e}"))?;
-            let p = sample_posterior(s, data, (&fit.fit.best.x, &fit.fit.other_optima()), &settings)
-                .map_err(|e| format!("cell {i}: posterior: {e}"))?;
+            let p = sample_posterior(
+                s,
+                data,
+                (&fit.fit.best.x, &fit.fit.other_optima()),
+                &settings,
+            )
+            .map_err(|e| format!("cell {i}: posterior: {e}"))?;
             // ln L at the truth over ln L at the fit (> 0: the fit missed
             // a better region).
             let sigma_hat = noise_sd(s.times(), data).map_err(|e| e.to_string())?;

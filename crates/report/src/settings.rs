@@ -39,11 +39,11 @@
 
 use std::path::{Path, PathBuf};
 
+use nlvid_inverse::posterior::RidgeTime;
 use nlvid_inverse::{
     AfmColumns, Calibration, CompressionColumns, Coordinates, PosteriorSettings, ProtocolTolerance,
     Segment,
 };
-use nlvid_inverse::posterior::RidgeTime;
 use nlvid_study::{Bounds, Dimension, FromSection, Section, Study, StudyError};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};

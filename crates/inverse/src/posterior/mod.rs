@@ -12,9 +12,10 @@
 //! - sampler: independent affine-invariant ensembles ([`ensemble`]) in u,
 //!   started over-dispersed around the multistart optimum (Laplace shape)
 //!   and — half of them — around the fit's other optima within reach
-//!   ([`other_modes`]; the ensembles' independence proposal is then pooled,
-//!   the [`ensemble`] module docs, "Pooled proposals"), run in rounds until the split R̂ across ensembles is ≤ [`RHAT_TARGET`]
-//!   or `max_steps` (after the first round R̂ is checked every
+//!   ([`other_modes`]; the ensembles' independence proposal is then
+//!   pooled, the [`ensemble`] module docs, "Pooled proposals"), run in
+//!   rounds until the split R̂ across ensembles is ≤ [`RHAT_TARGET`] or
+//!   `max_steps` (after the first round R̂ is checked every
 //!   `check_every` kept steps, so a posterior stops as soon as it is
 //!   converged; refits and the restart stay at round ends); a posterior still above the target after
 //!   `temper_after` kept steps is restarted from its walkers' positions
@@ -39,8 +40,8 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 pub use ensemble::{
-    Chains, Ensemble, EnsembleSettings, LogDensity, RidgeMove, RidgeTime, burn_in,
-    refit_proposals, sample, sample_ensemble, sample_more,
+    Chains, Ensemble, EnsembleSettings, LogDensity, RidgeMove, RidgeTime, burn_in, refit_proposals,
+    sample, sample_ensemble, sample_more,
 };
 pub use likelihood::{CurveLikelihood, noise_sd};
 use screen::VarianceModel;
@@ -423,8 +424,10 @@ const OTHER_CENTRE_LN_L: f64 = 6.0;
 /// not the optimum (the longer basin along the fast-term ridge has the
 /// larger prior volume), and ensembles all started at the optimum agree
 /// with each other there and never see it (docs/theory/inverse.md,
-/// "Session 20"). Started in both, they disagree until they mix, so R̂
-/// sees the second mode and the tempered restart weighs the two.
+/// "Session 20"). Started in both, the ensembles share one independence
+/// proposal fitted to their pooled draws, which carries walkers between
+/// the modes in proportion to their masses (and R̂ stays high until it
+/// has).
 fn other_modes(
     lik: &CurveLikelihood,
     fixed: &FixedInputs,
@@ -1129,7 +1132,10 @@ mod tests {
             .with_surrogate_error(false);
         let fitter = crate::SurrogateFitter::new(s.clone(), None).unwrap();
         let ms = crate::MultiStart::new().with_seed(1);
-        let fit = fitter.fit_fixed(&[("cell", &data)], &ms, &none).unwrap().fit;
+        let fit = fitter
+            .fit_fixed(&[("cell", &data)], &ms, &none)
+            .unwrap()
+            .fit;
         let best = lik.value(&fit.best.x).unwrap();
         let others = fit.other_optima();
         let modes = other_modes(&lik, &none, best, &others).unwrap();
