@@ -183,8 +183,11 @@ pub struct PosteriorSettings {
     #[serde(default)]
     pub ridge_starts: bool,
     /// Half of the ensembles start at the fit's other local optima
-    /// ([`other_modes`]) where those lie within 6 of the optimum's ln L;
-    /// off: every ensemble starts at the optimum (unless `ridge_starts`).
+    /// ([`other_modes`]) where those lie within 6 of the optimum's ln L,
+    /// and the ensembles share one independence proposal fitted to their
+    /// pooled draws (`EnsembleSettings::pool_proposals`); off: session
+    /// 19's sampler (every ensemble at the optimum unless `ridge_starts`,
+    /// each with its own proposal). docs/theory/inverse.md, "Session 20".
     #[serde(default = "default_true")]
     pub mode_starts: bool,
 }
@@ -717,7 +720,7 @@ pub fn sample_posterior_fixed(
                 .wrapping_add(0x9e37_79b9_7f4a_7c15u64.wrapping_mul(e as u64)),
             refresh_fraction: settings.refresh_fraction,
             ridge_fraction: settings.ridge_fraction,
-            pool_proposals: !centres.is_empty(),
+            pool_proposals: settings.mode_starts,
             ..EnsembleSettings::default()
         };
         let mut ens = Ensemble::new(&log_density, start, &es)?;
