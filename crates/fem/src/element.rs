@@ -16,8 +16,9 @@
 //! Ψ = Ψ_iso(F) + U(J) this is exactly the Q1/P0 mixed element of
 //! Simo–Taylor–Pister with the pressure condensed out.
 
-use crate::fbar::FbarPoint;
-use nlvid_material::{Mat3, Material3, MaterialError};
+use crate::fbar::{FbarMaterialPoint, FbarPoint, PointUpdate};
+use crate::kind::LocalOutput;
+use nlvid_material::{F64x4, Lane, Mat3, Material3, MaterialError};
 
 /// 2×2 Gauss points (ξ, η); all weights are 1.
 pub const GAUSS: [(f64, f64); 4] = {
@@ -67,19 +68,47 @@ pub fn shape_gradients(x: &[[f64; 2]; 4], xi: f64, eta: f64) -> ([f64; 4], [[f64
     (n, dx, det)
 }
 
-/// Reference-configuration data of one Gauss point.
+/// Reference-configuration data of one Gauss point (`T` =
+/// [`nlvid_material::F64x4`]: of the same point of four elements, one per
+/// lane, [`PointGeometry::lanes`]).
 #[derive(Debug, Clone, Copy)]
-pub struct PointGeometry {
+pub struct PointGeometry<T = f64> {
     /// Shape functions.
-    pub n: [f64; 4],
+    pub n: [T; 4],
     /// ∂N/∂R, ∂N/∂Z.
-    pub dn: [[f64; 2]; 4],
+    pub dn: [[T; 2]; 4],
     /// Reference radius R.
-    pub r: f64,
+    pub r: T,
     /// N/R (the hoop row of ∂F/∂u), precomputed for the element loop.
-    pub n_over_r: [f64; 4],
+    pub n_over_r: [T; 4],
     /// Integration weight 2π R det J (m³).
-    pub weight: f64,
+    pub weight: T,
+}
+
+impl PointGeometry<F64x4> {
+    /// The same point of four elements, one per lane.
+    #[inline]
+    pub fn lanes(g: [&PointGeometry; 4]) -> Self {
+        let z = F64x4::default();
+        let mut out = Self {
+            n: [z; 4],
+            dn: [[z; 2]; 4],
+            r: z,
+            n_over_r: [z; 4],
+            weight: z,
+        };
+        for (l, p) in g.into_iter().enumerate() {
+            for a in 0..4 {
+                out.n[a].0[l] = p.n[a];
+                out.dn[a][0].0[l] = p.dn[a][0];
+                out.dn[a][1].0[l] = p.dn[a][1];
+                out.n_over_r[a].0[l] = p.n_over_r[a];
+            }
+            out.r.0[l] = p.r;
+            out.weight.0[l] = p.weight;
+        }
+        out
+    }
 }
 
 /// Gauss-point geometry of one element.
@@ -123,11 +152,12 @@ pub(crate) fn deformation(b: &[[f64; 8]; 5], u: &[f64; 8]) -> [f64; 5] {
 }
 
 /// J = det F for stored components, its gradient and Hessian w.r.t. them.
-pub(crate) fn jacobian_derivatives(f: &[f64; 5]) -> (f64, [f64; 5], [[f64; 5]; 5]) {
+#[inline(always)]
+pub(crate) fn jacobian_derivatives<T: Lane>(f: &[T; 5]) -> (T, [T; 5], [[T; 5]; 5]) {
     let j2 = f[0] * f[3] - f[1] * f[2];
     let h = f[4];
     let dj = [f[3] * h, -f[2] * h, -f[1] * h, f[0] * h, j2];
-    let mut hj = [[0.0; 5]; 5];
+    let mut hj = [[T::zero(); 5]; 5];
     hj[0][3] = h;
     hj[3][0] = h;
     hj[1][2] = -h;
@@ -341,18 +371,19 @@ pub type PointFailure = (usize, nlvid_material::MaterialError);
 /// The Q4 point in the shared F-bar kernel ([`crate::fbar::fbar_kernel`]):
 /// F stored as (rR, rZ, zR, zZ, θθ), B used through its sparsity (each
 /// column has at most 3 non-zeros), the material's axisymmetric update.
-impl FbarPoint<5, 8> for PointGeometry {
-    #[inline]
-    fn weight(&self) -> f64 {
+impl<T: Lane> FbarPoint<T, 5, 8> for PointGeometry<T> {
+    #[inline(always)]
+    fn weight(&self) -> T {
         self.weight
     }
 
     /// The stored F components at a point, from the shape functions directly
     /// (same as `deformation(&grad_operator(g), u)`).
-    #[inline]
-    fn deformation(&self, u: &[f64; 8]) -> [f64; 5] {
+    #[inline(always)]
+    fn deformation(&self, u: &[T; 8]) -> [T; 5] {
         let g = self;
-        let mut f = [1.0, 0.0, 0.0, 1.0, 1.0];
+        let (one, zero) = (T::one(), T::zero());
+        let mut f = [one, zero, zero, one, one];
         for a in 0..4 {
             let (ur, uz) = (u[2 * a], u[2 * a + 1]);
             f[0] += g.dn[a][0] * ur;
@@ -364,10 +395,10 @@ impl FbarPoint<5, 8> for PointGeometry {
         f
     }
 
-    #[inline]
-    fn bt_v(&self, v: &[f64; 5]) -> [f64; 8] {
+    #[inline(always)]
+    fn bt_v(&self, v: &[T; 5]) -> [T; 8] {
         let g = self;
-        let mut out = [0.0; 8];
+        let mut out = [T::zero(); 8];
         for a in 0..4 {
             out[2 * a] = g.dn[a][0] * v[0] + g.dn[a][1] * v[1] + g.n_over_r[a] * v[4];
             out[2 * a + 1] = g.dn[a][0] * v[2] + g.dn[a][1] * v[3];
@@ -378,15 +409,15 @@ impl FbarPoint<5, 8> for PointGeometry {
     /// Always inlined, so it is compiled in the kernel's SIMD dispatch
     /// ([`crate::fbar::fbar_kernel`]).
     #[inline(always)]
-    fn add_bt_m_b(&self, out: &mut [[f64; 8]; 8], m: &[[f64; 5]; 5], lower: bool) {
+    fn add_bt_m_b(&self, out: &mut [[T; 8]; 8], m: &[[T; 5]; 5], lower: bool) {
         let g = self;
         // Column c of B as (row, value) pairs: even c → rows 0, 1, 4; odd c → 2, 3.
-        let mut col = [[0.0; 3]; 4];
+        let mut col = [[T::zero(); 3]; 4];
         for a in 0..4 {
             col[a] = [g.dn[a][0], g.dn[a][1], g.n_over_r[a]];
         }
         // MB (5×8).
-        let mut mb = [[0.0; 8]; 5];
+        let mut mb = [[T::zero(); 8]; 5];
         for i in 0..5 {
             for a in 0..4 {
                 let c = &col[a];
@@ -412,14 +443,14 @@ impl FbarPoint<5, 8> for PointGeometry {
         }
     }
 
-    #[inline]
-    fn jacobian(f: &[f64; 5]) -> (f64, [f64; 5], [[f64; 5]; 5]) {
+    #[inline(always)]
+    fn jacobian(f: &[T; 5]) -> (T, [T; 5], [[T; 5]; 5]) {
         jacobian_derivatives(f)
     }
 
     /// The 12 non-zero entries of the Hessian of [`jacobian_derivatives`].
-    #[inline]
-    fn add_jacobian_hessian(f: &[f64; 5], c: f64, m: &mut [[f64; 5]; 5]) {
+    #[inline(always)]
+    fn add_jacobian_hessian(f: &[T; 5], c: T, m: &mut [[T; 5]; 5]) {
         let h = f[4];
         for (i, k, x) in [
             (0, 3, h),
@@ -433,7 +464,9 @@ impl FbarPoint<5, 8> for PointGeometry {
             m[k][i] += c * x;
         }
     }
+}
 
+impl FbarMaterialPoint<5, 8> for PointGeometry {
     fn matrix(f: &[f64; 5]) -> Mat3 {
         Mat3::new(f[0], f[1], 0.0, f[2], f[3], 0.0, 0.0, 0.0, f[4])
     }
@@ -452,6 +485,98 @@ impl FbarPoint<5, 8> for PointGeometry {
         let resp = material.update_axisymmetric(state_n, f, dt, trial, tangent)?;
         Ok((resp.first_piola, resp.tangent))
     }
+}
+
+/// The points of four elements, one per lane: [`Material3::update_axisymmetric_lanes`].
+struct LanePoints<'a, M: Material3> {
+    material: &'a M,
+    state_n: [&'a [M::State]; 4],
+    trial: [&'a mut [M::State]; 4],
+    dt: f64,
+}
+
+impl<M: Material3> PointUpdate<F64x4, 5> for LanePoints<'_, M> {
+    /// Always inlined into the kernel's SIMD dispatch; a lane that fails
+    /// fails the group (an error without a message: the caller evaluates
+    /// the elements one by one).
+    #[inline(always)]
+    fn update(
+        &mut self,
+        q: usize,
+        f: &[F64x4; 5],
+        tangent: bool,
+        p: &mut [F64x4; 5],
+        a: &mut [[F64x4; 5]; 5],
+    ) -> Result<(), MaterialError> {
+        let [t0, t1, t2, t3] = &mut self.trial;
+        if self.material.update_axisymmetric_lanes(
+            self.state_n.map(|s| &s[q]),
+            f,
+            self.dt,
+            [&mut t0[q], &mut t1[q], &mut t2[q], &mut t3[q]],
+            tangent,
+            p,
+            a,
+        ) {
+            Ok(())
+        } else {
+            Err(MaterialError::Deformation(String::new()))
+        }
+    }
+}
+
+/// The F-bar kernel ([`crate::fbar::fbar_kernel`]) on four elements at once,
+/// one per lane of [`F64x4`] (the same code, so each element's output and
+/// trial history are bitwise those of the one-element kernel). `false` if
+/// the material has no lane update or any element fails (det F ≤ 0, a
+/// material error): the caller then evaluates the four one by one, which
+/// rewrites every trial history and reports the error.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn fbar_kernel_lanes<M: Material3>(
+    material: &M,
+    geometry: &[PointGeometry<F64x4>; 4],
+    u: [&[f64]; 4],
+    state_n: [&[M::State]; 4],
+    trial: [&mut [M::State]; 4],
+    dt: f64,
+    fbar: bool,
+    part: TangentPart,
+    out: [&mut ElementOutput; 4],
+) -> bool {
+    if !M::AXISYMMETRIC_LANES
+        || u.iter().any(|x| x.len() != 8)
+        || state_n.iter().any(|s| s.len() != 4)
+        || trial.iter().any(|s| s.len() != 4)
+    {
+        return false;
+    }
+    let mut ul = [F64x4::default(); 8];
+    for (l, x) in u.iter().enumerate() {
+        for (k, y) in ul.iter_mut().enumerate() {
+            y.0[l] = x[k];
+        }
+    }
+    let points = LanePoints {
+        material,
+        state_n,
+        trial,
+        dt,
+    };
+    let mut lanes = LocalOutput::<8, F64x4> {
+        r: [F64x4::default(); 8],
+        k: [[F64x4::default(); 8]; 8],
+    };
+    if crate::fbar::fbar_kernel_in(geometry, &ul, points, fbar, part, &mut lanes).is_err() {
+        return false;
+    }
+    let tangent = part != TangentPart::None;
+    for (l, o) in out.into_iter().enumerate() {
+        o.r = lanes.r.map(|x| x.0[l]);
+        if tangent {
+            o.k = lanes.k.map(|row| row.map(|x| x.0[l]));
+        }
+    }
+    true
 }
 
 #[cfg(test)]

@@ -16,27 +16,29 @@
 
 use crate::element::{PointFailure, TangentPart};
 use crate::kind::{LocalOutput, bad_length};
-use nlvid_material::{Mat3, Material3, MaterialError};
+use nlvid_material::{Lane, Mat3, Material3, MaterialError};
 
 /// One Gauss point of an element whose deformation gradient is stored as
-/// `NF` components and whose dof vector has `ND` entries.
+/// `NF` components and whose dof vector has `ND` entries: its geometry, in
+/// numbers of type `T` (`f64`, or one element per lane of
+/// [`nlvid_material::F64x4`]).
 #[doc(hidden)]
-pub trait FbarPoint<const NF: usize, const ND: usize> {
+pub trait FbarPoint<T: Lane, const NF: usize, const ND: usize> {
     /// Integration weight (m³).
-    fn weight(&self) -> f64;
+    fn weight(&self) -> T;
     /// The stored F components for element displacements `u`.
-    fn deformation(&self, u: &[f64; ND]) -> [f64; NF];
+    fn deformation(&self, u: &[T; ND]) -> [T; NF];
     /// `Bᵀ v` with B = ∂F/∂u (constant: F is linear in u).
-    fn bt_v(&self, v: &[f64; NF]) -> [f64; ND];
+    fn bt_v(&self, v: &[T; NF]) -> [T; ND];
     /// `out += Bᵀ M B`, rows `r` and columns `c ≤ r` only if `lower`.
-    fn add_bt_m_b(&self, out: &mut [[f64; ND]; ND], m: &[[f64; NF]; NF], lower: bool);
+    fn add_bt_m_b(&self, out: &mut [[T; ND]; ND], m: &[[T; NF]; NF], lower: bool);
     /// J = det F, its gradient and Hessian w.r.t. the stored components.
-    fn jacobian(f: &[f64; NF]) -> (f64, [f64; NF], [[f64; NF]; NF]);
+    fn jacobian(f: &[T; NF]) -> (T, [T; NF], [[T; NF]; NF]);
     /// `m += c H_J` with H_J = ∂²J/∂F² at `f` (the Hessian of
     /// [`FbarPoint::jacobian`]); a kind whose Hessian is sparse adds only
     /// its non-zero entries (adding `c · 0` leaves `m` unchanged).
     #[inline]
-    fn add_jacobian_hessian(f: &[f64; NF], c: f64, m: &mut [[f64; NF]; NF]) {
+    fn add_jacobian_hessian(f: &[T; NF], c: T, m: &mut [[T; NF]; NF]) {
         let h = Self::jacobian(f).2;
         for i in 0..NF {
             for k in 0..NF {
@@ -44,6 +46,11 @@ pub trait FbarPoint<const NF: usize, const ND: usize> {
             }
         }
     }
+}
+
+/// A [`FbarPoint`] of one element (`f64`) with its material update.
+#[doc(hidden)]
+pub trait FbarMaterialPoint<const NF: usize, const ND: usize>: FbarPoint<f64, NF, ND> {
     /// The 3×3 matrix of the stored components.
     fn matrix(f: &[f64; NF]) -> Mat3;
     /// First Piola–Kirchhoff stress P and ∂P/∂F (stored components) of the
@@ -61,16 +68,85 @@ pub trait FbarPoint<const NF: usize, const ND: usize> {
     ) -> Result<([f64; NF], [[f64; NF]; NF]), MaterialError>;
 }
 
-/// `Err` naming point `q` unless `j = det F > 0`.
-pub(crate) fn positive_jacobian(q: usize, j: f64) -> Result<(), PointFailure> {
-    if j > 0.0 {
+/// `Err` naming point `q` unless `j = det F > 0` (in every lane; the value
+/// of the first lane that fails is named).
+#[inline]
+pub(crate) fn positive_jacobian<T: Lane>(q: usize, j: T) -> Result<(), PointFailure> {
+    if j.all_positive() {
         Ok(())
     } else {
+        let j = (0..T::WIDTH)
+            .map(|i| j.lane(i))
+            .find(|x| !(*x > 0.0))
+            .unwrap_or(f64::NAN);
         Err((
             q,
             MaterialError::Deformation(format!("det F = {j:.3e} ≤ 0")),
         ))
     }
+}
+
+/// The material update at the Gauss points of the element(s) the kernel
+/// evaluates: `P` and `∂P/∂F` (stored components; the tangent only if
+/// `tangent`) at point `q` for `f`, writing the point's trial history.
+#[doc(hidden)]
+pub trait PointUpdate<T, const NF: usize> {
+    /// The update at point `q`: `P` to `p`, `∂P/∂F` to `a` if `tangent`.
+    ///
+    /// # Errors
+    /// The material's error.
+    fn update(
+        &mut self,
+        q: usize,
+        f: &[T; NF],
+        tangent: bool,
+        p: &mut [T; NF],
+        a: &mut [[T; NF]; NF],
+    ) -> Result<(), MaterialError>;
+}
+
+/// The points of one element: `material` with the element's histories,
+/// updated through [`FbarMaterialPoint::update`].
+pub(crate) struct ElementPoints<'a, M: Material3, P, const ND: usize> {
+    pub material: &'a M,
+    pub state_n: &'a [M::State],
+    pub trial: &'a mut [M::State],
+    pub dt: f64,
+    /// The point type and its number of dofs.
+    pub point: std::marker::PhantomData<(P, [f64; ND])>,
+}
+
+impl<M, P, const NF: usize, const ND: usize> PointUpdate<f64, NF> for ElementPoints<'_, M, P, ND>
+where
+    M: Material3,
+    P: FbarMaterialPoint<NF, ND>,
+{
+    /// Always inlined into the kernel's SIMD dispatch.
+    #[inline(always)]
+    fn update(
+        &mut self,
+        q: usize,
+        f: &[f64; NF],
+        tangent: bool,
+        p: &mut [f64; NF],
+        a: &mut [[f64; NF]; NF],
+    ) -> Result<(), MaterialError> {
+        (*p, *a) = P::update(
+            self.material,
+            &self.state_n[q],
+            f,
+            self.dt,
+            &mut self.trial[q],
+            tangent,
+        )?;
+        Ok(())
+    }
+}
+
+/// `Σ x` in the order of `f64`'s `Sum` (from −0, which adds exactly).
+#[inline(always)]
+fn sum<T: Lane>(x: impl IntoIterator<Item = T>) -> T {
+    x.into_iter().fold(T::splat(-0.0), |s, y| s + y)
 }
 
 /// Internal force and tangent of one F-bar element (module docs), F-bar if
@@ -121,15 +197,43 @@ pub(crate) fn fbar_kernel<M, P, const NF: usize, const ND: usize, const NQ: usiz
 ) -> Result<(), PointFailure>
 where
     M: Material3,
-    P: FbarPoint<NF, ND>,
+    P: FbarMaterialPoint<NF, ND>,
 {
-    pulp::Arch::new().dispatch(Dispatch {
+    let u: &[f64; ND] = u.try_into().map_err(|_| bad_length(u.len()))?;
+    let points = ElementPoints::<M, P, ND> {
         material,
-        geometry,
-        u,
         state_n,
         trial,
         dt,
+        point: std::marker::PhantomData,
+    };
+    fbar_kernel_in(geometry, u, points, fbar, part, out)
+}
+
+/// [`fbar_kernel`] for numbers of type `T` ([`nlvid_material::Lane`]): one
+/// element (`f64`) or one element per lane, the material update given by
+/// `points`. The same code for both, so each lane's result is bitwise the
+/// one-element result.
+///
+/// # Errors
+/// As [`fbar_kernel`].
+pub(crate) fn fbar_kernel_in<T, P, U, const NF: usize, const ND: usize, const NQ: usize>(
+    geometry: &[P; NQ],
+    u: &[T; ND],
+    points: U,
+    fbar: bool,
+    part: TangentPart,
+    out: &mut LocalOutput<ND, T>,
+) -> Result<(), PointFailure>
+where
+    T: Lane,
+    P: FbarPoint<T, NF, ND>,
+    U: PointUpdate<T, NF>,
+{
+    pulp::Arch::new().dispatch(Dispatch {
+        geometry,
+        u,
+        points,
         fbar,
         part,
         out,
@@ -137,30 +241,28 @@ where
     })
 }
 
-/// The arguments of [`fbar_kernel`] as a `pulp::WithSimd` operation: its
+/// The arguments of [`fbar_kernel_in`] as a `pulp::WithSimd` operation: its
 /// `with_simd` is inlined into pulp's `#[target_feature]` entry points, and
 /// the kernel into it, so the whole kernel (material update included) is
 /// compiled for that instruction set. (A closure would stay a separate
 /// function compiled for the baseline.)
-struct Dispatch<'a, M: Material3, P, const NF: usize, const ND: usize, const NQ: usize> {
-    material: &'a M,
+struct Dispatch<'a, T, P, U, const NF: usize, const ND: usize, const NQ: usize> {
     geometry: &'a [P; NQ],
-    u: &'a [f64],
-    state_n: &'a [M::State],
-    trial: &'a mut [M::State],
-    dt: f64,
+    u: &'a [T; ND],
+    points: U,
     fbar: bool,
     part: TangentPart,
-    out: &'a mut LocalOutput<ND>,
+    out: &'a mut LocalOutput<ND, T>,
     /// The number of stored F components (fixes `NF` of the point type).
     components: std::marker::PhantomData<[f64; NF]>,
 }
 
-impl<M, P, const NF: usize, const ND: usize, const NQ: usize> pulp::WithSimd
-    for Dispatch<'_, M, P, NF, ND, NQ>
+impl<T, P, U, const NF: usize, const ND: usize, const NQ: usize> pulp::WithSimd
+    for Dispatch<'_, T, P, U, NF, ND, NQ>
 where
-    M: Material3,
-    P: FbarPoint<NF, ND>,
+    T: Lane,
+    P: FbarPoint<T, NF, ND>,
+    U: PointUpdate<T, NF>,
 {
     type Output = Result<(), PointFailure>;
 
@@ -169,30 +271,27 @@ where
     #[inline(always)]
     fn with_simd<S: pulp::Simd>(self, _: S) -> Self::Output {
         let Self {
-            material,
             geometry,
             u,
-            state_n,
-            trial,
-            dt,
+            mut points,
             fbar,
             part,
             out,
             ..
         } = self;
-        let u: &[f64; ND] = u.try_into().map_err(|_| bad_length(u.len()))?;
+        let zero = T::zero();
         let tangent = part != TangentPart::None;
         let lower = part == TangentPart::Lower;
-        out.r = [0.0; ND];
+        out.r = [zero; ND];
         if tangent {
-            out.k = [[0.0; ND]; ND];
+            out.k = [[zero; ND]; ND];
         }
-        let mut f = [[0.0; NF]; NQ];
-        let mut jq = [0.0; NQ];
-        let mut dju = [[0.0; ND]; NQ];
-        let mut vol = 0.0;
-        let mut jbar = 0.0;
-        let mut djbar = [0.0; ND];
+        let mut f = [[zero; NF]; NQ];
+        let mut jq = [zero; NQ];
+        let mut dju = [[zero; ND]; NQ];
+        let mut vol = zero;
+        let mut jbar = zero;
+        let mut djbar = [zero; ND];
         for q in 0..NQ {
             let g = &geometry[q];
             f[q] = g.deformation(u);
@@ -209,7 +308,7 @@ where
                 }
             }
         }
-        let mut dlnjbar = [0.0; ND];
+        let mut dlnjbar = [zero; ND];
         if fbar {
             jbar /= vol;
             for c in 0..ND {
@@ -217,12 +316,12 @@ where
             }
         }
         // Pass 1: material response at every point, residual, per-point terms.
-        let mut wa = [[[0.0; NF]; NF]; NQ];
-        let mut alpha = [1.0; NQ];
-        let mut dlnalpha = [[0.0; ND]; NQ];
-        let mut p = [[0.0; NF]; NQ];
-        let mut s_q = [0.0; NQ];
-        let mut bp = [[0.0; ND]; NQ];
+        let mut wa = [[[zero; NF]; NF]; NQ];
+        let mut alpha = [T::one(); NQ];
+        let mut dlnalpha = [[zero; ND]; NQ];
+        let mut p = [[zero; NF]; NQ];
+        let mut s_q = [zero; NQ];
+        let mut bp = [[zero; ND]; NQ];
         for q in 0..NQ {
             let g = &geometry[q];
             let w = g.weight();
@@ -230,24 +329,22 @@ where
                 for c in 0..ND {
                     dlnalpha[q][c] = (dlnjbar[c] - dju[q][c] / jq[q]) / 3.0;
                 }
-                alpha[q] = nlvid_material::cube_root(jbar / jq[q]);
+                alpha[q] = (jbar / jq[q]).cube_root();
             }
             let a = alpha[q];
             let fbar_q = f[q].map(|x| a * x);
-            let (pq, aq) = P::update(material, &state_n[q], &fbar_q, dt, &mut trial[q], tangent)
+            points
+                .update(q, &fbar_q, tangent, &mut p[q], &mut wa[q])
                 .map_err(|e| (q, e))?;
-            p[q] = pq;
             if tangent {
-                for (mi, ti) in wa[q].iter_mut().zip(&aq) {
-                    for (m, t) in mi.iter_mut().zip(ti) {
-                        *m = w * t;
-                    }
+                for m in wa[q].iter_mut().flatten() {
+                    *m = w * *m;
                 }
             }
             // r = w B̄ᵀ P = w α Bᵀ P + w (P : F) ∂α.
             let gp = g.bt_v(&p[q]);
             bp[q] = gp;
-            let pf: f64 = (0..NF).map(|i| p[q][i] * f[q][i]).sum();
+            let pf = sum((0..NF).map(|i| p[q][i] * f[q][i]));
             s_q[q] = w * a * pf;
             for c in 0..ND {
                 out.r[c] += w * a * gp[c] + s_q[q] * dlnalpha[q][c];
@@ -256,20 +353,21 @@ where
         if !tangent {
             return Ok(());
         }
-        let s_total: f64 = s_q.iter().sum();
+        let s_total = sum(s_q);
         for q in 0..NQ {
             let g = &geometry[q];
             let w = g.weight();
             let a = alpha[q];
             let waq = &wa[q];
-            let mut mq = [[0.0; NF]; NF];
+            let mut mq = [[zero; NF]; NF];
             for i in 0..NF {
                 for k in 0..NF {
                     mq[i][k] = a * a * waq[i][k];
                 }
             }
             if fbar {
-                let cq = s_total * w / (3.0 * vol * jbar) - s_q[q] / (3.0 * jq[q]);
+                let three = T::splat(3.0);
+                let cq = s_total * w / (three * vol * jbar) - s_q[q] / (three * jq[q]);
                 P::add_jacobian_hessian(&f[q], cq, &mut mq);
             }
             g.add_bt_m_b(&mut out.k, &mq, lower);
@@ -277,29 +375,29 @@ where
                 continue;
             }
             // Fᵀ(wA), (wA)F and Fᵀ(wA)F.
-            let mut af = [0.0; NF];
-            let mut fa = [0.0; NF];
+            let mut af = [zero; NF];
+            let mut fa = [zero; NF];
             for i in 0..NF {
                 for k in 0..NF {
                     af[i] += waq[i][k] * f[q][k];
                     fa[k] += f[q][i] * waq[i][k];
                 }
             }
-            let mut faf = 0.0;
+            let mut faf = zero;
             for i in 0..NF {
                 faf += f[q][i] * af[i];
             }
             let baf = g.bt_v(&af);
             let bfa = g.bt_v(&fa);
-            let mut v = [0.0; ND];
-            let mut vt = [0.0; ND];
+            let mut v = [zero; ND];
+            let mut vt = [zero; ND];
             for c in 0..ND {
                 v[c] = a * a * baf[c] + w * a * bp[q][c];
                 vt[c] = a * a * bfa[c] + w * a * bp[q][c];
             }
             let dl = &dlnalpha[q];
             let cc = a * a * faf + s_q[q];
-            let cj = s_q[q] / (3.0 * jq[q] * jq[q]);
+            let cj = s_q[q] / (T::splat(3.0) * jq[q] * jq[q]);
             let dj = &dju[q];
             for r in 0..ND {
                 let (vr, dlr, cdl, cjr) = (v[r], dl[r], cc * dl[r], cj * dj[r]);
@@ -335,7 +433,7 @@ pub(crate) fn fbar_energy<P, const NF: usize, const ND: usize, const NQ: usize>(
     psi: &dyn Fn(&Mat3) -> f64,
 ) -> f64
 where
-    P: FbarPoint<NF, ND>,
+    P: FbarMaterialPoint<NF, ND>,
 {
     let Ok(u) = <&[f64; ND]>::try_from(u) else {
         return f64::NAN;
@@ -375,7 +473,7 @@ mod tests {
         f: [f64; NF],
         tol: f64,
     ) where
-        P: FbarPoint<NF, ND>,
+        P: FbarMaterialPoint<NF, ND>,
     {
         let (j, dj, hj) = P::jacobian(&f);
         let h = 1e-6;
@@ -420,7 +518,7 @@ mod tests {
         geo: &[P; NQ],
         u: [f64; ND],
     ) where
-        P: FbarPoint<NF, ND>,
+        P: FbarMaterialPoint<NF, ND>,
     {
         let shear = nlvid_model::Relaxation::from_named(
             &nlvid_model::names::PRONY2,

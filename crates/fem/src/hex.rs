@@ -18,7 +18,7 @@
 //! (−−−, +−−, ++−, −+−, −−+, +−+, +++, −++), so that nodes 0–3 are the
 //! ζ = −1 face counter-clockwise seen from +ζ.
 
-use crate::fbar::FbarPoint;
+use crate::fbar::{FbarMaterialPoint, FbarPoint};
 use nlvid_material::{Mat3, Material3, MaterialError};
 
 /// Corner signs (ξ_a, η_a, ζ_a).
@@ -213,7 +213,7 @@ fn levi(i: usize, j: usize, k: usize) -> f64 {
 /// The hexahedron's point in the shared F-bar kernel
 /// ([`crate::fbar::fbar_kernel`]): F stored row-major (`3i+J`), the
 /// material's 3D update.
-impl FbarPoint<9, DOFS> for HexPoint {
+impl FbarPoint<f64, 9, DOFS> for HexPoint {
     #[inline]
     fn weight(&self) -> f64 {
         self.weight
@@ -278,7 +278,9 @@ impl FbarPoint<9, DOFS> for HexPoint {
     fn jacobian(f: &[f64; 9]) -> (f64, [f64; 9], [[f64; 9]; 9]) {
         jacobian_derivatives(f)
     }
+}
 
+impl FbarMaterialPoint<9, DOFS> for HexPoint {
     fn matrix(f: &[f64; 9]) -> Mat3 {
         Mat3::from_row_slice(f)
     }

@@ -14,17 +14,18 @@ use crate::fbar::{fbar_energy, fbar_kernel};
 use crate::hex::{HexOutput, HexPoint};
 use crate::sets::NamedSets;
 use crate::{FemError, Mesh, Mesh3, Result};
-use nlvid_material::{Mat3, Material3};
+use nlvid_material::{F64x4, Mat3, Material3};
 
 /// Residual and tangent of one element with `ND` dofs (every element
 /// kind's local output).
+/// (`T` = [`nlvid_material::F64x4`]: four elements, one per lane.)
 #[doc(hidden)]
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LocalOutput<const ND: usize> {
+pub struct LocalOutput<const ND: usize, T = f64> {
     /// Internal force ∂W/∂u (N).
-    pub r: [f64; ND],
+    pub r: [T; ND],
     /// Tangent ∂r/∂u (N/m).
-    pub k: [[f64; ND]; ND],
+    pub k: [[T; ND]; ND],
 }
 
 impl<const ND: usize> LocalOutput<ND> {
@@ -242,6 +243,10 @@ pub trait ElementKind<M: Material3>: Send + Sync + 'static {
     /// Residual and tangent storage of one element.
     #[doc(hidden)]
     type Output: Local;
+    /// Reference geometry of four elements in SIMD lanes
+    /// ([`ElementKind::evaluate_lanes`]; `()` for kinds without).
+    #[doc(hidden)]
+    type LaneGeometry: Send + Sync;
 
     /// An empty output.
     #[doc(hidden)]
@@ -271,6 +276,36 @@ pub trait ElementKind<M: Material3>: Send + Sync + 'static {
         part: TangentPart,
         out: &mut Self::Output,
     ) -> std::result::Result<(), PointFailure>;
+
+    /// Whether [`ElementKind::evaluate_lanes`] can evaluate elements (for
+    /// this material).
+    #[doc(hidden)]
+    const LANES: bool = false;
+
+    /// The reference geometry of four elements in lanes (built once per
+    /// model if [`ElementKind::LANES`]).
+    #[doc(hidden)]
+    fn lane_geometry(geometry: [&Self::Geometry; 4]) -> Self::LaneGeometry;
+
+    /// [`ElementKind::evaluate`] of four elements at once, one per SIMD
+    /// lane, each output bitwise the one-element result; `false` if not
+    /// implemented or any element fails (the caller then evaluates them one
+    /// by one, which rewrites their trial histories and reports the error).
+    #[doc(hidden)]
+    #[allow(clippy::too_many_arguments)]
+    fn evaluate_lanes(
+        _material: &M,
+        _geometry: &Self::LaneGeometry,
+        _u: [&[f64]; 4],
+        _state_n: [&[M::State]; 4],
+        _trial: [&mut [M::State]; 4],
+        _dt: f64,
+        _fbar: bool,
+        _part: TangentPart,
+        _out: [&mut Self::Output; 4],
+    ) -> bool {
+        false
+    }
 
     /// The element residual.
     #[doc(hidden)]
@@ -304,6 +339,7 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
     type Mesh = Mesh;
     type Geometry = [PointGeometry; 4];
     type Output = ElementOutput;
+    type LaneGeometry = [PointGeometry<F64x4>; 4];
 
     fn geometry(mesh: &Mesh) -> Result<Vec<[PointGeometry; 4]>> {
         Ok(mesh
@@ -327,6 +363,28 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
         fbar_kernel(material, geometry, u, state_n, trial, dt, fbar, part, out)
     }
 
+    const LANES: bool = M::AXISYMMETRIC_LANES;
+
+    fn lane_geometry(g: [&[PointGeometry; 4]; 4]) -> [PointGeometry<F64x4>; 4] {
+        [0, 1, 2, 3].map(|q| PointGeometry::lanes(g.map(|e| &e[q])))
+    }
+
+    fn evaluate_lanes(
+        material: &M,
+        geometry: &[PointGeometry<F64x4>; 4],
+        u: [&[f64]; 4],
+        state_n: [&[M::State]; 4],
+        trial: [&mut [M::State]; 4],
+        dt: f64,
+        fbar: bool,
+        part: TangentPart,
+        out: [&mut ElementOutput; 4],
+    ) -> bool {
+        crate::element::fbar_kernel_lanes(
+            material, geometry, u, state_n, trial, dt, fbar, part, out,
+        )
+    }
+
     fn energy(
         geometry: &[PointGeometry; 4],
         u: &[f64],
@@ -344,6 +402,9 @@ impl<M: Material3> ElementKind<M> for Solid {
     type Mesh = Mesh3;
     type Geometry = [HexPoint; 8];
     type Output = HexOutput;
+    type LaneGeometry = ();
+
+    fn lane_geometry(_: [&[HexPoint; 8]; 4]) {}
 
     fn geometry(mesh: &Mesh3) -> Result<Vec<[HexPoint; 8]>> {
         mesh.elements

@@ -341,6 +341,9 @@ where
     type Mesh = MembraneMesh;
     type Geometry = MembraneGeometry;
     type Output = MembraneOutput;
+    type LaneGeometry = ();
+
+    fn lane_geometry(_: [&Self::Geometry; 4]) {}
 
     fn geometry(mesh: &MembraneMesh) -> Result<Vec<MembraneGeometry>> {
         Ok(mesh

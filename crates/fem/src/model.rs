@@ -327,6 +327,12 @@ pub struct Settings {
     /// result is bitwise the same for any number (element outputs are
     /// computed in parallel, then added in element order).
     pub threads: usize,
+    /// Evaluate the elements of a serial element loop four at a time, one
+    /// per SIMD lane, where the element kind and material have a lane form
+    /// (the axisymmetric Q4 with this crate's cell materials). Bitwise the
+    /// same results either way; default true (docs/theory/fem.md, "Session
+    /// 20").
+    pub lanes: bool,
 }
 
 impl Default for Settings {
@@ -351,6 +357,7 @@ impl Default for Settings {
             output_tolerance: 2e-4,
             output_rejection: 2.5,
             threads: 1,
+            lanes: true,
         }
     }
 }
@@ -485,6 +492,9 @@ pub struct Model<M: Material3, K: ElementKind<M> = Axisymmetric> {
     material: M,
     settings: Settings,
     geometry: Vec<K::Geometry>,
+    /// The geometry of elements 4g … 4g + 3 in lanes, for every full group
+    /// g (empty unless the lanes are used, [`Settings::lanes`]).
+    lane_geometry: Vec<K::LaneGeometry>,
     history: History<M::State>,
     dof_eq: Vec<usize>,
     prescribed: Vec<(usize, f64)>,
@@ -505,7 +515,8 @@ pub struct Model<M: Material3, K: ElementKind<M> = Axisymmetric> {
     system: SparseSystem,
     residual: Vec<f64>,
     rhs: Vec<f64>,
-    element_out: K::Output,
+    /// One element's output, or four (the lanes of [`Settings::lanes`]).
+    element_out: [K::Output; 4],
     /// Per-element outputs for the parallel element loop (empty if serial).
     element_outs: Vec<K::Output>,
     pool: Option<rayon::ThreadPool>,
@@ -867,6 +878,14 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             _ => None,
         };
         Ok(Self {
+            lane_geometry: if K::LANES && settings.lanes && settings.threads <= 1 {
+                geometry
+                    .chunks_exact(4)
+                    .map(|g| K::lane_geometry([&g[0], &g[1], &g[2], &g[3]]))
+                    .collect()
+            } else {
+                Vec::new()
+            },
             geometry,
             history,
             dof_eq,
@@ -883,7 +902,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             cavity,
             residual: vec![0.0; ndof],
             rhs: vec![0.0; neq],
-            element_out: K::output(),
+            element_out: std::array::from_fn(|_| K::output()),
             element_outs: if settings.threads > 1 {
                 (0..ne).map(|_| K::output()).collect()
             } else {
@@ -1201,39 +1220,74 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                 );
             }
         } else {
-            for e in 0..self.mesh.element_count() {
-                let conn = self.mesh.connectivity(e);
-                let mut ue = [0.0; 24];
-                for k in 0..nd {
-                    ue[k] = self.u[dim * conn[k / dim] + k % dim];
+            let ne = self.mesh.element_count();
+            let lanes = !self.lane_geometry.is_empty();
+            for e0 in (0..ne).step_by(4) {
+                let e1 = (e0 + 4).min(ne);
+                // Four elements in lanes; on failure (or a short last group)
+                // one by one.
+                let mut done = false;
+                if lanes && e1 == e0 + 4 {
+                    let mut ue = [[0.0; 24]; 4];
+                    for (l, uel) in ue.iter_mut().enumerate() {
+                        let conn = self.mesh.connectivity(e0 + l);
+                        for k in 0..nd {
+                            uel[k] = self.u[dim * conn[k / dim] + k % dim];
+                        }
+                    }
+                    let (committed, trial) = self.history.split();
+                    let committed = &committed[np * e0..np * e1];
+                    let mut tr = trial[np * e0..np * e1].chunks_mut(np);
+                    let trial = std::array::from_fn(|_| tr.next().expect("4 elements"));
+                    done = K::evaluate_lanes(
+                        &self.material,
+                        &self.lane_geometry[e0 / 4],
+                        std::array::from_fn(|l| &ue[l][..nd]),
+                        std::array::from_fn(|l| &committed[np * l..np * (l + 1)]),
+                        trial,
+                        dt,
+                        fbar,
+                        part,
+                        self.element_out.each_mut(),
+                    );
                 }
-                let (committed, trial) = self.history.element(e);
-                K::evaluate(
-                    &self.material,
-                    &self.geometry[e],
-                    &ue[..nd],
-                    committed,
-                    trial,
-                    dt,
-                    fbar,
-                    part,
-                    &mut self.element_out,
-                )
-                .map_err(|(point, source)| FemError::Material {
-                    element: e,
-                    point,
-                    source,
-                })?;
-                let slots = &self.elem_slots[nd * nd * e..nd * nd * (e + 1)];
-                scatter::<M, K>(
-                    conn,
-                    &self.element_out,
-                    slots,
-                    tangent,
-                    &mut self.residual,
-                    &mut self.system.values,
-                    &mut gross,
-                );
+                for e in e0..e1 {
+                    let conn = self.mesh.connectivity(e);
+                    let out = &mut self.element_out[e - e0];
+                    if !done {
+                        let mut ue = [0.0; 24];
+                        for k in 0..nd {
+                            ue[k] = self.u[dim * conn[k / dim] + k % dim];
+                        }
+                        let (committed, trial) = self.history.element(e);
+                        K::evaluate(
+                            &self.material,
+                            &self.geometry[e],
+                            &ue[..nd],
+                            committed,
+                            trial,
+                            dt,
+                            fbar,
+                            part,
+                            out,
+                        )
+                        .map_err(|(point, source)| FemError::Material {
+                            element: e,
+                            point,
+                            source,
+                        })?;
+                    }
+                    let slots = &self.elem_slots[nd * nd * e..nd * nd * (e + 1)];
+                    scatter::<M, K>(
+                        conn,
+                        out,
+                        slots,
+                        tangent,
+                        &mut self.residual,
+                        &mut self.system.values,
+                        &mut gross,
+                    );
+                }
             }
         }
         self.counters.element_seconds += clock.elapsed().as_secs_f64();

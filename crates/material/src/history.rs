@@ -21,7 +21,7 @@ pub enum HistoryRule {
 }
 
 /// Step weights of one Prony term.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct StepWeights {
     /// `exp(−Δt/τ)`, applied to `H(t_n)`.
     pub decay: f64,
@@ -75,23 +75,48 @@ pub(crate) fn advance(
     h_out: &mut Vec<crate::Mat3>,
 ) -> (crate::Mat3, f64) {
     h_out.resize(prony.len(), crate::Mat3::zeros());
-    with_series_weights(rule, prony, dt, |weights| {
-        let mut frozen = crate::Mat3::zeros();
-        let mut sum_b1 = 0.0;
-        for (((term, w), hn), ho) in prony
-            .terms()
-            .iter()
-            .zip(weights)
-            .zip(h_n)
-            .zip(h_out.iter_mut())
-        {
-            let old = hn * w.decay + a_n * w.beta0;
-            frozen -= old * term.weight;
-            *ho = old + a_new * w.beta1;
-            sum_b1 += term.weight * w.beta1;
+    advance_with(rule, prony, dt, |k| h_n[k], a_n, a_new, |k, h| h_out[k] = h)
+}
+
+/// [`advance`] for points in lanes ([`crate::Lane`]): `H_k(t_n)` read by
+/// `h_n(k)`, `H_k(t_{n+1})` written by `h_out(k, ·)`. The step weights and
+/// `Σ g_k β1_k` depend on Δt and the series only, so they are the same in
+/// every lane.
+#[inline(always)]
+pub(crate) fn advance_with<T: crate::Lane>(
+    rule: HistoryRule,
+    prony: &nlvid_model::Prony,
+    dt: f64,
+    h_n: impl Fn(usize) -> nalgebra::Matrix3<T>,
+    a_n: &nalgebra::Matrix3<T>,
+    a_new: &nalgebra::Matrix3<T>,
+    mut h_out: impl FnMut(usize, nalgebra::Matrix3<T>),
+) -> (nalgebra::Matrix3<T>, f64) {
+    // The weights copied out of the memo, so the loop below is not a
+    // closure (a closure stays a separate function, compiled outside the
+    // element kernel's SIMD dispatch); series longer than `SHORT` read them
+    // from a vector.
+    const SHORT: usize = 8;
+    let n = prony.len();
+    let mut short = [StepWeights::default(); SHORT];
+    let long: Vec<StepWeights> = with_series_weights(rule, prony, dt, |w| {
+        if n <= SHORT {
+            short[..n].copy_from_slice(w);
+            Vec::new()
+        } else {
+            w.to_vec()
         }
-        (frozen, sum_b1)
-    })
+    });
+    let weights = if n <= SHORT { &short[..n] } else { &long[..] };
+    let mut frozen = nalgebra::Matrix3::zeros();
+    let mut sum_b1 = 0.0;
+    for (k, (term, w)) in prony.terms().iter().zip(weights).enumerate() {
+        let old = h_n(k) * T::splat(w.decay) + a_n * T::splat(w.beta0);
+        frozen -= old * T::splat(term.weight);
+        h_out(k, old + a_new * T::splat(w.beta1));
+        sum_b1 += term.weight * w.beta1;
+    }
+    (frozen, sum_b1)
 }
 
 /// Entries of the per-thread memo of [`HistoryRule::weights`].

@@ -11,7 +11,7 @@
 //! formulations that carry the pressure as an unknown of their own.
 
 use crate::kernel::{IsoStress, Kin, XC, XCI, XI};
-use crate::{MaterialError, Result};
+use crate::{Lane, MaterialError, Result};
 
 /// Mooney–Rivlin solid (`C2 = 0`: neo-Hookean), eq. 4.1, with volumetric
 /// penalty `K`.
@@ -120,35 +120,40 @@ impl MooneyRivlin {
     /// Adds `scale ·` the isochoric second Piola–Kirchhoff stress
     /// `S_iso = 2∂/∂C [C1(Ī1−3) + C2(Ī2−3)]
     ///        = 2C1 J^{-2/3}(I − I1/3 C⁻¹) + 2C2 J^{-4/3}(I1 I − C − 2I2/3 C⁻¹)`.
-    #[inline]
-    pub(crate) fn add_isochoric(&self, k: &Kin, scale: f64, out: &mut IsoStress) {
+    /// The material constants are `f64` and the kinematics `T`
+    /// ([`crate::Lane`]): a product such as `2 C1 J^{-2/3}` is formed as
+    /// `(2 C1) J^{-2/3}`, the scalar code's order.
+    #[inline(always)]
+    pub(crate) fn add_isochoric<T: Lane>(&self, k: &Kin<T>, scale: f64, out: &mut IsoStress<T>) {
         let (c1, c2) = (scale * self.c1, scale * self.c2);
+        let c = T::splat;
+        let zero = T::zero();
         let j23 = k.j23;
         let j43 = j23 * j23;
-        let ij = 1.0 / k.j;
+        let ij = T::one() / k.j;
         out.add(
             XI,
-            2.0 * c1 * j23 + 2.0 * c2 * j43 * k.i1,
+            c(2.0 * c1) * j23 + c(2.0 * c2) * j43 * k.i1,
             k.grad(
-                2.0 * c2 * j43,
-                0.0,
-                -4.0 / 3.0 * c1 * j23 * ij - 8.0 / 3.0 * c2 * j43 * k.i1 * ij,
-                0.0,
+                c(2.0 * c2) * j43,
+                zero,
+                c(-4.0 / 3.0 * c1) * j23 * ij - c(8.0 / 3.0 * c2) * j43 * k.i1 * ij,
+                zero,
             ),
         );
         out.add(
             XC,
-            -2.0 * c2 * j43,
-            k.grad(0.0, 0.0, 8.0 / 3.0 * c2 * j43 * ij, 0.0),
+            c(-2.0 * c2) * j43,
+            k.grad(zero, zero, c(8.0 / 3.0 * c2) * j43 * ij, zero),
         );
         out.add(
             XCI,
-            -2.0 / 3.0 * c1 * j23 * k.i1 - 4.0 / 3.0 * c2 * j43 * k.i2,
+            c(-2.0 / 3.0 * c1) * j23 * k.i1 - c(4.0 / 3.0 * c2) * j43 * k.i2,
             k.grad(
-                -2.0 / 3.0 * c1 * j23,
-                -4.0 / 3.0 * c2 * j43,
-                4.0 / 9.0 * c1 * j23 * k.i1 * ij + 16.0 / 9.0 * c2 * j43 * k.i2 * ij,
-                0.0,
+                c(-2.0 / 3.0 * c1) * j23,
+                c(-4.0 / 3.0 * c2) * j43,
+                c(4.0 / 9.0 * c1) * j23 * k.i1 * ij + c(16.0 / 9.0 * c2) * j43 * k.i2 * ij,
+                zero,
             ),
         );
     }
@@ -156,13 +161,19 @@ impl MooneyRivlin {
 
 /// Adds the volumetric penalty `S_vol = K J (J − 1) C⁻¹` (Kirchhoff
 /// `K J (J − 1) I`, eqs. 2.50/D.5).
-#[inline]
-pub(crate) fn add_volumetric(k: &Kin, bulk: f64, out: &mut IsoStress) {
+#[inline(always)]
+pub(crate) fn add_volumetric<T: Lane>(k: &Kin<T>, bulk: f64, out: &mut IsoStress<T>) {
     if bulk != 0.0 {
+        let zero = T::zero();
         out.add(
             XCI,
-            bulk * k.j * (k.j - 1.0),
-            k.grad(0.0, 0.0, bulk * (2.0 * k.j - 1.0), 0.0),
+            T::splat(bulk) * k.j * (k.j - 1.0),
+            k.grad(
+                zero,
+                zero,
+                T::splat(bulk) * (T::splat(2.0) * k.j - 1.0),
+                zero,
+            ),
         );
     }
 }

@@ -11,29 +11,31 @@
 //! `∂P_iJ/∂F_kL = δ_ik S_LJ + F_iM (2∂S/∂C)_MJLQ F_kQ` (eq. 2.52 before the
 //! push-forward of D.12).
 
-use crate::{Mat3, MaterialError, Result, Tangent3};
+use crate::{Lane, Mat3, MaterialError, Result, Tangent3};
+use nalgebra::Matrix3;
 
-/// Kinematic quantities of a deformation gradient.
+/// Kinematic quantities of a deformation gradient (of one point, `T =
+/// f64`, or of one point per lane, [`crate::Lane`]).
 #[derive(Debug, Clone)]
-pub(crate) struct Kin {
-    pub f: Mat3,
-    pub c: Mat3,
-    pub cinv: Mat3,
+pub(crate) struct Kin<T: Lane = f64> {
+    pub f: Matrix3<T>,
+    pub c: Matrix3<T>,
+    pub cinv: Matrix3<T>,
     /// F⁻ᵀ
-    pub fit: Mat3,
-    pub b: Mat3,
-    pub j: f64,
+    pub fit: Matrix3<T>,
+    pub b: Matrix3<T>,
+    pub j: T,
     /// `J^{-2/3}`, computed once (every isochoric term uses it).
-    pub j23: f64,
-    pub i1: f64,
-    pub i2: f64,
+    pub j23: T,
+    pub i1: T,
+    pub i2: T,
 }
 
 /// `J^{-2/3}`, the factor of every isochoric term.
-#[inline]
-fn j_minus_two_thirds(j: f64) -> f64 {
-    let c = crate::cube_root(j);
-    1.0 / (c * c)
+#[inline(always)]
+fn j_minus_two_thirds<T: Lane>(j: T) -> T {
+    let c = j.cube_root();
+    T::one() / (c * c)
 }
 
 impl Kin {
@@ -67,36 +69,56 @@ impl Kin {
             i2: 0.5 * (i1 * i1 - trc2),
         })
     }
+}
 
+impl<T: Lane> Kin<T> {
     /// [`Kin::new`] for an axisymmetric `F` given by its components
     /// [`crate::AXISYMMETRIC_COMPONENTS`] (rR, rZ, zR, zZ, θθ): the same
     /// quantities from 2×2 block algebra instead of general 3×3 operations.
     /// Always inlined: the `Result<Kin>` (≈ 400 bytes) is then built in
     /// place instead of copied once per point update.
     #[inline(always)]
-    pub fn axisymmetric(f5: &[f64; 5]) -> Result<Self> {
+    pub fn axisymmetric(f5: &[T; 5]) -> Result<Self> {
+        Self::check_axisymmetric(f5)?;
+        Ok(Self::axisymmetric_unchecked(f5))
+    }
+
+    /// The checks of [`Kin::axisymmetric`]: every component finite and
+    /// `det F > 0` (in every lane).
+    #[inline(always)]
+    pub fn check_axisymmetric(f5: &[T; 5]) -> Result<()> {
         let [a, b, c, d, h] = *f5;
-        if f5.iter().any(|x| !x.is_finite()) {
+        if f5.iter().any(|x| !x.all_finite()) {
             return Err(MaterialError::Deformation(format!(
                 "deformation gradient has a non-finite entry: {f5:?} (rR, rZ, zR, zZ, θθ)"
             )));
         }
-        let j2 = a * d - b * c;
-        let j = j2 * h;
-        if j <= 0.0 || j.is_nan() {
+        let j = (a * d - b * c) * h;
+        if !j.all_positive() {
             return Err(MaterialError::Deformation(format!(
                 "det F = {j} ≤ 0 (inverted or degenerate element)"
             )));
         }
+        Ok(())
+    }
+
+    /// [`Kin::axisymmetric`] without its checks (for an `f5` that passed
+    /// [`Kin::check_axisymmetric`]; the lanes build it in place).
+    #[inline(always)]
+    pub fn axisymmetric_unchecked(f5: &[T; 5]) -> Self {
+        let [a, b, c, d, h] = *f5;
+        let j2 = a * d - b * c;
+        let j = j2 * h;
         // F⁻¹ blocks.
-        let ij2 = 1.0 / j2;
+        let ij2 = T::one() / j2;
         let (ia, ib, ic, id) = (d * ij2, -b * ij2, -c * ij2, a * ij2);
-        let ih = 1.0 / h;
+        let ih = T::one() / h;
         let (c00, c01, c11, c22) = (a * a + c * c, a * b + c * d, b * b + d * d, h * h);
         let i1 = c00 + c11 + c22;
-        let trc2 = c00 * c00 + 2.0 * c01 * c01 + c11 * c11 + c22 * c22;
-        let block = |xx, xy, yx, yy, zz| Mat3::new(xx, xy, 0.0, yx, yy, 0.0, 0.0, 0.0, zz);
-        Ok(Self {
+        let trc2 = c00 * c00 + T::splat(2.0) * c01 * c01 + c11 * c11 + c22 * c22;
+        let z = T::zero();
+        let block = |xx, xy, yx, yy, zz| Matrix3::new(xx, xy, z, yx, yy, z, z, z, zz);
+        Self {
             f: block(a, b, c, d, h),
             c: block(c00, c01, c01, c11, c22),
             // C⁻¹ = F⁻¹ F⁻ᵀ.
@@ -112,15 +134,15 @@ impl Kin {
             j,
             j23: j_minus_two_thirds(j),
             i1,
-            i2: 0.5 * (i1 * i1 - trc2),
-        })
+            i2: T::splat(0.5) * (i1 * i1 - trc2),
+        }
     }
 
     /// The axisymmetric components ([`crate::AXISYMMETRIC_COMPONENTS`]) of
     /// `F X` for an axisymmetric (block-diagonal) `F`: the products with
     /// F's zero off-block entries are left out (they add exact zeros).
-    #[inline]
-    pub fn f_times_axisymmetric(&self, x: &Mat3) -> [f64; 5] {
+    #[inline(always)]
+    pub fn f_times_axisymmetric(&self, x: &Matrix3<T>) -> [T; 5] {
         let f = &self.f;
         [
             f[(0, 0)] * x[(0, 0)] + f[(0, 1)] * x[(1, 0)],
@@ -133,13 +155,13 @@ impl Kin {
 
     /// Basis coefficients of `2∂s/∂C` for a scalar `s(I1, I2, J, H:C)` with
     /// the given partial derivatives.
-    #[inline]
-    pub fn grad(&self, d_i1: f64, d_i2: f64, d_j: f64, d_hc: f64) -> [f64; 4] {
+    #[inline(always)]
+    pub fn grad(&self, d_i1: T, d_i2: T, d_j: T, d_hc: T) -> [T; 4] {
         [
-            2.0 * (d_i1 + self.i1 * d_i2),
-            -2.0 * d_i2,
+            T::splat(2.0) * (d_i1 + self.i1 * d_i2),
+            T::splat(-2.0) * d_i2,
             self.j * d_j,
-            2.0 * d_hc,
+            T::splat(2.0) * d_hc,
         ]
     }
 }
@@ -151,17 +173,28 @@ pub(crate) const XCI: usize = 2;
 pub(crate) const XH: usize = 3;
 
 /// `S = Σ s_a X_a` plus the dyadic part of its tangent, see the module doc.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct IsoStress {
-    pub s: [f64; 4],
-    pub m: [[f64; 4]; 4],
-    pub h: Mat3,
+#[derive(Debug, Clone)]
+pub(crate) struct IsoStress<T: Lane = f64> {
+    pub s: [T; 4],
+    pub m: [[T; 4]; 4],
+    pub h: Matrix3<T>,
 }
 
-impl IsoStress {
+impl<T: Lane> Default for IsoStress<T> {
+    #[inline(always)]
+    fn default() -> Self {
+        Self {
+            s: [T::zero(); 4],
+            m: [[T::zero(); 4]; 4],
+            h: Matrix3::zeros(),
+        }
+    }
+}
+
+impl<T: Lane> IsoStress<T> {
     /// Adds `value · X_a` whose coefficient has gradient `grad` (from [`Kin::grad`]).
-    #[inline]
-    pub fn add(&mut self, a: usize, value: f64, grad: [f64; 4]) {
+    #[inline(always)]
+    pub fn add(&mut self, a: usize, value: T, grad: [T; 4]) {
         self.s[a] += value;
         for (m, g) in self.m[a].iter_mut().zip(grad) {
             *m += g;
@@ -169,14 +202,86 @@ impl IsoStress {
     }
 
     /// Second Piola–Kirchhoff stress.
-    #[inline]
-    pub fn pk2(&self, k: &Kin) -> Mat3 {
-        Mat3::identity() * self.s[XI]
+    #[inline(always)]
+    pub fn pk2(&self, k: &Kin<T>) -> Matrix3<T> {
+        Matrix3::identity() * self.s[XI]
             + k.c * self.s[XC]
             + k.cinv * self.s[XCI]
             + self.h * self.s[XH]
     }
 
+    /// Adds `scale ·` another stress that does not use the `H` basis tensor.
+    #[inline(always)]
+    pub fn add_scaled(&mut self, other: &IsoStress<T>, scale: f64) {
+        for a in 0..4 {
+            self.s[a] += other.s[a] * scale;
+            for b in 0..4 {
+                self.m[a][b] += other.m[a][b] * scale;
+            }
+        }
+    }
+
+    /// The entries of [`IsoStress::tangent`] on the axisymmetric components
+    /// [`crate::AXISYMMETRIC_COMPONENTS`] (a 5×5 block of the 9×9 matrix),
+    /// term by term the same formula restricted to those rows and columns.
+    /// Exact for any `H`; `F` must be axisymmetric (zero off-block entries).
+    /// The scalar code's skips of zero coefficients are masks lane by lane
+    /// ([`crate::Lane`]).
+    #[inline(always)]
+    pub fn tangent_axisymmetric(&self, k: &Kin<T>, s: &Matrix3<T>) -> [[T; 5]; 5] {
+        use crate::AXISYMMETRIC_COMPONENTS as IDX;
+        let pick = |m: &Matrix3<T>| IDX.map(|(i, j)| m[(i, j)]);
+        let u = [
+            pick(&k.f),
+            k.f_times_axisymmetric(&k.c),
+            pick(&k.fit),
+            k.f_times_axisymmetric(&self.h),
+        ];
+        let mut v = [[T::zero(); 5]; 4];
+        for (va, ma) in v.iter_mut().zip(&self.m) {
+            for (ub, &m) in u.iter().zip(ma) {
+                let live = m.nonzero();
+                if T::any(live) {
+                    for (x, &y) in va.iter_mut().zip(ub) {
+                        *x = T::select(live, *x + m * y, *x);
+                    }
+                }
+            }
+        }
+        let (sc, sci) = (self.s[XC], self.s[XCI]);
+        let diag = s - k.cinv * sci;
+        let mut t = [[T::zero(); 5]; 5];
+        for (a, (ua, va)) in u.iter().zip(&v).enumerate() {
+            let ma = &self.m[a];
+            let live = T::or(
+                T::or(ma[0].nonzero(), ma[1].nonzero()),
+                T::or(ma[2].nonzero(), ma[3].nonzero()),
+            );
+            if !T::any(live) {
+                continue;
+            }
+            for (row, &x) in t.iter_mut().zip(ua) {
+                for (y, &z) in row.iter_mut().zip(va) {
+                    *y = T::select(live, *y + x * z, *y);
+                }
+            }
+        }
+        for (row, &(i, jj)) in t.iter_mut().zip(&IDX) {
+            for (y, &(kk, l)) in row.iter_mut().zip(&IDX) {
+                *y += sc * (k.f[(i, l)] * k.f[(kk, jj)]) - sci * (k.fit[(i, l)] * k.fit[(kk, jj)]);
+                if jj == l {
+                    *y += sc * k.b[(i, kk)];
+                }
+                if i == kk {
+                    *y += diag[(jj, l)];
+                }
+            }
+        }
+        t
+    }
+}
+
+impl IsoStress {
     /// `∂P/∂F` for `P = F S`, row `3i+J`, column `3k+L`.
     pub fn tangent(&self, k: &Kin, s: &Mat3) -> Tangent3 {
         let u = [k.f, k.f * k.c, k.fit, k.f * self.h];
@@ -225,57 +330,6 @@ impl IsoStress {
         }
         Tangent3::from_fn(|r, c| t[r][c])
     }
-
-    /// The entries of [`IsoStress::tangent`] on the axisymmetric components
-    /// [`crate::AXISYMMETRIC_COMPONENTS`] (a 5×5 block of the 9×9 matrix),
-    /// term by term the same formula restricted to those rows and columns.
-    /// Exact for any `H`; `F` must be axisymmetric (zero off-block entries).
-    #[inline(always)]
-    pub fn tangent_axisymmetric(&self, k: &Kin, s: &Mat3) -> [[f64; 5]; 5] {
-        use crate::AXISYMMETRIC_COMPONENTS as IDX;
-        let pick = |m: &Mat3| IDX.map(|(i, j)| m[(i, j)]);
-        let u = [
-            pick(&k.f),
-            k.f_times_axisymmetric(&k.c),
-            pick(&k.fit),
-            k.f_times_axisymmetric(&self.h),
-        ];
-        let mut v = [[0.0; 5]; 4];
-        for (va, ma) in v.iter_mut().zip(&self.m) {
-            for (ub, &m) in u.iter().zip(ma) {
-                if m != 0.0 {
-                    for (x, y) in va.iter_mut().zip(ub) {
-                        *x += m * y;
-                    }
-                }
-            }
-        }
-        let (sc, sci) = (self.s[XC], self.s[XCI]);
-        let diag = s - k.cinv * sci;
-        let mut t = [[0.0; 5]; 5];
-        for (a, (ua, va)) in u.iter().zip(&v).enumerate() {
-            if self.m[a].iter().all(|&m| m == 0.0) {
-                continue;
-            }
-            for (row, &x) in t.iter_mut().zip(ua) {
-                for (y, &z) in row.iter_mut().zip(va) {
-                    *y += x * z;
-                }
-            }
-        }
-        for (row, &(i, jj)) in t.iter_mut().zip(&IDX) {
-            for (y, &(kk, l)) in row.iter_mut().zip(&IDX) {
-                *y += sc * (k.f[(i, l)] * k.f[(kk, jj)]) - sci * (k.fit[(i, l)] * k.fit[(kk, jj)]);
-                if jj == l {
-                    *y += sc * k.b[(i, kk)];
-                }
-                if i == kk {
-                    *y += diag[(jj, l)];
-                }
-            }
-        }
-        t
-    }
 }
 
 /// Row-major copy of a 3×3 matrix.
@@ -289,17 +343,4 @@ fn flat(m: &Mat3) -> [f64; 9] {
     [
         r[0][0], r[0][1], r[0][2], r[1][0], r[1][1], r[1][2], r[2][0], r[2][1], r[2][2],
     ]
-}
-
-impl IsoStress {
-    /// Adds `scale ·` another stress that does not use the `H` basis tensor.
-    #[inline]
-    pub fn add_scaled(&mut self, other: &IsoStress, scale: f64) {
-        for a in 0..4 {
-            self.s[a] += scale * other.s[a];
-            for b in 0..4 {
-                self.m[a][b] += scale * other.m[a][b];
-            }
-        }
-    }
 }

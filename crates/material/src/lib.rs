@@ -68,6 +68,7 @@ mod history;
 pub mod homogeneous;
 mod hyperelastic;
 mod kernel;
+mod lane;
 pub(crate) mod model;
 mod pipkin_rogers;
 pub mod point;
@@ -81,6 +82,7 @@ pub use curve::samples_curve;
 pub use error::{MaterialError, Result};
 pub use history::HistoryRule;
 pub use hyperelastic::MooneyRivlin;
+pub use lane::{F64x4, Lane};
 pub use model::Incompressible;
 pub use pipkin_rogers::{Eq256, PipkinRogers, PipkinRogersState};
 pub use point::{

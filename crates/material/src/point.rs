@@ -97,6 +97,33 @@ pub trait Material3: PointState {
         }
         Ok(out)
     }
+
+    /// Whether [`Material3::update_axisymmetric_lanes`] is implemented (the
+    /// models of this crate whose kernel has a lane form).
+    #[doc(hidden)]
+    const AXISYMMETRIC_LANES: bool = false;
+
+    /// [`Material3::update_axisymmetric`] of four points at once, one per
+    /// lane of [`crate::F64x4`] (e.g. the same Gauss point of four
+    /// elements), each lane bitwise the result of the one-point update:
+    /// `P` to `first_piola`, `∂P/∂F` to `tangent_out` if `tangent` (else it
+    /// is left as it is). `false` if not implemented (the default) or if any
+    /// lane fails a check; the caller then updates the points one by one
+    /// (which reports the error).
+    #[doc(hidden)]
+    #[allow(clippy::too_many_arguments)]
+    fn update_axisymmetric_lanes(
+        &self,
+        _state_n: [&Self::State; 4],
+        _f: &[crate::F64x4; 5],
+        _dt: f64,
+        _trial: [&mut Self::State; 4],
+        _tangent: bool,
+        _first_piola: &mut [crate::F64x4; 5],
+        _tangent_out: &mut [[crate::F64x4; 5]; 5],
+    ) -> bool {
+        false
+    }
 }
 
 /// The (row, column) indices in the 3×3 tensor of the five components an
@@ -106,13 +133,15 @@ pub const AXISYMMETRIC_COMPONENTS: [(usize, usize); 5] = [(0, 0), (0, 1), (1, 0)
 
 /// Stress and tangent at one axisymmetric 3D material point (the entries of
 /// [`PointResponse3`] on [`AXISYMMETRIC_COMPONENTS`]).
+/// `T` = [`crate::F64x4`]: four points, one per lane
+/// ([`Material3::update_axisymmetric_lanes`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AxisymmetricResponse {
+pub struct AxisymmetricResponse<T = f64> {
     /// First Piola–Kirchhoff stress components P_rR, P_rZ, P_zR, P_zZ, P_θθ.
-    pub first_piola: [f64; 5],
+    pub first_piola: [T; 5],
     /// `tangent[p][q] = ∂P_p/∂F_q` over the same components (zero if not
     /// requested).
-    pub tangent: [[f64; 5]; 5],
+    pub tangent: [[T; 5]; 5],
 }
 
 /// Principal stresses and tangent at one membrane (plane-stress) point.

@@ -15,10 +15,12 @@
 //! The bulk response does not relax (`K(s) = K`): `τᴴ = K J (J − 1) I`.
 
 use crate::PointState;
-use crate::history::advance;
+use crate::history::advance_with;
 use crate::hyperelastic::add_volumetric;
 use crate::kernel::{IsoStress, Kin, XCI, XH};
 use crate::model::Kernel;
+use crate::{F64x4, Lane};
+use nalgebra::Matrix3;
 use nlvid_model::{Prony, Relaxation};
 
 use crate::{HistoryRule, Mat3, MooneyRivlin};
@@ -155,7 +157,59 @@ impl PointState for PronyViscoelastic {
     }
 }
 
+impl PronyViscoelastic {
+    /// The kernel ([`Kernel::eval`]) for one point (`T = f64`) or one point
+    /// per lane ([`crate::Lane`]): the history at `t_n` read by `h_n(k)`
+    /// (`H_k`) and `sbar_n` (`S̄0`), the trial history written by
+    /// `h_out(k, ·)` and `sbar_out`. Always inlined (see [`Kernel::eval`]).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn eval_generic<T: Lane>(
+        &self,
+        h_n: impl Fn(usize) -> Matrix3<T>,
+        sbar_n: &Matrix3<T>,
+        k: &Kin<T>,
+        dt: f64,
+        h_out: impl FnMut(usize, Matrix3<T>),
+        sbar_out: impl FnOnce(Matrix3<T>),
+        bulk: f64,
+    ) -> IsoStress<T> {
+        let mut iso = IsoStress::default();
+        self.elastic.add_isochoric(k, 1.0, &mut iso);
+        if self.prony.is_empty() {
+            // No Prony term (an elastic cell): no history and no H term;
+            // the general path below would add exact zeros only.
+            add_volumetric(k, bulk, &mut iso);
+            return iso;
+        }
+        let j23 = k.j23;
+        let sbar = iso.pk2(k) * (T::one() / j23);
+        let (frozen, sum_b1) = advance_with(self.rule, &self.prony, dt, h_n, sbar_n, &sbar, h_out);
+        sbar_out(sbar);
+        let mut out = IsoStress::default();
+        out.add_scaled(&iso, 1.0 - sum_b1);
+        // J^{-2/3} DEV(frozen) = J^{-2/3} [h − (h:C)/3 C⁻¹].
+        let hc = frozen.dot(&k.c);
+        out.h = frozen;
+        let zero = T::zero();
+        out.add(
+            XH,
+            j23,
+            k.grad(zero, zero, T::splat(-2.0 / 3.0) * j23 / k.j, zero),
+        );
+        out.add(
+            XCI,
+            -j23 * hc / 3.0,
+            k.grad(zero, zero, T::splat(2.0 / 9.0) * j23 * hc / k.j, -j23 / 3.0),
+        );
+        add_volumetric(k, bulk, &mut out);
+        out
+    }
+}
+
 impl Kernel for PronyViscoelastic {
+    const LANES: bool = true;
+
     fn bulk(&self) -> f64 {
         self.elastic.bulk()
     }
@@ -172,38 +226,61 @@ impl Kernel for PronyViscoelastic {
         trial: &mut PronyViscoelasticState,
         bulk: f64,
     ) -> IsoStress {
-        let mut iso = IsoStress::default();
-        self.elastic.add_isochoric(k, 1.0, &mut iso);
-        if self.prony.is_empty() {
-            // No Prony term (an elastic cell): no history and no H term;
-            // the general path below would add exact zeros only.
-            add_volumetric(k, bulk, &mut iso);
-            return iso;
+        if !self.prony.is_empty() {
+            trial.h.resize(self.prony.len(), Mat3::zeros());
         }
-        let j23 = k.j23;
-        let sbar = iso.pk2(k) * (1.0 / j23);
-        let (frozen, sum_b1) = advance(
-            self.rule,
-            &self.prony,
+        let (h, sbar) = (&mut trial.h, &mut trial.sbar);
+        self.eval_generic(
+            |k| st.h[k],
+            &st.sbar,
+            k,
             dt,
-            (&st.h, &st.sbar),
-            &sbar,
-            &mut trial.h,
-        );
-        trial.sbar = sbar;
-        let mut out = IsoStress::default();
-        out.add_scaled(&iso, 1.0 - sum_b1);
-        // J^{-2/3} DEV(frozen) = J^{-2/3} [h − (h:C)/3 C⁻¹].
-        let hc = frozen.dot(&k.c);
-        out.h = frozen;
-        out.add(XH, j23, k.grad(0.0, 0.0, -2.0 / 3.0 * j23 / k.j, 0.0));
-        out.add(
-            XCI,
-            -j23 * hc / 3.0,
-            k.grad(0.0, 0.0, 2.0 / 9.0 * j23 * hc / k.j, -j23 / 3.0),
-        );
-        add_volumetric(k, bulk, &mut out);
-        out
+            |k, x| h[k] = x,
+            |x| *sbar = x,
+            bulk,
+        )
+    }
+
+    /// [`Kernel::eval`] of four points, one per lane: the histories are
+    /// gathered into lanes and the trial histories scattered back.
+    #[inline(always)]
+    fn eval_lanes(
+        &self,
+        st: [&PronyViscoelasticState; 4],
+        k: &Kin<F64x4>,
+        dt: f64,
+        trial: [&mut PronyViscoelasticState; 4],
+        bulk: f64,
+    ) -> IsoStress<F64x4> {
+        let gather = |m: [&Mat3; 4]| {
+            Matrix3::from_fn(|r, c| F64x4([m[0][(r, c)], m[1][(r, c)], m[2][(r, c)], m[3][(r, c)]]))
+        };
+        let [t0, t1, t2, t3] = trial;
+        let mut h = [&mut t0.h, &mut t1.h, &mut t2.h, &mut t3.h];
+        let sbar = [&mut t0.sbar, &mut t1.sbar, &mut t2.sbar, &mut t3.sbar];
+        if !self.prony.is_empty() {
+            for x in h.iter_mut() {
+                x.resize(self.prony.len(), Mat3::zeros());
+            }
+        }
+        let sbar_n = gather(st.map(|s| &s.sbar));
+        self.eval_generic(
+            |k| gather(st.map(|s| &s.h[k])),
+            &sbar_n,
+            k,
+            dt,
+            |k, x| {
+                for (l, hl) in h.iter_mut().enumerate() {
+                    hl[k] = Mat3::from_fn(|r, c| x[(r, c)].0[l]);
+                }
+            },
+            |x| {
+                for (l, s) in sbar.into_iter().enumerate() {
+                    *s = Mat3::from_fn(|r, c| x[(r, c)].0[l]);
+                }
+            },
+            bulk,
+        )
     }
 }
 
