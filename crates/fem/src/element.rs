@@ -337,6 +337,133 @@ mod tests {
         compare_with_direct_form(&cell, true);
     }
 
+    /// Four different elements through [`fbar_kernel_lanes`] and one by one
+    /// through [`fbar_kernel`]: outputs and trial histories bitwise equal,
+    /// for the cell material with history and a time step (and without
+    /// Prony terms), every tangent part, F-bar and plain; a group with an
+    /// inverted element is refused.
+    #[test]
+    fn lanes_are_bitwise_the_one_element_kernel() {
+        use nlvid_material::{PointState, PronyViscoelastic};
+        let (_, u0) = distorted_element();
+        let base = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
+        let geo: [[PointGeometry; 4]; 4] = std::array::from_fn(|e| {
+            element_geometry(&std::array::from_fn(|a| {
+                let s = ((3 * e + a) as f64 * 1.7).sin();
+                [
+                    base[a][0] + 0.3 * e as f64 + 0.05 * s,
+                    base[a][1] + 0.04 * s,
+                ]
+            }))
+        });
+        let lane_geo = [0, 1, 2, 3].map(|q| PointGeometry::lanes(geo.each_ref().map(|g| &g[q])));
+        let us: [[f64; 8]; 4] = std::array::from_fn(|e| {
+            std::array::from_fn(|k| u0[k] * (1.0 - 0.2 * e as f64) + 0.01 * (k + e) as f64)
+        });
+        let bits = |o: &ElementOutput| {
+            let mut v: Vec<u64> = o.r.iter().map(|x| x.to_bits()).collect();
+            v.extend(o.k.iter().flatten().map(|x| x.to_bits()));
+            v
+        };
+        let elastic = nlvid_model::Relaxation::new(
+            nlvid_model::names::G0,
+            1.0,
+            nlvid_model::Prony::elastic(),
+        )
+        .unwrap();
+        for shear in [afm_cell_shear(), elastic] {
+            let cell = PronyViscoelastic::cell(&shear, 1000.0).unwrap();
+            // History after one step to half the displacement.
+            let fresh: Vec<_> = (0..4).map(|_| cell.initial_state()).collect();
+            let mut sn = [(); 4].map(|_| fresh.clone());
+            for e in 0..4 {
+                let half = us[e].map(|x| 0.5 * x);
+                let mut out = ElementOutput::zero();
+                let part = TangentPart::None;
+                fbar_kernel(
+                    &cell, &geo[e], &half, &fresh, &mut sn[e], 0.3, true, part, &mut out,
+                )
+                .unwrap();
+            }
+            for fbar in [true, false] {
+                for part in [TangentPart::None, TangentPart::Full, TangentPart::Lower] {
+                    let mut tr_one = sn.clone();
+                    let mut one = [ElementOutput::zero(); 4];
+                    for e in 0..4 {
+                        fbar_kernel(
+                            &cell,
+                            &geo[e],
+                            &us[e],
+                            &sn[e],
+                            &mut tr_one[e],
+                            0.2,
+                            fbar,
+                            part,
+                            &mut one[e],
+                        )
+                        .unwrap();
+                    }
+                    let mut tr_lanes = sn.clone();
+                    let mut lanes = [ElementOutput::zero(); 4];
+                    let [t0, t1, t2, t3] = &mut tr_lanes;
+                    let [o0, o1, o2, o3] = &mut lanes;
+                    assert!(fbar_kernel_lanes(
+                        &cell,
+                        &lane_geo,
+                        us.each_ref().map(|u| &u[..]),
+                        sn.each_ref().map(|s| &s[..]),
+                        [&mut t0[..], &mut t1[..], &mut t2[..], &mut t3[..]],
+                        0.2,
+                        fbar,
+                        part,
+                        [o0, o1, o2, o3],
+                    ));
+                    for e in 0..4 {
+                        assert_eq!(bits(&lanes[e]), bits(&one[e]), "element {e} {part:?}");
+                        assert_eq!(format!("{:?}", tr_lanes[e]), format!("{:?}", tr_one[e]));
+                    }
+                }
+            }
+            // An inverted element in the group: refused (the caller then
+            // evaluates the four one by one and reports the error).
+            let mut bad = us;
+            // The top nodes below the bottom ones: F_zZ < 0.
+            bad[2][5] = -3.0;
+            bad[2][7] = -3.0;
+            let mut tr = sn.clone();
+            let mut out = [ElementOutput::zero(); 4];
+            let [t0, t1, t2, t3] = &mut tr;
+            let [o0, o1, o2, o3] = &mut out;
+            assert!(!fbar_kernel_lanes(
+                &cell,
+                &lane_geo,
+                bad.each_ref().map(|u| &u[..]),
+                sn.each_ref().map(|s| &s[..]),
+                [&mut t0[..], &mut t1[..], &mut t2[..], &mut t3[..]],
+                0.2,
+                true,
+                TangentPart::Full,
+                [o0, o1, o2, o3],
+            ));
+            let mut one = ElementOutput::zero();
+            let (sn2, tr2) = (&sn[2], &mut tr[2]);
+            assert!(
+                fbar_kernel(
+                    &cell,
+                    &geo[2],
+                    &bad[2],
+                    sn2,
+                    tr2,
+                    0.2,
+                    true,
+                    TangentPart::Full,
+                    &mut one
+                )
+                .is_err()
+            );
+        }
+    }
+
     #[test]
     fn weights_integrate_ring_volume() {
         // Square [1,2]×[0,1]: volume of the ring = π (2² − 1²) · 1.

@@ -96,6 +96,24 @@ fn parallel_element_loop_is_bitwise_serial() {
     assert_eq!((a.steps, a.iterations), (b.steps, b.iterations));
 }
 
+/// The elements evaluated four at a time in SIMD lanes (the default) give
+/// bitwise the run of the one-element kernel (`Settings::lanes = false`).
+#[test]
+fn lanes_are_bitwise_the_one_element_loop() {
+    let lanes = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    assert!(lanes.settings.lanes);
+    let mut single = lanes.clone();
+    single.settings.lanes = false;
+    let a = afm::run(&params(), &lanes).unwrap();
+    let b = afm::run(&params(), &single).unwrap();
+    assert_eq!(a.force, b.force);
+    assert_eq!(a.indentation, b.indentation);
+    assert_eq!(
+        (a.steps, a.iterations, a.assemblies),
+        (b.steps, b.iterations, b.assemblies)
+    );
+}
+
 /// Residual-only trial assemblies near convergence (`lazy_tangent`) change
 /// which tangents are computed, not the Newton path: the residual of a
 /// residual-only assembly is bitwise the one of a full assembly, so the run
