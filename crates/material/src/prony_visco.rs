@@ -161,7 +161,8 @@ impl PronyViscoelastic {
     /// The kernel ([`Kernel::eval`]) for one point (`T = f64`) or one point
     /// per lane ([`crate::Lane`]): the history at `t_n` read by `h_n(k)`
     /// (`H_k`) and `sbar_n` (`S̄0`), the trial history written by
-    /// `h_out(k, ·)` and `sbar_out`. Always inlined (see [`Kernel::eval`]).
+    /// `h_out(k, ·)` and `sbar_out`; the stress to `out` (zero on entry).
+    /// Always inlined (see [`Kernel::eval`]).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn eval_generic<T: Lane>(
@@ -173,20 +174,21 @@ impl PronyViscoelastic {
         h_out: impl FnMut(usize, Matrix3<T>),
         sbar_out: impl FnOnce(Matrix3<T>),
         bulk: f64,
-    ) -> IsoStress<T> {
-        let mut iso = IsoStress::default();
-        self.elastic.add_isochoric(k, 1.0, &mut iso);
+        out: &mut IsoStress<T>,
+    ) {
         if self.prony.is_empty() {
             // No Prony term (an elastic cell): no history and no H term;
             // the general path below would add exact zeros only.
-            add_volumetric(k, bulk, &mut iso);
-            return iso;
+            self.elastic.add_isochoric(k, 1.0, out);
+            add_volumetric(k, bulk, out);
+            return;
         }
+        let mut iso = IsoStress::default();
+        self.elastic.add_isochoric(k, 1.0, &mut iso);
         let j23 = k.j23;
         let sbar = iso.pk2(k) * (T::one() / j23);
         let (frozen, sum_b1) = advance_with(self.rule, &self.prony, dt, h_n, sbar_n, &sbar, h_out);
         sbar_out(sbar);
-        let mut out = IsoStress::default();
         out.add_scaled(&iso, 1.0 - sum_b1);
         // J^{-2/3} DEV(frozen) = J^{-2/3} [h − (h:C)/3 C⁻¹].
         let hc = frozen.dot(&k.c);
@@ -202,8 +204,7 @@ impl PronyViscoelastic {
             -j23 * hc / 3.0,
             k.grad(zero, zero, T::splat(2.0 / 9.0) * j23 * hc / k.j, -j23 / 3.0),
         );
-        add_volumetric(k, bulk, &mut out);
-        out
+        add_volumetric(k, bulk, out);
     }
 }
 
@@ -230,6 +231,7 @@ impl Kernel for PronyViscoelastic {
             trial.h.resize(self.prony.len(), Mat3::zeros());
         }
         let (h, sbar) = (&mut trial.h, &mut trial.sbar);
+        let mut out = IsoStress::default();
         self.eval_generic(
             |k| st.h[k],
             &st.sbar,
@@ -238,7 +240,9 @@ impl Kernel for PronyViscoelastic {
             |k, x| h[k] = x,
             |x| *sbar = x,
             bulk,
-        )
+            &mut out,
+        );
+        out
     }
 
     /// [`Kernel::eval`] of four points, one per lane: the histories are
@@ -264,6 +268,7 @@ impl Kernel for PronyViscoelastic {
             }
         }
         let sbar_n = gather(st.map(|s| &s.sbar));
+        let mut out = IsoStress::default();
         self.eval_generic(
             |k| gather(st.map(|s| &s.h[k])),
             &sbar_n,
@@ -280,7 +285,9 @@ impl Kernel for PronyViscoelastic {
                 }
             },
             bulk,
-        )
+            &mut out,
+        );
+        out
     }
 }
 
