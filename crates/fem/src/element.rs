@@ -696,11 +696,15 @@ pub(crate) fn fbar_kernel_lanes<M: Material3>(
     if crate::fbar::fbar_kernel_in(geometry, &ul, points, fbar, part, &mut lanes).is_err() {
         return false;
     }
-    let tangent = part != TangentPart::None;
-    for (l, o) in out.into_iter().enumerate() {
-        o.r = lanes.r.map(|x| x.0[l]);
-        if tangent {
-            o.k = lanes.k.map(|row| row.map(|x| x.0[l]));
+    let [o0, o1, o2, o3] = out;
+    for c in 0..8 {
+        [o0.r[c], o1.r[c], o2.r[c], o3.r[c]] = lanes.r[c].0;
+    }
+    if part != TangentPart::None {
+        for r in 0..8 {
+            for c in 0..8 {
+                [o0.k[r][c], o1.k[r][c], o2.k[r][c], o3.k[r][c]] = lanes.k[r][c].0;
+            }
         }
     }
     true

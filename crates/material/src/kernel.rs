@@ -227,8 +227,9 @@ impl<T: Lane> IsoStress<T> {
     /// Exact for any `H`; `F` must be axisymmetric (zero off-block entries).
     /// The scalar code's skips of zero coefficients are masks lane by lane
     /// ([`crate::Lane`]).
+    /// Written to `t` (four points' are 800 bytes).
     #[inline(always)]
-    pub fn tangent_axisymmetric(&self, k: &Kin<T>, s: &Matrix3<T>) -> [[T; 5]; 5] {
+    pub fn tangent_axisymmetric(&self, k: &Kin<T>, s: &Matrix3<T>, t: &mut [[T; 5]; 5]) {
         use crate::AXISYMMETRIC_COMPONENTS as IDX;
         let pick = |m: &Matrix3<T>| IDX.map(|(i, j)| m[(i, j)]);
         let u = [
@@ -250,7 +251,7 @@ impl<T: Lane> IsoStress<T> {
         }
         let (sc, sci) = (self.s[XC], self.s[XCI]);
         let diag = s - k.cinv * sci;
-        let mut t = [[T::zero(); 5]; 5];
+        *t = [[T::zero(); 5]; 5];
         for (a, (ua, va)) in u.iter().zip(&v).enumerate() {
             let ma = &self.m[a];
             let live = T::or(
@@ -277,7 +278,6 @@ impl<T: Lane> IsoStress<T> {
                 }
             }
         }
-        t
     }
 }
 

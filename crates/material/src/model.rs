@@ -74,7 +74,7 @@ fn axisymmetric_response<T: Lane>(
     let s = iso.pk2(k);
     *p = k.f_times_axisymmetric(&s);
     if tangent {
-        *a = iso.tangent_axisymmetric(k, &s);
+        iso.tangent_axisymmetric(k, &s, a);
     }
 }
 
