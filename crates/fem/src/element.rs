@@ -416,6 +416,7 @@ mod tests {
                         0.2,
                         fbar,
                         part,
+                        &mut Default::default(),
                         [o0, o1, o2, o3],
                     ));
                     for e in 0..4 {
@@ -443,6 +444,7 @@ mod tests {
                 0.2,
                 true,
                 TangentPart::Full,
+                &mut Default::default(),
                 [o0, o1, o2, o3],
             ));
             let mut one = ElementOutput::zero();
@@ -668,6 +670,7 @@ pub(crate) fn fbar_kernel_lanes<M: Material3>(
     dt: f64,
     fbar: bool,
     part: TangentPart,
+    lanes: &mut LocalOutput<8, F64x4>,
     out: [&mut ElementOutput; 4],
 ) -> bool {
     if !M::AXISYMMETRIC_LANES
@@ -689,11 +692,7 @@ pub(crate) fn fbar_kernel_lanes<M: Material3>(
         trial,
         dt,
     };
-    let mut lanes = LocalOutput::<8, F64x4> {
-        r: [F64x4::default(); 8],
-        k: [[F64x4::default(); 8]; 8],
-    };
-    if crate::fbar::fbar_kernel_in(geometry, &ul, points, fbar, part, &mut lanes).is_err() {
+    if crate::fbar::fbar_kernel_in(geometry, &ul, points, fbar, part, lanes).is_err() {
         return false;
     }
     let [o0, o1, o2, o3] = out;

@@ -9,6 +9,12 @@
 //! The kernel is generic over the point type and the three sizes, so it is
 //! monomorphised per element kind and material: the loops have constant
 //! bounds as in a hand-written kernel, no allocation, no dynamic dispatch.
+//! It is generic over the number type too ([`nlvid_material::Lane`]): `f64`
+//! for one element, [`nlvid_material::F64x4`] for four elements at once, one
+//! per AVX2 lane (`crate::element::fbar_kernel_lanes`: the axisymmetric Q4
+//! with the material crate's cell models, docs/theory/fem.md "Session 20").
+//! Every lane performs the one-element arithmetic in the same order, so its
+//! results are bitwise the one-element results.
 //!
 //! The material sees `F̄ = (J̄/J)^{1/3} F` with `J̄ = ∫J dV₀ / ∫dV₀`; the
 //! element is the stationary point of `∫ Ψ(F̄(u)) dV₀` (module docs of

@@ -44,6 +44,15 @@ impl<const ND: usize> Default for LocalOutput<ND> {
     }
 }
 
+impl<const ND: usize> Default for LocalOutput<ND, F64x4> {
+    fn default() -> Self {
+        Self {
+            r: [F64x4::default(); ND],
+            k: [[F64x4::default(); ND]; ND],
+        }
+    }
+}
+
 /// What the model reads of an element's output ([`LocalOutput`]).
 #[doc(hidden)]
 pub trait Local: Clone + Send + Default {
@@ -247,6 +256,10 @@ pub trait ElementKind<M: Material3>: Send + Sync + 'static {
     /// ([`ElementKind::evaluate_lanes`]; `()` for kinds without).
     #[doc(hidden)]
     type LaneGeometry: Send + Sync;
+    /// The output of four elements in lanes (a buffer the model keeps, so
+    /// it is not cleared twice per group).
+    #[doc(hidden)]
+    type LaneOutput: Send + Default;
 
     /// An empty output.
     #[doc(hidden)]
@@ -302,6 +315,7 @@ pub trait ElementKind<M: Material3>: Send + Sync + 'static {
         _dt: f64,
         _fbar: bool,
         _part: TangentPart,
+        _lanes: &mut Self::LaneOutput,
         _out: [&mut Self::Output; 4],
     ) -> bool {
         false
@@ -340,6 +354,7 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
     type Geometry = [PointGeometry; 4];
     type Output = ElementOutput;
     type LaneGeometry = [PointGeometry<F64x4>; 4];
+    type LaneOutput = LocalOutput<8, F64x4>;
 
     fn geometry(mesh: &Mesh) -> Result<Vec<[PointGeometry; 4]>> {
         Ok(mesh
@@ -378,10 +393,11 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
         dt: f64,
         fbar: bool,
         part: TangentPart,
+        lanes: &mut LocalOutput<8, F64x4>,
         out: [&mut ElementOutput; 4],
     ) -> bool {
         crate::element::fbar_kernel_lanes(
-            material, geometry, u, state_n, trial, dt, fbar, part, out,
+            material, geometry, u, state_n, trial, dt, fbar, part, lanes, out,
         )
     }
 
@@ -403,6 +419,7 @@ impl<M: Material3> ElementKind<M> for Solid {
     type Geometry = [HexPoint; 8];
     type Output = HexOutput;
     type LaneGeometry = ();
+    type LaneOutput = ();
 
     fn lane_geometry(_: [&[HexPoint; 8]; 4]) {}
 

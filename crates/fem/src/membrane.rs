@@ -342,6 +342,7 @@ where
     type Geometry = MembraneGeometry;
     type Output = MembraneOutput;
     type LaneGeometry = ();
+    type LaneOutput = ();
 
     fn lane_geometry(_: [&Self::Geometry; 4]) {}
 

@@ -517,6 +517,8 @@ pub struct Model<M: Material3, K: ElementKind<M> = Axisymmetric> {
     rhs: Vec<f64>,
     /// One element's output, or four (the lanes of [`Settings::lanes`]).
     element_out: [K::Output; 4],
+    /// The four elements' output in lanes.
+    lane_out: K::LaneOutput,
     /// Per-element outputs for the parallel element loop (empty if serial).
     element_outs: Vec<K::Output>,
     pool: Option<rayon::ThreadPool>,
@@ -903,6 +905,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             residual: vec![0.0; ndof],
             rhs: vec![0.0; neq],
             element_out: std::array::from_fn(|_| K::output()),
+            lane_out: Default::default(),
             element_outs: if settings.threads > 1 {
                 (0..ne).map(|_| K::output()).collect()
             } else {
@@ -1248,6 +1251,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                         dt,
                         fbar,
                         part,
+                        &mut self.lane_out,
                         self.element_out.each_mut(),
                     );
                 }

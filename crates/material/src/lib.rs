@@ -36,7 +36,10 @@
 //! tangent: about 0.3 µs per 3D update with tangent on one core. The
 //! axisymmetric path [`Material3::update_axisymmetric`] returns only the
 //! 5 components of `P` and the 5×5 block of the tangent an axisymmetric
-//! element reads (no 9×9 matrix, no Cauchy stress; tangent optional). The
+//! element reads (no 9×9 matrix, no Cauchy stress; tangent optional); for
+//! [`PronyViscoelastic`] it also runs four points at once, one per lane of
+//! [`F64x4`] (`Material3::update_axisymmetric_lanes`, the same code generic
+//! over [`Lane`], bitwise the one-point results). The
 //! thesis's O(steps) trapezoidal sum (eq. 2.48) is kept in [`reference`].
 //!
 //! ```
