@@ -325,14 +325,15 @@ pub struct Settings {
     pub output_rejection: f64,
     /// Threads for the element loop (material updates); 0 or 1 = serial. The
     /// result is bitwise the same for any number (element outputs are
-    /// computed in parallel, then added in element order).
+    /// computed in parallel, then added in element order). The serial loop
+    /// evaluates four elements at a time, one per SIMD lane, where the
+    /// element kind and material have a lane form (the axisymmetric Q4 with
+    /// this crate's cell materials; docs/theory/fem.md, "Session 20"),
+    /// bitwise the one-element results; the threaded loop one element per
+    /// task. (No setting of its own: a field here would enter the models'
+    /// identity, and with it the study hash of every run store, for a choice
+    /// that changes no result.)
     pub threads: usize,
-    /// Evaluate the elements of a serial element loop four at a time, one
-    /// per SIMD lane, where the element kind and material have a lane form
-    /// (the axisymmetric Q4 with this crate's cell materials). Bitwise the
-    /// same results either way; default true (docs/theory/fem.md, "Session
-    /// 20").
-    pub lanes: bool,
 }
 
 impl Default for Settings {
@@ -357,7 +358,6 @@ impl Default for Settings {
             output_tolerance: 2e-4,
             output_rejection: 2.5,
             threads: 1,
-            lanes: true,
         }
     }
 }
@@ -493,7 +493,7 @@ pub struct Model<M: Material3, K: ElementKind<M> = Axisymmetric> {
     settings: Settings,
     geometry: Vec<K::Geometry>,
     /// The geometry of elements 4g … 4g + 3 in lanes, for every full group
-    /// g (empty unless the lanes are used, [`Settings::lanes`]).
+    /// g (empty unless the lanes are used: serial loop, [`Settings::threads`]).
     lane_geometry: Vec<K::LaneGeometry>,
     history: History<M::State>,
     dof_eq: Vec<usize>,
@@ -515,7 +515,7 @@ pub struct Model<M: Material3, K: ElementKind<M> = Axisymmetric> {
     system: SparseSystem,
     residual: Vec<f64>,
     rhs: Vec<f64>,
-    /// One element's output, or four (the lanes of [`Settings::lanes`]).
+    /// One element's output, or four (the lanes of a serial loop).
     element_out: [K::Output; 4],
     /// The four elements' output in lanes.
     lane_out: K::LaneOutput,
@@ -880,7 +880,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             _ => None,
         };
         Ok(Self {
-            lane_geometry: if K::LANES && settings.lanes && settings.threads <= 1 {
+            lane_geometry: if K::LANES && settings.threads <= 1 {
                 geometry
                     .chunks_exact(4)
                     .map(|g| K::lane_geometry([&g[0], &g[1], &g[2], &g[3]]))
