@@ -385,6 +385,27 @@ mod tests {
                 )
                 .unwrap();
             }
+            // The four elements at `u` through the lanes: whether the group
+            // was accepted, the outputs and the trial histories.
+            let lanes_at = |u: &[[f64; 8]; 4], fbar: bool, part: TangentPart| {
+                let mut tr = sn.clone();
+                let mut out = [ElementOutput::zero(); 4];
+                let [t0, t1, t2, t3] = &mut tr;
+                let [o0, o1, o2, o3] = &mut out;
+                let ok = fbar_kernel_lanes(
+                    &cell,
+                    &lane_geo,
+                    u.each_ref().map(|u| &u[..]),
+                    sn.each_ref().map(|s| &s[..]),
+                    [&mut t0[..], &mut t1[..], &mut t2[..], &mut t3[..]],
+                    0.2,
+                    fbar,
+                    part,
+                    &mut Default::default(),
+                    [o0, o1, o2, o3],
+                );
+                (ok, out, tr)
+            };
             for fbar in [true, false] {
                 for part in [TangentPart::None, TangentPart::Full, TangentPart::Lower] {
                     let mut tr_one = sn.clone();
@@ -403,22 +424,8 @@ mod tests {
                         )
                         .unwrap();
                     }
-                    let mut tr_lanes = sn.clone();
-                    let mut lanes = [ElementOutput::zero(); 4];
-                    let [t0, t1, t2, t3] = &mut tr_lanes;
-                    let [o0, o1, o2, o3] = &mut lanes;
-                    assert!(fbar_kernel_lanes(
-                        &cell,
-                        &lane_geo,
-                        us.each_ref().map(|u| &u[..]),
-                        sn.each_ref().map(|s| &s[..]),
-                        [&mut t0[..], &mut t1[..], &mut t2[..], &mut t3[..]],
-                        0.2,
-                        fbar,
-                        part,
-                        &mut Default::default(),
-                        [o0, o1, o2, o3],
-                    ));
+                    let (ok, lanes, tr_lanes) = lanes_at(&us, fbar, part);
+                    assert!(ok);
                     for e in 0..4 {
                         assert_eq!(bits(&lanes[e]), bits(&one[e]), "element {e} {part:?}");
                         assert_eq!(format!("{:?}", tr_lanes[e]), format!("{:?}", tr_one[e]));
@@ -431,22 +438,8 @@ mod tests {
             // The top nodes below the bottom ones: F_zZ < 0.
             bad[2][5] = -3.0;
             bad[2][7] = -3.0;
-            let mut tr = sn.clone();
-            let mut out = [ElementOutput::zero(); 4];
-            let [t0, t1, t2, t3] = &mut tr;
-            let [o0, o1, o2, o3] = &mut out;
-            assert!(!fbar_kernel_lanes(
-                &cell,
-                &lane_geo,
-                bad.each_ref().map(|u| &u[..]),
-                sn.each_ref().map(|s| &s[..]),
-                [&mut t0[..], &mut t1[..], &mut t2[..], &mut t3[..]],
-                0.2,
-                true,
-                TangentPart::Full,
-                &mut Default::default(),
-                [o0, o1, o2, o3],
-            ));
+            let (ok, _, mut tr) = lanes_at(&bad, true, TangentPart::Full);
+            assert!(!ok);
             let mut one = ElementOutput::zero();
             let (sn2, tr2) = (&sn[2], &mut tr[2]);
             assert!(
