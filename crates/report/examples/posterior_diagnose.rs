@@ -24,7 +24,11 @@
 //!
 //! ```text
 //! - the linearised coverage of the 90 % intervals of G0, g1 + g2 and
-//!   G(t_end) (below), with the likelihood's Σ and with σ̂²I alone.
+//!   G(t_end) (below), with the likelihood's Σ (K = K_CV), with σ̂²I alone,
+//!   and with K estimated near the truth
+//!   (`KrigingModel::output_covariance_local`; its neighbourhood
+//!   `NLVID_LOCAL_POWER`, default 1, and its pooling with K_CV
+//!   `NLVID_LOCAL_PRIOR` pseudo-sites, default 0).
 //!
 //! *Linearised coverage.* At the truth x (unit coordinates u, where the
 //! prior is flat) the posterior of a summary q(u) is taken as Gaussian with
@@ -119,6 +123,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // cells' coverage probabilities, Σ z_s², Σ predicted var(z_s).
     let mut linear = [[[0.0f64; 3]; 2]; 3];
     let mut linear_cells = 0usize;
+    let mut linear_local = [[[0.0f64; 3]; 2]; 3];
+    let mut n_effs = Vec::new();
+    let env = |k: &str, d: f64| {
+        std::env::var(k)
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(d)
+    };
+    let (local_power, local_prior) = (env("NLVID_LOCAL_POWER", 1.0), env("NLVID_LOCAL_PRIOR", 0.0));
+    let OutputCovariance::LowRank { factor: cvf, .. } = kr.output_covariance_cv()? else {
+        return Err("PCA model".into());
+    };
+    let u_cv = DMatrix::from_column_slice(m, k, &cvf);
     let t_end = *s.times().last().ok_or("empty grid")?;
     for (inp, cin) in inputs.iter().zip(&clean_inputs).take(cells) {
         let r = fit_cell(&settings, &model, inp);
@@ -189,18 +206,30 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 ));
             }
         }
-        match linearised(s, &truth.x, &rs, &u, vc, est, t_end) {
-            Ok(cell) => {
+        let (local_k, n_eff) =
+            kr.output_covariance_local(&truth.x, &cal, local_power, local_prior)?;
+        let OutputCovariance::LowRank { factor: lf, .. } = local_k else {
+            return Err("PCA model".into());
+        };
+        let u_local = DMatrix::from_column_slice(m, k, &lf);
+        n_effs.push(n_eff);
+        match (
+            linearised(s, &truth.x, &rs, &u_cv, vc, est, t_end),
+            linearised(s, &truth.x, &rs, &u_local, vc, est, t_end),
+        ) {
+            (Ok(cell), Ok(cell_local)) => {
                 linear_cells += 1;
-                for (acc, c) in linear.iter_mut().zip(&cell) {
-                    for (a, x) in acc.iter_mut().zip(c) {
-                        for (ai, xi) in a.iter_mut().zip(x) {
-                            *ai += xi;
+                for (lin, cell) in [(&mut linear, cell), (&mut linear_local, cell_local)] {
+                    for (acc, c) in lin.iter_mut().zip(&cell) {
+                        for (a, x) in acc.iter_mut().zip(c) {
+                            for (ai, xi) in a.iter_mut().zip(x) {
+                                *ai += xi;
+                            }
                         }
                     }
                 }
             }
-            Err(e) => println!("  {}: no linearisation ({e})", r.cell),
+            (Err(e), _) | (_, Err(e)) => println!("  {}: no linearisation ({e})", r.cell),
         }
         ratios.push(est / sigma);
         chis.push(chi);
@@ -282,15 +311,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     for (q, name) in ["G0", "g1 + g2", "G(t_end)"].iter().enumerate() {
         let [full, bare] = linear[q];
+        let [local, _] = linear_local[q];
         println!(
-            "  {name:9} {:5.1} % (z_s^2 {:.3} vs predicted {:.3}) | {:5.1} % (z_s^2 {:.3})",
+            "  {name:9} {:5.1} % (z_s^2 {:.3} vs predicted {:.3}) | {:5.1} % (z_s^2 {:.3}) | local K {:5.1} % (predicted {:.3})",
             100.0 * full[0] / nl,
             full[1] / nl,
             full[2] / nl,
             100.0 * bare[0] / nl,
-            bare[1] / nl
+            bare[1] / nl,
+            100.0 * local[0] / nl,
+            local[2] / nl
         );
     }
+    n_effs.sort_by(f64::total_cmp);
+    println!(
+        "local K (power {local_power}, prior sites {local_prior}): n_eff min {:.1}, median {:.1}, max {:.1}",
+        n_effs[0],
+        n_effs[n_effs.len() / 2],
+        n_effs[n_effs.len() - 1]
+    );
     std::fs::remove_dir_all(&root)?;
     Ok(())
 }

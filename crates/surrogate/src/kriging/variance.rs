@@ -424,6 +424,142 @@ impl KrigingModel {
         Ok(self.cv_covariance_from(&self.loo_precision_diagonal()?))
     }
 
+    /// The process covariance K of [`KrigingModel::output_covariance_cv`]
+    /// estimated near `x` instead of over the whole design: the training
+    /// sites' leave-one-out residuals r_i, each standardised by its
+    /// calibrated variance (`cal`, α v_i^β), weighted by w_i = c(x, x_i)^p
+    /// (c the model's correlation, p = `power`; p < 1 widens the
+    /// neighbourhood), and pooled with Σ_CV as `prior_sites` pseudo-sites:
+    /// Σ_x = (n₀ Σ_CV + Σ_i w_i z_i z_iᵀ · n_eff/Σ_i w_i)/(n₀ + n_eff),
+    /// n_eff = (Σ w)²/Σ w². Returns K and n_eff.
+    ///
+    /// # Errors
+    /// As [`KrigingModel::output_covariance_cv`]; as
+    /// [`KrigingModel::variance_point`].
+    pub fn output_covariance_local(
+        &self,
+        x: &[f64],
+        cal: &VarianceCalibration,
+        power: f64,
+        prior_sites: f64,
+    ) -> Result<(OutputCovariance, f64)> {
+        self.check_linear_for_variance()?;
+        let d = self.dim;
+        let qii = self.loo_precision_diagonal()?;
+        let z = self.standardised_loo_residuals(&qii, cal)?;
+        let global = self.cv_covariance_from(&qii);
+        let xi = self.internal_x(x)?;
+        let xn: Vec<f64> = (0..d)
+            .map(|k| (xi[k] - self.x_mean[k]) / self.x_std[k])
+            .collect();
+        let (sigma, n_eff) = self.local_sigma(&xn, None, &z, &global, power, prior_sites);
+        Ok((self.output_covariance_with(&sigma)?, n_eff))
+    }
+
+    /// Mean log density (per site, additive constants included) of each
+    /// training site's standardised LOO residual z_j under N(0, Σ_x) with
+    /// Σ_x of [`KrigingModel::output_covariance_local`] at x_j built from
+    /// the *other* sites — the local covariance's own predictive score;
+    /// `power` = 0 with `prior_sites` = 0 scores the global Σ_CV.
+    ///
+    /// # Errors
+    /// As [`KrigingModel::output_covariance_local`]; a Σ_x that is not
+    /// positive definite.
+    pub fn local_covariance_score(
+        &self,
+        cal: &VarianceCalibration,
+        power: f64,
+        prior_sites: f64,
+    ) -> Result<f64> {
+        let (n, q, d) = (self.n_sites, self.n_kriged(), self.dim);
+        let qii = self.loo_precision_diagonal()?;
+        let z = self.standardised_loo_residuals(&qii, cal)?;
+        let global = self.cv_covariance_from(&qii);
+        let mut total = 0.0;
+        for j in 0..n {
+            let xn: Vec<f64> = (0..d).map(|k| self.sites[k * n + j]).collect();
+            let (sigma, _) = self.local_sigma(&xn, Some(j), &z, &global, power, prior_sites);
+            let white = Whitener::new(&sigma, q)?;
+            let zj: Vec<f64> = (0..q).map(|a| z[a * n + j]).collect();
+            total += -0.5
+                * (white.energy(&zj)
+                    + white.log_det()
+                    + white.rank as f64 * (2.0 * std::f64::consts::PI).ln());
+        }
+        Ok(total / n as f64)
+    }
+
+    /// z_i = s_i r_i/√(α v_i^β) of every site (q × n, column-major by
+    /// output): the LOO residuals r_i = γ_i/Q_ii standardised by their
+    /// calibrated variance, ~ N(0, Σ_CV) under the calibrated model.
+    fn standardised_loo_residuals(
+        &self,
+        qii: &[f64],
+        cal: &VarianceCalibration,
+    ) -> Result<Vec<f64>> {
+        let (n, q) = (self.n_sites, self.n_kriged());
+        let mut z = vec![0.0; q * n];
+        for i in 0..n {
+            let s2 = match self.output_scale {
+                Some(sc) => sc.check(&self.site_physical(i), "a training site")?.powi(2),
+                None => 1.0,
+            };
+            let f = s2.sqrt() / (qii[i] * cal.apply(s2 / qii[i]).sqrt());
+            for a in 0..q {
+                z[a * n + i] = self.gamma[a * n + i] * f;
+            }
+        }
+        Ok(z)
+    }
+
+    /// Σ_x at the normalised point `xn` (docs of
+    /// [`KrigingModel::output_covariance_local`]), leaving out site
+    /// `exclude`; and n_eff.
+    fn local_sigma(
+        &self,
+        xn: &[f64],
+        exclude: Option<usize>,
+        z: &[f64],
+        global: &[f64],
+        power: f64,
+        prior_sites: f64,
+    ) -> (Vec<f64>, f64) {
+        let (n, q, d) = (self.n_sites, self.n_kriged(), self.dim);
+        let mut dx = vec![0.0; d];
+        let mut local = vec![0.0; q * q];
+        let (mut sw, mut sw2) = (0.0, 0.0);
+        for i in 0..n {
+            if exclude == Some(i) {
+                continue;
+            }
+            for k in 0..d {
+                dx[k] = xn[k] - self.sites[k * n + i];
+            }
+            let w = self.correlation.value(&self.theta, &dx).powf(power);
+            if !(w > 0.0) {
+                continue;
+            }
+            for a in 0..q {
+                let za = w * z[a * n + i];
+                for b in 0..q {
+                    local[b * q + a] += za * z[b * n + i];
+                }
+            }
+            sw += w;
+            sw2 += w * w;
+        }
+        let n_eff = if sw2 > 0.0 { sw * sw / sw2 } else { 0.0 };
+        let sigma = global
+            .iter()
+            .zip(&local)
+            .map(|(g, l)| {
+                let l = if sw > 0.0 { l / sw } else { 0.0 };
+                (prior_sites * g + n_eff * l) / (prior_sites + n_eff)
+            })
+            .collect();
+        (sigma, n_eff)
+    }
+
     /// Σ_CV of [`KrigingModel::cv_process_covariance`] from the Q_ii.
     fn cv_covariance_from(&self, qii: &[f64]) -> Vec<f64> {
         let (n, q) = (self.n_sites, self.n_kriged());
@@ -742,6 +878,15 @@ impl Whitener {
             ));
         }
         Ok(Self { l, q, rank })
+    }
+
+    /// ln det Σ on Σ's span (the zero pivots left out).
+    fn log_det(&self) -> f64 {
+        (0..self.q)
+            .map(|j| self.l[j * self.q + j])
+            .filter(|&d| d > 0.0)
+            .map(|d| 2.0 * d.ln())
+            .sum()
     }
 
     /// gᵀΣ⁻¹g on Σ's span (forward substitution).
@@ -1878,6 +2023,92 @@ mod covariance_tests {
             );
         }
         assert!(model(None, false).score_loadings(&[1.0; 40]).is_none());
+    }
+
+    /// The local covariance reduces to the cross-validated one when it is
+    /// not local: every site weighted 1 (power 0) with v ↦ v (α = β = 1)
+    /// gives the mean of γ_iγ_iᵀ/Q_ii, which is Σ_CV; far from every site
+    /// (all weights underflow) the prior sites give Σ_CV alone. Its score
+    /// with every other site weighted 1 is the mean Gaussian log density of
+    /// each z_j under the mean of the others' z zᵀ, computed here densely.
+    #[test]
+    fn local_covariance_without_locality_is_the_cross_validated_one() {
+        let m = model(Some(0.99999), false);
+        let unit = VarianceCalibration {
+            alpha: 1.0,
+            beta: 1.0,
+            beta_se: 0.0,
+            nu: f64::INFINITY,
+            directions: Vec::new(),
+        };
+        let entries = |cov: OutputCovariance| {
+            let OutputCovariance::LowRank { m: mo, k, factor } = cov else {
+                panic!("a PCA model has a low-rank covariance");
+            };
+            (0..mo * mo)
+                .map(|ij| {
+                    let (i, j) = (ij / mo, ij % mo);
+                    (0..k)
+                        .map(|a| factor[a * mo + i] * factor[a * mo + j])
+                        .sum::<f64>()
+                })
+                .collect::<Vec<f64>>()
+        };
+        let cv = entries(m.output_covariance_cv().expect("cv"));
+        let big = cv.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        let (all, n_eff) = m
+            .output_covariance_local(&[0.8, 0.3], &unit, 0.0, 0.0)
+            .expect("local");
+        assert!((n_eff - m.n_sites as f64).abs() < 1e-9, "n_eff {n_eff}");
+        for (a, b) in entries(all).iter().zip(&cv) {
+            assert!((a - b).abs() <= 1e-9 * big, "{a} vs {b}");
+        }
+        let (far, n_far) = m
+            .output_covariance_local(&[1e3, 1e3], &unit, 1.0, 2.0)
+            .expect("far");
+        assert_eq!(n_far, 0.0);
+        for (a, b) in entries(far).iter().zip(&cv) {
+            assert!((a - b).abs() <= 1e-9 * big, "{a} vs {b}");
+        }
+        // A local neighbourhood changes K (the test would pass vacuously
+        // if the weights were ignored).
+        let (near, n_near) = m
+            .output_covariance_local(&[0.8, 0.3], &unit, 30.0, 0.0)
+            .expect("near");
+        assert!(n_near < 0.5 * m.n_sites as f64, "n_eff {n_near}");
+        let moved = entries(near)
+            .iter()
+            .zip(&cv)
+            .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        assert!(moved > 1e-3 * big, "{moved}");
+
+        // The score, densely: z_j = γ_j/√Q_jj (α = β = 1, no output scale).
+        let (n, q) = (m.n_sites, m.n_kriged());
+        let qii = m.loo_precision_diagonal().expect("qii");
+        let z =
+            |j: usize| -> Vec<f64> { (0..q).map(|a| m.gamma[a * n + j] / qii[j].sqrt()).collect() };
+        let mut direct = 0.0;
+        for j in 0..n {
+            let sigma = Mat::<f64>::from_fn(q, q, |a, b| {
+                (0..n)
+                    .filter(|&i| i != j)
+                    .map(|i| z(i)[a] * z(i)[b])
+                    .sum::<f64>()
+                    / (n - 1) as f64
+            });
+            use faer::prelude::Solve;
+            let llt = sigma.llt(faer::Side::Lower).expect("spd");
+            let zj = Mat::<f64>::from_fn(q, 1, |a, _| z(j)[a]);
+            let quad = (zj.transpose() * llt.solve(&zj))[(0, 0)];
+            let log_det: f64 = (0..q).map(|a| 2.0 * llt.L()[(a, a)].ln()).sum();
+            direct -= 0.5 * (quad + log_det + q as f64 * std::f64::consts::TAU.ln());
+        }
+        direct /= n as f64;
+        let score = m.local_covariance_score(&unit, 0.0, 0.0).expect("score");
+        assert!(
+            (score - direct).abs() <= 1e-9 * direct.abs(),
+            "{score} vs {direct}"
+        );
     }
 
     #[test]
