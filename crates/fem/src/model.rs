@@ -880,7 +880,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             _ => None,
         };
         Ok(Self {
-            lane_geometry: if K::LANES && settings.threads <= 1 {
+            lane_geometry: if K::LANES {
                 geometry
                     .chunks_exact(4)
                     .map(|g| K::lane_geometry([&g[0], &g[1], &g[2], &g[3]]))
@@ -1171,33 +1171,75 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         let np = K::POINTS;
         if let Some(pool) = &self.pool {
             let (committed, trial) = self.history.split();
-            let (mesh, material, geometry, u) =
-                (&self.mesh, &self.material, &self.geometry, &self.u);
+            let (mesh, material, geometry, lane_geometry, u) = (
+                &self.mesh,
+                &self.material,
+                &self.geometry,
+                &self.lane_geometry,
+                &self.u,
+            );
+            // One task per group of four elements, in lanes as in the
+            // serial loop below (so the outputs are bitwise the serial
+            // ones); a failing or short group one by one.
             let failures: Vec<Option<(usize, crate::element::PointFailure)>> = pool.install(|| {
                 use rayon::prelude::*;
                 self.element_outs
-                    .par_iter_mut()
-                    .zip(trial.par_chunks_mut(np))
+                    .par_chunks_mut(4)
+                    .zip(trial.par_chunks_mut(4 * np))
                     .enumerate()
-                    .map(|(e, (out, tr))| {
-                        let conn = mesh.connectivity(e);
-                        let mut ue = [0.0; 24];
-                        for k in 0..nd {
-                            ue[k] = u[dim * conn[k / dim] + k % dim];
+                    .map_init(K::LaneOutput::default, |lane_out, (g, (outs, tr))| {
+                        let e0 = 4 * g;
+                        let gather = |e: usize| {
+                            let conn = mesh.connectivity(e);
+                            let mut ue = [0.0; 24];
+                            for k in 0..nd {
+                                ue[k] = u[dim * conn[k / dim] + k % dim];
+                            }
+                            ue
+                        };
+                        if let (Some(lane_geo), Ok(four)) = (
+                            lane_geometry.get(g),
+                            <&mut [K::Output; 4]>::try_from(&mut *outs),
+                        ) {
+                            let ue: [[f64; 24]; 4] = std::array::from_fn(|l| gather(e0 + l));
+                            let mut chunks = tr.chunks_mut(np);
+                            let trial = std::array::from_fn(|_| chunks.next().expect("4 elements"));
+                            if K::evaluate_lanes(
+                                material,
+                                lane_geo,
+                                std::array::from_fn(|l| &ue[l][..nd]),
+                                std::array::from_fn(|l| {
+                                    &committed[np * (e0 + l)..np * (e0 + l + 1)]
+                                }),
+                                trial,
+                                dt,
+                                fbar,
+                                part,
+                                lane_out,
+                                four.each_mut(),
+                            ) {
+                                return None;
+                            }
                         }
-                        K::evaluate(
-                            material,
-                            &geometry[e],
-                            &ue[..nd],
-                            &committed[np * e..np * e + np],
-                            tr,
-                            dt,
-                            fbar,
-                            part,
-                            out,
+                        outs.iter_mut().zip(tr.chunks_mut(np)).enumerate().find_map(
+                            |(l, (out, tr))| {
+                                let e = e0 + l;
+                                let ue = gather(e);
+                                K::evaluate(
+                                    material,
+                                    &geometry[e],
+                                    &ue[..nd],
+                                    &committed[np * e..np * e + np],
+                                    tr,
+                                    dt,
+                                    fbar,
+                                    part,
+                                    out,
+                                )
+                                .err()
+                                .map(|f| (e, f))
+                            },
                         )
-                        .err()
-                        .map(|f| (e, f))
                     })
                     .collect()
             });
@@ -2373,6 +2415,68 @@ mod tests {
         // The check covered contact and the fluid coupling.
         assert!(kd.iter().all(|row| row.len() == neq));
         assert!(active > 0, "no node in contact");
+    }
+
+    /// The element loop in lanes (groups of four, serial or one group per
+    /// task on two threads) against the same loop one element at a time:
+    /// residual and tangent bitwise equal, for the cell material with a
+    /// committed history and a time step, on a mesh whose element count is
+    /// not a multiple of four (the short last group goes one by one).
+    #[test]
+    fn element_loop_in_lanes_is_bitwise_one_element_at_a_time() {
+        let shear = nlvid_model::Relaxation::from_named(
+            &nlvid_model::names::PRONY2,
+            &[1.0, 0.3, 0.3, 0.5, 10.0],
+        )
+        .unwrap();
+        let material = nlvid_material::PronyViscoelastic::cell(&shear, 1000.0).unwrap();
+        let build = |threads: usize| {
+            let mesh = crate::Mesh::graded_block(1.0, 0.8, 5, 3, 1.3).unwrap();
+            let settings = Settings {
+                threads,
+                ..Settings::default()
+            };
+            let mut model: Model<_, Axisymmetric> =
+                Model::build(mesh, material.clone(), &Parts::default(), settings).unwrap();
+            assert_eq!(model.mesh.element_count() % 4, 3);
+            assert!(
+                !model.lane_geometry.is_empty(),
+                "the cell material has lanes"
+            );
+            let ctl = Control::default();
+            // A committed history at half the displacement, then a trial
+            // step to the full one.
+            for (scale, commit) in [(0.5, true), (1.0, false)] {
+                for a in 0..model.mesh.node_count() {
+                    let x = model.mesh.position(a);
+                    model.u[2 * a] = scale * 0.04 * x[0] * (1.0 + x[1]);
+                    model.u[2 * a + 1] = -scale * 0.06 * x[1] * (1.0 + 0.5 * x[0] * x[0]);
+                }
+                model.assemble(&ctl, 0.2, true).unwrap();
+                if commit {
+                    model.history.commit();
+                }
+            }
+            model
+        };
+        let bits = |m: &Model<_, Axisymmetric>| -> Vec<u64> {
+            m.residual
+                .iter()
+                .chain(&m.system.values)
+                .map(|x| x.to_bits())
+                .collect()
+        };
+        let ctl = Control::default();
+        for threads in [1, 2] {
+            let mut model = build(threads);
+            let lanes = bits(&model);
+            model.lane_geometry.clear();
+            model.assemble(&ctl, 0.2, true).unwrap();
+            assert!(
+                lanes == bits(&model),
+                "{threads} thread(s): lanes differ from one element at a time"
+            );
+        }
     }
 
     #[test]
