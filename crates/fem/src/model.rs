@@ -325,11 +325,11 @@ pub struct Settings {
     pub output_rejection: f64,
     /// Threads for the element loop (material updates); 0 or 1 = serial. The
     /// result is bitwise the same for any number (element outputs are
-    /// computed in parallel, then added in element order). The serial loop
+    /// computed in parallel, then added in element order). The loop
     /// evaluates four elements at a time, one per SIMD lane, where the
     /// element kind and material have a lane form (the axisymmetric Q4 with
     /// this crate's cell materials; docs/theory/fem.md, "Session 20"),
-    /// bitwise the one-element results; the threaded loop one element per
+    /// bitwise the one-element results; threaded, one group of four per
     /// task. (No setting of its own: a field here would enter the models'
     /// identity, and with it the study hash of every run store, for a choice
     /// that changes no result.)
