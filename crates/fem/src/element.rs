@@ -17,7 +17,9 @@
 //! Simo–Taylor–Pister with the pressure condensed out.
 
 use crate::fbar::{FbarMaterialPoint, FbarPoint, PointUpdate};
-use crate::kind::LocalOutput;
+use crate::local::LocalOutput;
+#[doc(hidden)]
+pub use crate::local::{PointFailure, TangentPart};
 use nlvid_material::{F64x4, Lane, Mat3, Material3, MaterialError};
 
 /// 2×2 Gauss points (ξ, η); all weights are 1.
@@ -230,265 +232,9 @@ pub(crate) fn distorted_element() -> ([PointGeometry; 4], [f64; 8]) {
     (element_geometry(&x), u)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::fbar::fbar_kernel;
-
-    /// The kernel on [`distorted_element`] at `u` from fresh history over
-    /// Δt = 0.1.
-    fn evaluate<M: Material3>(
-        mat: &M,
-        u: &[f64; 8],
-        fbar: bool,
-        part: TangentPart,
-    ) -> ElementOutput {
-        let (geo, _) = distorted_element();
-        let sn: Vec<M::State> = (0..4).map(|_| mat.initial_state()).collect();
-        let mut tr = sn.clone();
-        let mut out = ElementOutput::zero();
-        fbar_kernel(mat, &geo, u, &sn, &mut tr, 0.1, fbar, part, &mut out).unwrap();
-        out
-    }
-
-    fn tangent_fd(fbar: bool) {
-        let mat = crate::reference::NeoHookean {
-            mu: 1.0,
-            kappa: 30.0,
-        };
-        let (_, u) = distorted_element();
-        let out = evaluate(&mat, &u, fbar, TangentPart::Full);
-        let h = 1e-7;
-        for c in 0..8 {
-            let mut up = u;
-            let mut um = u;
-            up[c] += h;
-            um[c] -= h;
-            let op = evaluate(&mat, &up, fbar, TangentPart::None);
-            let om = evaluate(&mat, &um, fbar, TangentPart::None);
-            for r in 0..8 {
-                let fd = (op.r[r] - om.r[r]) / (2.0 * h);
-                assert!(
-                    (fd - out.k[r][c]).abs() < 1e-5 * (1.0 + fd.abs()),
-                    "K[{r}][{c}] = {} vs fd {fd}",
-                    out.k[r][c]
-                );
-            }
-        }
-    }
-
-    #[test]
-    fn fbar_tangent_matches_finite_differences_of_residual() {
-        tangent_fd(true);
-    }
-
-    #[test]
-    fn displacement_tangent_matches_finite_differences_of_residual() {
-        tangent_fd(false);
-    }
-
-    fn compare_with_direct_form<M: nlvid_material::Material3>(mat: &M, fbar: bool) {
-        let (geo, u) = distorted_element();
-        let sn: Vec<M::State> = (0..4).map(|_| mat.initial_state()).collect();
-        let mut tr = sn.clone();
-        let fast = evaluate(mat, &u, fbar, TangentPart::Full);
-        let mut direct = ElementOutput::zero();
-        fbar_element_reference(mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut direct).unwrap();
-        let kmax = direct
-            .k
-            .iter()
-            .flatten()
-            .fold(0.0f64, |m, x| m.max(x.abs()));
-        let rmax = direct.r.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        for r in 0..8 {
-            assert!((fast.r[r] - direct.r[r]).abs() <= 1e-13 * rmax, "r[{r}]");
-            for c in 0..8 {
-                assert!(
-                    (fast.k[r][c] - direct.k[r][c]).abs() <= 1e-12 * kmax,
-                    "K[{r}][{c}] = {} vs direct {}",
-                    fast.k[r][c],
-                    direct.k[r][c]
-                );
-            }
-        }
-    }
-
-    /// G(t) of the AFM cell model in the tests below: G0 = 1 (C1 = 0.5),
-    /// g1 = g2 = 0.3, τ1 = 0.5, τ2 = 10.
-    fn afm_cell_shear() -> nlvid_model::Relaxation {
-        nlvid_model::Relaxation::from_named(
-            &nlvid_model::names::PRONY2,
-            &[1.0, 0.3, 0.3, 0.5, 10.0],
-        )
-        .unwrap()
-    }
-
-    #[test]
-    fn regrouped_tangent_equals_direct_form() {
-        let neo = crate::reference::NeoHookean {
-            mu: 1.0,
-            kappa: 30.0,
-        };
-        compare_with_direct_form(&neo, true);
-        compare_with_direct_form(&neo, false);
-        // A history-dependent material of the `material` crate (the AFM cell
-        // model), evaluated with a time step so the viscous terms enter.
-        let cell = nlvid_material::PronyViscoelastic::cell(&afm_cell_shear(), 1000.0).unwrap();
-        compare_with_direct_form(&cell, true);
-    }
-
-    /// Four different elements through [`fbar_kernel_lanes`] and one by one
-    /// through [`fbar_kernel`]: outputs and trial histories bitwise equal,
-    /// for the cell material with history and a time step (and without
-    /// Prony terms), every tangent part, F-bar and plain; a group with an
-    /// inverted element is refused.
-    #[test]
-    fn lanes_are_bitwise_the_one_element_kernel() {
-        use nlvid_material::{PointState, PronyViscoelastic};
-        let (_, u0) = distorted_element();
-        let base = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
-        let geo: [[PointGeometry; 4]; 4] = std::array::from_fn(|e| {
-            element_geometry(&std::array::from_fn(|a| {
-                let s = ((3 * e + a) as f64 * 1.7).sin();
-                [
-                    base[a][0] + 0.3 * e as f64 + 0.05 * s,
-                    base[a][1] + 0.04 * s,
-                ]
-            }))
-        });
-        let lane_geo = [0, 1, 2, 3].map(|q| PointGeometry::lanes(geo.each_ref().map(|g| &g[q])));
-        let us: [[f64; 8]; 4] = std::array::from_fn(|e| {
-            std::array::from_fn(|k| u0[k] * (1.0 - 0.2 * e as f64) + 0.01 * (k + e) as f64)
-        });
-        let bits = |o: &ElementOutput| {
-            let mut v: Vec<u64> = o.r.iter().map(|x| x.to_bits()).collect();
-            v.extend(o.k.iter().flatten().map(|x| x.to_bits()));
-            v
-        };
-        let elastic = nlvid_model::Relaxation::new(
-            nlvid_model::names::G0,
-            1.0,
-            nlvid_model::Prony::elastic(),
-        )
-        .unwrap();
-        for shear in [afm_cell_shear(), elastic] {
-            let cell = PronyViscoelastic::cell(&shear, 1000.0).unwrap();
-            // History after one step to half the displacement.
-            let fresh: Vec<_> = (0..4).map(|_| cell.initial_state()).collect();
-            let mut sn = [(); 4].map(|_| fresh.clone());
-            for e in 0..4 {
-                let half = us[e].map(|x| 0.5 * x);
-                let mut out = ElementOutput::zero();
-                let part = TangentPart::None;
-                fbar_kernel(
-                    &cell, &geo[e], &half, &fresh, &mut sn[e], 0.3, true, part, &mut out,
-                )
-                .unwrap();
-            }
-            // The four elements at `u` through the lanes: whether the group
-            // was accepted, the outputs and the trial histories.
-            let lanes_at = |u: &[[f64; 8]; 4], fbar: bool, part: TangentPart| {
-                let mut tr = sn.clone();
-                let mut out = [ElementOutput::zero(); 4];
-                let [t0, t1, t2, t3] = &mut tr;
-                let [o0, o1, o2, o3] = &mut out;
-                let ok = fbar_kernel_lanes(
-                    &cell,
-                    &lane_geo,
-                    u.each_ref().map(|u| &u[..]),
-                    sn.each_ref().map(|s| &s[..]),
-                    [&mut t0[..], &mut t1[..], &mut t2[..], &mut t3[..]],
-                    0.2,
-                    fbar,
-                    part,
-                    &mut Default::default(),
-                    [o0, o1, o2, o3],
-                );
-                (ok, out, tr)
-            };
-            for fbar in [true, false] {
-                for part in [TangentPart::None, TangentPart::Full, TangentPart::Lower] {
-                    let mut tr_one = sn.clone();
-                    let mut one = [ElementOutput::zero(); 4];
-                    for e in 0..4 {
-                        fbar_kernel(
-                            &cell,
-                            &geo[e],
-                            &us[e],
-                            &sn[e],
-                            &mut tr_one[e],
-                            0.2,
-                            fbar,
-                            part,
-                            &mut one[e],
-                        )
-                        .unwrap();
-                    }
-                    let (ok, lanes, tr_lanes) = lanes_at(&us, fbar, part);
-                    assert!(ok);
-                    for e in 0..4 {
-                        assert_eq!(bits(&lanes[e]), bits(&one[e]), "element {e} {part:?}");
-                        assert_eq!(format!("{:?}", tr_lanes[e]), format!("{:?}", tr_one[e]));
-                    }
-                }
-            }
-            // An inverted element in the group: refused (the caller then
-            // evaluates the four one by one and reports the error).
-            let mut bad = us;
-            // The top nodes below the bottom ones: F_zZ < 0.
-            bad[2][5] = -3.0;
-            bad[2][7] = -3.0;
-            let (ok, _, mut tr) = lanes_at(&bad, true, TangentPart::Full);
-            assert!(!ok);
-            let mut one = ElementOutput::zero();
-            let (sn2, tr2) = (&sn[2], &mut tr[2]);
-            assert!(
-                fbar_kernel(
-                    &cell,
-                    &geo[2],
-                    &bad[2],
-                    sn2,
-                    tr2,
-                    0.2,
-                    true,
-                    TangentPart::Full,
-                    &mut one
-                )
-                .is_err()
-            );
-        }
-    }
-
-    #[test]
-    fn weights_integrate_ring_volume() {
-        // Square [1,2]×[0,1]: volume of the ring = π (2² − 1²) · 1.
-        let x = [[1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0]];
-        let v: f64 = element_geometry(&x).iter().map(|g| g.weight).sum();
-        assert!((v - 3.0 * std::f64::consts::PI).abs() < 1e-12);
-    }
-}
-
 /// Residual and tangent of one element (8 dofs u_r0, u_z0, u_r1, …).
 #[doc(hidden)]
-pub type ElementOutput = crate::kind::LocalOutput<8>;
-
-/// Which part of the element tangent to compute.
-#[doc(hidden)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TangentPart {
-    /// Residual only.
-    None,
-    /// The full 8×8 matrix.
-    Full,
-    /// Entries `k[r][c]` with `c ≤ r` only (the rest is left zero): for a
-    /// symmetric tangent stored as one triangle (test
-    /// `lower_tangent_is_the_lower_triangle_of_a_symmetric_full_tangent`).
-    Lower,
-}
-
-/// Where an element evaluation failed: Gauss point and the material error.
-#[doc(hidden)]
-pub type PointFailure = (usize, nlvid_material::MaterialError);
+pub type ElementOutput = LocalOutput<8>;
 
 /// The Q4 point in the shared F-bar kernel ([`crate::fbar::fbar_kernel`]):
 /// F stored as (rR, rZ, zR, zZ, θθ), B used through its sparsity (each
@@ -839,4 +585,242 @@ pub(crate) fn fbar_element_reference<M: nlvid_material::Material3>(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fbar::fbar_kernel;
+
+    /// The kernel on [`distorted_element`] at `u` from fresh history over
+    /// Δt = 0.1.
+    fn evaluate<M: Material3>(
+        mat: &M,
+        u: &[f64; 8],
+        fbar: bool,
+        part: TangentPart,
+    ) -> ElementOutput {
+        let (geo, _) = distorted_element();
+        let sn: Vec<M::State> = (0..4).map(|_| mat.initial_state()).collect();
+        let mut tr = sn.clone();
+        let mut out = ElementOutput::zero();
+        fbar_kernel(mat, &geo, u, &sn, &mut tr, 0.1, fbar, part, &mut out).unwrap();
+        out
+    }
+
+    fn tangent_fd(fbar: bool) {
+        let mat = crate::reference::NeoHookean {
+            mu: 1.0,
+            kappa: 30.0,
+        };
+        let (_, u) = distorted_element();
+        let out = evaluate(&mat, &u, fbar, TangentPart::Full);
+        let h = 1e-7;
+        for c in 0..8 {
+            let mut up = u;
+            let mut um = u;
+            up[c] += h;
+            um[c] -= h;
+            let op = evaluate(&mat, &up, fbar, TangentPart::None);
+            let om = evaluate(&mat, &um, fbar, TangentPart::None);
+            for r in 0..8 {
+                let fd = (op.r[r] - om.r[r]) / (2.0 * h);
+                assert!(
+                    (fd - out.k[r][c]).abs() < 1e-5 * (1.0 + fd.abs()),
+                    "K[{r}][{c}] = {} vs fd {fd}",
+                    out.k[r][c]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn fbar_tangent_matches_finite_differences_of_residual() {
+        tangent_fd(true);
+    }
+
+    #[test]
+    fn displacement_tangent_matches_finite_differences_of_residual() {
+        tangent_fd(false);
+    }
+
+    fn compare_with_direct_form<M: nlvid_material::Material3>(mat: &M, fbar: bool) {
+        let (geo, u) = distorted_element();
+        let sn: Vec<M::State> = (0..4).map(|_| mat.initial_state()).collect();
+        let mut tr = sn.clone();
+        let fast = evaluate(mat, &u, fbar, TangentPart::Full);
+        let mut direct = ElementOutput::zero();
+        fbar_element_reference(mat, &geo, &u, &sn, &mut tr, 0.1, fbar, true, &mut direct).unwrap();
+        let kmax = direct
+            .k
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, x| m.max(x.abs()));
+        let rmax = direct.r.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        for r in 0..8 {
+            assert!((fast.r[r] - direct.r[r]).abs() <= 1e-13 * rmax, "r[{r}]");
+            for c in 0..8 {
+                assert!(
+                    (fast.k[r][c] - direct.k[r][c]).abs() <= 1e-12 * kmax,
+                    "K[{r}][{c}] = {} vs direct {}",
+                    fast.k[r][c],
+                    direct.k[r][c]
+                );
+            }
+        }
+    }
+
+    /// G(t) of the AFM cell model in the tests below: G0 = 1 (C1 = 0.5),
+    /// g1 = g2 = 0.3, τ1 = 0.5, τ2 = 10.
+    fn afm_cell_shear() -> nlvid_model::Relaxation {
+        nlvid_model::Relaxation::from_named(
+            &nlvid_model::names::PRONY2,
+            &[1.0, 0.3, 0.3, 0.5, 10.0],
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn regrouped_tangent_equals_direct_form() {
+        let neo = crate::reference::NeoHookean {
+            mu: 1.0,
+            kappa: 30.0,
+        };
+        compare_with_direct_form(&neo, true);
+        compare_with_direct_form(&neo, false);
+        // A history-dependent material of the `material` crate (the AFM cell
+        // model), evaluated with a time step so the viscous terms enter.
+        let cell = nlvid_material::PronyViscoelastic::cell(&afm_cell_shear(), 1000.0).unwrap();
+        compare_with_direct_form(&cell, true);
+    }
+
+    /// Four different elements through [`fbar_kernel_lanes`] and one by one
+    /// through [`fbar_kernel`]: outputs and trial histories bitwise equal,
+    /// for the cell material with history and a time step (and without
+    /// Prony terms), every tangent part, F-bar and plain; a group with an
+    /// inverted element is refused.
+    #[test]
+    fn lanes_are_bitwise_the_one_element_kernel() {
+        use nlvid_material::{PointState, PronyViscoelastic};
+        let (_, u0) = distorted_element();
+        let base = [[0.5, 0.0], [1.4, 0.1], [1.3, 1.0], [0.4, 0.8]];
+        let geo: [[PointGeometry; 4]; 4] = std::array::from_fn(|e| {
+            element_geometry(&std::array::from_fn(|a| {
+                let s = ((3 * e + a) as f64 * 1.7).sin();
+                [
+                    base[a][0] + 0.3 * e as f64 + 0.05 * s,
+                    base[a][1] + 0.04 * s,
+                ]
+            }))
+        });
+        let lane_geo = [0, 1, 2, 3].map(|q| PointGeometry::lanes(geo.each_ref().map(|g| &g[q])));
+        let us: [[f64; 8]; 4] = std::array::from_fn(|e| {
+            std::array::from_fn(|k| u0[k] * (1.0 - 0.2 * e as f64) + 0.01 * (k + e) as f64)
+        });
+        let bits = |o: &ElementOutput| {
+            let mut v: Vec<u64> = o.r.iter().map(|x| x.to_bits()).collect();
+            v.extend(o.k.iter().flatten().map(|x| x.to_bits()));
+            v
+        };
+        let elastic = nlvid_model::Relaxation::new(
+            nlvid_model::names::G0,
+            1.0,
+            nlvid_model::Prony::elastic(),
+        )
+        .unwrap();
+        for shear in [afm_cell_shear(), elastic] {
+            let cell = PronyViscoelastic::cell(&shear, 1000.0).unwrap();
+            // History after one step to half the displacement.
+            let fresh: Vec<_> = (0..4).map(|_| cell.initial_state()).collect();
+            let mut sn = [(); 4].map(|_| fresh.clone());
+            for e in 0..4 {
+                let half = us[e].map(|x| 0.5 * x);
+                let mut out = ElementOutput::zero();
+                let part = TangentPart::None;
+                fbar_kernel(
+                    &cell, &geo[e], &half, &fresh, &mut sn[e], 0.3, true, part, &mut out,
+                )
+                .unwrap();
+            }
+            // The four elements at `u` through the lanes: whether the group
+            // was accepted, the outputs and the trial histories.
+            let lanes_at = |u: &[[f64; 8]; 4], fbar: bool, part: TangentPart| {
+                let mut tr = sn.clone();
+                let mut out = [ElementOutput::zero(); 4];
+                let [t0, t1, t2, t3] = &mut tr;
+                let [o0, o1, o2, o3] = &mut out;
+                let ok = fbar_kernel_lanes(
+                    &cell,
+                    &lane_geo,
+                    u.each_ref().map(|u| &u[..]),
+                    sn.each_ref().map(|s| &s[..]),
+                    [&mut t0[..], &mut t1[..], &mut t2[..], &mut t3[..]],
+                    0.2,
+                    fbar,
+                    part,
+                    &mut Default::default(),
+                    [o0, o1, o2, o3],
+                );
+                (ok, out, tr)
+            };
+            for fbar in [true, false] {
+                for part in [TangentPart::None, TangentPart::Full, TangentPart::Lower] {
+                    let mut tr_one = sn.clone();
+                    let mut one = [ElementOutput::zero(); 4];
+                    for e in 0..4 {
+                        fbar_kernel(
+                            &cell,
+                            &geo[e],
+                            &us[e],
+                            &sn[e],
+                            &mut tr_one[e],
+                            0.2,
+                            fbar,
+                            part,
+                            &mut one[e],
+                        )
+                        .unwrap();
+                    }
+                    let (ok, lanes, tr_lanes) = lanes_at(&us, fbar, part);
+                    assert!(ok);
+                    for e in 0..4 {
+                        assert_eq!(bits(&lanes[e]), bits(&one[e]), "element {e} {part:?}");
+                        assert_eq!(format!("{:?}", tr_lanes[e]), format!("{:?}", tr_one[e]));
+                    }
+                }
+            }
+            // An inverted element in the group: refused (the caller then
+            // evaluates the four one by one and reports the error).
+            let mut bad = us;
+            // The top nodes below the bottom ones: F_zZ < 0.
+            bad[2][5] = -3.0;
+            bad[2][7] = -3.0;
+            let (ok, _, mut tr) = lanes_at(&bad, true, TangentPart::Full);
+            assert!(!ok);
+            let mut one = ElementOutput::zero();
+            let (sn2, tr2) = (&sn[2], &mut tr[2]);
+            assert!(
+                fbar_kernel(
+                    &cell,
+                    &geo[2],
+                    &bad[2],
+                    sn2,
+                    tr2,
+                    0.2,
+                    true,
+                    TangentPart::Full,
+                    &mut one
+                )
+                .is_err()
+            );
+        }
+    }
+
+    #[test]
+    fn weights_integrate_ring_volume() {
+        // Square [1,2]×[0,1]: volume of the ring = π (2² − 1²) · 1.
+        let x = [[1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0]];
+        let v: f64 = element_geometry(&x).iter().map(|g| g.weight).sum();
+        assert!((v - 3.0 * std::f64::consts::PI).abs() < 1e-12);
+    }
 }

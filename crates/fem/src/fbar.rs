@@ -20,8 +20,7 @@
 //! element is the stationary point of `∫ Ψ(F̄(u)) dV₀` (module docs of
 //! [`crate::element`] and [`crate::hex`]).
 
-use crate::element::{PointFailure, TangentPart};
-use crate::kind::{LocalOutput, bad_length};
+use crate::local::{LocalOutput, PointFailure, TangentPart, bad_length};
 use nlvid_material::{Lane, Mat3, Material3, MaterialError};
 
 /// One Gauss point of an element whose deformation gradient is stored as

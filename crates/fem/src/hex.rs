@@ -159,7 +159,7 @@ pub fn element_geometry(x: &[[f64; 3]; 8]) -> std::result::Result<[HexPoint; 8],
 
 /// Residual and tangent of one hexahedron (dof `3a + i`).
 #[doc(hidden)]
-pub type HexOutput = crate::kind::LocalOutput<DOFS>;
+pub type HexOutput = crate::local::LocalOutput<DOFS>;
 
 /// J = det F, its gradient ∂J/∂F (the cofactor J F⁻ᵀ) and Hessian
 /// ∂²J/∂F_iJ∂F_kL = ε_ikm ε_JLN F_mN, row-major indices `3i+J`.
@@ -314,8 +314,8 @@ impl FbarMaterialPoint<9, DOFS> for HexPoint {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::element::TangentPart;
     use crate::fbar::{fbar_energy as element_energy, fbar_kernel as fbar_hex};
+    use crate::local::TangentPart;
     use crate::reference::NeoHookean;
     use nlvid_material::PointState;
 

@@ -9,69 +9,13 @@
 //! Everything else in the model (supports, rigid planes, the fluid cavity,
 //! the sparse solver, Newton and the time stepping) is shared.
 
-use crate::element::{ElementOutput, PointFailure, PointGeometry, TangentPart};
+use crate::element::{ElementOutput, PointGeometry};
 use crate::fbar::{fbar_energy, fbar_kernel};
 use crate::hex::{HexOutput, HexPoint};
+use crate::local::{Local, LocalOutput, PointFailure, TangentPart};
 use crate::sets::NamedSets;
 use crate::{FemError, Mesh, Mesh3, Result};
 use nlvid_material::{F64x4, Mat3, Material3};
-
-/// Residual and tangent of one element with `ND` dofs (every element
-/// kind's local output).
-/// (`T` = [`nlvid_material::F64x4`]: four elements, one per lane.)
-#[doc(hidden)]
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LocalOutput<const ND: usize, T = f64> {
-    /// Internal force ∂W/∂u (N).
-    pub r: [T; ND],
-    /// Tangent ∂r/∂u (N/m).
-    pub k: [[T; ND]; ND],
-}
-
-impl<const ND: usize> LocalOutput<ND> {
-    /// All zero.
-    pub fn zero() -> Self {
-        Self {
-            r: [0.0; ND],
-            k: [[0.0; ND]; ND],
-        }
-    }
-}
-
-impl<const ND: usize> Default for LocalOutput<ND> {
-    fn default() -> Self {
-        Self::zero()
-    }
-}
-
-impl<const ND: usize> Default for LocalOutput<ND, F64x4> {
-    fn default() -> Self {
-        Self {
-            r: [F64x4::default(); ND],
-            k: [[F64x4::default(); ND]; ND],
-        }
-    }
-}
-
-/// What the model reads of an element's output ([`LocalOutput`]).
-#[doc(hidden)]
-pub trait Local: Clone + Send + Default {
-    /// The element residual.
-    fn residual(&self) -> &[f64];
-    /// Row `a` of the element tangent.
-    fn tangent_row(&self, a: usize) -> &[f64];
-}
-
-impl<const ND: usize> Local for LocalOutput<ND> {
-    #[inline]
-    fn residual(&self) -> &[f64] {
-        &self.r
-    }
-    #[inline]
-    fn tangent_row(&self, a: usize) -> &[f64] {
-        &self.k[a]
-    }
-}
 
 /// Axisymmetric solids (module docs).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -336,14 +280,6 @@ pub trait ElementKind<M: Material3>: Send + Sync + 'static {
     /// `Σ_q w_q ψ(F̄_q)` of one element for a strain-energy density `psi`.
     #[doc(hidden)]
     fn energy(geometry: &Self::Geometry, u: &[f64], fbar: bool, psi: &dyn Fn(&Mat3) -> f64) -> f64;
-}
-
-/// The error of a dof vector of the wrong length `n`.
-pub(crate) fn bad_length(n: usize) -> PointFailure {
-    (
-        0,
-        nlvid_material::MaterialError::Deformation(format!("element dof vector has {n} entries")),
-    )
 }
 
 impl<M: Material3> ElementKind<M> for Axisymmetric {

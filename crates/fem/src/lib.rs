@@ -59,6 +59,7 @@ pub mod hex;
 mod history;
 mod kind;
 mod ldlt;
+mod local;
 pub mod membrane;
 pub mod mesh;
 pub mod mesh3;

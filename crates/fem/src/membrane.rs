@@ -25,8 +25,9 @@
 //! Principal directions: without torsion the meridian and the hoop are
 //! principal, so the update in principal stretches is exact.
 
-use crate::element::{PointFailure, TangentPart};
-use crate::kind::{ElementKind, Topology, bad_length};
+use crate::kind::{ElementKind, Topology};
+use crate::local::bad_length;
+use crate::local::{PointFailure, TangentPart};
 use crate::sets::NamedSets;
 use crate::{FemError, Model, Result};
 use nlvid_material::{Mat3, Material3, MaterialError, MembraneMaterial};
@@ -217,7 +218,7 @@ pub struct MembraneGeometry {
 
 /// Residual and tangent of one membrane element (dofs r₁, z₁, r₂, z₂; the
 /// tangent full, the model reads the triangle it stores).
-pub type MembraneOutput = crate::kind::LocalOutput<4>;
+pub type MembraneOutput = crate::local::LocalOutput<4>;
 
 fn geometry(x: [[f64; 2]; 2], thickness: f64) -> MembraneGeometry {
     let length = (x[1][0] - x[0][0]).hypot(x[1][1] - x[0][1]);

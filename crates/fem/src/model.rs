@@ -27,9 +27,9 @@
 
 use crate::cavity::{quad_area_normals, quad_volume, segment_area_normals, segment_volume};
 use crate::contact::{self, ContactSurface, Obstacle};
-use crate::element::TangentPart;
 use crate::history::History;
 use crate::kind::{Axisymmetric, CavityCells, ElementKind, Solid, Topology};
+use crate::local::TangentPart;
 use crate::sparse::{NO_SLOT, SparseSystem};
 use crate::{FemError, NonConvergence, Result};
 use nlvid_material::{Mat3, Material3};
@@ -1181,7 +1181,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             // One task per group of four elements, in lanes as in the
             // serial loop below (so the outputs are bitwise the serial
             // ones); a failing or short group one by one.
-            let failures: Vec<Option<(usize, crate::element::PointFailure)>> = pool.install(|| {
+            let failures: Vec<Option<(usize, crate::local::PointFailure)>> = pool.install(|| {
                 use rayon::prelude::*;
                 self.element_outs
                     .par_chunks_mut(4)

@@ -36,94 +36,16 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::build::{Admissibility, BuildOptions, MetaModel, build_into, load};
+/// Read with the rest of `[design]` ([`crate::doe::DesignSettings`]).
+pub use crate::doe::InfillSettings;
+
 use crate::doe::Design;
 use crate::error::{Result, SurrogateError};
 use crate::kriging::{KrigingModel, KrigingSettings, OutputScale, VariancePoint};
 use crate::store::{RunStore, StoreMeta};
 use crate::{Correlation, Regression};
 
-/// `[design.infill]` of a build study.
-///
-/// ```toml
-/// [design]
-/// n_train = 300              # with infill: the budget of training runs
-/// [design.infill]
-/// initial = 100              # Latin hypercube to start from
-/// batch = 10                 # runs added per round
-/// target_max_error = 0.01    # stop when the max checking error is ≤ 1 %
-/// proportional_to = "G0"     # outputs ∝ this parameter (OutputScale)
-/// pca = 0.999999             # output principal components kept
-/// candidates = 4000          # candidate points per round
-/// ```
-#[derive(Debug, Clone, PartialEq)]
-pub struct InfillSettings {
-    /// Size of the starting Latin hypercube.
-    pub initial: usize,
-    /// Runs added per round.
-    pub batch: usize,
-    /// Stop when the max checking error (eq. 4.4; the max predicted error
-    /// without a checking set) is at most this fraction.
-    pub target_max_error: Option<f64>,
-    /// Candidate points per round.
-    pub candidates: usize,
-    /// Index of the parameter every output is proportional to.
-    pub proportional_to: Option<usize>,
-    /// Energy of the output principal components kept in the fits.
-    pub pca_energy: Option<f64>,
-}
-
 impl InfillSettings {
-    /// Reads `[design.infill]` for parameters `names` and budget `n_train`.
-    ///
-    /// # Errors
-    /// Missing `initial`, `initial` > `n_train`, values out of range, an
-    /// unknown parameter in `proportional_to` (file, line, key).
-    pub fn from_section(
-        s: &mut nlvid_study::Section,
-        names: &[String],
-        n_train: usize,
-    ) -> nlvid_study::Result<Self> {
-        use nlvid_study::Bounds;
-        let initial = s.req_usize("initial", Bounds::closed(2.0, 1e7))?;
-        if initial > n_train {
-            return Err(s.invalid(
-                "initial",
-                format!("{initial} starting runs exceed the budget n_train = {n_train}"),
-            ));
-        }
-        let batch = s
-            .opt_usize("batch", Bounds::closed(1.0, 1e6))?
-            .unwrap_or(10);
-        let target_max_error = s.opt_f64("target_max_error", Bounds::open(0.0, 1.0))?;
-        let candidates = s
-            .opt_usize("candidates", Bounds::closed(10.0, 1e7))?
-            .unwrap_or(4000);
-        let proportional_to = match s.opt_str("proportional_to")? {
-            None => None,
-            Some(p) => Some(names.iter().position(|n| *n == p).ok_or_else(|| {
-                s.invalid(
-                    "proportional_to",
-                    format!(
-                        "`{p}` is not a parameter (parameters: {})",
-                        names.join(", ")
-                    ),
-                )
-            })?),
-        };
-        let pca_energy = Some(
-            s.opt_f64("pca", Bounds::open_closed(0.0, 1.0))?
-                .unwrap_or(1.0 - 1e-6),
-        );
-        Ok(Self {
-            initial,
-            batch,
-            target_max_error,
-            candidates,
-            proportional_to,
-            pca_energy,
-        })
-    }
-
     /// The Kriging fit of every round: gauss/poly1 (the best of the
     /// measured choices, docs/theory/surrogate.md), log-axis parameters
     /// kriged in ln x, the output scale and PCA of these settings.
