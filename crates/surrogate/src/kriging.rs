@@ -26,10 +26,12 @@ use crate::regression::Regression;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+mod calibration;
 mod reduced;
 mod variance;
 
-pub use variance::{CalibrationData, OutputCovariance, VarianceCalibration, VariancePoint};
+pub use calibration::{CalibrationData, VarianceCalibration};
+pub use variance::{OutputCovariance, VariancePoint};
 
 /// How θ is chosen.
 #[derive(Debug, Clone)]
