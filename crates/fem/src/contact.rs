@@ -1,7 +1,7 @@
 //! Frictionless penalty contact of a surface polyline with a rigid sphere
 //! (the AFM probe, moving along the axis with the unknown w),
 //! **integrated along the surface segments** (axisymmetric models; the
-//! rigid planes of 2D and 3D models keep nodal penalties, `model.rs`).
+//! rigid planes of 2D and 3D models keep nodal penalties, `model/assemble.rs`).
 //!
 //! Potential: Π_c = ∫_Γ ½ κ ⟨−g⟩² dA₀ with dA₀ = 2π r dS the reference
 //! area, κ = `penalty` · G / L the pressure per unit penetration (G the
