@@ -3,6 +3,7 @@
 //! element outputs into the global residual and tangent.
 
 use super::*;
+use crate::local::PointFailure;
 
 impl<M: Material3, K: ElementKind<M>> Model<M, K> {
     pub(super) fn assemble(&mut self, ctl: &Control, dt: f64, tangent: bool) -> Result<Assembly> {
@@ -37,170 +38,81 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         let dim = K::DIM;
         let nd = K::NODES * dim;
         let np = K::POINTS;
-        if let Some(pool) = &self.pool {
-            let (committed, trial) = self.history.split();
-            let (mesh, material, geometry, lane_geometry, u) = (
-                &self.mesh,
-                &self.material,
-                &self.geometry,
-                &self.lane_geometry,
-                &self.u,
+        let ne = self.mesh.element_count();
+        let Self {
+            mesh,
+            material,
+            geometry,
+            lane_geometry,
+            u,
+            history,
+            pool,
+            element_outs,
+            element_out,
+            lane_out,
+            elem_slots,
+            residual,
+            system,
+            ..
+        } = self;
+        let (committed, trial) = history.split();
+        let elements = ElementLoop::<M, K> {
+            mesh,
+            material,
+            geometry,
+            lane_geometry,
+            u,
+            committed,
+            dt,
+            fbar,
+            part,
+        };
+        let failure = |(element, (point, source))| FemError::Material {
+            element,
+            point,
+            source,
+        };
+        let mut add = |e: usize, out: &K::Output| {
+            scatter::<M, K>(
+                mesh.connectivity(e),
+                out,
+                &elem_slots[nd * nd * e..nd * nd * (e + 1)],
+                tangent,
+                residual,
+                &mut system.values,
+                &mut gross,
             );
-            // One task per group of four elements, in lanes as in the
-            // serial loop below (so the outputs are bitwise the serial
-            // ones); a failing or short group one by one.
-            let failures: Vec<Option<(usize, crate::local::PointFailure)>> = pool.install(|| {
+        };
+        if let Some(pool) = pool {
+            // One task per group of four elements; the outputs are added
+            // in element order, so the sums are the serial loop's.
+            let failures: Vec<std::result::Result<(), _>> = pool.install(|| {
                 use rayon::prelude::*;
-                self.element_outs
+                element_outs
                     .par_chunks_mut(4)
                     .zip(trial.par_chunks_mut(4 * np))
                     .enumerate()
                     .map_init(K::LaneOutput::default, |lane_out, (g, (outs, tr))| {
-                        let e0 = 4 * g;
-                        let gather = |e: usize| {
-                            let conn = mesh.connectivity(e);
-                            let mut ue = [0.0; 24];
-                            for k in 0..nd {
-                                ue[k] = u[dim * conn[k / dim] + k % dim];
-                            }
-                            ue
-                        };
-                        if let (Some(lane_geo), Ok(four)) = (
-                            lane_geometry.get(g),
-                            <&mut [K::Output; 4]>::try_from(&mut *outs),
-                        ) {
-                            let ue: [[f64; 24]; 4] = std::array::from_fn(|l| gather(e0 + l));
-                            let mut chunks = tr.chunks_mut(np);
-                            let trial = std::array::from_fn(|_| chunks.next().expect("4 elements"));
-                            if K::evaluate_lanes(
-                                material,
-                                lane_geo,
-                                std::array::from_fn(|l| &ue[l][..nd]),
-                                std::array::from_fn(|l| {
-                                    &committed[np * (e0 + l)..np * (e0 + l + 1)]
-                                }),
-                                trial,
-                                dt,
-                                fbar,
-                                part,
-                                lane_out,
-                                four.each_mut(),
-                            ) {
-                                return None;
-                            }
-                        }
-                        outs.iter_mut().zip(tr.chunks_mut(np)).enumerate().find_map(
-                            |(l, (out, tr))| {
-                                let e = e0 + l;
-                                let ue = gather(e);
-                                K::evaluate(
-                                    material,
-                                    &geometry[e],
-                                    &ue[..nd],
-                                    &committed[np * e..np * e + np],
-                                    tr,
-                                    dt,
-                                    fbar,
-                                    part,
-                                    out,
-                                )
-                                .err()
-                                .map(|f| (e, f))
-                            },
-                        )
+                        elements.group(4 * g, tr, lane_out, outs)
                     })
                     .collect()
             });
             // The first failing element in element order (deterministic).
-            if let Some((element, (point, source))) = failures.into_iter().flatten().next() {
-                return Err(FemError::Material {
-                    element,
-                    point,
-                    source,
-                });
+            if let Some(Err(f)) = failures.into_iter().find(std::result::Result::is_err) {
+                return Err(failure(f));
             }
-            for e in 0..self.mesh.element_count() {
-                let out = &self.element_outs[e];
-                let slots = &self.elem_slots[nd * nd * e..nd * nd * (e + 1)];
-                scatter::<M, K>(
-                    self.mesh.connectivity(e),
-                    out,
-                    slots,
-                    tangent,
-                    &mut self.residual,
-                    &mut self.system.values,
-                    &mut gross,
-                );
+            for (e, out) in element_outs.iter().enumerate() {
+                add(e, out);
             }
         } else {
-            let ne = self.mesh.element_count();
-            let lanes = !self.lane_geometry.is_empty();
             for e0 in (0..ne).step_by(4) {
                 let e1 = (e0 + 4).min(ne);
-                // Four elements in lanes; on failure (or a short last group)
-                // one by one.
-                let mut done = false;
-                if lanes && e1 == e0 + 4 {
-                    let mut ue = [[0.0; 24]; 4];
-                    for (l, uel) in ue.iter_mut().enumerate() {
-                        let conn = self.mesh.connectivity(e0 + l);
-                        for k in 0..nd {
-                            uel[k] = self.u[dim * conn[k / dim] + k % dim];
-                        }
-                    }
-                    let (committed, trial) = self.history.split();
-                    let committed = &committed[np * e0..np * e1];
-                    let mut tr = trial[np * e0..np * e1].chunks_mut(np);
-                    let trial = std::array::from_fn(|_| tr.next().expect("4 elements"));
-                    done = K::evaluate_lanes(
-                        &self.material,
-                        &self.lane_geometry[e0 / 4],
-                        std::array::from_fn(|l| &ue[l][..nd]),
-                        std::array::from_fn(|l| &committed[np * l..np * (l + 1)]),
-                        trial,
-                        dt,
-                        fbar,
-                        part,
-                        &mut self.lane_out,
-                        self.element_out.each_mut(),
-                    );
-                }
-                for e in e0..e1 {
-                    let conn = self.mesh.connectivity(e);
-                    let out = &mut self.element_out[e - e0];
-                    if !done {
-                        let mut ue = [0.0; 24];
-                        for k in 0..nd {
-                            ue[k] = self.u[dim * conn[k / dim] + k % dim];
-                        }
-                        let (committed, trial) = self.history.element(e);
-                        K::evaluate(
-                            &self.material,
-                            &self.geometry[e],
-                            &ue[..nd],
-                            committed,
-                            trial,
-                            dt,
-                            fbar,
-                            part,
-                            out,
-                        )
-                        .map_err(|(point, source)| FemError::Material {
-                            element: e,
-                            point,
-                            source,
-                        })?;
-                    }
-                    let slots = &self.elem_slots[nd * nd * e..nd * nd * (e + 1)];
-                    scatter::<M, K>(
-                        conn,
-                        out,
-                        slots,
-                        tangent,
-                        &mut self.residual,
-                        &mut self.system.values,
-                        &mut gross,
-                    );
+                let outs = &mut element_out[..e1 - e0];
+                elements
+                    .group(e0, &mut trial[np * e0..np * e1], lane_out, outs)
+                    .map_err(failure)?;
+                for (l, out) in outs.iter().enumerate() {
+                    add(e0 + l, out);
                 }
             }
         }
@@ -454,6 +366,89 @@ impl CavityModel {
             values[self.diagonal] -= self.k * self.k * self.v0 * self.compliance;
         }
         (p, volume)
+    }
+}
+
+/// What every element evaluation of one assembly reads.
+struct ElementLoop<'a, M: Material3, K: ElementKind<M>> {
+    mesh: &'a K::Mesh,
+    material: &'a M,
+    geometry: &'a [K::Geometry],
+    /// Per group of four elements, empty without a lane form.
+    lane_geometry: &'a [K::LaneGeometry],
+    u: &'a [f64],
+    committed: &'a [M::State],
+    dt: f64,
+    fbar: bool,
+    part: TangentPart,
+}
+
+impl<M: Material3, K: ElementKind<M>> ElementLoop<'_, M, K> {
+    /// Element `e`'s dofs.
+    fn dofs(&self, e: usize) -> [f64; 24] {
+        let dim = K::DIM;
+        let conn = self.mesh.connectivity(e);
+        let mut ue = [0.0; 24];
+        for k in 0..K::NODES * dim {
+            ue[k] = self.u[dim * conn[k / dim] + k % dim];
+        }
+        ue
+    }
+
+    /// The elements from `e0`, as many as `outs` (at most four), their
+    /// trial histories `trial`: four at once in lanes where the element
+    /// kind and material have a lane form, else — and for a group that
+    /// fails in any lane, which rewrites its trial histories — one by one
+    /// (bitwise the same outputs either way).
+    ///
+    /// # Errors
+    /// The first failing element of the group and where it failed.
+    fn group(
+        &self,
+        e0: usize,
+        trial: &mut [M::State],
+        lane_out: &mut K::LaneOutput,
+        outs: &mut [K::Output],
+    ) -> std::result::Result<(), (usize, PointFailure)> {
+        let (nd, np) = (K::NODES * K::DIM, K::POINTS);
+        if let (Some(lane_geo), Ok(four)) = (
+            self.lane_geometry.get(e0 / 4),
+            <&mut [K::Output; 4]>::try_from(&mut *outs),
+        ) {
+            let ue: [[f64; 24]; 4] = std::array::from_fn(|l| self.dofs(e0 + l));
+            let mut chunks = trial.chunks_mut(np);
+            let lanes_trial = std::array::from_fn(|_| chunks.next().expect("4 elements"));
+            if K::evaluate_lanes(
+                self.material,
+                lane_geo,
+                std::array::from_fn(|l| &ue[l][..nd]),
+                std::array::from_fn(|l| &self.committed[np * (e0 + l)..np * (e0 + l + 1)]),
+                lanes_trial,
+                self.dt,
+                self.fbar,
+                self.part,
+                lane_out,
+                four.each_mut(),
+            ) {
+                return Ok(());
+            }
+        }
+        for (l, (out, tr)) in outs.iter_mut().zip(trial.chunks_mut(np)).enumerate() {
+            let e = e0 + l;
+            K::evaluate(
+                self.material,
+                &self.geometry[e],
+                &self.dofs(e)[..nd],
+                &self.committed[np * e..np * (e + 1)],
+                tr,
+                self.dt,
+                self.fbar,
+                self.part,
+                out,
+            )
+            .map_err(|f| (e, f))?;
+        }
+        Ok(())
     }
 }
 
