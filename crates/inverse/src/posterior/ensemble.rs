@@ -1961,8 +1961,8 @@ mod tests {
         assert_eq!((right, none), (0, 0.0));
     }
 
-    /// The tempered restart as `sample_posterior` makes it early since
-    /// session 21: two pooled ensembles started in the light mode of
+    /// The tempered restart as `sample_posterior` makes it early with
+    /// `temper_rhat` set (session 21): two pooled ensembles started in the light mode of
     /// [`two_modes`], restarted after one untempered round of 250 kept
     /// steps (the early restart, `temper_rhat`) with a burn-in of 50
     /// steps (half `temper_burn`), then rounds with pooled refits. Each

@@ -19,7 +19,7 @@
 //!   `check_every` kept steps, so a posterior stops as soon as it is
 //!   converged; refits and the restart stay at round ends); a posterior still above the target after
 //!   `temper_after` kept steps — or at the end of a round with R̂ above
-//!   `temper_rhat`, far from converged — is restarted from its walkers' positions
+//!   `temper_rhat` when set (opt-in), far from converged — is restarted from its walkers' positions
 //!   with parallel tempering inside each ensemble (`rungs`; the
 //!   [`ensemble`] module docs, "Tempering"), the draws before dropped,
 //!   burnt in for `temper_burn` steps and checked from `temper_min_steps`
@@ -115,12 +115,13 @@ pub struct PosteriorSettings {
     #[serde(default = "default_temper_after")]
     pub temper_after: usize,
     /// R̂ at the end of a round above which the posterior is restarted
-    /// tempered at once, before `temper_after` kept steps (None: only
-    /// after `temper_after`). On seed 17's FE cohort every cell with R̂ >
-    /// 1.025 after its first round was tempered at 500 kept steps anyway
-    /// and no cell converged untempered from above 1.024
-    /// (docs/theory/inverse.md, "Session 21"): waiting for `temper_after`
-    /// only spent 250 untempered steps whose draws the restart drops.
+    /// tempered at once, before `temper_after` kept steps (None, the
+    /// default: only after `temper_after`). Opt-in: with 1.025, seed 17's
+    /// FE cohort tempers the same 9 cells 250 kept steps earlier (2 of
+    /// them above 2 s instead of 9, 0.96× the proposals), but seeds 18
+    /// and 19 temper more cells or longer (1.02×, 1.08× the proposals)
+    /// and seed 19's wide-b-12 ends at R̂ 1.014 after 2000 tempered kept
+    /// steps (docs/theory/inverse.md, "Session 21").
     #[serde(default = "default_temper_rhat")]
     pub temper_rhat: Option<f64>,
     /// Burn-in steps of the tempered restart. Its walkers start where the
@@ -236,7 +237,7 @@ fn default_temper_after() -> usize {
 }
 
 fn default_temper_rhat() -> Option<f64> {
-    Some(1.025)
+    None
 }
 
 fn default_temper_burn() -> usize {
@@ -1151,12 +1152,16 @@ mod tests {
     /// the optimum's within reach: the mode the ensembles never visited.
     /// The restart rule: after `temper_after` kept steps whatever R̂, and
     /// before it only when R̂ at the round's end is above `temper_rhat`
-    /// (NaN counts as above); with `temper_rhat` None only after
-    /// `temper_after` (the sampler before session 21).
+    /// (NaN counts as above); with `temper_rhat` None, the default, only
+    /// after `temper_after` (the sampler before session 21).
     #[test]
     fn a_far_unconverged_round_is_tempered_before_temper_after() {
-        let s = PosteriorSettings::new(52.0);
-        assert_eq!((s.temper_after, s.temper_rhat), (500, Some(1.025)));
+        let default = PosteriorSettings::new(52.0);
+        assert_eq!((default.temper_after, default.temper_rhat), (500, None));
+        let s = PosteriorSettings {
+            temper_rhat: Some(1.025),
+            ..default
+        };
         assert!(!temper_now(&s, 250, 1.024));
         assert!(temper_now(&s, 250, 1.026));
         assert!(temper_now(&s, 250, f64::NAN));
