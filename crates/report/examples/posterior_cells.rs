@@ -11,13 +11,15 @@
 //! ```text
 //! cargo run --release -p nlvid-report --example posterior_cells \
 //!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=kept|redrawn|viscous] \
-//!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [check=N] \
+//!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [temper_burn=N] \
+//!     [temper_min=N] [temper_rhat=F|none] [check=N] \
 //!     [delayed=BOOL,...] [seed=N] [prior=BOOL] [heavy_tails=BOOL] \
 //!     [direction_scales=BOOL] [cell ...]
 //! ```
 //! (`prior=true`: the cells drawn from the posteriors' prior,
 //! `DemoSpec::from_prior`, as `posterior_coverage … prior`.)
-//! (`rungs`, `ratio`, `temper_after`, `temper_ridge` and `delayed` (delayed
+//! (`rungs`, `ratio`, `temper_after`, `temper_ridge`, `temper_burn`,
+//! `temper_min` (`temper_min_steps`) and `delayed` (delayed
 //! acceptance) take comma-separated lists, e.g. `delayed=true,false`: every
 //! combination in turn, on the same curves and fits; `seed` is the
 //! sampler's, the study's fit seed by default.)
@@ -67,7 +69,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let (rungs_l, ratio_l) = (list("rungs")?, list("ratio")?);
     let (after_l, tridge_l) = (list("temper_after")?, list("temper_ridge")?);
+    let (tburn_l, tmin_l) = (list("temper_burn")?, list("temper_min")?);
     let check: Option<usize> = opt("check").map(|v| v.parse()).transpose()?;
+    // `none`: tempered only after `temper_after` (the sampler before
+    // session 21).
+    let temper_rhat: Option<Option<f64>> = opt("temper_rhat")
+        .map(|v| (v != "none").then(|| v.parse()).transpose())
+        .transpose()?;
     let sampler_seed: Option<u64> = opt("seed").map(|v| v.parse()).transpose()?;
     let delayed: Vec<Option<bool>> = opt("delayed").map_or(Ok(vec![None]), |v| {
         v.split(',')
@@ -80,8 +88,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             for &a in &after_l {
                 for &t in &tridge_l {
                     for &da in &delayed {
-                        // Counts are written as whole numbers.
-                        tempering.push((r.map(|v| v as usize), q, a.map(|v| v as usize), t, da));
+                        for &b in &tburn_l {
+                            for &m in &tmin_l {
+                                // Counts are written as whole numbers.
+                                tempering.push((
+                                    (r.map(|v| v as usize), q, a.map(|v| v as usize), t, da),
+                                    (b.map(|v| v as usize), m.map(|v| v as usize)),
+                                ));
+                            }
+                        }
                     }
                 }
             }
@@ -131,10 +146,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 refit.unwrap_or(ps.refit_proposal),
             )],
         };
-        for ((refresh_fraction, refit_proposal), (rungs, ratio, temper_after, temper_ridge, da)) in
-            configs
-                .iter()
-                .flat_map(|&c| tempering.iter().map(move |&t| (c, t)))
+        for (
+            (refresh_fraction, refit_proposal),
+            ((rungs, ratio, temper_after, temper_ridge, da), (temper_burn, temper_min)),
+        ) in configs
+            .iter()
+            .flat_map(|&c| tempering.iter().map(move |&t| (c, t)))
         {
             let ps = PosteriorSettings {
                 refresh_fraction,
@@ -146,6 +163,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 rung_ratio: ratio.unwrap_or(ps.rung_ratio),
                 temper_after: temper_after.unwrap_or(ps.temper_after),
                 temper_ridge: temper_ridge.unwrap_or(ps.temper_ridge),
+                temper_burn: temper_burn.unwrap_or(ps.temper_burn),
+                temper_min_steps: temper_min.unwrap_or(ps.temper_min_steps),
+                temper_rhat: temper_rhat.unwrap_or(ps.temper_rhat),
                 check_every: check.unwrap_or(ps.check_every),
                 delayed_acceptance: da.unwrap_or(ps.delayed_acceptance),
                 heavy_tails: heavy_tails.unwrap_or(ps.heavy_tails),
@@ -154,13 +174,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             };
             println!(
                 "refresh {refresh_fraction}, refit {refit_proposal}, ridge {}, ridge_time \
-                 {ridge_time:?}, rungs {} ratio {} after {} ridge {}, R-hat checked every {}, \
-                 delayed acceptance {}:",
+                 {ridge_time:?}, rungs {} ratio {} after {} (or R-hat > {:?}) ridge {} burn {} min {}, R-hat checked \
+                 every {}, delayed acceptance {}:",
                 ps.ridge_fraction,
                 ps.rungs,
                 ps.rung_ratio,
                 ps.temper_after,
+                ps.temper_rhat,
                 ps.temper_ridge,
+                ps.temper_burn,
+                ps.temper_min_steps,
                 ps.check_every,
                 ps.delayed_acceptance
             );

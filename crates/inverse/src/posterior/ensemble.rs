@@ -1961,6 +1961,56 @@ mod tests {
         assert_eq!((right, none), (0, 0.0));
     }
 
+    /// The tempered restart as `sample_posterior` makes it early with
+    /// `temper_rhat` set (session 21): two pooled ensembles started in the light mode of
+    /// [`two_modes`], restarted after one untempered round of 250 kept
+    /// steps (the early restart, `temper_rhat`) with a burn-in of 50
+    /// steps (half `temper_burn`), then rounds with pooled refits. Each
+    /// ensemble's β = 1 draws have the mixture's moments (the tolerances of
+    /// [`assert_two_modes`]); without the restart no walker leaves the
+    /// light mode.
+    #[test]
+    fn an_early_restart_keeps_a_two_mode_mixture() {
+        let logp = two_modes;
+        let (init, s) = two_modes_run();
+        let s = EnsembleSettings {
+            pool_proposals: true,
+            ..s
+        };
+        let s2 = EnsembleSettings { seed: 14, ..s };
+        let run = |tempered: bool| {
+            let mut e = [
+                Ensemble::new(&logp, &init, &s).expect("first"),
+                Ensemble::new(&logp, &init, &s2).expect("second"),
+            ];
+            burn_in(&mut e, &logp);
+            let mut ch = [e[0].empty_chains(), e[1].empty_chains()];
+            sample(&mut e, &logp, 250, &mut ch);
+            if tempered {
+                for (e, c) in e.iter_mut().zip(ch.iter_mut()) {
+                    e.temper(5, 0.4).expect("ladder");
+                    e.set_burn(50);
+                    *c = e.empty_chains();
+                }
+                burn_in(&mut e, &logp);
+            } else {
+                refit_proposals(&mut e);
+            }
+            for _ in 0..8 {
+                sample(&mut e, &logp, 500, &mut ch);
+                refit_proposals(&mut e);
+            }
+            ch
+        };
+        for ch in &run(true) {
+            assert_two_modes(ch);
+        }
+        for ch in &run(false) {
+            let right = ch.samples.iter().step_by(2).filter(|&&v| v > 0.0).count();
+            assert_eq!(right, 0);
+        }
+    }
+
     /// Points of two separated Gaussian clusters (weights 0.3 / 0.7) are
     /// fitted with a two-component mixture whose weights and means are the
     /// clusters'; one elongated Gaussian cloud keeps the single t.

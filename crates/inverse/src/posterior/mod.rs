@@ -18,7 +18,8 @@
 //!   `max_steps` (after the first round R̂ is checked every
 //!   `check_every` kept steps, so a posterior stops as soon as it is
 //!   converged; refits and the restart stay at round ends); a posterior still above the target after
-//!   `temper_after` kept steps is restarted from its walkers' positions
+//!   `temper_after` kept steps — or at the end of a round with R̂ above
+//!   `temper_rhat` when set (opt-in), far from converged — is restarted from its walkers' positions
 //!   with parallel tempering inside each ensemble (`rungs`; the
 //!   [`ensemble`] module docs, "Tempering"), the draws before dropped,
 //!   burnt in for `temper_burn` steps and checked from `temper_min_steps`
@@ -113,11 +114,22 @@ pub struct PosteriorSettings {
     /// dropped).
     #[serde(default = "default_temper_after")]
     pub temper_after: usize,
+    /// R̂ at the end of a round above which the posterior is restarted
+    /// tempered at once, before `temper_after` kept steps (None, the
+    /// default: only after `temper_after`). Opt-in: with 1.025, seed 17's
+    /// FE cohort tempers the same 9 cells 250 kept steps earlier (2 of
+    /// them above 2 s instead of 9, 0.96× the proposals), but seeds 18
+    /// and 19 temper more cells or longer (1.02×, 1.08× the proposals)
+    /// and seed 19's wide-b-12 ends at R̂ 1.014 after 2000 tempered kept
+    /// steps (docs/theory/inverse.md, "Session 21").
+    #[serde(default = "default_temper_rhat")]
+    pub temper_rhat: Option<f64>,
     /// Burn-in steps of the tempered restart. Its walkers start where the
-    /// untempered chain's `temper_after` kept steps left them, so only the
-    /// hot rungs have to spread (seed 19 of docs/theory/inverse.md
-    /// "Session 16": 100 steps instead of `burn`, with `temper_min_steps`,
-    /// cost 0.87× the proposals at the same coverage).
+    /// untempered chain left them, so only the hot rungs have to spread
+    /// (seed 19 of docs/theory/inverse.md "Session 16": 100 steps instead
+    /// of `burn`, with `temper_min_steps`, cost 0.87× the proposals at the
+    /// same coverage; 50 stopped seed 17's wide-a-47 at 100 kept steps
+    /// with every ensemble short of the G0 tail, "Session 21").
     #[serde(default = "default_temper_burn")]
     pub temper_burn: usize,
     /// Kept steps of a tempered chain before its first R̂ check (then
@@ -224,6 +236,10 @@ fn default_temper_after() -> usize {
     500
 }
 
+fn default_temper_rhat() -> Option<f64> {
+    None
+}
+
 fn default_temper_burn() -> usize {
     100
 }
@@ -283,6 +299,7 @@ impl PosteriorSettings {
             rungs: default_rungs(),
             rung_ratio: default_rung_ratio(),
             temper_after: default_temper_after(),
+            temper_rhat: default_temper_rhat(),
             temper_burn: default_temper_burn(),
             temper_min_steps: default_temper_min_steps(),
             temper_ridge: default_temper_ridge(),
@@ -598,7 +615,8 @@ fn starts(
 /// in and then run `steps` kept steps at a time until the split R̂ across
 /// ensembles of every reported quantity is ≤ [`RHAT_TARGET`] or
 /// `max_steps` kept steps are reached. Not converged after
-/// `temper_after` kept steps: every ensemble gets `rungs` rungs
+/// `temper_after` kept steps, or with R̂ above `temper_rhat` at the end of
+/// an earlier round ([`temper_now`]): every ensemble gets `rungs` rungs
 /// ([`Ensemble::temper`]), is burnt in again (`temper_burn` steps) and run
 /// in rounds as before (kept steps counted from 0, R̂ checked from
 /// `temper_min_steps`), only its β = 1 rung kept. Validity: the
@@ -778,7 +796,7 @@ pub fn sample_posterior_fixed(
         if kept + settings.steps > max_steps {
             return Ok(post);
         }
-        if rungs == 1 && settings.rungs > 1 && kept >= settings.temper_after {
+        if rungs == 1 && settings.rungs > 1 && temper_now(settings, kept, post.rhat_max) {
             // A tempered restart from the current positions: a new chain
             // of the tempered joint target, burnt in, its rounds counted
             // from 0 ([`ensemble`] module docs, "Tempering").
@@ -795,6 +813,14 @@ pub fn sample_posterior_fixed(
             refit_proposals(&mut ensembles);
         }
     }
+}
+
+/// True when an untempered posterior with `kept` kept steps and R̂
+/// `rhat` at the end of a round (above [`RHAT_TARGET`]) is restarted
+/// tempered: after `temper_after` kept steps, or earlier when R̂ is above
+/// `temper_rhat`.
+fn temper_now(settings: &PosteriorSettings, kept: usize, rhat: f64) -> bool {
+    kept >= settings.temper_after || settings.temper_rhat.is_some_and(|t| !(rhat <= t))
 }
 
 /// The posterior's log-density in the unit coordinates u of the free
@@ -1124,6 +1150,31 @@ mod tests {
     /// (the session-19 cell whose posterior the sampler missed) the
     /// 64-start fit has a second basin with a τ1 at least 3× apart from
     /// the optimum's within reach: the mode the ensembles never visited.
+    /// The restart rule: after `temper_after` kept steps whatever R̂, and
+    /// before it only when R̂ at the round's end is above `temper_rhat`
+    /// (NaN counts as above); with `temper_rhat` None, the default, only
+    /// after `temper_after` (the sampler before session 21).
+    #[test]
+    fn a_far_unconverged_round_is_tempered_before_temper_after() {
+        let default = PosteriorSettings::new(52.0);
+        assert_eq!((default.temper_after, default.temper_rhat), (500, None));
+        let s = PosteriorSettings {
+            temper_rhat: Some(1.025),
+            ..default
+        };
+        assert!(!temper_now(&s, 250, 1.024));
+        assert!(temper_now(&s, 250, 1.026));
+        assert!(temper_now(&s, 250, f64::NAN));
+        assert!(temper_now(&s, 500, 1.011));
+        let off = PosteriorSettings {
+            temper_rhat: None,
+            ..s
+        };
+        assert!(!temper_now(&off, 250, 1.5));
+        assert!(!temper_now(&off, 450, f64::NAN));
+        assert!(temper_now(&off, 500, 1.011));
+    }
+
     #[test]
     fn other_modes_are_the_optima_within_reach_of_the_best() {
         let s = likelihood::tests::demo_surrogate();
