@@ -8,9 +8,8 @@
 
 use nlvid_fem::shell::{ShellSpec, ellipsoidal_shell};
 use nlvid_fem::{
-    Cavity, Component, Control, FemError, Fluid, LiftOff, Mesh3, Model, Parts, PatchSpec,
-    PlateProgram, PlateRun, RigidPlane, Settings, Solid, Stage, Support, Symmetry,
-    run_plate_program,
+    Component, Control, FemError, Fluid, LiftOff, Mesh3, Model, Parts, PatchSpec, PlateProgram,
+    PlateRun, Settings, Solid, Stage, Support, Symmetry, run_plate_program,
 };
 use nlvid_material::{Material3, MooneyRivlin, PronyViscoelastic};
 use nlvid_protocol::{Label, Program, ProgramBuilder, Quantity, grid, parse_table, programs};
@@ -31,19 +30,7 @@ fn viscoelastic() -> PronyViscoelastic {
 }
 
 fn parts() -> Parts {
-    Parts {
-        supports: vec![
-            Support::fixed("x0", Component::X),
-            Support::fixed("y0", Component::Y),
-            Support::fixed("z0", Component::Z),
-        ],
-        planes: vec![RigidPlane::above("outer")],
-        cavity: Some(Cavity {
-            boundary: "inner".into(),
-            fluid: Fluid::Incompressible,
-        }),
-        ..Parts::default()
-    }
+    Parts::eighth_capsule(Fluid::Incompressible)
 }
 
 fn settings() -> Settings {
