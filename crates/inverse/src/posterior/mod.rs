@@ -42,7 +42,7 @@ use serde::{Deserialize, Serialize};
 
 pub use ensemble::{
     Chains, Ensemble, EnsembleSettings, LogDensity, RidgeMove, RidgeTime, burn_in, refit_proposals,
-    sample, sample_ensemble, sample_more,
+    sample, sample_ensemble, sample_more, temper_from_proposal,
 };
 pub use likelihood::{CurveLikelihood, noise_sd};
 use screen::VarianceModel;
@@ -132,6 +132,13 @@ pub struct PosteriorSettings {
     /// with every ensemble short of the G0 tail, "Session 21").
     #[serde(default = "default_temper_burn")]
     pub temper_burn: usize,
+    /// The tempered restart's hot rungs start from draws of the β = 1
+    /// walkers' independence proposal (pooled over the ensembles with
+    /// `mode_starts`) widened to each rung's temperature, which also
+    /// becomes the rung's proposal ([`temper_from_proposal`]); off (the
+    /// default): copies of the β = 1 walkers and their proposal.
+    #[serde(default)]
+    pub hot_starts: bool,
     /// Kept steps of a tempered chain before its first R̂ check (then
     /// every `check_every`; untempered chains wait for a whole round,
     /// `steps`). A tempered step costs `rungs` untempered ones and mixes
@@ -301,6 +308,7 @@ impl PosteriorSettings {
             temper_after: default_temper_after(),
             temper_rhat: default_temper_rhat(),
             temper_burn: default_temper_burn(),
+            hot_starts: false,
             temper_min_steps: default_temper_min_steps(),
             temper_ridge: default_temper_ridge(),
             check_every: default_check_every(),
@@ -800,8 +808,18 @@ pub fn sample_posterior_fixed(
             // A tempered restart from the current positions: a new chain
             // of the tempered joint target, burnt in, its rounds counted
             // from 0 ([`ensemble`] module docs, "Tempering").
+            if settings.hot_starts {
+                proposals += temper_from_proposal(
+                    &mut ensembles,
+                    &log_density,
+                    settings.rungs,
+                    settings.rung_ratio,
+                )?;
+            }
             for (ens, ch) in ensembles.iter_mut().zip(chains.iter_mut()) {
-                ens.temper(settings.rungs, settings.rung_ratio)?;
+                if !settings.hot_starts {
+                    ens.temper(settings.rungs, settings.rung_ratio)?;
+                }
                 ens.set_ridge_fraction(settings.temper_ridge)?;
                 ens.set_burn(settings.temper_burn);
                 *ch = ens.empty_chains();
