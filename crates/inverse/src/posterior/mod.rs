@@ -121,7 +121,8 @@ pub struct PosteriorSettings {
     /// them above 2 s instead of 9, 0.96× the proposals), but seeds 18
     /// and 19 temper more cells or longer (1.02×, 1.08× the proposals)
     /// and seed 19's wide-b-12 ends at R̂ 1.014 after 2000 tempered kept
-    /// steps (docs/theory/inverse.md, "Session 21").
+    /// steps (docs/theory/inverse.md, "Session 21"); 1.05 the same on
+    /// wide-b-12, for 0.985× / 0.993× on seeds 17 / 18 ("Session 21b").
     #[serde(default = "default_temper_rhat")]
     pub temper_rhat: Option<f64>,
     /// Burn-in steps of the tempered restart. Its walkers start where the
@@ -136,7 +137,11 @@ pub struct PosteriorSettings {
     /// walkers' independence proposal (pooled over the ensembles with
     /// `mode_starts`) widened to each rung's temperature, which also
     /// becomes the rung's proposal ([`temper_from_proposal`]); off (the
-    /// default): copies of the β = 1 walkers and their proposal.
+    /// default): copies of the β = 1 walkers and their proposal. Off by
+    /// default: with `temper_rhat` 1.05 the cohorts of seeds 17–19 cost
+    /// 1.01–1.03× the proposals, seed 19's wide-b-36 ended at R̂ 1.0104
+    /// and its wide-b-12 converged after 100 kept steps on one arm of a
+    /// two-armed posterior (docs/theory/inverse.md, "Session 21b").
     #[serde(default)]
     pub hot_starts: bool,
     /// Kept steps of a tempered chain before its first R̂ check (then
