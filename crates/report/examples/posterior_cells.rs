@@ -12,7 +12,7 @@
 //! cargo run --release -p nlvid-report --example posterior_cells \
 //!     [cells] [noise] [seed] [max_steps] [refresh=F] [refit=BOOL] [ridge=F] [ridge_time=kept|redrawn|viscous] \
 //!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [temper_burn=N] \
-//!     [temper_min=N] [temper_rhat=F|none] [check=N] \
+//!     [temper_min=N] [temper_rhat=F|none] [hot_starts=B] [check=N] \
 //!     [delayed=BOOL,...] [seed=N] [prior=BOOL] [heavy_tails=BOOL] \
 //!     [direction_scales=BOOL] [cell ...]
 //! ```
@@ -76,6 +76,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let temper_rhat: Option<Option<f64>> = opt("temper_rhat")
         .map(|v| (v != "none").then(|| v.parse()).transpose())
         .transpose()?;
+    let hot_starts: Option<bool> = opt("hot_starts").map(|v| v.parse()).transpose()?;
     let sampler_seed: Option<u64> = opt("seed").map(|v| v.parse()).transpose()?;
     let delayed: Vec<Option<bool>> = opt("delayed").map_or(Ok(vec![None]), |v| {
         v.split(',')
@@ -166,6 +167,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 temper_burn: temper_burn.unwrap_or(ps.temper_burn),
                 temper_min_steps: temper_min.unwrap_or(ps.temper_min_steps),
                 temper_rhat: temper_rhat.unwrap_or(ps.temper_rhat),
+                hot_starts: hot_starts.unwrap_or(ps.hot_starts),
                 check_every: check.unwrap_or(ps.check_every),
                 delayed_acceptance: da.unwrap_or(ps.delayed_acceptance),
                 heavy_tails: heavy_tails.unwrap_or(ps.heavy_tails),

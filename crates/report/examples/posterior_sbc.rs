@@ -71,6 +71,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "ridge_time" => settings.ridge_time = v.parse()?,
             "ridge_starts" => settings.ridge_starts = v.parse()?,
             "mode_starts" => settings.mode_starts = v.parse()?,
+            "temper_rhat" => settings.temper_rhat = Some(v.parse()?),
+            "temper_burn" => settings.temper_burn = v.parse()?,
+            "hot_starts" => settings.hot_starts = v.parse()?,
             "only" => {
                 only = v
                     .split(',')

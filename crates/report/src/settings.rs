@@ -640,6 +640,9 @@ pub struct CohortSettings {
 /// seed = 1          # default: fit.seed
 /// rungs = 4         # temperature rungs of the restart of a slow cell (1: none)
 /// temper_after = 500  # kept steps after which a cell with R-hat > 1.01 restarts tempered
+/// # temper_rhat = 1.05  # opt-in: restart tempered at a round's end with R-hat above this
+/// temper_burn = 100    # burn-in steps of the tempered restart
+/// hot_starts = false   # true: hot rungs start from the pooled proposal, widened
 /// check_every = 50  # after the first round, R-hat checked every this many kept steps
 /// delayed_acceptance = true  # screen proposals on the Kriging mean first (exact)
 /// heavy_tails = false  # true: surrogate error Student-t (nu from the meta-model's LOO)
@@ -675,6 +678,19 @@ pub struct PosteriorStudy {
     /// (`PosteriorSettings::temper_after`).
     #[serde(default = "default_temper_after")]
     pub temper_after: usize,
+    /// R̂ at a round's end above which a cell restarts tempered before
+    /// `temper_after` (`PosteriorSettings::temper_rhat`; None, the
+    /// default: only after `temper_after`).
+    #[serde(default)]
+    pub temper_rhat: Option<f64>,
+    /// Burn-in steps of the tempered restart
+    /// (`PosteriorSettings::temper_burn`).
+    #[serde(default = "default_temper_burn")]
+    pub temper_burn: usize,
+    /// Hot rungs started from the independence proposal
+    /// (`PosteriorSettings::hot_starts`).
+    #[serde(default)]
+    pub hot_starts: bool,
     /// Kept steps between R̂ checks after the first round
     /// (`PosteriorSettings::check_every`).
     #[serde(default = "default_check_every")]
@@ -730,6 +746,10 @@ fn default_temper_after() -> usize {
     PosteriorSettings::new(1.0).temper_after
 }
 
+fn default_temper_burn() -> usize {
+    PosteriorSettings::new(1.0).temper_burn
+}
+
 struct PosteriorSection(Option<PosteriorStudy>);
 
 impl FromSection for PosteriorSection {
@@ -751,6 +771,13 @@ impl FromSection for PosteriorSection {
                 Bounds::closed(0.0, 1e8),
                 default_temper_after(),
             )?,
+            temper_rhat: s.opt_f64("temper_rhat", Bounds::closed(1.0, 100.0))?,
+            temper_burn: s.usize_or(
+                "temper_burn",
+                Bounds::closed(0.0, 1e6),
+                default_temper_burn(),
+            )?,
+            hot_starts: s.opt_bool("hot_starts")?.unwrap_or(false),
             check_every: s.usize_or(
                 "check_every",
                 Bounds::closed(1.0, 1e8),

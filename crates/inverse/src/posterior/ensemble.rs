@@ -899,6 +899,97 @@ pub fn refit_proposals(ensembles: &mut [Ensemble]) {
     }
 }
 
+/// Tempers ensembles stepped together ([`Ensemble::temper`]) with their
+/// hot rungs started from draws of an independence proposal instead of
+/// copies of the β = 1 walkers (module docs, "Tempering"): rung r's
+/// walkers are drawn from [`Proposal::fit`] of the β = 1 positions over
+/// the current round (pooled over the ensembles with `pool_proposals`,
+/// else each ensemble's own; its current walkers when the round is
+/// empty) with the scale 1.2/√β_r — a Gaussian posterior's spread at
+/// inverse temperature β — and that proposal becomes the rung's
+/// independence proposal. A draw outside the support is redrawn (at most
+/// `HOT_TRIES` times, then the copy stays). Each ensemble draws with its
+/// own random stream. A new chain of the joint target from other
+/// starting positions: run [`burn_in`] before keeping draws.
+///
+/// Cost: the draws' log-densities, at most `HOT_TRIES` batches of the
+/// hot rungs' walkers per ensemble (points outside the unit box are −∞
+/// without a likelihood evaluation in the posterior's density).
+///
+/// Returns the number of points drawn (log-densities asked for).
+///
+/// # Errors
+/// As [`Ensemble::temper`].
+pub fn temper_from_proposal(
+    ensembles: &mut [Ensemble],
+    log_density: &impl LogDensity,
+    rungs: usize,
+    ratio: f64,
+) -> Result<usize> {
+    const HOT_TRIES: usize = 20;
+    let pool = pooled(ensembles);
+    let points_of = |e: &Ensemble| -> Vec<Vec<f64>> {
+        if e.recent[0].is_empty() {
+            e.pos[..e.settings.walkers].to_vec()
+        } else {
+            e.recent[0].clone()
+        }
+    };
+    let pooled_points: Vec<Vec<f64>> = if pool {
+        ensembles.iter().flat_map(points_of).collect()
+    } else {
+        Vec::new()
+    };
+    let mut drawn = 0;
+    for e in ensembles.iter_mut() {
+        e.temper(rungs, ratio)?;
+        let own;
+        let points = if pool {
+            &pooled_points
+        } else {
+            own = points_of(e);
+            &own
+        };
+        let w = e.settings.walkers;
+        for r in 1..e.betas.len() {
+            let Some(q) = Proposal::fit(points, 1.2 / e.betas[r].sqrt()) else {
+                continue;
+            };
+            let mut todo: Vec<usize> = (0..w).collect();
+            for _ in 0..HOT_TRIES {
+                if todo.is_empty() {
+                    break;
+                }
+                let ys: Vec<Vec<f64>> = todo.iter().map(|_| q.draw(&mut e.rng).0).collect();
+                drawn += ys.len();
+                let lp = log_density.log_densities(&ys);
+                let ok: Vec<usize> = (0..ys.len()).filter(|&i| lp[i].is_finite()).collect();
+                let slp = if e.screening() {
+                    let good: Vec<Vec<f64>> = ok.iter().map(|&i| ys[i].clone()).collect();
+                    log_density.screen_log_densities(&good).unwrap_or_default()
+                } else {
+                    Vec::new()
+                };
+                for (j, &i) in ok.iter().enumerate() {
+                    if e.screening() && !slp.get(j).is_some_and(|v| v.is_finite()) {
+                        continue;
+                    }
+                    let k = r * w + todo[i];
+                    e.pos[k].clone_from(&ys[i]);
+                    e.lp[k] = lp[i];
+                    if e.screening() {
+                        e.slp[k] = slp[j];
+                    }
+                    todo[i] = usize::MAX;
+                }
+                todo.retain(|&k| k != usize::MAX);
+            }
+            e.proposals[r] = Some(q);
+        }
+    }
+    Ok(drawn)
+}
+
 /// `steps` more steps of every ensemble, stepped together, appended to
 /// `out` (one [`Ensemble::empty_chains`] per ensemble, same order; the
 /// β = 1 rung only). Starts a round: the points the next
@@ -2008,6 +2099,59 @@ mod tests {
         for ch in &run(false) {
             let right = ch.samples.iter().step_by(2).filter(|&&v| v > 0.0).count();
             assert_eq!(right, 0);
+        }
+    }
+
+    /// Hot starts ([`temper_from_proposal`]): on [`two_modes`], two pooled
+    /// ensembles all in the light mode, one round, then the hot rungs
+    /// drawn from the pooled proposal widened to their temperature. Every
+    /// walker's stored ln p is the density at its position; the hottest
+    /// rung (β = 0.4⁴) is spread ≈ 1.2/√β × t₅ times wider along the
+    /// second coordinate than the β = 1 walkers (copies: the same
+    /// spread); after a 50-step burn-in and eight pooled rounds each
+    /// ensemble has the mixture's moments ([`assert_two_modes`]).
+    #[test]
+    fn hot_starts_spread_the_hot_rungs_and_keep_a_two_mode_mixture() {
+        let logp = two_modes;
+        let (init, s) = two_modes_run();
+        let s = EnsembleSettings {
+            pool_proposals: true,
+            ..s
+        };
+        let s2 = EnsembleSettings { seed: 14, ..s };
+        let mut e = [
+            Ensemble::new(&logp, &init, &s).expect("first"),
+            Ensemble::new(&logp, &init, &s2).expect("second"),
+        ];
+        burn_in(&mut e, &logp);
+        let mut ch = [e[0].empty_chains(), e[1].empty_chains()];
+        sample(&mut e, &logp, 250, &mut ch);
+        let drawn = temper_from_proposal(&mut e, &logp, 5, 0.4).expect("ladder");
+        assert!(drawn >= 2 * 4 * 16, "{drawn} draws");
+        let sd = |xs: &[Vec<f64>]| {
+            let m = xs.iter().map(|p| p[1]).sum::<f64>() / xs.len() as f64;
+            (xs.iter().map(|p| (p[1] - m).powi(2)).sum::<f64>() / (xs.len() - 1) as f64).sqrt()
+        };
+        for ens in &e {
+            assert_eq!(ens.rungs(), 5);
+            for (x, lp) in ens.pos.iter().zip(&ens.lp) {
+                assert_eq!(*lp, logp(x));
+            }
+            let ratio = sd(&ens.pos[4 * 16..]) / sd(&ens.pos[..16]);
+            assert!(ratio > 3.0 && ratio < 30.0, "hottest / cold spread {ratio}");
+            assert!(ens.proposals.iter().all(Option::is_some));
+        }
+        for (ens, c) in e.iter_mut().zip(ch.iter_mut()) {
+            ens.set_burn(50);
+            *c = ens.empty_chains();
+        }
+        burn_in(&mut e, &logp);
+        for _ in 0..8 {
+            sample(&mut e, &logp, 500, &mut ch);
+            refit_proposals(&mut e);
+        }
+        for c in &ch {
+            assert_two_modes(c);
         }
     }
 

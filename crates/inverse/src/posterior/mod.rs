@@ -42,7 +42,7 @@ use serde::{Deserialize, Serialize};
 
 pub use ensemble::{
     Chains, Ensemble, EnsembleSettings, LogDensity, RidgeMove, RidgeTime, burn_in, refit_proposals,
-    sample, sample_ensemble, sample_more,
+    sample, sample_ensemble, sample_more, temper_from_proposal,
 };
 pub use likelihood::{CurveLikelihood, noise_sd};
 use screen::VarianceModel;
@@ -121,7 +121,8 @@ pub struct PosteriorSettings {
     /// them above 2 s instead of 9, 0.96× the proposals), but seeds 18
     /// and 19 temper more cells or longer (1.02×, 1.08× the proposals)
     /// and seed 19's wide-b-12 ends at R̂ 1.014 after 2000 tempered kept
-    /// steps (docs/theory/inverse.md, "Session 21").
+    /// steps (docs/theory/inverse.md, "Session 21"); 1.05 the same on
+    /// wide-b-12, for 0.985× / 0.993× on seeds 17 / 18 ("Session 21b").
     #[serde(default = "default_temper_rhat")]
     pub temper_rhat: Option<f64>,
     /// Burn-in steps of the tempered restart. Its walkers start where the
@@ -132,6 +133,17 @@ pub struct PosteriorSettings {
     /// with every ensemble short of the G0 tail, "Session 21").
     #[serde(default = "default_temper_burn")]
     pub temper_burn: usize,
+    /// The tempered restart's hot rungs start from draws of the β = 1
+    /// walkers' independence proposal (pooled over the ensembles with
+    /// `mode_starts`) widened to each rung's temperature, which also
+    /// becomes the rung's proposal ([`temper_from_proposal`]); off (the
+    /// default): copies of the β = 1 walkers and their proposal. Off by
+    /// default: with `temper_rhat` 1.05 the cohorts of seeds 17–19 cost
+    /// 1.01–1.03× the proposals, seed 19's wide-b-36 ended at R̂ 1.0104
+    /// and its wide-b-12 converged after 100 kept steps on one arm of a
+    /// two-armed posterior (docs/theory/inverse.md, "Session 21b").
+    #[serde(default)]
+    pub hot_starts: bool,
     /// Kept steps of a tempered chain before its first R̂ check (then
     /// every `check_every`; untempered chains wait for a whole round,
     /// `steps`). A tempered step costs `rungs` untempered ones and mixes
@@ -301,6 +313,7 @@ impl PosteriorSettings {
             temper_after: default_temper_after(),
             temper_rhat: default_temper_rhat(),
             temper_burn: default_temper_burn(),
+            hot_starts: false,
             temper_min_steps: default_temper_min_steps(),
             temper_ridge: default_temper_ridge(),
             check_every: default_check_every(),
@@ -800,8 +813,18 @@ pub fn sample_posterior_fixed(
             // A tempered restart from the current positions: a new chain
             // of the tempered joint target, burnt in, its rounds counted
             // from 0 ([`ensemble`] module docs, "Tempering").
+            if settings.hot_starts {
+                proposals += temper_from_proposal(
+                    &mut ensembles,
+                    &log_density,
+                    settings.rungs,
+                    settings.rung_ratio,
+                )?;
+            }
             for (ens, ch) in ensembles.iter_mut().zip(chains.iter_mut()) {
-                ens.temper(settings.rungs, settings.rung_ratio)?;
+                if !settings.hot_starts {
+                    ens.temper(settings.rungs, settings.rung_ratio)?;
+                }
                 ens.set_ridge_fraction(settings.temper_ridge)?;
                 ens.set_burn(settings.temper_burn);
                 *ch = ens.empty_chains();
