@@ -1600,6 +1600,16 @@ mod tests {
         (init, s)
     }
 
+    /// Two ensembles on [`two_modes`] with settings `s` (the second with
+    /// seed 14), started at `a` and `b`.
+    fn two_ensembles(a: &[Vec<f64>], b: &[Vec<f64>], s: EnsembleSettings) -> [Ensemble; 2] {
+        let s2 = EnsembleSettings { seed: 14, ..s };
+        [
+            Ensemble::new(&two_modes, a, &s).expect("first"),
+            Ensemble::new(&two_modes, b, &s2).expect("second"),
+        ]
+    }
+
     /// Pooled proposals carry walkers between modes that separate
     /// ensembles were started in: on [`two_modes`], one ensemble started in
     /// each mode, no tempering, eight rounds with refits. Pooled, each
@@ -1616,11 +1626,7 @@ mod tests {
                 pool_proposals: pool,
                 ..s
             };
-            let s2 = EnsembleSettings { seed: 14, ..s };
-            let mut e = [
-                Ensemble::new(&logp, &left, &s).expect("left"),
-                Ensemble::new(&logp, &right, &s2).expect("right"),
-            ];
+            let mut e = two_ensembles(&left, &right, s);
             burn_in(&mut e, &logp);
             let mut ch = [e[0].empty_chains(), e[1].empty_chains()];
             for _ in 0..8 {
@@ -2068,12 +2074,8 @@ mod tests {
             pool_proposals: true,
             ..s
         };
-        let s2 = EnsembleSettings { seed: 14, ..s };
         let run = |tempered: bool| {
-            let mut e = [
-                Ensemble::new(&logp, &init, &s).expect("first"),
-                Ensemble::new(&logp, &init, &s2).expect("second"),
-            ];
+            let mut e = two_ensembles(&init, &init, s);
             burn_in(&mut e, &logp);
             let mut ch = [e[0].empty_chains(), e[1].empty_chains()];
             sample(&mut e, &logp, 250, &mut ch);
@@ -2118,11 +2120,7 @@ mod tests {
             pool_proposals: true,
             ..s
         };
-        let s2 = EnsembleSettings { seed: 14, ..s };
-        let mut e = [
-            Ensemble::new(&logp, &init, &s).expect("first"),
-            Ensemble::new(&logp, &init, &s2).expect("second"),
-        ];
+        let mut e = two_ensembles(&init, &init, s);
         burn_in(&mut e, &logp);
         let mut ch = [e[0].empty_chains(), e[1].empty_chains()];
         sample(&mut e, &logp, 250, &mut ch);
