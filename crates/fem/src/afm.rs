@@ -191,6 +191,7 @@ impl AfmSetup {
         if self.engagement.force > 0.0 {
             positive("engagement ramp", self.engagement.ramp)?;
         }
+        crate::model::check_output_times(&self.output_times)?;
         if self.piezo.len() < 2 || self.piezo[0].0 != 0.0 {
             return Err(FemError::Setting {
                 name: "piezo program",
@@ -470,6 +471,7 @@ pub fn run_with<M: Material3>(material: M, setup: &AfmSetup) -> Result<AfmRun> {
         Cantilever::Rigid => (f64::INFINITY, w0 + z_start),
     };
     let n_engage_records = model.records().len();
+    model.set_output_times(&setup.output_times)?;
     let piezo = &setup.piezo;
     for (seg, win) in piezo.windows(2).enumerate() {
         let (t0, z0) = win[0];

@@ -149,12 +149,33 @@ pub struct Model<M: Material3, K: ElementKind<M> = Axisymmetric> {
     /// 32 ε K L² (K ≈ the stiffest modulus at F = I, L the model size).
     force_floor: f64,
     records: Vec<StepRecord>,
+    /// Times at which the caller will read the records by dense output
+    /// (sorted; empty: every step is under output control). A step with
+    /// no sample inside is neither shortened nor redone for its
+    /// interpolation error (`Model::set_output_times`).
+    output_times: Vec<f64>,
     /// Loads of the last converged step.
     control: Control,
     /// The last factorised tangent belongs to the Newton iterations of the
     /// last converged step (not to a rejected or failed attempt since).
     factors_current: bool,
     counters: Counters,
+}
+
+/// Output times must be finite and strictly increasing.
+///
+/// # Errors
+/// [`FemError::Setting`] naming the first offending time.
+pub(crate) fn check_output_times(times: &[f64]) -> Result<()> {
+    match (0..times.len()).find(|&i| !times[i].is_finite() || (i > 0 && !(times[i] > times[i - 1])))
+    {
+        Some(i) => Err(FemError::Setting {
+            name: "output times",
+            value: times[i],
+            reason: "must be finite and strictly increasing",
+        }),
+        None => Ok(()),
+    }
 }
 
 impl<M: Material3, K: ElementKind<M>> std::fmt::Debug for Model<M, K> {
@@ -548,6 +569,7 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             force_floor: 32.0 * f64::EPSILON * stiffest * length * length,
             positions2,
             records: Vec::new(),
+            output_times: Vec::new(),
             control: Control::default(),
             factors_current: false,
             counters: Counters::default(),
@@ -723,6 +745,23 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
     /// Loads of the last converged step.
     pub fn last_control(&self) -> Control {
         self.control
+    }
+
+    /// The times at which the records will be read (the written curve's
+    /// samples). The dense-output control then only governs steps that
+    /// have a sample strictly inside: a step that would end short of the
+    /// next sample is lengthened to land on it (never beyond the step
+    /// Newton's growth allows), and a converged step without a sample
+    /// inside is kept whatever its interpolation error, since no value is
+    /// interpolated on it. A step that lands on a sample writes that sample
+    /// exactly, as a run with a breakpoint at every sample would.
+    ///
+    /// # Errors
+    /// [`FemError::Setting`] if the times are not finite and increasing.
+    pub fn set_output_times(&mut self, times: &[f64]) -> Result<()> {
+        check_output_times(times)?;
+        self.output_times = times.to_vec();
+        Ok(())
     }
 
     /// Records of all converged steps so far.

@@ -145,6 +145,19 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         (ratio, dt * factor)
     }
 
+    /// The first output time after `t` (beyond `eps`), if any.
+    fn next_sample(&self, t: f64, eps: f64) -> Option<f64> {
+        let k = self.output_times.partition_point(|&s| s <= t + eps);
+        self.output_times.get(k).copied()
+    }
+
+    /// Whether a step from `t0` to `t1` has an output time strictly inside,
+    /// i.e. a written value interpolated on it (always, when the model has
+    /// no output times).
+    fn interpolates_a_sample(&self, t0: f64, t1: f64, eps: f64) -> bool {
+        self.output_times.is_empty() || self.next_sample(t0, eps).is_some_and(|s| s < t1 - eps)
+    }
+
     /// Advances through `stage` with adaptive steps: a failed attempt is
     /// cut back by `Settings::cutback`, easy steps grow by
     /// `Settings::growth` up to `stage.dt_max`.
@@ -179,6 +192,8 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             return Ok(());
         }
         let dt_min = self.settings.min_step_fraction * duration;
+        // Times closer than this are one time (a step landing on a sample).
+        let eps = 1e-12 * (duration + stage.end.abs());
         let mut dt = stage.dt_initial.min(stage.dt_max);
         let mut first = true;
         // Length of the last step rejected by the output control, while its
@@ -200,7 +215,12 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             if dt > remaining || remaining - dt < 0.01 * dt {
                 dt = remaining;
             }
-            let t_new = self.time + dt;
+            let mut t_new = self.time + dt;
+            if let Some(sample) = self.next_sample(self.time, eps)
+                && (sample - t_new).abs() <= eps
+            {
+                t_new = sample;
+            }
             let ctl = (stage.control)(t_new);
             // Predictor.
             if self.settings.tangent_predictor
@@ -235,7 +255,10 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                         asm.plane_force
                     };
                     let (ratio, dt_error) = self.output_error(t_new, force, dt);
-                    if ratio > self.settings.output_rejection && dt > dt_min * (1.0 + 1e-9) {
+                    if ratio > self.settings.output_rejection
+                        && dt > dt_min * (1.0 + 1e-9)
+                        && self.interpolates_a_sample(self.time, t_new, eps)
+                    {
                         if trace() {
                             eprintln!(
                                 "reject t={t_new:.5} dt={dt:.3e} output error {ratio:.2} × tolerance"
@@ -266,7 +289,15 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
                     if iterations <= self.settings.easy_iterations {
                         dt *= self.settings.growth;
                     }
-                    dt = dt.min(dt_error).min(stage.dt_max);
+                    let dt_newton = dt.min(stage.dt_max);
+                    dt = dt_newton.min(dt_error);
+                    // The output control does not stop a step short of the
+                    // next sample (`Model::set_output_times`).
+                    if let Some(sample) = self.next_sample(self.time, eps)
+                        && self.time + dt < sample - eps
+                    {
+                        dt = dt_newton.min(sample - self.time);
+                    }
                 }
                 Err((residual, tolerance, iterations, cause)) => {
                     if trace() {

@@ -404,6 +404,51 @@ fn plain_ramp_hold_matches_a_breakpoint_at_every_sample() {
     }
 }
 
+/// With the output grid known, the dense-output control neither stops a
+/// step short of the next sample nor redoes a step with no sample inside
+/// (`Model::set_output_times`): the same ramp-hold takes fewer steps than
+/// with the control on every step (an empty grid), and
+/// `plain_ramp_hold_matches_a_breakpoint_at_every_sample` checks the
+/// written values.
+#[test]
+fn steps_land_on_samples_instead_of_stopping_short_for_the_output_error() {
+    let mut setup = short_setup(Cantilever::Rigid);
+    setup.engagement.force = 0.0;
+    setup.piezo = vec![(0.0, 0.0), (0.1, 1e-6), (2.1, 1e-6)];
+    setup.output_times = (0..=210).map(|i| 0.01 * i as f64).collect();
+    let with_samples = afm::run(&params(), &setup).unwrap();
+    setup.output_times.clear();
+    let every_step = afm::run(&params(), &setup).unwrap();
+    eprintln!(
+        "{} steps with the output grid, {} with the control on every step",
+        with_samples.steps, every_step.steps
+    );
+    assert!(
+        with_samples.steps < every_step.steps,
+        "{} vs {}",
+        with_samples.steps,
+        every_step.steps
+    );
+}
+
+/// Output times that do not increase, or are not finite, are a setting
+/// error naming them, before anything is run.
+#[test]
+fn output_times_must_increase() {
+    for bad in [
+        vec![0.0, 0.1, 0.1],
+        vec![0.0, f64::NAN, 0.2],
+        vec![0.0, 0.2, 0.1],
+    ] {
+        let mut setup = short_setup(Cantilever::Rigid);
+        setup.output_times = bad;
+        match afm::run(&params(), &setup) {
+            Err(FemError::Setting { name, .. }) => assert_eq!(name, "output times"),
+            other => panic!("expected a setting error, got {other:?}"),
+        }
+    }
+}
+
 /// An indentation deeper than the cell (the probe would reach the
 /// substrate) is a setting error naming the piezo program, not a run.
 #[test]
