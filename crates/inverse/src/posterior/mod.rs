@@ -34,17 +34,20 @@
 pub mod diagnostics;
 pub mod ensemble;
 mod error_scale;
+mod independence;
 mod likelihood;
+mod ridge;
 pub mod screen;
 
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
 pub use ensemble::{
-    Chains, Ensemble, EnsembleSettings, LogDensity, RidgeMove, RidgeTime, burn_in, refit_proposals,
-    sample, sample_ensemble, sample_more, temper_from_proposal,
+    Chains, Ensemble, EnsembleSettings, LogDensity, burn_in, refit_proposals, sample,
+    sample_ensemble, sample_more, temper_from_proposal,
 };
 pub use likelihood::{CurveLikelihood, noise_sd};
+pub use ridge::{RidgeMove, RidgeTime};
 use screen::VarianceModel;
 
 use crate::error::{InverseError, Result};
