@@ -747,6 +747,17 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
         self.control
     }
 
+    /// Sets [`Settings::easy_iterations`] for the stages run from now on
+    /// (e.g. one stage whose Newton iterations do not fall with the step).
+    pub fn set_easy_iterations(&mut self, iterations: usize) {
+        self.settings.easy_iterations = iterations;
+    }
+
+    /// The settings the model was built with (and changed by the setters).
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
     /// The times at which the records will be read (the written curve's
     /// samples). The dense-output control then only governs steps that
     /// have a sample strictly inside: a step that would end short of the
