@@ -49,6 +49,7 @@ pub use parts::{
     Support,
 };
 pub use settings::Settings;
+pub(crate) use stepping::check_output_times;
 pub use stepping::{Counters, Stage, StepRecord};
 
 struct ContactSet {
@@ -160,22 +161,6 @@ pub struct Model<M: Material3, K: ElementKind<M> = Axisymmetric> {
     /// last converged step (not to a rejected or failed attempt since).
     factors_current: bool,
     counters: Counters,
-}
-
-/// Output times must be finite and strictly increasing.
-///
-/// # Errors
-/// [`FemError::Setting`] naming the first offending time.
-pub(crate) fn check_output_times(times: &[f64]) -> Result<()> {
-    match (0..times.len()).find(|&i| !times[i].is_finite() || (i > 0 && !(times[i] > times[i - 1])))
-    {
-        Some(i) => Err(FemError::Setting {
-            name: "output times",
-            value: times[i],
-            reason: "must be finite and strictly increasing",
-        }),
-        None => Ok(()),
-    }
 }
 
 impl<M: Material3, K: ElementKind<M>> std::fmt::Debug for Model<M, K> {
@@ -756,23 +741,6 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
     /// The settings the model was built with (and changed by the setters).
     pub fn settings(&self) -> &Settings {
         &self.settings
-    }
-
-    /// The times at which the records will be read (the written curve's
-    /// samples). The dense-output control then only governs steps that
-    /// have a sample strictly inside: a step that would end short of the
-    /// next sample is lengthened to land on it (never beyond the step
-    /// Newton's growth allows), and a converged step without a sample
-    /// inside is kept whatever its interpolation error, since no value is
-    /// interpolated on it. A step that lands on a sample writes that sample
-    /// exactly, as a run with a breakpoint at every sample would.
-    ///
-    /// # Errors
-    /// [`FemError::Setting`] if the times are not finite and increasing.
-    pub fn set_output_times(&mut self, times: &[f64]) -> Result<()> {
-        check_output_times(times)?;
-        self.output_times = times.to_vec();
-        Ok(())
     }
 
     /// Records of all converged steps so far.

@@ -78,6 +78,22 @@ pub struct Counters {
     pub lu_fallbacks: usize,
 }
 
+/// Output times must be finite and strictly increasing.
+///
+/// # Errors
+/// [`FemError::Setting`] naming the first offending time.
+pub(crate) fn check_output_times(times: &[f64]) -> Result<()> {
+    match (0..times.len()).find(|&i| !times[i].is_finite() || (i > 0 && !(times[i] > times[i - 1])))
+    {
+        Some(i) => Err(FemError::Setting {
+            name: "output times",
+            value: times[i],
+            reason: "must be finite and strictly increasing",
+        }),
+        None => Ok(()),
+    }
+}
+
 impl<M: Material3, K: ElementKind<M>> Model<M, K> {
     pub(super) fn push_record(
         &mut self,
@@ -143,6 +159,23 @@ impl<M: Material3, K: ElementKind<M>> Model<M, K> {
             2.0
         };
         (ratio, dt * factor)
+    }
+
+    /// The times at which the records will be read (the written curve's
+    /// samples). The dense-output control then only governs steps that
+    /// have a sample strictly inside: a step that would end short of the
+    /// next sample is lengthened to land on it (never beyond the step
+    /// Newton's growth allows), and a converged step without a sample
+    /// inside is kept whatever its interpolation error, since no value is
+    /// interpolated on it. A step that lands on a sample writes that sample
+    /// exactly, as a run with a breakpoint at every sample would.
+    ///
+    /// # Errors
+    /// [`FemError::Setting`] if the times are not finite and increasing.
+    pub fn set_output_times(&mut self, times: &[f64]) -> Result<()> {
+        check_output_times(times)?;
+        self.output_times = times.to_vec();
+        Ok(())
     }
 
     /// The first output time after `t` (beyond `eps`), if any.
