@@ -231,7 +231,11 @@ impl<T: Lane> IsoStress<T> {
     #[inline(always)]
     pub fn tangent_axisymmetric(&self, k: &Kin<T>, s: &Matrix3<T>, t: &mut [[T; 5]; 5]) {
         use crate::AXISYMMETRIC_COMPONENTS as IDX;
-        let pick = |m: &Matrix3<T>| IDX.map(|(i, j)| m[(i, j)]);
+        // The components in IDX order, written out: `IDX.map(..)` stays an
+        // out-of-line call (`array::try_map`, compiled for the baseline
+        // instruction set, with two copies of the array) in the element
+        // kernel's SIMD dispatch.
+        let pick = |m: &Matrix3<T>| [m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)], m[(2, 2)]];
         let u = [
             pick(&k.f),
             k.f_times_axisymmetric(&k.c),
