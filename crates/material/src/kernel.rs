@@ -225,8 +225,9 @@ impl<T: Lane> IsoStress<T> {
     /// [`crate::AXISYMMETRIC_COMPONENTS`] (a 5×5 block of the 9×9 matrix),
     /// term by term the same formula restricted to those rows and columns.
     /// Exact for any `H`; `F` must be axisymmetric (zero off-block entries).
-    /// The scalar code's skips of zero coefficients are masks lane by lane
-    /// ([`crate::Lane`]).
+    /// The scalar code's skips of zero coefficients are skips of
+    /// coefficients zero in every lane ([`crate::Lane`]; the other lanes add
+    /// exact zeros, see the comment in the body).
     /// Written to `t` (four points' are 800 bytes).
     #[inline(always)]
     pub fn tangent_axisymmetric(&self, k: &Kin<T>, s: &Matrix3<T>, t: &mut [[T; 5]; 5]) {
@@ -242,13 +243,19 @@ impl<T: Lane> IsoStress<T> {
             pick(&k.fit),
             k.f_times_axisymmetric(&self.h),
         ];
+        // The scalar code skips a zero coefficient; the lanes skip it when
+        // it is zero in every lane and otherwise add it in every lane
+        // without a mask. That is bitwise the masked sum: `v` and `t` start
+        // at +0 and only accumulate (a round-to-nearest sum is −0 only if
+        // both terms are), so they never hold −0, and adding `0 · y = ±0`
+        // (y finite: u is F, F C, F⁻ᵀ, F H of a finite F with det F > 0)
+        // leaves them unchanged.
         let mut v = [[T::zero(); 5]; 4];
         for (va, ma) in v.iter_mut().zip(&self.m) {
             for (ub, &m) in u.iter().zip(ma) {
-                let live = m.nonzero();
-                if T::any(live) {
+                if T::any(m.nonzero()) {
                     for (x, &y) in va.iter_mut().zip(ub) {
-                        *x = T::select(live, *x + m * y, *x);
+                        *x += m * y;
                     }
                 }
             }
@@ -267,7 +274,7 @@ impl<T: Lane> IsoStress<T> {
             }
             for (row, &x) in t.iter_mut().zip(ua) {
                 for (y, &z) in row.iter_mut().zip(va) {
-                    *y = T::select(live, *y + x * z, *y);
+                    *y += x * z;
                 }
             }
         }
