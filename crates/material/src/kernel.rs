@@ -225,9 +225,8 @@ impl<T: Lane> IsoStress<T> {
     /// [`crate::AXISYMMETRIC_COMPONENTS`] (a 5×5 block of the 9×9 matrix),
     /// term by term the same formula restricted to those rows and columns.
     /// Exact for any `H`; `F` must be axisymmetric (zero off-block entries).
-    /// The scalar code's skips of zero coefficients are skips of
-    /// coefficients zero in every lane ([`crate::Lane`]; the other lanes add
-    /// exact zeros, see the comment in the body).
+    /// Zero coefficients are added like the others (exact zeros, see the
+    /// comment in the body), so the lanes ([`crate::Lane`]) need no masks.
     /// Written to `t` (four points' are 800 bytes).
     #[inline(always)]
     pub fn tangent_axisymmetric(&self, k: &Kin<T>, s: &Matrix3<T>, t: &mut [[T; 5]; 5]) {
@@ -243,50 +242,44 @@ impl<T: Lane> IsoStress<T> {
             pick(&k.fit),
             k.f_times_axisymmetric(&self.h),
         ];
-        // The scalar code skips a zero coefficient; the lanes skip it when
-        // it is zero in every lane and otherwise add it in every lane
-        // without a mask. That is bitwise the masked sum: `v` and `t` start
-        // at +0 and only accumulate (a round-to-nearest sum is −0 only if
-        // both terms are), so they never hold −0, and adding `0 · y = ±0`
-        // (y finite: u is F, F C, F⁻ᵀ, F H of a finite F with det F > 0)
-        // leaves them unchanged.
-        let mut v = [[T::zero(); 5]; 4];
-        for (va, ma) in v.iter_mut().zip(&self.m) {
-            for (ub, &m) in u.iter().zip(ma) {
-                if T::any(m.nonzero()) {
-                    for (x, &y) in va.iter_mut().zip(ub) {
-                        *x += m * y;
-                    }
-                }
-            }
-        }
+        // Every coefficient is added, zero or not: the sums start at +0
+        // and only accumulate (a round-to-nearest sum is −0 only if both
+        // terms are), so they never hold −0, and adding `0 · y = ±0` (y
+        // finite: u is F, F C, F⁻ᵀ, F H of a finite F with det F > 0)
+        // leaves them bitwise unchanged. Skipping zero coefficients (as
+        // [`IsoStress::tangent`] does) therefore gives the same numbers; in
+        // lanes it took a mask per product, and branches per coefficient
+        // cost more than the products they skip.
+        let m = &self.m;
         let (sc, sci) = (self.s[XC], self.s[XCI]);
         let diag = s - k.cinv * sci;
-        *t = [[T::zero(); 5]; 5];
-        for (a, (ua, va)) in u.iter().zip(&v).enumerate() {
-            let ma = &self.m[a];
-            let live = T::or(
-                T::or(ma[0].nonzero(), ma[1].nonzero()),
-                T::or(ma[2].nonzero(), ma[3].nonzero()),
-            );
-            if !T::any(live) {
-                continue;
-            }
-            for (row, &x) in t.iter_mut().zip(ua) {
-                for (y, &z) in row.iter_mut().zip(va) {
-                    *y += x * z;
+        // Column by column: `v[a][q] = Σ_b m_ab u[b][q]` for the column's
+        // q only (four numbers, no 4×5 array), then the column of
+        // `Σ_a u[a] ⊗ v[a]` and the other terms; each entry is the same sum
+        // in the same order as row by row, and `t` is written once (no
+        // zeroed temporaries: the memsets cost ≈ 5 % of the kernel).
+        for (q, &(kk, l)) in IDX.iter().enumerate() {
+            let mut vq = [T::zero(); 4];
+            for a in 0..4 {
+                let mut x = T::zero();
+                for b in 0..4 {
+                    x += m[a][b] * u[b][q];
                 }
+                vq[a] = x;
             }
-        }
-        for (row, &(i, jj)) in t.iter_mut().zip(&IDX) {
-            for (y, &(kk, l)) in row.iter_mut().zip(&IDX) {
-                *y += sc * (k.f[(i, l)] * k.f[(kk, jj)]) - sci * (k.fit[(i, l)] * k.fit[(kk, jj)]);
+            for (p, &(i, jj)) in IDX.iter().enumerate() {
+                let mut y = T::zero();
+                for a in 0..4 {
+                    y += u[a][p] * vq[a];
+                }
+                y += sc * (k.f[(i, l)] * k.f[(kk, jj)]) - sci * (k.fit[(i, l)] * k.fit[(kk, jj)]);
                 if jj == l {
-                    *y += sc * k.b[(i, kk)];
+                    y += sc * k.b[(i, kk)];
                 }
                 if i == kk {
-                    *y += diag[(jj, l)];
+                    y += diag[(jj, l)];
                 }
+                t[p][q] = y;
             }
         }
     }
