@@ -225,57 +225,61 @@ impl<T: Lane> IsoStress<T> {
     /// [`crate::AXISYMMETRIC_COMPONENTS`] (a 5×5 block of the 9×9 matrix),
     /// term by term the same formula restricted to those rows and columns.
     /// Exact for any `H`; `F` must be axisymmetric (zero off-block entries).
-    /// The scalar code's skips of zero coefficients are masks lane by lane
-    /// ([`crate::Lane`]).
+    /// Zero coefficients are added like the others (exact zeros, see the
+    /// comment in the body), so the lanes ([`crate::Lane`]) need no masks.
     /// Written to `t` (four points' are 800 bytes).
     #[inline(always)]
     pub fn tangent_axisymmetric(&self, k: &Kin<T>, s: &Matrix3<T>, t: &mut [[T; 5]; 5]) {
         use crate::AXISYMMETRIC_COMPONENTS as IDX;
-        let pick = |m: &Matrix3<T>| IDX.map(|(i, j)| m[(i, j)]);
+        // The components in IDX order, written out: `IDX.map(..)` stays an
+        // out-of-line call (`array::try_map`, compiled for the baseline
+        // instruction set, with two copies of the array) in the element
+        // kernel's SIMD dispatch.
+        let pick = |m: &Matrix3<T>| [m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)], m[(2, 2)]];
         let u = [
             pick(&k.f),
             k.f_times_axisymmetric(&k.c),
             pick(&k.fit),
             k.f_times_axisymmetric(&self.h),
         ];
-        let mut v = [[T::zero(); 5]; 4];
-        for (va, ma) in v.iter_mut().zip(&self.m) {
-            for (ub, &m) in u.iter().zip(ma) {
-                let live = m.nonzero();
-                if T::any(live) {
-                    for (x, &y) in va.iter_mut().zip(ub) {
-                        *x = T::select(live, *x + m * y, *x);
-                    }
-                }
-            }
-        }
+        // Every coefficient is added, zero or not: the sums start at +0
+        // and only accumulate (a round-to-nearest sum is −0 only if both
+        // terms are), so they never hold −0, and adding `0 · y = ±0` (y
+        // finite: u is F, F C, F⁻ᵀ, F H of a finite F with det F > 0)
+        // leaves them bitwise unchanged. Skipping zero coefficients (as
+        // [`IsoStress::tangent`] does) therefore gives the same numbers; in
+        // lanes it took a mask per product, and branches per coefficient
+        // cost more than the products they skip.
+        let m = &self.m;
         let (sc, sci) = (self.s[XC], self.s[XCI]);
         let diag = s - k.cinv * sci;
-        *t = [[T::zero(); 5]; 5];
-        for (a, (ua, va)) in u.iter().zip(&v).enumerate() {
-            let ma = &self.m[a];
-            let live = T::or(
-                T::or(ma[0].nonzero(), ma[1].nonzero()),
-                T::or(ma[2].nonzero(), ma[3].nonzero()),
-            );
-            if !T::any(live) {
-                continue;
-            }
-            for (row, &x) in t.iter_mut().zip(ua) {
-                for (y, &z) in row.iter_mut().zip(va) {
-                    *y = T::select(live, *y + x * z, *y);
+        // Column by column: `v[a][q] = Σ_b m_ab u[b][q]` for the column's
+        // q only (four numbers, no 4×5 array), then the column of
+        // `Σ_a u[a] ⊗ v[a]` and the other terms; each entry is the same sum
+        // in the same order as row by row, and `t` is written once (no
+        // zeroed temporaries: the memsets cost ≈ 5 % of the kernel).
+        for (q, &(kk, l)) in IDX.iter().enumerate() {
+            let mut vq = [T::zero(); 4];
+            for a in 0..4 {
+                let mut x = T::zero();
+                for b in 0..4 {
+                    x += m[a][b] * u[b][q];
                 }
+                vq[a] = x;
             }
-        }
-        for (row, &(i, jj)) in t.iter_mut().zip(&IDX) {
-            for (y, &(kk, l)) in row.iter_mut().zip(&IDX) {
-                *y += sc * (k.f[(i, l)] * k.f[(kk, jj)]) - sci * (k.fit[(i, l)] * k.fit[(kk, jj)]);
+            for (p, &(i, jj)) in IDX.iter().enumerate() {
+                let mut y = T::zero();
+                for a in 0..4 {
+                    y += u[a][p] * vq[a];
+                }
+                y += sc * (k.f[(i, l)] * k.f[(kk, jj)]) - sci * (k.fit[(i, l)] * k.fit[(kk, jj)]);
                 if jj == l {
-                    *y += sc * k.b[(i, kk)];
+                    y += sc * k.b[(i, kk)];
                 }
                 if i == kk {
-                    *y += diag[(jj, l)];
+                    y += diag[(jj, l)];
                 }
+                t[p][q] = y;
             }
         }
     }
