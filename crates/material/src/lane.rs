@@ -5,11 +5,14 @@
 //! The point update and the kernel are written once, generic over [`Lane`]:
 //! every lane of an [`F64x4`] goes through exactly the operations of the
 //! `f64` code in the same order (elementwise IEEE arithmetic, never fused,
-//! no reassociation), so each lane's result is bitwise the scalar one. Data-
-//! dependent branches of the scalar code are written with a mask
-//! ([`Lane::select`]), so a lane skips exactly what the scalar code skips;
-//! a check that fails in any lane (a non-finite F, det F ≤ 0) fails the whole
-//! group, and the caller evaluates its elements one by one.
+//! no reassociation), so each lane's result is bitwise the scalar one. The
+//! kernels avoid data-dependent branches: where the scalar code would skip a
+//! term with a zero coefficient, the generic code adds 0·y, which leaves a
+//! sum that started at +0 bitwise unchanged (y finite; such a sum never
+//! holds −0). [`Lane::select`] blends per lane where a branch cannot be
+//! avoided. A check that fails in any lane (a non-finite F, det F ≤ 0)
+//! fails the whole group, and the caller evaluates its elements one by
+//! one.
 
 use std::fmt::{Debug, Display};
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
