@@ -1,37 +1,26 @@
-//! The elastic dome of issue 15 (benchmark): the setup-1 half spheroid
-//! (H = 12.22 µm, D = 28.88 µm), neo-Hookean G = 1 kPa, K = 1000 G, pushed
-//! 2 µm by a rigid 2.5 µm sphere on the default mesh (converged to 0.5 %
-//! at every depth from 0.05 µm, docs/theory/fem.md), forces written at 201
-//! depths. Prints the forces at a few depths and the CPU time (median of
-//! 5).
+//! The elastic dome of issue 15 (benchmark, [`AfmSetup::elastic_dome`]):
+//! the setup-1 half spheroid (H = 12.22 µm, D = 28.88 µm), neo-Hookean
+//! G = 1 kPa, K = 1000 G, pushed 2 µm by a rigid 2.5 µm sphere, forces
+//! written at 201 depths. Prints the forces at a few depths and the CPU
+//! time (median of 5).
 //!
 //! ```text
-//! cargo run -p nlvid-fem --release --example elastic_dome
+//! cargo run -p nlvid-fem --release --example elastic_dome              # default mesh (0.5 % from 0.05 µm)
+//! cargo run -p nlvid-fem --release --example elastic_dome -- benchmark # the benchmark's run (0.5 % from 0.1 µm)
 //! ```
 
 #![allow(clippy::unwrap_used)]
 
-use nlvid_fem::afm::{self, AfmSetup, Cantilever, Engagement};
+use nlvid_fem::afm::{self, AfmSetup};
 use nlvid_model::{Prony, Relaxation, names};
-
-/// The benchmark setup.
-fn setup() -> AfmSetup {
-    let mut s = AfmSetup::thesis_setup1();
-    s.cantilever = Cantilever::Rigid;
-    s.engagement = Engagement {
-        force: 0.0,
-        ramp: 1.0,
-        hold: 0.0,
-    };
-    s.bulk_ratio = 1000.0;
-    s.piezo = vec![(0.0, 0.0), (1.0, 2e-6)];
-    s.output_times = (0..=200).map(|i| i as f64 / 200.0).collect();
-    s
-}
 
 fn main() {
     faer::set_global_parallelism(faer::Par::Seq);
-    let mut setup = setup();
+    let mut setup = if std::env::args().nth(1).as_deref() == Some("benchmark") {
+        AfmSetup::elastic_dome_benchmark()
+    } else {
+        AfmSetup::elastic_dome()
+    };
     // Experiment knobs: NLVID_FEM_OUTPUT_TOL, NLVID_FEM_REFINE (the default
     // mesh refined that many times), NLVID_FEM_DUMP (write "δ F" lines).
     if let Ok(v) = std::env::var("NLVID_FEM_OUTPUT_TOL") {

@@ -164,6 +164,39 @@ impl AfmSetup {
         }
     }
 
+    /// The elastic dome of issue 15's benchmark: setup 1's half spheroid
+    /// (H = 12.22 µm, D = 28.88 µm), K = 1000 G, a rigid cantilever pushing
+    /// the 2.5 µm sphere to δ = 2 µm in 1 s, forces at 201 depths, on the
+    /// default mesh. Run it with an elastic [`Relaxation`]
+    /// (`Prony::elastic()`) for the neo-Hookean dome.
+    pub fn elastic_dome() -> Self {
+        let mut s = Self::thesis_setup1();
+        s.cantilever = Cantilever::Rigid;
+        s.engagement = Engagement {
+            force: 0.0,
+            ramp: 1.0,
+            hold: 0.0,
+        };
+        s.bulk_ratio = 1000.0;
+        s.piezo = vec![(0.0, 0.0), (1.0, 2e-6)];
+        s.output_times = (0..=200).map(|i| i as f64 / 200.0).collect();
+        s
+    }
+
+    /// [`AfmSetup::elastic_dome`] as the benchmark runs it: converged to
+    /// 0.5 % from δ = 0.1 µm, the depth range the benchmark asks for, at
+    /// the least cost measured (docs/theory/fem.md, "Session 23"): the mesh
+    /// [`ContactMesh::cell_from_tenth_micron`] and an output tolerance of
+    /// 2e-3 (largest difference from the 4×-refined default mesh 0.34–0.36 %
+    /// over 21 tolerances between 1.5e-3 and 2.5e-3).
+    pub fn elastic_dome_benchmark() -> Self {
+        let mut s = Self::elastic_dome();
+        s.mesh_layout =
+            MeshLayout::ContactGraded(ContactMesh::cell_from_tenth_micron(s.probe_radius));
+        s.settings.output_tolerance = 2e-3;
+        s
+    }
+
     fn check(&self) -> Result<()> {
         let positive = |name, v: f64| {
             if v > 0.0 && v.is_finite() {

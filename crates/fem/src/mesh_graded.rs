@@ -51,6 +51,20 @@ impl ContactMesh {
         }
     }
 
+    /// A coarser grading for protocols whose forces matter from
+    /// δ = 0.1 µm on: h₀ = R/100 instead of the default's R/250, 684
+    /// elements on setup 1 instead of 912. On the elastic dome
+    /// ([`crate::afm::AfmSetup::elastic_dome`]) every force from 0.1 µm is
+    /// within 0.36 % of the 4×-refined default mesh, but 0.59 % at 0.05 µm
+    /// (docs/theory/fem.md, "Session 23"): use the default below 0.1 µm.
+    pub fn cell_from_tenth_micron(probe_radius: f64) -> Self {
+        Self {
+            spacing: probe_radius / 100.0,
+            core: 10,
+            ..Self::cell_default(probe_radius)
+        }
+    }
+
     /// The same layout refined `factor` times in every direction: h₀ and
     /// the core elements' size / factor (core × factor per side), ring
     /// ratio q^{1/factor} (so factor rings per ring), and the far patch
