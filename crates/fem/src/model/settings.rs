@@ -6,7 +6,11 @@
 pub struct Settings {
     /// Use the F-bar element (true) or the plain displacement element.
     pub fbar: bool,
-    /// Residual tolerance relative to the gross internal force.
+    /// Residual tolerance relative to the gross internal force, tested
+    /// only after at least one Newton correction (a predictor is never
+    /// accepted as it stands). Default 1e-9; the AFM cell model uses 3e-5
+    /// ([`crate::afm::AfmSetup::thesis_setup1`], docs/theory/fem.md
+    /// "Session 23").
     pub rtol: f64,
     /// Absolute residual tolerance (N): a step also counts as converged when
     /// the residual norm is below it. 0 (the default) disables it; set it
@@ -53,7 +57,8 @@ pub struct Settings {
     /// point turns out not converged (then, with `chord_contraction`, a
     /// chord step may follow instead). 0 disables. Default 1e5 (session 3:
     /// 1e4 without chord steps; with them 1e5 measured best on the thesis
-    /// run and the elastic dome, docs/theory/fem.md "Speed").
+    /// run and the elastic dome at `rtol` 1e-9, docs/theory/fem.md
+    /// "Speed"); the AFM cell model, at `rtol` 3e-5, disables it.
     pub lazy_tangent: f64,
     /// Chord steps near convergence: after a residual-only (lazy)
     /// assembly that is not converged but shows the residual contracted by

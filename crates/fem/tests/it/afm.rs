@@ -108,6 +108,8 @@ fn parallel_element_loop_is_bitwise_serial() {
 #[test]
 fn lazy_tangent_is_bitwise_the_eager_run() {
     let mut lazy = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    // The general default (the AFM setup turns residual-only points off).
+    lazy.settings.lazy_tangent = Settings::default().lazy_tangent;
     // Chord steps (which do change the path) follow lazy assemblies only.
     lazy.settings.chord_contraction = 0.0;
     let mut eager = lazy.clone();
@@ -169,7 +171,10 @@ fn tangent_predictor_keeps_the_forces_and_saves_iterations() {
 /// than Newton iterations.
 #[test]
 fn chord_steps_keep_the_forces_and_save_factorisations() {
-    let chord = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    let mut chord = short_setup(Cantilever::Spring { stiffness: 0.12 });
+    // Chord steps follow residual-only assemblies, which the AFM setup
+    // turns off: the general default.
+    chord.settings.lazy_tangent = Settings::default().lazy_tangent;
     let mut newton = chord.clone();
     newton.settings.chord_contraction = 0.0;
     assert!(chord.settings.chord_contraction > 0.0);
@@ -329,6 +334,9 @@ fn probe_starting_inside_the_cell_is_a_setting_error() {
 fn elastic_cell_needs_no_prony_terms() {
     let mut setup = short_setup(Cantilever::Rigid);
     setup.output_times = vec![0.0, 0.1, 0.2, 1.0, 5.2];
+    // Three implementations compared to 1e-8: each solved to the general
+    // default tolerance, far below the AFM setup's.
+    setup.settings.rtol = Settings::default().rtol;
     let elastic = Relaxation::new("G0", 1e3, nlvid_model::Prony::elastic()).unwrap();
     let run = afm::run(&elastic, &setup).unwrap();
     // The hold (t ≥ 0.2 s at Z = 1 µm) does not relax.
