@@ -5,16 +5,13 @@
 #   study.toml      -> (with metamodel.toml's [forward]) the cells' curves
 #                      data/<group>/*.csv and ground_truth.csv
 # The forward model is the FE cell model (afm-fe): N = 970 + 74 runs, about
-# 26 min of CPU (1.6 s a run; both cores are used). The run store in $WORK
+# 8 min of CPU (0.43 s a run; both cores are used). The run store in $WORK
 # is kept until the end, so an interrupted regenerate.sh resumes where it
 # stopped when run again (a store of another study is refused).
 # Deterministic: same study files -> same bytes (the data: checked by
 # `cargo test -p nlvid-report the_committed_demo`). The committed
-# metamodel/model.json was built on session 12's FE solver. Since then the
-# numeric LDLT (session 18) changed the runs at round-off and the
-# sample-aware stepping (session 22, docs/theory/fem.md "Session 22") by up
-# to 6e-4 of the peak deflection (the data/ curves were rewritten then), so
-# a rebuild gives a model close to the committed one, not byte for byte.
+# metamodel/ and data/ were rebuilt by this script on session 23's FE
+# solver (Newton tolerance 3e-5, docs/theory/fem.md "Session 23").
 set -eu
 cd "$(dirname "$0")"
 NLVID=${NLVID:-"cargo run --release -q -p nlvid --"}

@@ -170,11 +170,11 @@ fn recovered_moduli_match_the_ground_truth_per_cell() {
             x[0] * (1.0 - x[1] - x[2] + x[1] * (-s / x[3]).exp() + x[2] * (-s / x[4]).exp())
         };
         // 1 % force noise, FE curves fitted on the FE meta-model (checking
-        // error: median 0.26 %, max 12.6 % at G0 = 82 Pa, far from these
+        // error: median 0.27 %, max 12.5 % at G0 = 82 Pa, far from these
         // cells; metamodel/check.json): G(t) within 5 % at 1, 10 and 52 s
         // (worst cell today 2.1 %). G(0) is an extrapolation here — the 1 s
         // ramp is longer than τ1 (0.6 s median), so the data never show the
-        // unrelaxed modulus — and gets 10 % (worst cell today: 4.5 %).
+        // unrelaxed modulus — and gets 10 % (worst cell today: 4.6 %).
         for (s, tol) in [(0.0, 0.10), (1.0, 0.05), (10.0, 0.05), (52.0, 0.05)] {
             let (fit, truth) = (shear(&x, s), shear(&t.x, s));
             assert!(
