@@ -280,19 +280,27 @@ impl<T: Lane> FbarPoint<T, 5, 8> for PointGeometry<T> {
     fn add_bt_m_b(&self, out: &mut [[T; 8]; 8], m: &[[T; 5]; 5], lower: bool) {
         let g = self;
         // Column c of B as (row, value) pairs: even c → rows 0, 1, 4; odd c → 2, 3.
-        let mut col = [[T::zero(); 3]; 4];
-        for a in 0..4 {
-            col[a] = [g.dn[a][0], g.dn[a][1], g.n_over_r[a]];
-        }
-        // MB (5×8).
-        let mut mb = [[T::zero(); 8]; 5];
-        for i in 0..5 {
-            for a in 0..4 {
-                let c = &col[a];
-                mb[i][2 * a] = m[i][0] * c[0] + m[i][1] * c[1] + m[i][4] * c[2];
-                mb[i][2 * a + 1] = m[i][2] * c[0] + m[i][3] * c[1];
-            }
-        }
+        let column = |a: usize| [g.dn[a][0], g.dn[a][1], g.n_over_r[a]];
+        let col = [column(0), column(1), column(2), column(3)];
+        // MB (5×8) as array literals, so every entry is built in place (a
+        // zeroed array filled afterwards cost a 1.3 kB memset per point in
+        // lanes, `array::from_fn` a 256 B memcpy per row).
+        let row = |i: usize| {
+            let even = |c: &[T; 3]| m[i][0] * c[0] + m[i][1] * c[1] + m[i][4] * c[2];
+            let odd = |c: &[T; 3]| m[i][2] * c[0] + m[i][3] * c[1];
+            let [c0, c1, c2, c3] = &col;
+            [
+                even(c0),
+                odd(c0),
+                even(c1),
+                odd(c1),
+                even(c2),
+                odd(c2),
+                even(c3),
+                odd(c3),
+            ]
+        };
+        let mb = [row(0), row(1), row(2), row(3), row(4)];
         for a in 0..4 {
             let c = &col[a];
             let (ee, eo) = if lower {
@@ -395,15 +403,22 @@ impl<M: Material3> PointUpdate<F64x4, 5> for LanePoints<'_, M> {
 
 /// The F-bar kernel ([`crate::fbar::fbar_kernel`]) on four elements at once,
 /// one per lane of [`F64x4`] (the same code, so each element's output and
-/// trial history are bitwise those of the one-element kernel). `false` if
-/// the material has no lane update or any element fails (det F ≤ 0, a
-/// material error): the caller then evaluates the four one by one, which
-/// rewrites every trial history and reports the error.
+/// trial history are bitwise those of the one-element kernel). Element `l`
+/// has the nodes `nodes[l]` and its dofs are read from the global dof
+/// vector `u` (two per node) straight into the lanes. `false` if the
+/// material has no lane update or any element fails (det F ≤ 0, a material
+/// error): the caller then evaluates the four one by one, which rewrites
+/// every trial history and reports the error.
+///
+/// With [`TangentPart::Lower`] only the lower triangle of each element
+/// tangent is written to `out` (the rest is not read: the model's slot
+/// table has no slot for it).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn fbar_kernel_lanes<M: Material3>(
     material: &M,
     geometry: &[PointGeometry<F64x4>; 4],
-    u: [&[f64]; 4],
+    u: &[f64],
+    nodes: [&[usize]; 4],
     state_n: [&[M::State]; 4],
     trial: [&mut [M::State]; 4],
     dt: f64,
@@ -413,18 +428,14 @@ pub(crate) fn fbar_kernel_lanes<M: Material3>(
     out: [&mut ElementOutput; 4],
 ) -> bool {
     if !M::AXISYMMETRIC_LANES
-        || u.iter().any(|x| x.len() != 8)
+        || nodes.iter().any(|x| x.len() != 4)
         || state_n.iter().any(|s| s.len() != 4)
         || trial.iter().any(|s| s.len() != 4)
     {
         return false;
     }
-    let mut ul = [F64x4::default(); 8];
-    for (l, x) in u.iter().enumerate() {
-        for (k, y) in ul.iter_mut().enumerate() {
-            y.0[l] = x[k];
-        }
-    }
+    let ul: [F64x4; 8] =
+        std::array::from_fn(|k| F64x4(std::array::from_fn(|l| u[2 * nodes[l][k / 2] + k % 2])));
     let points = LanePoints {
         material,
         state_n,
@@ -440,7 +451,8 @@ pub(crate) fn fbar_kernel_lanes<M: Material3>(
     }
     if part != TangentPart::None {
         for r in 0..8 {
-            for c in 0..8 {
+            let end = if part == TangentPart::Lower { r + 1 } else { 8 };
+            for c in 0..end {
                 [o0.k[r][c], o1.k[r][c], o2.k[r][c], o3.k[r][c]] = lanes.k[r][c].0;
             }
         }
@@ -749,10 +761,15 @@ mod tests {
                 let mut out = [ElementOutput::zero(); 4];
                 let [t0, t1, t2, t3] = &mut tr;
                 let [o0, o1, o2, o3] = &mut out;
+                // Element l's nodes 4l..4l + 4 in a global dof vector.
+                let global: Vec<f64> = u.iter().flatten().copied().collect();
+                let nodes: [[usize; 4]; 4] =
+                    std::array::from_fn(|l| [0, 1, 2, 3].map(|a| 4 * l + a));
                 let ok = fbar_kernel_lanes(
                     &cell,
                     &lane_geo,
-                    u.each_ref().map(|u| &u[..]),
+                    &global,
+                    nodes.each_ref().map(|n| &n[..]),
                     sn.each_ref().map(|s| &s[..]),
                     [&mut t0[..], &mut t1[..], &mut t2[..], &mut t3[..]],
                     0.2,

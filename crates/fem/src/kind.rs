@@ -248,12 +248,15 @@ pub trait ElementKind<M: Material3>: Send + Sync + 'static {
     /// lane, each output bitwise the one-element result; `false` if not
     /// implemented or any element fails (the caller then evaluates them one
     /// by one, which rewrites their trial histories and reports the error).
+    /// Element `l` has the nodes `nodes[l]`; its dofs are read from the
+    /// global dof vector `u` directly into the lanes (no per-element copy).
     #[doc(hidden)]
     #[allow(clippy::too_many_arguments)]
     fn evaluate_lanes(
         _material: &M,
         _geometry: &Self::LaneGeometry,
-        _u: [&[f64]; 4],
+        _u: &[f64],
+        _nodes: [&[usize]; 4],
         _state_n: [&[M::State]; 4],
         _trial: [&mut [M::State]; 4],
         _dt: f64,
@@ -323,7 +326,8 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
     fn evaluate_lanes(
         material: &M,
         geometry: &[PointGeometry<F64x4>; 4],
-        u: [&[f64]; 4],
+        u: &[f64],
+        nodes: [&[usize]; 4],
         state_n: [&[M::State]; 4],
         trial: [&mut [M::State]; 4],
         dt: f64,
@@ -333,7 +337,7 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
         out: [&mut ElementOutput; 4],
     ) -> bool {
         crate::element::fbar_kernel_lanes(
-            material, geometry, u, state_n, trial, dt, fbar, part, lanes, out,
+            material, geometry, u, nodes, state_n, trial, dt, fbar, part, lanes, out,
         )
     }
 
