@@ -16,7 +16,7 @@
 //! Ψ = Ψ_iso(F) + U(J) this is exactly the Q1/P0 mixed element of
 //! Simo–Taylor–Pister with the pressure condensed out.
 
-use crate::fbar::{FbarMaterialPoint, FbarPoint, PointUpdate};
+use crate::fbar::{FbarMaterialPoint, FbarPoint, KernelScratch, PointUpdate};
 use crate::local::LocalOutput;
 #[doc(hidden)]
 pub use crate::local::{PointFailure, TangentPart};
@@ -280,27 +280,21 @@ impl<T: Lane> FbarPoint<T, 5, 8> for PointGeometry<T> {
     fn add_bt_m_b(&self, out: &mut [[T; 8]; 8], m: &[[T; 5]; 5], lower: bool) {
         let g = self;
         // Column c of B as (row, value) pairs: even c → rows 0, 1, 4; odd c → 2, 3.
-        let column = |a: usize| [g.dn[a][0], g.dn[a][1], g.n_over_r[a]];
-        let col = [column(0), column(1), column(2), column(3)];
-        // MB (5×8) as array literals, so every entry is built in place (a
+        let mut col = [[T::zero(); 3]; 4];
+        for a in 0..4 {
+            col[a] = [g.dn[a][0], g.dn[a][1], g.n_over_r[a]];
+        }
+        // MB (5×8) as array literals, so every entry is built in place: a
         // zeroed array filled afterwards cost a 1.3 kB memset per point in
-        // lanes, `array::from_fn` a 256 B memcpy per row).
-        let row = |i: usize| {
-            let even = |c: &[T; 3]| m[i][0] * c[0] + m[i][1] * c[1] + m[i][4] * c[2];
-            let odd = |c: &[T; 3]| m[i][2] * c[0] + m[i][3] * c[1];
-            let [c0, c1, c2, c3] = &col;
-            [
-                even(c0),
-                odd(c0),
-                even(c1),
-                odd(c1),
-                even(c2),
-                odd(c2),
-                even(c3),
-                odd(c3),
-            ]
-        };
-        let mb = [row(0), row(1), row(2), row(3), row(4)];
+        // lanes. (Functions, not closures: a closure the optimiser leaves
+        // out of line is compiled for the baseline instruction set.)
+        let mb = [
+            mb_row(&m[0], &col),
+            mb_row(&m[1], &col),
+            mb_row(&m[2], &col),
+            mb_row(&m[3], &col),
+            mb_row(&m[4], &col),
+        ];
         for a in 0..4 {
             let c = &col[a];
             let (ee, eo) = if lower {
@@ -342,6 +336,35 @@ impl<T: Lane> FbarPoint<T, 5, 8> for PointGeometry<T> {
     }
 }
 
+/// Row `m_i B` of M B for one row `mi` of M and the columns `col` of the
+/// Q4's B ([`FbarPoint::add_bt_m_b`]): an even column c = 2a has the
+/// entries (rows 0, 1, 4) `col[a]`, an odd one (rows 2, 3) its first two.
+#[inline(always)]
+fn mb_row<T: Lane>(mi: &[T; 5], col: &[[T; 3]; 4]) -> [T; 8] {
+    [
+        mb_even(mi, &col[0]),
+        mb_odd(mi, &col[0]),
+        mb_even(mi, &col[1]),
+        mb_odd(mi, &col[1]),
+        mb_even(mi, &col[2]),
+        mb_odd(mi, &col[2]),
+        mb_even(mi, &col[3]),
+        mb_odd(mi, &col[3]),
+    ]
+}
+
+/// Entry of [`mb_row`] in an even column (u_r of a node).
+#[inline(always)]
+fn mb_even<T: Lane>(mi: &[T; 5], c: &[T; 3]) -> T {
+    mi[0] * c[0] + mi[1] * c[1] + mi[4] * c[2]
+}
+
+/// Entry of [`mb_row`] in an odd column (u_z of a node).
+#[inline(always)]
+fn mb_odd<T: Lane>(mi: &[T; 5], c: &[T; 3]) -> T {
+    mi[2] * c[0] + mi[3] * c[1]
+}
+
 impl FbarMaterialPoint<5, 8> for PointGeometry {
     fn matrix(f: &[f64; 5]) -> Mat3 {
         Mat3::new(f[0], f[1], 0.0, f[2], f[3], 0.0, 0.0, 0.0, f[4])
@@ -361,6 +384,16 @@ impl FbarMaterialPoint<5, 8> for PointGeometry {
         let resp = material.update_axisymmetric(state_n, f, dt, trial, tangent)?;
         Ok((resp.first_piola, resp.tangent))
     }
+}
+
+/// What the model keeps for [`fbar_kernel_lanes`] from one group of four
+/// elements to the next: the lane output and the kernel's intermediates
+/// (kept, not rebuilt per group, so they are not zeroed every time).
+#[doc(hidden)]
+#[derive(Default)]
+pub struct LaneBuffers {
+    out: LocalOutput<8, F64x4>,
+    scratch: KernelScratch<F64x4, 5, 8, 4>,
 }
 
 /// The points of four elements, one per lane: [`Material3::update_axisymmetric_lanes`].
@@ -424,7 +457,7 @@ pub(crate) fn fbar_kernel_lanes<M: Material3>(
     dt: f64,
     fbar: bool,
     part: TangentPart,
-    lanes: &mut LocalOutput<8, F64x4>,
+    lanes: &mut LaneBuffers,
     out: [&mut ElementOutput; 4],
 ) -> bool {
     if !M::AXISYMMETRIC_LANES
@@ -442,7 +475,11 @@ pub(crate) fn fbar_kernel_lanes<M: Material3>(
         trial,
         dt,
     };
-    if crate::fbar::fbar_kernel_in(geometry, &ul, points, fbar, part, lanes).is_err() {
+    let LaneBuffers {
+        out: lanes,
+        scratch,
+    } = lanes;
+    if crate::fbar::fbar_kernel_in(geometry, &ul, points, fbar, part, scratch, lanes).is_err() {
         return false;
     }
     let [o0, o1, o2, o3] = out;

@@ -12,7 +12,7 @@
 use crate::element::{ElementOutput, PointGeometry};
 use crate::fbar::{fbar_energy, fbar_kernel};
 use crate::hex::{HexOutput, HexPoint};
-use crate::local::{Local, LocalOutput, PointFailure, TangentPart};
+use crate::local::{Local, PointFailure, TangentPart};
 use crate::sets::NamedSets;
 use crate::{FemError, Mesh, Mesh3, Result};
 use nlvid_material::{F64x4, Mat3, Material3};
@@ -200,8 +200,8 @@ pub trait ElementKind<M: Material3>: Send + Sync + 'static {
     /// ([`ElementKind::evaluate_lanes`]; `()` for kinds without).
     #[doc(hidden)]
     type LaneGeometry: Send + Sync;
-    /// The output of four elements in lanes (a buffer the model keeps, so
-    /// it is not cleared twice per group).
+    /// The output of four elements in lanes and the kernel's intermediates
+    /// (buffers the model keeps, so they are not cleared at every group).
     #[doc(hidden)]
     type LaneOutput: Send + Default;
 
@@ -293,7 +293,7 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
     type Geometry = [PointGeometry; 4];
     type Output = ElementOutput;
     type LaneGeometry = [PointGeometry<F64x4>; 4];
-    type LaneOutput = LocalOutput<8, F64x4>;
+    type LaneOutput = crate::element::LaneBuffers;
 
     fn geometry(mesh: &Mesh) -> Result<Vec<[PointGeometry; 4]>> {
         Ok(mesh
@@ -333,7 +333,7 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
         dt: f64,
         fbar: bool,
         part: TangentPart,
-        lanes: &mut LocalOutput<8, F64x4>,
+        lanes: &mut crate::element::LaneBuffers,
         out: [&mut ElementOutput; 4],
     ) -> bool {
         crate::element::fbar_kernel_lanes(
