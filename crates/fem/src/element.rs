@@ -460,15 +460,27 @@ pub(crate) fn fbar_kernel_lanes<M: Material3>(
     lanes: &mut LaneBuffers,
     out: [&mut ElementOutput; 4],
 ) -> bool {
+    let (Ok(n0), Ok(n1), Ok(n2), Ok(n3)) = (
+        <&[usize; 4]>::try_from(nodes[0]),
+        <&[usize; 4]>::try_from(nodes[1]),
+        <&[usize; 4]>::try_from(nodes[2]),
+        <&[usize; 4]>::try_from(nodes[3]),
+    ) else {
+        return false;
+    };
     if !M::AXISYMMETRIC_LANES
-        || nodes.iter().any(|x| x.len() != 4)
         || state_n.iter().any(|s| s.len() != 4)
         || trial.iter().any(|s| s.len() != 4)
     {
         return false;
     }
-    let ul: [F64x4; 8] =
-        std::array::from_fn(|k| F64x4(std::array::from_fn(|l| u[2 * nodes[l][k / 2] + k % 2])));
+    // Dof k of element l: component k % 2 of its node k / 2.
+    let mut ul = [F64x4::default(); 8];
+    for (l, n) in [n0, n1, n2, n3].into_iter().enumerate() {
+        for (k, y) in ul.iter_mut().enumerate() {
+            y.0[l] = u[2 * n[k / 2] + k % 2];
+        }
+    }
     let points = LanePoints {
         material,
         state_n,
