@@ -16,7 +16,7 @@
 //! Ψ = Ψ_iso(F) + U(J) this is exactly the Q1/P0 mixed element of
 //! Simo–Taylor–Pister with the pressure condensed out.
 
-use crate::fbar::{FbarMaterialPoint, FbarPoint, PointUpdate};
+use crate::fbar::{FbarMaterialPoint, FbarPoint, KernelScratch, PointUpdate};
 use crate::local::LocalOutput;
 #[doc(hidden)]
 pub use crate::local::{PointFailure, TangentPart};
@@ -284,15 +284,17 @@ impl<T: Lane> FbarPoint<T, 5, 8> for PointGeometry<T> {
         for a in 0..4 {
             col[a] = [g.dn[a][0], g.dn[a][1], g.n_over_r[a]];
         }
-        // MB (5×8).
-        let mut mb = [[T::zero(); 8]; 5];
-        for i in 0..5 {
-            for a in 0..4 {
-                let c = &col[a];
-                mb[i][2 * a] = m[i][0] * c[0] + m[i][1] * c[1] + m[i][4] * c[2];
-                mb[i][2 * a + 1] = m[i][2] * c[0] + m[i][3] * c[1];
-            }
-        }
+        // MB (5×8) as array literals, so every entry is built in place: a
+        // zeroed array filled afterwards cost a 1.3 kB memset per point in
+        // lanes. (Functions, not closures: a closure the optimiser leaves
+        // out of line is compiled for the baseline instruction set.)
+        let mb = [
+            mb_row(&m[0], &col),
+            mb_row(&m[1], &col),
+            mb_row(&m[2], &col),
+            mb_row(&m[3], &col),
+            mb_row(&m[4], &col),
+        ];
         for a in 0..4 {
             let c = &col[a];
             let (ee, eo) = if lower {
@@ -334,6 +336,35 @@ impl<T: Lane> FbarPoint<T, 5, 8> for PointGeometry<T> {
     }
 }
 
+/// Row `m_i B` of M B for one row `mi` of M and the columns `col` of the
+/// Q4's B ([`FbarPoint::add_bt_m_b`]): an even column c = 2a has the
+/// entries (rows 0, 1, 4) `col[a]`, an odd one (rows 2, 3) its first two.
+#[inline(always)]
+fn mb_row<T: Lane>(mi: &[T; 5], col: &[[T; 3]; 4]) -> [T; 8] {
+    [
+        mb_even(mi, &col[0]),
+        mb_odd(mi, &col[0]),
+        mb_even(mi, &col[1]),
+        mb_odd(mi, &col[1]),
+        mb_even(mi, &col[2]),
+        mb_odd(mi, &col[2]),
+        mb_even(mi, &col[3]),
+        mb_odd(mi, &col[3]),
+    ]
+}
+
+/// Entry of [`mb_row`] in an even column (u_r of a node).
+#[inline(always)]
+fn mb_even<T: Lane>(mi: &[T; 5], c: &[T; 3]) -> T {
+    mi[0] * c[0] + mi[1] * c[1] + mi[4] * c[2]
+}
+
+/// Entry of [`mb_row`] in an odd column (u_z of a node).
+#[inline(always)]
+fn mb_odd<T: Lane>(mi: &[T; 5], c: &[T; 3]) -> T {
+    mi[2] * c[0] + mi[3] * c[1]
+}
+
 impl FbarMaterialPoint<5, 8> for PointGeometry {
     fn matrix(f: &[f64; 5]) -> Mat3 {
         Mat3::new(f[0], f[1], 0.0, f[2], f[3], 0.0, 0.0, 0.0, f[4])
@@ -353,6 +384,16 @@ impl FbarMaterialPoint<5, 8> for PointGeometry {
         let resp = material.update_axisymmetric(state_n, f, dt, trial, tangent)?;
         Ok((resp.first_piola, resp.tangent))
     }
+}
+
+/// What the model keeps for [`fbar_kernel_lanes`] from one group of four
+/// elements to the next: the lane output and the kernel's intermediates
+/// (kept, not rebuilt per group, so they are not zeroed every time).
+#[doc(hidden)]
+#[derive(Default)]
+pub struct LaneBuffers {
+    out: LocalOutput<8, F64x4>,
+    scratch: KernelScratch<F64x4, 5, 8, 4>,
 }
 
 /// The points of four elements, one per lane: [`Material3::update_axisymmetric_lanes`].
@@ -395,34 +436,49 @@ impl<M: Material3> PointUpdate<F64x4, 5> for LanePoints<'_, M> {
 
 /// The F-bar kernel ([`crate::fbar::fbar_kernel`]) on four elements at once,
 /// one per lane of [`F64x4`] (the same code, so each element's output and
-/// trial history are bitwise those of the one-element kernel). `false` if
-/// the material has no lane update or any element fails (det F ≤ 0, a
-/// material error): the caller then evaluates the four one by one, which
-/// rewrites every trial history and reports the error.
+/// trial history are bitwise those of the one-element kernel). Element `l`
+/// has the nodes `nodes[l]` and its dofs are read from the global dof
+/// vector `u` (two per node) straight into the lanes. `false` if the
+/// material has no lane update or any element fails (det F ≤ 0, a material
+/// error): the caller then evaluates the four one by one, which rewrites
+/// every trial history and reports the error.
+///
+/// With [`TangentPart::Lower`] only the lower triangle of each element
+/// tangent is written to `out` (the rest is not read: the model's slot
+/// table has no slot for it).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn fbar_kernel_lanes<M: Material3>(
     material: &M,
     geometry: &[PointGeometry<F64x4>; 4],
-    u: [&[f64]; 4],
+    u: &[f64],
+    nodes: [&[usize]; 4],
     state_n: [&[M::State]; 4],
     trial: [&mut [M::State]; 4],
     dt: f64,
     fbar: bool,
     part: TangentPart,
-    lanes: &mut LocalOutput<8, F64x4>,
+    lanes: &mut LaneBuffers,
     out: [&mut ElementOutput; 4],
 ) -> bool {
+    let (Ok(n0), Ok(n1), Ok(n2), Ok(n3)) = (
+        <&[usize; 4]>::try_from(nodes[0]),
+        <&[usize; 4]>::try_from(nodes[1]),
+        <&[usize; 4]>::try_from(nodes[2]),
+        <&[usize; 4]>::try_from(nodes[3]),
+    ) else {
+        return false;
+    };
     if !M::AXISYMMETRIC_LANES
-        || u.iter().any(|x| x.len() != 8)
         || state_n.iter().any(|s| s.len() != 4)
         || trial.iter().any(|s| s.len() != 4)
     {
         return false;
     }
+    // Dof k of element l: component k % 2 of its node k / 2.
     let mut ul = [F64x4::default(); 8];
-    for (l, x) in u.iter().enumerate() {
+    for (l, n) in [n0, n1, n2, n3].into_iter().enumerate() {
         for (k, y) in ul.iter_mut().enumerate() {
-            y.0[l] = x[k];
+            y.0[l] = u[2 * n[k / 2] + k % 2];
         }
     }
     let points = LanePoints {
@@ -431,7 +487,11 @@ pub(crate) fn fbar_kernel_lanes<M: Material3>(
         trial,
         dt,
     };
-    if crate::fbar::fbar_kernel_in(geometry, &ul, points, fbar, part, lanes).is_err() {
+    let LaneBuffers {
+        out: lanes,
+        scratch,
+    } = lanes;
+    if crate::fbar::fbar_kernel_in(geometry, &ul, points, fbar, part, scratch, lanes).is_err() {
         return false;
     }
     let [o0, o1, o2, o3] = out;
@@ -440,7 +500,8 @@ pub(crate) fn fbar_kernel_lanes<M: Material3>(
     }
     if part != TangentPart::None {
         for r in 0..8 {
-            for c in 0..8 {
+            let end = if part == TangentPart::Lower { r + 1 } else { 8 };
+            for c in 0..end {
                 [o0.k[r][c], o1.k[r][c], o2.k[r][c], o3.k[r][c]] = lanes.k[r][c].0;
             }
         }
@@ -749,10 +810,15 @@ mod tests {
                 let mut out = [ElementOutput::zero(); 4];
                 let [t0, t1, t2, t3] = &mut tr;
                 let [o0, o1, o2, o3] = &mut out;
+                // Element l's nodes 4l..4l + 4 in a global dof vector.
+                let global: Vec<f64> = u.iter().flatten().copied().collect();
+                let nodes: [[usize; 4]; 4] =
+                    std::array::from_fn(|l| [0, 1, 2, 3].map(|a| 4 * l + a));
                 let ok = fbar_kernel_lanes(
                     &cell,
                     &lane_geo,
-                    u.each_ref().map(|u| &u[..]),
+                    &global,
+                    nodes.each_ref().map(|n| &n[..]),
                     sn.each_ref().map(|s| &s[..]),
                     [&mut t0[..], &mut t1[..], &mut t2[..], &mut t3[..]],
                     0.2,

@@ -12,7 +12,7 @@
 use crate::element::{ElementOutput, PointGeometry};
 use crate::fbar::{fbar_energy, fbar_kernel};
 use crate::hex::{HexOutput, HexPoint};
-use crate::local::{Local, LocalOutput, PointFailure, TangentPart};
+use crate::local::{Local, PointFailure, TangentPart};
 use crate::sets::NamedSets;
 use crate::{FemError, Mesh, Mesh3, Result};
 use nlvid_material::{F64x4, Mat3, Material3};
@@ -200,8 +200,8 @@ pub trait ElementKind<M: Material3>: Send + Sync + 'static {
     /// ([`ElementKind::evaluate_lanes`]; `()` for kinds without).
     #[doc(hidden)]
     type LaneGeometry: Send + Sync;
-    /// The output of four elements in lanes (a buffer the model keeps, so
-    /// it is not cleared twice per group).
+    /// The output of four elements in lanes and the kernel's intermediates
+    /// (buffers the model keeps, so they are not cleared at every group).
     #[doc(hidden)]
     type LaneOutput: Send + Default;
 
@@ -248,12 +248,15 @@ pub trait ElementKind<M: Material3>: Send + Sync + 'static {
     /// lane, each output bitwise the one-element result; `false` if not
     /// implemented or any element fails (the caller then evaluates them one
     /// by one, which rewrites their trial histories and reports the error).
+    /// Element `l` has the nodes `nodes[l]`; its dofs are read from the
+    /// global dof vector `u` directly into the lanes (no per-element copy).
     #[doc(hidden)]
     #[allow(clippy::too_many_arguments)]
     fn evaluate_lanes(
         _material: &M,
         _geometry: &Self::LaneGeometry,
-        _u: [&[f64]; 4],
+        _u: &[f64],
+        _nodes: [&[usize]; 4],
         _state_n: [&[M::State]; 4],
         _trial: [&mut [M::State]; 4],
         _dt: f64,
@@ -290,7 +293,7 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
     type Geometry = [PointGeometry; 4];
     type Output = ElementOutput;
     type LaneGeometry = [PointGeometry<F64x4>; 4];
-    type LaneOutput = LocalOutput<8, F64x4>;
+    type LaneOutput = crate::element::LaneBuffers;
 
     fn geometry(mesh: &Mesh) -> Result<Vec<[PointGeometry; 4]>> {
         Ok(mesh
@@ -323,17 +326,18 @@ impl<M: Material3> ElementKind<M> for Axisymmetric {
     fn evaluate_lanes(
         material: &M,
         geometry: &[PointGeometry<F64x4>; 4],
-        u: [&[f64]; 4],
+        u: &[f64],
+        nodes: [&[usize]; 4],
         state_n: [&[M::State]; 4],
         trial: [&mut [M::State]; 4],
         dt: f64,
         fbar: bool,
         part: TangentPart,
-        lanes: &mut LocalOutput<8, F64x4>,
+        lanes: &mut crate::element::LaneBuffers,
         out: [&mut ElementOutput; 4],
     ) -> bool {
         crate::element::fbar_kernel_lanes(
-            material, geometry, u, state_n, trial, dt, fbar, part, lanes, out,
+            material, geometry, u, nodes, state_n, trial, dt, fbar, part, lanes, out,
         )
     }
 

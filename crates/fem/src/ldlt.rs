@@ -12,18 +12,22 @@
 //! system is built ([`SupernodalLdlt::new`]), so a factorisation is the
 //! dense arithmetic plus one indexed subtraction per update entry.
 //!
-//! The values are stored as faer stores them: supernode s owns a
-//! column-major block of (n_s + m_s) rows × n_s columns — its own columns,
-//! then its m_s off-diagonal rows — with D on the block's diagonal and the
-//! unit lower factor L below it. The algorithm is right-looking: once a
-//! supernode's block is factorised, its Schur complement update
-//! L₂₁ D L₂₁ᵀ is subtracted from the ancestors' blocks, so every supernode
-//! has received all its updates when its turn comes.
+//! The values are stored as faer stores them, except that each block is
+//! zero-padded for the register tiles: supernode s owns a column-major
+//! block of n_s columns — its own rows, padded to a multiple of 4, then its
+//! m_s off-diagonal rows, padded to a multiple of 4 ([`Panel`]) — with D
+//! on the block's diagonal and the unit lower factor L below it. The
+//! algorithm is right-looking: once a supernode's block is factorised, its
+//! Schur complement update L₂₁ D L₂₁ᵀ is subtracted from the ancestors'
+//! blocks, so every supernode has received all its updates when its turn
+//! comes.
 //!
-//! The dense work of a small supernode runs in zero-padded 4 × 4 register
-//! tiles ([`Panel`], [`tile_product`]); a large one ([`LARGE_BLOCK`], e.g.
-//! the 3D capsule's) goes to faer's cache-blocked dense kernels, which win
-//! there (docs/theory/fem.md "Session 18").
+//! The dense work of a small supernode runs in 4 × 4 register tiles
+//! ([`Panel`], [`tile_product`]) on its block in place (the padded layout
+//! spares copying every block into a padded working panel and back, ≈ 2 %
+//! of the thesis run in memmove); a large one ([`LARGE_BLOCK`], e.g. the 3D
+//! capsule's) goes to faer's cache-blocked dense kernels, which win there
+//! (docs/theory/fem.md "Session 18").
 //!
 //! No pivoting: a zero or non-finite pivot makes [`SupernodalLdlt::factorize`]
 //! return false, and the caller solves by LU instead (crates/fem/src/sparse.rs).
@@ -59,7 +63,8 @@ pub(crate) struct SupernodalLdlt {
     /// Off-diagonal rows of supernode s: `rows[row_ptr[s]..row_ptr[s + 1]]`.
     row_ptr: Vec<usize>,
     rows: Vec<usize>,
-    /// Values of supernode s: `values[val_ptr[s]..val_ptr[s + 1]]`.
+    /// Values of supernode s (its padded block, [`Panel`]):
+    /// `values[val_ptr[s]..val_ptr[s + 1]]`.
     val_ptr: Vec<usize>,
     /// For each stored entry of the matrix, its position in `values`.
     entry_to_factor: Vec<usize>,
@@ -68,13 +73,13 @@ pub(crate) struct SupernodalLdlt {
     targets: Vec<UpdateTarget>,
     /// Row positions, within their target's block, of update rows.
     row_in_target: Vec<usize>,
-    /// The factors (faer's layout, module docs).
+    /// The factors (padded blocks, module docs).
     values: Vec<f64>,
-    /// Scratch of one supernode: its working panel ([`Panel`]), L₂₁ D
-    /// (column-major, m rounded up to 4 rows), the update's lower tiles;
-    /// one column of a product (longest panel), coefficients (4 × widest
-    /// supernode).
-    panel: Vec<f64>,
+    /// Number of factor values in faer's unpadded layout.
+    faer_len: usize,
+    /// Scratch of one supernode: L₂₁ D (column-major, m rounded up to 4
+    /// rows), the update's lower tiles; one column of a product (longest
+    /// block), coefficients (4 × widest supernode).
     scaled: Vec<f64>,
     update: Vec<f64>,
     column: Vec<f64>,
@@ -90,7 +95,7 @@ impl std::fmt::Debug for SupernodalLdlt {
             "SupernodalLdlt(n = {}, supernodes = {}, factor values = {})",
             self.begin.last().copied().unwrap_or(0),
             self.begin.len().saturating_sub(1),
-            self.values.len()
+            self.faer_len
         )
     }
 }
@@ -117,22 +122,25 @@ impl SupernodalLdlt {
         row_ptr.push(0);
         val_ptr.push(0);
         let mut supernode_of = vec![0; n];
+        let mut faer_len = 0;
         for s in 0..n_super {
             rows.extend_from_slice(structure.supernode(s).pattern());
             row_ptr.push(rows.len());
             let ns = begin[s + 1] - begin[s];
-            let ld = ns + row_ptr[s + 1] - row_ptr[s];
-            val_ptr.push(val_ptr[s] + ld * ns);
+            let m = row_ptr[s + 1] - row_ptr[s];
+            val_ptr.push(val_ptr[s] + Panel::new(ns, m).rows * ns);
+            faer_len += (ns + m) * ns;
             supernode_of[begin[s]..begin[s + 1]].fill(s);
         }
-        if val_ptr[n_super] != structure.len_val() {
+        if faer_len != structure.len_val() {
             return Err(FemError::Solver(
                 "supernodal structure: value layout differs from faer's".into(),
             ));
         }
         let missing =
             |r: usize, c: usize| FemError::Solver(format!("factor structure lacks ({r}, {c})"));
-        // Position of row r in supernode t's block.
+        let panel = |t: usize| Panel::new(begin[t + 1] - begin[t], row_ptr[t + 1] - row_ptr[t]);
+        // Position of row r in supernode t's (padded) block.
         let row_position = |t: usize, r: usize| -> Option<usize> {
             if (begin[t]..begin[t + 1]).contains(&r) {
                 Some(r - begin[t])
@@ -140,10 +148,10 @@ impl SupernodalLdlt {
                 rows[row_ptr[t]..row_ptr[t + 1]]
                     .binary_search(&r)
                     .ok()
-                    .map(|k| begin[t + 1] - begin[t] + k)
+                    .map(|k| panel(t).top + k)
             }
         };
-        let leading = |t: usize| begin[t + 1] - begin[t] + row_ptr[t + 1] - row_ptr[t];
+        let leading = |t: usize| panel(t).rows;
 
         let mut entry_to_factor = Vec::with_capacity(pattern.row_idx().len());
         for c in 0..n {
@@ -159,8 +167,7 @@ impl SupernodalLdlt {
         let mut target_ptr = vec![0];
         let mut targets = Vec::new();
         let mut row_in_target = Vec::new();
-        let (mut max_ld, mut max_ns, mut max_scaled, mut max_update, mut max_panel) =
-            (0, 0, 0, 0, 0);
+        let (mut max_ld, mut max_ns, mut max_scaled, mut max_update) = (0, 0, 0, 0);
         for s in 0..n_super {
             let own = &rows[row_ptr[s]..row_ptr[s + 1]];
             let m = own.len();
@@ -168,7 +175,6 @@ impl SupernodalLdlt {
             max_ld = max_ld.max(Panel::new(ns, m).rows);
             max_ns = max_ns.max(ns);
             max_scaled = max_scaled.max(m.next_multiple_of(4) * ns);
-            max_panel = max_panel.max(Panel::new(ns, m).rows * ns);
             max_update = max_update.max(m.next_multiple_of(4).pow(2));
             if is_large(ns, m) {
                 max_scaled = max_scaled.max(m * ns);
@@ -201,7 +207,7 @@ impl SupernodalLdlt {
             target_ptr,
             targets,
             row_in_target,
-            panel: vec![0.0; max_panel],
+            faer_len,
             scaled: vec![0.0; max_scaled],
             update: vec![0.0; max_update],
             column: vec![0.0; max_ld],
@@ -228,9 +234,26 @@ impl SupernodalLdlt {
             .count()
     }
 
-    /// The factor values, in faer's supernodal layout (module docs).
-    pub(crate) fn values(&self) -> &[f64] {
-        &self.values
+    /// Number of factor values (nnz(L) with D on the diagonal, faer's count).
+    pub(crate) fn factor_len(&self) -> usize {
+        self.faer_len
+    }
+
+    /// The factor values in faer's unpadded supernodal layout (tests compare
+    /// them with faer's own factorisation), entries above the diagonal zero.
+    #[cfg(test)]
+    pub(crate) fn faer_values(&self) -> Vec<f64> {
+        let mut out = Vec::with_capacity(self.faer_len);
+        for s in 0..self.begin.len() - 1 {
+            let ns = self.begin[s + 1] - self.begin[s];
+            let panel = Panel::new(ns, self.row_ptr[s + 1] - self.row_ptr[s]);
+            let block = &self.values[self.val_ptr[s]..self.val_ptr[s + 1]];
+            for (k, column) in block.chunks_exact(panel.rows).enumerate() {
+                out.extend((0..ns).map(|i| if i < k { 0.0 } else { column[i] }));
+                out.extend_from_slice(&column[panel.top..panel.top + panel.m]);
+            }
+        }
+        out
     }
 
     /// Factorises the matrix whose stored entries (the pattern given to
@@ -270,22 +293,19 @@ impl pulp::WithSimd for Factorize<'_> {
             let ns = f.begin[s + 1] - f.begin[s];
             let m = f.row_ptr[s + 1] - f.row_ptr[s];
             let (head, tail) = f.values.split_at_mut(f.val_ptr[s + 1]);
-            let block = &mut head[f.val_ptr[s]..];
+            let q = &mut head[f.val_ptr[s]..];
+            let panel = Panel::new(ns, m);
             // The update W = L₂₁ D L₂₁ᵀ, column-major with leading dimension `ldw`.
             let ldw = if is_large(ns, m) {
-                if !factorize_large(block, ns, m, &mut f.stack) {
+                if !factorize_large(q, &panel, &mut f.stack) {
                     return false;
                 }
-                update_large(block, ns, m, &mut f.scaled, &mut f.update);
+                update_large(q, &panel, &mut f.scaled, &mut f.update);
                 m
             } else {
-                let panel = Panel::new(ns, m);
-                let q = &mut f.panel[..panel.rows * ns];
-                panel.load(q, block);
                 if !panel.factorize(q, &mut f.coefficients, &mut f.column) {
                     return false;
                 }
-                panel.store(q, block);
                 // Lower tiles of 4 × 4 (leading dimension m4).
                 let m4 = panel.rows - panel.top;
                 let scaled = &mut f.scaled[..m4 * ns];
@@ -314,7 +334,8 @@ impl pulp::WithSimd for Factorize<'_> {
             let own = &f.rows[f.row_ptr[s]..f.row_ptr[s + 1]];
             for target in &f.targets[f.target_ptr[s]..f.target_ptr[s + 1]] {
                 let t = target.supernode;
-                let ld_t = f.begin[t + 1] - f.begin[t] + f.row_ptr[t + 1] - f.row_ptr[t];
+                let ld_t =
+                    Panel::new(f.begin[t + 1] - f.begin[t], f.row_ptr[t + 1] - f.row_ptr[t]).rows;
                 for j in target.first..target.end {
                     let base = f.val_ptr[t] + (own[j] - f.begin[t]) * ld_t - offset;
                     let rel = &f.row_in_target[target.rel_start + (j - target.first)..][..m - j];
@@ -341,12 +362,15 @@ fn is_large(ns: usize, m: usize) -> bool {
     ns * (ns + m) * (ns + m) >= LARGE_BLOCK
 }
 
-/// A large supernode's block factorised in place by faer's dense LDLᵀ
-/// (the diagonal block) and a unit triangular solve (L₂₁), as faer's own
-/// supernodal factorisation does. false on a zero or non-finite pivot.
-fn factorize_large(block: &mut [f64], ns: usize, m: usize, stack: &mut MemBuffer) -> bool {
-    let ls = MatMut::from_column_major_slice_mut(&mut block[..(ns + m) * ns], ns + m, ns);
-    let (mut top, mut bottom) = ls.split_at_row_mut(ns);
+/// A large supernode's (padded) block factorised in place by faer's dense
+/// LDLᵀ (the diagonal block) and a unit triangular solve (L₂₁), as faer's
+/// own supernodal factorisation does. false on a zero or non-finite pivot.
+fn factorize_large(block: &mut [f64], panel: &Panel, stack: &mut MemBuffer) -> bool {
+    let (ns, m) = (panel.ns, panel.m);
+    let ls = MatMut::from_column_major_slice_mut(&mut block[..panel.rows * ns], panel.rows, ns);
+    let (diagonal, below) = ls.split_at_row_mut(panel.top);
+    let mut top = diagonal.split_at_row_mut(ns).0;
+    let mut bottom = below.split_at_row_mut(m).0;
     let factored = cholesky_in_place(
         top.as_mut(),
         LdltRegularization::default(),
@@ -374,9 +398,12 @@ fn factorize_large(block: &mut [f64], ns: usize, m: usize, stack: &mut MemBuffer
 
 /// A large supernode's update W = L₂₁ D L₂₁ᵀ (lower triangle, column-major
 /// m × m) by faer's triangular matrix product.
-fn update_large(block: &[f64], ns: usize, m: usize, scaled: &mut [f64], update: &mut [f64]) {
-    let ls = MatRef::from_column_major_slice(&block[..(ns + m) * ns], ns + m, ns);
-    let (top, l21) = ls.split_at_row(ns);
+fn update_large(block: &[f64], panel: &Panel, scaled: &mut [f64], update: &mut [f64]) {
+    let (ns, m) = (panel.ns, panel.m);
+    let ls = MatRef::from_column_major_slice(&block[..panel.rows * ns], panel.rows, ns);
+    let (diagonal, below) = ls.split_at_row(panel.top);
+    let top = diagonal.split_at_row(ns).0;
+    let l21 = below.split_at_row(m).0;
     let mut s = MatMut::from_column_major_slice_mut(&mut scaled[..m * ns], m, ns);
     for k in 0..ns {
         let d = top[(k, k)];
@@ -397,11 +424,12 @@ fn update_large(block: &[f64], ns: usize, m: usize, scaled: &mut [f64], update: 
     );
 }
 
-/// One supernode's block copied into a zero-padded working panel whose
-/// row counts are multiples of 4, so the tiles need no remainder loops:
+/// The layout of one supernode's block of `ns` columns: zero-padded row
+/// counts that are multiples of 4, so the tiles need no remainder loops:
 /// rows `0..ns` the diagonal block, `top..top + m` the off-diagonal rows
 /// (`top` = ns rounded up to 4), `rows` = top + m rounded up to 4. The
-/// padding rows stay zero through the factorisation.
+/// padding rows are zeroed with the block and stay zero through the
+/// factorisation.
 struct Panel {
     ns: usize,
     m: usize,
@@ -418,32 +446,6 @@ impl Panel {
             m,
             top,
             rows: top + m.next_multiple_of(4),
-        }
-    }
-
-    #[inline(always)]
-    fn load(&self, q: &mut [f64], block: &[f64]) {
-        let (ns, ld) = (self.ns, self.ns + self.m);
-        for (dst, src) in q.chunks_exact_mut(self.rows).zip(block.chunks_exact(ld)) {
-            dst[..ns].copy_from_slice(&src[..ns]);
-            dst[ns..self.top].fill(0.0);
-            dst[self.top..self.top + self.m].copy_from_slice(&src[ns..]);
-            dst[self.top + self.m..].fill(0.0);
-        }
-    }
-
-    /// Writes the lower triangle of the diagonal block and the off-diagonal
-    /// rows back (the rest of the block is not touched).
-    #[inline(always)]
-    fn store(&self, q: &[f64], block: &mut [f64]) {
-        let (ns, ld) = (self.ns, self.ns + self.m);
-        for (k, (src, dst)) in q
-            .chunks_exact(self.rows)
-            .zip(block.chunks_exact_mut(ld))
-            .enumerate()
-        {
-            dst[k..ns].copy_from_slice(&src[k..ns]);
-            dst[ns..].copy_from_slice(&src[self.top..self.top + self.m]);
         }
     }
 
@@ -593,7 +595,7 @@ impl pulp::WithSimd for Solve<'_, '_> {
         for s in 0..n_super {
             let (b, ns) = (f.begin[s], f.begin[s + 1] - f.begin[s]);
             let own = &f.rows[f.row_ptr[s]..f.row_ptr[s + 1]];
-            let ld = ns + own.len();
+            let Panel { rows: ld, top, .. } = Panel::new(ns, own.len());
             let values = &f.values[f.val_ptr[s]..f.val_ptr[s + 1]];
             for k in 0..ns {
                 let xk = x[b + k];
@@ -606,7 +608,7 @@ impl pulp::WithSimd for Solve<'_, '_> {
             }
             if !own.is_empty() {
                 let t = &mut f.column[..own.len()];
-                product(t, values, ld, ns, &x[b..b + ns]);
+                product(t, values, ld, top, &x[b..b + ns]);
                 for (&r, &v) in own.iter().zip(t.iter()) {
                     x[r] -= v;
                 }
@@ -615,7 +617,7 @@ impl pulp::WithSimd for Solve<'_, '_> {
         // D z = y.
         for s in 0..n_super {
             let (b, ns) = (f.begin[s], f.begin[s + 1] - f.begin[s]);
-            let ld = ns + f.row_ptr[s + 1] - f.row_ptr[s];
+            let ld = Panel::new(ns, f.row_ptr[s + 1] - f.row_ptr[s]).rows;
             let values = &f.values[f.val_ptr[s]..f.val_ptr[s + 1]];
             for k in 0..ns {
                 x[b + k] /= values[k * ld + k];
@@ -626,7 +628,9 @@ impl pulp::WithSimd for Solve<'_, '_> {
         for s in (0..n_super).rev() {
             let (b, ns) = (f.begin[s], f.begin[s + 1] - f.begin[s]);
             let own = &f.rows[f.row_ptr[s]..f.row_ptr[s + 1]];
-            let ld = ns + own.len();
+            let Panel {
+                rows: ld, top, m, ..
+            } = Panel::new(ns, own.len());
             let values = &f.values[f.val_ptr[s]..f.val_ptr[s + 1]];
             if !own.is_empty() {
                 let g = &mut f.column[..own.len()];
@@ -634,7 +638,7 @@ impl pulp::WithSimd for Solve<'_, '_> {
                     *gi = x[r];
                 }
                 for k in 0..ns {
-                    x[b + k] -= dot(&values[k * ld + ns..(k + 1) * ld], g);
+                    x[b + k] -= dot(&values[k * ld + top..k * ld + top + m], g);
                 }
             }
             for k in (0..ns).rev() {
