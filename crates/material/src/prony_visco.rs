@@ -517,6 +517,197 @@ mod tests {
         target.clone_from(&s1);
         assert_eq!(target, s1);
         assert_ne!(target, s0);
-        assert_eq!(target.h.as_ptr(), ptr, "history vector reallocated");
+        assert_eq!(target.terms.as_ptr(), ptr, "history vector reallocated");
+    }
+
+    /// The step cache against the direct recursion, bitwise: four points
+    /// through a sequence of Newton-like iterations into the same trial
+    /// buffers (lanes and one by one, alternately) with rejected steps
+    /// retried with another and with the same Δt, equal Δt on successive
+    /// steps, Δt = 0, a material change within a step, commits by copy and
+    /// by swap, and one scratch trial shared by all points; against
+    /// updates into fresh trial states (no cache) and against
+    /// `H_k(t_{n+1}) = E_k H_k(t_n) + β0_k S̄0(t_n) + β1_k S̄0(t_{n+1})`.
+    #[test]
+    fn step_cache_is_bitwise_the_direct_recursion() {
+        use crate::{AxisymmetricResponse, F64x4};
+        let g = Relaxation::from_named(&nlvid_model::names::PRONY2, &[1000.0, 0.3, 0.3, 0.5, 10.0])
+            .expect("valid");
+        let m = PronyViscoelastic::cell(&g, 1e5).expect("valid");
+        let trapezoid = m.clone().with_rule(HistoryRule::Trapezoid);
+        let f_at = |step: usize, it: usize, p: usize| -> [f64; 5] {
+            let s = 0.02 * (step as f64 + 1.0) + 0.003 * it as f64 + 0.01 * p as f64;
+            [1.0 + s, 0.3 * s, -0.2 * s, 1.0 - 0.5 * s, 1.0 - 0.4 * s]
+        };
+        let bits = |r: &AxisymmetricResponse| -> Vec<u64> {
+            r.first_piola
+                .iter()
+                .chain(r.tangent.iter().flatten())
+                .map(|x| x.to_bits())
+                .collect()
+        };
+        // (Δt, iterations, accepted)
+        let plan = [
+            (0.1, 3, true),
+            (0.1, 2, true),
+            (0.4, 3, false),
+            (0.2, 3, true),
+            (0.2, 2, false),
+            (0.2, 4, true),
+            (0.0, 2, true),
+            (0.05, 3, true),
+            (0.05, 1, true),
+        ];
+        let init = PointState::initial_state(&m);
+        let mut committed = vec![init.clone(); 4];
+        let mut trial = vec![init.clone(); 4];
+        let mut reference = vec![init.clone(); 4];
+        let mut scratch = init.clone();
+        let mut direct_h = vec![vec![Mat3::zeros(); 2]; 4];
+        let mut direct_sbar = vec![Mat3::zeros(); 4];
+        for (step, &(dt, iterations, accepted)) in plan.iter().enumerate() {
+            let mut last_ref = vec![init.clone(); 4];
+            for it in 0..iterations {
+                let mat = if step == 3 && it == 1 { &trapezoid } else { &m };
+                let f: Vec<[f64; 5]> = (0..4).map(|p| f_at(step, it, p)).collect();
+                // The reference: a fresh trial state every time.
+                let want: Vec<AxisymmetricResponse> = (0..4)
+                    .map(|p| {
+                        let mut fresh = init.clone();
+                        let r = Material3::update_axisymmetric(
+                            mat,
+                            &reference[p],
+                            &f[p],
+                            dt,
+                            &mut fresh,
+                            true,
+                        )
+                        .expect("update");
+                        last_ref[p] = fresh;
+                        r
+                    })
+                    .collect();
+                if it % 2 == 0 {
+                    let fl: [F64x4; 5] =
+                        std::array::from_fn(|c| F64x4(std::array::from_fn(|l| f[l][c])));
+                    let mut p_out = [F64x4([0.0; 4]); 5];
+                    let mut a_out = [[F64x4([0.0; 4]); 5]; 5];
+                    let [c0, c1, c2, c3] = &committed[..] else {
+                        unreachable!()
+                    };
+                    let [t0, t1, t2, t3] = &mut trial[..] else {
+                        unreachable!()
+                    };
+                    assert!(Material3::update_axisymmetric_lanes(
+                        mat,
+                        [c0, c1, c2, c3],
+                        &fl,
+                        dt,
+                        [t0, t1, t2, t3],
+                        true,
+                        &mut p_out,
+                        &mut a_out,
+                    ));
+                    for (p, w) in want.iter().enumerate() {
+                        let got = AxisymmetricResponse {
+                            first_piola: p_out.map(|x| x.0[p]),
+                            tangent: a_out.map(|row| row.map(|x| x.0[p])),
+                        };
+                        assert_eq!(bits(&got), bits(w), "lanes, step {step} it {it} point {p}");
+                    }
+                } else {
+                    for p in 0..4 {
+                        let got = Material3::update_axisymmetric(
+                            mat,
+                            &committed[p],
+                            &f[p],
+                            dt,
+                            &mut trial[p],
+                            true,
+                        )
+                        .expect("update");
+                        assert_eq!(bits(&got), bits(&want[p]), "step {step} it {it} point {p}");
+                    }
+                }
+                if it == 0 {
+                    // One scratch trial for every point (equal Δt, states
+                    // of the same step).
+                    for p in 0..4 {
+                        let got = Material3::update_axisymmetric(
+                            mat,
+                            &committed[p],
+                            &f[p],
+                            dt,
+                            &mut scratch,
+                            true,
+                        )
+                        .expect("update");
+                        assert_eq!(bits(&got), bits(&want[p]), "scratch, step {step} point {p}");
+                    }
+                }
+            }
+            for p in 0..4 {
+                assert_eq!(format!("{:?}", trial[p]), format!("{:?}", last_ref[p]));
+            }
+            if !accepted {
+                continue;
+            }
+            for p in 0..4 {
+                // H_k(t_{n+1}) by the direct recursion (the last iteration
+                // used `m`, the default rule).
+                let sbar_new = last_ref[p].sbar;
+                for (k, term) in m.prony().terms().iter().enumerate() {
+                    let w = HistoryRule::ExponentialLinear.weights(dt, term.tau);
+                    direct_h[p][k] =
+                        direct_h[p][k] * w.decay + direct_sbar[p] * w.beta0 + sbar_new * w.beta1;
+                }
+                direct_sbar[p] = sbar_new;
+                reference[p] = last_ref[p].clone();
+                if step % 2 == 0 {
+                    committed[p].clone_from(&trial[p]);
+                } else {
+                    std::mem::swap(&mut committed[p], &mut trial[p]);
+                }
+                assert_eq!(committed[p], reference[p]);
+                assert_eq!(
+                    committed[p].sbar.map(f64::to_bits),
+                    direct_sbar[p].map(f64::to_bits)
+                );
+                for k in 0..2 {
+                    assert_eq!(
+                        committed[p].history(k).map(f64::to_bits),
+                        direct_h[p][k].map(f64::to_bits),
+                        "H_{k} at step {step}, point {p}"
+                    );
+                }
+            }
+        }
+        assert_ne!(direct_h[0][0], Mat3::zeros());
+    }
+
+    /// Two trial states of one step (after different iterations, so with
+    /// different `S̄0`) used as committed states into one trial buffer
+    /// with the same Δt: the second must not reuse the first's cache.
+    #[test]
+    fn every_evaluation_gives_its_state_a_new_identity() {
+        let g = Relaxation::from_named(&nlvid_model::names::PRONY2, &[1000.0, 0.3, 0.3, 0.5, 10.0])
+            .expect("valid");
+        let m = PronyViscoelastic::cell(&g, 1e5).expect("valid");
+        let s0 = PointState::initial_state(&m);
+        let f1 = Mat3::new(1.1, 0.1, 0.0, 0.0, 0.95, 0.0, 0.0, 0.0, 0.97);
+        let f2 = Mat3::new(1.2, 0.1, 0.0, 0.0, 0.9, 0.0, 0.0, 0.0, 0.93);
+        let mut trial = s0.clone();
+        m.update(&s0, &f1, 0.1, &mut trial).expect("update");
+        let a = trial.clone();
+        m.update(&s0, &f2, 0.1, &mut trial).expect("update");
+        let b = trial.clone();
+        assert_ne!(a, b);
+        let mut scratch = s0.clone();
+        m.update(&a, &f2, 0.1, &mut scratch).expect("update");
+        let got = m.update(&b, &f2, 0.1, &mut scratch).expect("update");
+        let mut fresh = s0.clone();
+        let want = m.update(&b, &f2, 0.1, &mut fresh).expect("update");
+        assert_eq!(got, want);
+        assert_eq!(scratch, fresh);
     }
 }
