@@ -1,6 +1,6 @@
 //! Quadrature-point history (deal.II's `PointHistory`): the converged
 //! state at t_n of every Gauss point and the trial state of the step being
-//! solved. Committing copies trial over converged without allocating.
+//! solved. Committing swaps the two (no copy, no allocation).
 
 use nlvid_material::Material3;
 
@@ -36,9 +36,18 @@ impl<S: Clone> History<S> {
         (&self.committed, &mut self.trial)
     }
 
-    /// Accepts the trial states of a converged step.
+    /// Accepts the trial states of a converged step: they become the
+    /// converged states, and the trial vector holds the previous converged
+    /// states until the next assembly overwrites them. A swap instead of a
+    /// copy, which relies on the contract of [`Material3::update`] (and of
+    /// the other point updates): an update writes the trial history and
+    /// never relies on what the trial state held before (after a rejected
+    /// step it holds the rejected values anyway). The models of
+    /// `nlvid-material` obey it: their updates rewrite every field they
+    /// later read, and the Prony model's step cache in the trial state is
+    /// keyed by the committed state's identity, so a stale cache misses.
     pub fn commit(&mut self) {
-        self.committed.clone_from_slice(&self.trial);
+        std::mem::swap(&mut self.committed, &mut self.trial);
     }
 
     /// Converged state of point `p`.

@@ -47,7 +47,11 @@ pub trait Material3: PointState {
     /// Stress and consistent tangent at `t_{n+1} = t_n + dt` for the
     /// deformation gradient `f`, given the converged history `state_n` at
     /// `t_n`. The updated history is written to `trial`; the caller commits
-    /// it (copies it over `state_n`) once the global step converges.
+    /// it (copies it over `state_n`, or swaps the two) once the global step
+    /// converges. What `trial` held on entry is unspecified (a rejected
+    /// trial, an older converged state, a copy of `state_n`): an update
+    /// must not depend on it, except through a cache it validates itself
+    /// ([`crate::PronyViscoelastic`]'s step cache).
     ///
     /// # Errors
     /// [`crate::MaterialError::Deformation`] when `det f ≤ 0` or the update
