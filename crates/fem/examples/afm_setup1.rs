@@ -138,6 +138,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .collect();
         std::fs::write(path, text)?;
     }
+    // NLVID_FEM_DUMP_BITS=FILE: every written sample (t, Z, d, F, δ) as the
+    // hexadecimal bits of the f64s, to check two builds for bitwise equality.
+    if let (Some(path), Some(run)) = (std::env::var_os("NLVID_FEM_DUMP_BITS"), &last) {
+        let mut text = String::new();
+        for i in 0..run.time.len() {
+            let row = [
+                run.time[i],
+                run.piezo[i],
+                run.deflection[i],
+                run.force[i],
+                run.indentation[i],
+            ];
+            let row: Vec<String> = row
+                .iter()
+                .map(|x| format!("{:016x}", x.to_bits()))
+                .collect();
+            text.push_str(&row.join(" "));
+            text.push('\n');
+        }
+        std::fs::write(path, text)?;
+    }
     if let Some(run) = last {
         let min_force = run.force.iter().cloned().fold(f64::INFINITY, f64::min);
         println!(

@@ -44,7 +44,8 @@ impl<S: Clone> History<S> {
     /// never relies on what the trial state held before (after a rejected
     /// step it holds the rejected values anyway). The models of
     /// `nlvid-material` obey it: their updates rewrite every field they
-    /// later read.
+    /// later read, and the Prony model's step cache in the trial state is
+    /// keyed by the committed state's identity, so a stale cache misses.
     pub fn commit(&mut self) {
         std::mem::swap(&mut self.committed, &mut self.trial);
     }

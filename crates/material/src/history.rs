@@ -75,13 +75,25 @@ pub(crate) fn advance(
     h_out: &mut Vec<crate::Mat3>,
 ) -> (crate::Mat3, f64) {
     h_out.resize(prony.len(), crate::Mat3::zeros());
-    advance_with(rule, prony, dt, |k| h_n[k], a_n, a_new, |k, h| h_out[k] = h)
+    advance_with(
+        rule,
+        prony,
+        dt,
+        |k| h_n[k],
+        a_n,
+        |k, old, beta1| {
+            h_out[k] = old + a_new * beta1;
+        },
+    )
 }
 
-/// [`advance`] for points in lanes ([`crate::Lane`]): `H_k(t_n)` read by
-/// `h_n(k)`, `H_k(t_{n+1})` written by `h_out(k, ·)`. The step weights and
-/// `Σ g_k β1_k` depend on Δt and the series only, so they are the same in
-/// every lane.
+/// The step-constant part of [`advance`], for points in lanes
+/// ([`crate::Lane`]): `H_k(t_n)` read by `h_n(k)`; for each term
+/// `old_k = E_k H_k(t_n) + β0_k A_n` and `β1_k` go to `step_out(k, ·, ·)`
+/// (so `H_k(t_{n+1}) = old_k + A_{n+1} β1_k`, formed by the caller when
+/// `A_{n+1}` is known); returns `(−Σ g_k old_k, Σ g_k β1_k)`. Nothing
+/// here depends on `A_{n+1}`. The step weights and `Σ g_k β1_k` depend on
+/// Δt and the series only, so they are the same in every lane.
 #[inline(always)]
 pub(crate) fn advance_with<T: crate::Lane>(
     rule: HistoryRule,
@@ -89,8 +101,7 @@ pub(crate) fn advance_with<T: crate::Lane>(
     dt: f64,
     h_n: impl Fn(usize) -> nalgebra::Matrix3<T>,
     a_n: &nalgebra::Matrix3<T>,
-    a_new: &nalgebra::Matrix3<T>,
-    mut h_out: impl FnMut(usize, nalgebra::Matrix3<T>),
+    mut step_out: impl FnMut(usize, nalgebra::Matrix3<T>, f64),
 ) -> (nalgebra::Matrix3<T>, f64) {
     // The weights copied out of the memo, so the loop below is not a
     // closure (a closure stays a separate function, compiled outside the
@@ -113,10 +124,38 @@ pub(crate) fn advance_with<T: crate::Lane>(
     for (k, (term, w)) in prony.terms().iter().zip(weights).enumerate() {
         let old = h_n(k) * T::splat(w.decay) + a_n * T::splat(w.beta0);
         frozen -= old * T::splat(term.weight);
-        h_out(k, old + a_new * T::splat(w.beta1));
+        step_out(k, old, w.beta1);
         sum_b1 += term.weight * w.beta1;
     }
     (frozen, sum_b1)
+}
+
+/// Identifiers unique within the process (never 0): [`fresh_ids`].
+static NEXT_ID_BLOCK: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
+/// Identifiers taken from the global counter at once by each thread.
+const ID_BLOCK: u64 = 1 << 20;
+
+thread_local! {
+    /// This thread's unused identifiers `next..end`.
+    static IDS: std::cell::Cell<(u64, u64)> = const { std::cell::Cell::new((0, 0)) };
+}
+
+/// `N` identifiers never returned before in this process (on any thread)
+/// and never 0: a thread takes blocks of [`ID_BLOCK`] from one atomic
+/// counter, so a call costs a thread-local increment.
+#[inline]
+pub(crate) fn fresh_ids<const N: usize>() -> [u64; N] {
+    IDS.with(|ids| {
+        let (mut next, mut end) = ids.get();
+        if end - next < N as u64 {
+            let block = NEXT_ID_BLOCK.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            next = block * ID_BLOCK;
+            end = next + ID_BLOCK;
+        }
+        ids.set((next + N as u64, end));
+        std::array::from_fn(|i| next + i as u64)
+    })
 }
 
 /// Entries of the per-thread memo of [`HistoryRule::weights`].

@@ -33,7 +33,11 @@
 //!
 //! Cost: one update is O(number of Prony terms) (exact recursive update of
 //! the exponential kernels, [`HistoryRule`]) plus ~1.5 k flops for the 9×9
-//! tangent: about 0.3 µs per 3D update with tangent on one core. The
+//! tangent: about 0.3 µs per 3D update with tangent on one core. For
+//! [`PronyViscoelastic`] the O(terms) part is done once per point and time
+//! step: later updates of the same step (Newton iterations) into the same
+//! trial state reuse it (a step cache in the state, validated by the
+//! committed state's identity, Δt and the material). The
 //! axisymmetric path [`Material3::update_axisymmetric`] returns only the
 //! 5 components of `P` and the 5×5 block of the tangent an axisymmetric
 //! element reads (no 9×9 matrix, no Cauchy stress; tangent optional); for

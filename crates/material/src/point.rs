@@ -50,7 +50,8 @@ pub trait Material3: PointState {
     /// it (copies it over `state_n`, or swaps the two) once the global step
     /// converges. What `trial` held on entry is unspecified (a rejected
     /// trial, an older converged state, a copy of `state_n`): an update
-    /// must not depend on it.
+    /// must not depend on it, except through a cache it validates itself
+    /// ([`crate::PronyViscoelastic`]'s step cache).
     ///
     /// # Errors
     /// [`crate::MaterialError::Deformation`] when `det f ≤ 0` or the update

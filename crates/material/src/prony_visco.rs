@@ -13,9 +13,21 @@
 //! back by F̄) as `τᴰ = dev{F̄ [S̄0(t) − Σ g_k H_k(t)] F̄ᵀ}`,
 //! `H_k(t) = ∫_0^t (1/τ_k) e^{−(t−s)/τ_k} S̄0(s) ds`, updated recursively.
 //! The bulk response does not relax (`K(s) = K`): `τᴴ = K J (J − 1) I`.
+//!
+//! Per Newton iteration the update costs O(1) in the number of terms: of
+//! `H_k(t_{n+1}) = E_k H_k(t_n) + β0_k S̄0(t_n) + β1_k S̄0(t_{n+1})` only the
+//! last term depends on the iterate, so the step-constant parts
+//! `old_k = E_k H_k(t_n) + β0_k S̄0(t_n)` and the frozen stress
+//! `−Σ g_k old_k` are computed once per point and step, kept in the trial
+//! state ([`PronyViscoelasticState`], a cache keyed by the committed
+//! state's identity, Δt and the material) and reused by every later
+//! iteration of the same step. A state stores `old_k` and `β1_k` with
+//! `S̄0` instead of `H_k`: `H_k = old_k + β1_k S̄0` is formed when the
+//! next step reads it (the same floating-point operations as forming it at
+//! once, so results are bitwise those of the direct recursion).
 
 use crate::PointState;
-use crate::history::advance_with;
+use crate::history::{advance_with, fresh_ids};
 use crate::hyperelastic::add_volumetric;
 use crate::kernel::{IsoStress, Kin, XCI, XH};
 use crate::model::Kernel;
@@ -26,19 +38,104 @@ use nlvid_model::{Prony, Relaxation};
 use crate::{HistoryRule, Mat3, MooneyRivlin};
 
 /// ABAQUS-form finite-strain viscoelasticity, eqs. 4.1–4.3 / 5.1.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Clone)]
 pub struct PronyViscoelastic {
     elastic: MooneyRivlin,
     prony: Prony,
     rule: HistoryRule,
+    /// Identifies (series, rule) in the step cache of the states: unique
+    /// per construction ([`fresh_ids`]), shared by clones (which are the
+    /// same material); not part of the material's value (`PartialEq`,
+    /// `Debug`).
+    stamp: u64,
 }
 
-/// History of a [`PronyViscoelastic`] point: `H_k` per Prony term and `S̄0`
-/// at the last converged step.
-#[derive(Debug, PartialEq)]
+impl PartialEq for PronyViscoelastic {
+    fn eq(&self, other: &Self) -> bool {
+        self.elastic == other.elastic && self.prony == other.prony && self.rule == other.rule
+    }
+}
+
+impl std::fmt::Debug for PronyViscoelastic {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("PronyViscoelastic")
+            .field("elastic", &self.elastic)
+            .field("prony", &self.prony)
+            .field("rule", &self.rule)
+            .finish()
+    }
+}
+
+/// History of a [`PronyViscoelastic`] point at one time `t`: `S̄0(t)` and
+/// per Prony term `H_k(t)`, stored as `old_k` and `β1_k` of the step that
+/// produced it (`H_k(t) = old_k + S̄0(t) β1_k`, [`PronyViscoelasticState::history`]);
+/// plus the step cache of a trial state (module docs).
+///
+/// The cache is valid for the step from committed state `c` over `dt` with
+/// material `m` when its key is `(c.id, dt, m.stamp)`. Every evaluation
+/// gives the state it writes a new `id` (unique in the process, so two
+/// states with one `id` are copies of one evaluation's result), whether or
+/// not it used the cache: a copy of any trial is a valid committed state,
+/// and no other state can pass for it, whatever the caller does with its
+/// buffers (retried steps with a new or the same Δt, equal Δt on
+/// successive steps, one scratch trial for many points, swapped buffers).
 pub struct PronyViscoelasticState {
-    h: Vec<Mat3>,
+    terms: Vec<PendingTerm>,
     sbar: Mat3,
+    /// Identity of this state's contents; 0 for the initial state (all
+    /// initial states of one material are equal).
+    id: u64,
+    step: StepCache,
+}
+
+/// `H_k = old + S̄0 β1` of one term.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct PendingTerm {
+    old: Mat3,
+    beta1: f64,
+}
+
+/// The step-constant part of the update that wrote a trial state: valid
+/// for committed state `source`, time step `dt` (bits) and material
+/// `stamp`; `frozen = −Σ g_k old_k`, `sum_b1 = Σ g_k β1_k`. The `old_k`
+/// themselves are the trial's `terms`.
+#[derive(Debug, Clone, Copy)]
+struct StepCache {
+    source: u64,
+    dt: u64,
+    stamp: u64,
+    frozen: Mat3,
+    sum_b1: f64,
+}
+
+impl StepCache {
+    /// Matches nothing (identifiers are never `u64::MAX`).
+    const EMPTY: StepCache = StepCache {
+        source: u64::MAX,
+        dt: 0,
+        stamp: u64::MAX,
+        frozen: Mat3::new(0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+        sum_b1: 0.0,
+    };
+
+    #[inline(always)]
+    fn hit(&self, source: u64, dt: u64, stamp: u64) -> bool {
+        self.source == source && self.dt == dt && self.stamp == stamp
+    }
+}
+
+impl PronyViscoelasticState {
+    /// `H_k` of term `k` at this state's time.
+    fn history(&self, k: usize) -> Mat3 {
+        let t = &self.terms[k];
+        formed(t.old, &self.sbar, t.beta1)
+    }
+}
+
+/// `H_k = old_k + S̄0 β1_k`: the operations of the direct recursion.
+#[inline(always)]
+fn formed<T: Lane>(old: Matrix3<T>, sbar: &Matrix3<T>, beta1: T) -> Matrix3<T> {
+    old + sbar * beta1
 }
 
 /// `clone_from` reuses the history vector: a finite-element model commits
@@ -47,14 +144,39 @@ pub struct PronyViscoelasticState {
 impl Clone for PronyViscoelasticState {
     fn clone(&self) -> Self {
         Self {
-            h: self.h.clone(),
+            terms: self.terms.clone(),
             sbar: self.sbar,
+            id: self.id,
+            step: self.step,
         }
     }
 
     fn clone_from(&mut self, source: &Self) {
-        self.h.clone_from(&source.h);
+        self.terms.clone_from(&source.terms);
         self.sbar = source.sbar;
+        self.id = source.id;
+        self.step = source.step;
+    }
+}
+
+/// The history's value: `H_k` and `S̄0` (not how `H_k` is stored, not the
+/// identity or the step cache).
+impl PartialEq for PronyViscoelasticState {
+    fn eq(&self, other: &Self) -> bool {
+        self.sbar == other.sbar
+            && self.terms.len() == other.terms.len()
+            && (0..self.terms.len()).all(|k| self.history(k) == other.history(k))
+    }
+}
+
+/// The history's value, `h` (`H_k`) and `sbar` (`S̄0`), as [`PartialEq`].
+impl std::fmt::Debug for PronyViscoelasticState {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let h: Vec<Mat3> = (0..self.terms.len()).map(|k| self.history(k)).collect();
+        f.debug_struct("PronyViscoelasticState")
+            .field("h", &h)
+            .field("sbar", &self.sbar)
+            .finish()
     }
 }
 
@@ -67,6 +189,7 @@ impl PronyViscoelastic {
             elastic,
             prony,
             rule: HistoryRule::default(),
+            stamp: fresh_ids::<1>()[0],
         }
     }
 
@@ -106,6 +229,8 @@ impl PronyViscoelastic {
     /// Chooses the one-step quadrature of the hereditary integral.
     pub fn with_rule(mut self, rule: HistoryRule) -> Self {
         self.rule = rule;
+        // Another material: states cached for the old rule must miss.
+        self.stamp = fresh_ids::<1>()[0];
         self
     }
 
@@ -151,43 +276,40 @@ impl PointState for PronyViscoelastic {
 
     fn initial_state(&self) -> PronyViscoelasticState {
         PronyViscoelasticState {
-            h: vec![Mat3::zeros(); self.prony.len()],
+            terms: vec![PendingTerm::default(); self.prony.len()],
             sbar: Mat3::zeros(),
+            id: 0,
+            step: StepCache::EMPTY,
         }
     }
 }
 
 impl PronyViscoelastic {
     /// The kernel ([`Kernel::eval`]) for one point (`T = f64`) or one point
-    /// per lane ([`crate::Lane`]): the history at `t_n` read by `h_n(k)`
-    /// (`H_k`) and `sbar_n` (`S̄0`), the trial history written by
-    /// `h_out(k, ·)` and `sbar_out`; the stress to `out` (zero on entry).
-    /// Always inlined (see [`Kernel::eval`]).
-    #[allow(clippy::too_many_arguments)]
+    /// per lane ([`crate::Lane`]), given the step-constant part
+    /// `step = (−Σ g_k old_k, Σ g_k β1_k)` of the history (`None` without
+    /// Prony terms): the stress to `out` (zero on entry), `S̄0(t_{n+1})` to
+    /// `sbar_out`. Always inlined (see [`Kernel::eval`]).
     #[inline(always)]
     fn eval_generic<T: Lane>(
         &self,
-        h_n: impl Fn(usize) -> Matrix3<T>,
-        sbar_n: &Matrix3<T>,
         k: &Kin<T>,
-        dt: f64,
-        h_out: impl FnMut(usize, Matrix3<T>),
+        step: Option<(Matrix3<T>, f64)>,
         sbar_out: impl FnOnce(Matrix3<T>),
         bulk: f64,
         out: &mut IsoStress<T>,
     ) {
-        if self.prony.is_empty() {
+        let Some((frozen, sum_b1)) = step else {
             // No Prony term (an elastic cell): no history and no H term;
             // the general path below would add exact zeros only.
             self.elastic.add_isochoric(k, 1.0, out);
             add_volumetric(k, bulk, out);
             return;
-        }
+        };
         let mut iso = IsoStress::default();
         self.elastic.add_isochoric(k, 1.0, &mut iso);
         let j23 = k.j23;
         let sbar = iso.pk2(k) * (T::one() / j23);
-        let (frozen, sum_b1) = advance_with(self.rule, &self.prony, dt, h_n, sbar_n, &sbar, h_out);
         sbar_out(sbar);
         out.add_scaled(&iso, 1.0 - sum_b1);
         // J^{-2/3} DEV(frozen) = J^{-2/3} [h − (h:C)/3 C⁻¹].
@@ -205,6 +327,21 @@ impl PronyViscoelastic {
             k.grad(zero, zero, T::splat(2.0 / 9.0) * j23 * hc / k.j, -j23 / 3.0),
         );
         add_volumetric(k, bulk, out);
+    }
+
+    /// The step-constant part of the history update from the committed
+    /// histories (`H_k(t_n)` read by `h_n(k)`, `S̄0(t_n)`), once per point
+    /// and step: `old_k`, `β1_k` to `term_out(k, ·, ·)`; returns
+    /// `(−Σ g_k old_k, Σ g_k β1_k)`.
+    #[inline(always)]
+    fn step_constant<T: Lane>(
+        &self,
+        h_n: impl Fn(usize) -> Matrix3<T>,
+        sbar_n: &Matrix3<T>,
+        dt: f64,
+        term_out: impl FnMut(usize, Matrix3<T>, f64),
+    ) -> (Matrix3<T>, f64) {
+        advance_with(self.rule, &self.prony, dt, h_n, sbar_n, term_out)
     }
 }
 
@@ -227,26 +364,43 @@ impl Kernel for PronyViscoelastic {
         trial: &mut PronyViscoelasticState,
         bulk: f64,
     ) -> IsoStress {
-        if !self.prony.is_empty() {
-            trial.h.resize(self.prony.len(), Mat3::zeros());
-        }
-        let (h, sbar) = (&mut trial.h, &mut trial.sbar);
         let mut out = IsoStress::default();
-        self.eval_generic(
-            |k| st.h[k],
-            &st.sbar,
-            k,
-            dt,
-            |k, x| h[k] = x,
-            |x| *sbar = x,
-            bulk,
-            &mut out,
-        );
+        let n = self.prony.len();
+        let step = if n == 0 {
+            None
+        } else if trial.terms.len() == n && trial.step.hit(st.id, dt.to_bits(), self.stamp) {
+            Some((trial.step.frozen, trial.step.sum_b1))
+        } else {
+            trial.terms.resize(n, PendingTerm::default());
+            let terms = &mut trial.terms;
+            let (frozen, sum_b1) = self.step_constant(
+                |k| formed(st.terms[k].old, &st.sbar, st.terms[k].beta1),
+                &st.sbar,
+                dt,
+                |k, old, beta1| terms[k] = PendingTerm { old, beta1 },
+            );
+            trial.step = StepCache {
+                source: st.id,
+                dt: dt.to_bits(),
+                stamp: self.stamp,
+                frozen,
+                sum_b1,
+            };
+            Some((frozen, sum_b1))
+        };
+        if n > 0 {
+            trial.id = fresh_ids::<1>()[0];
+        }
+        let sbar = &mut trial.sbar;
+        self.eval_generic(k, step, |x| *sbar = x, bulk, &mut out);
         out
     }
 
     /// [`Kernel::eval`] of four points, one per lane: the histories are
-    /// gathered into lanes and the trial histories scattered back.
+    /// gathered into lanes and the trial histories scattered back. The
+    /// step cache is used only if it is valid in all four lanes (else all
+    /// four are recomputed, which rewrites a valid lane's cache with the
+    /// same values).
     #[inline(always)]
     fn eval_lanes(
         &self,
@@ -260,28 +414,74 @@ impl Kernel for PronyViscoelastic {
             Matrix3::from_fn(|r, c| F64x4([m[0][(r, c)], m[1][(r, c)], m[2][(r, c)], m[3][(r, c)]]))
         };
         let [t0, t1, t2, t3] = trial;
-        let mut h = [&mut t0.h, &mut t1.h, &mut t2.h, &mut t3.h];
-        let sbar = [&mut t0.sbar, &mut t1.sbar, &mut t2.sbar, &mut t3.sbar];
-        if !self.prony.is_empty() {
-            for x in h.iter_mut() {
-                x.resize(self.prony.len(), Mat3::zeros());
+        let n = self.prony.len();
+        let dt_bits = dt.to_bits();
+        let step = if n == 0 {
+            None
+        } else if [&*t0, &*t1, &*t2, &*t3]
+            .iter()
+            .zip(st)
+            .all(|(t, s)| t.terms.len() == n && t.step.hit(s.id, dt_bits, self.stamp))
+        {
+            let frozen = gather([
+                &t0.step.frozen,
+                &t1.step.frozen,
+                &t2.step.frozen,
+                &t3.step.frozen,
+            ]);
+            Some((frozen, t0.step.sum_b1))
+        } else {
+            let mut terms = [&mut t0.terms, &mut t1.terms, &mut t2.terms, &mut t3.terms];
+            for x in terms.iter_mut() {
+                x.resize(n, PendingTerm::default());
             }
+            let sbar_n = gather(st.map(|s| &s.sbar));
+            let (frozen, sum_b1) = self.step_constant(
+                |k| {
+                    let old = gather(st.map(|s| &s.terms[k].old));
+                    formed(old, &sbar_n, F64x4(st.map(|s| s.terms[k].beta1)))
+                },
+                &sbar_n,
+                dt,
+                |k, old, beta1| {
+                    let [h0, h1, h2, h3] = &mut terms;
+                    let out = [&mut h0[k], &mut h1[k], &mut h2[k], &mut h3[k]];
+                    scatter(
+                        &old,
+                        out.map(|t| {
+                            t.beta1 = beta1;
+                            &mut t.old
+                        }),
+                    );
+                },
+            );
+            for (t, s) in [&mut *t0, &mut *t1, &mut *t2, &mut *t3].into_iter().zip(st) {
+                t.step.source = s.id;
+                t.step.dt = dt_bits;
+                t.step.stamp = self.stamp;
+                t.step.sum_b1 = sum_b1;
+            }
+            scatter(
+                &frozen,
+                [
+                    &mut t0.step.frozen,
+                    &mut t1.step.frozen,
+                    &mut t2.step.frozen,
+                    &mut t3.step.frozen,
+                ],
+            );
+            Some((frozen, sum_b1))
+        };
+        if n > 0 {
+            let ids = fresh_ids::<4>();
+            t0.id = ids[0];
+            t1.id = ids[1];
+            t2.id = ids[2];
+            t3.id = ids[3];
         }
-        let sbar_n = gather(st.map(|s| &s.sbar));
+        let sbar = [&mut t0.sbar, &mut t1.sbar, &mut t2.sbar, &mut t3.sbar];
         let mut out = IsoStress::default();
-        self.eval_generic(
-            |k| gather(st.map(|s| &s.h[k])),
-            &sbar_n,
-            k,
-            dt,
-            |k, x| {
-                let [h0, h1, h2, h3] = &mut h;
-                scatter(&x, [&mut h0[k], &mut h1[k], &mut h2[k], &mut h3[k]]);
-            },
-            |x| scatter(&x, sbar),
-            bulk,
-            &mut out,
-        );
+        self.eval_generic(k, step, |x| scatter(&x, sbar), bulk, &mut out);
         out
     }
 }
@@ -313,10 +513,201 @@ mod tests {
         let f = Mat3::new(1.1, 0.1, 0.0, 0.0, 0.95, 0.0, 0.0, 0.0, 0.97);
         m.update(&s0, &f, 0.1, &mut s1).expect("update");
         let mut target = s0.clone();
-        let ptr = target.h.as_ptr();
+        let ptr = target.terms.as_ptr();
         target.clone_from(&s1);
         assert_eq!(target, s1);
         assert_ne!(target, s0);
-        assert_eq!(target.h.as_ptr(), ptr, "history vector reallocated");
+        assert_eq!(target.terms.as_ptr(), ptr, "history vector reallocated");
+    }
+
+    /// The step cache against the direct recursion, bitwise: four points
+    /// through a sequence of Newton-like iterations into the same trial
+    /// buffers (lanes and one by one, alternately) with rejected steps
+    /// retried with another and with the same Δt, equal Δt on successive
+    /// steps, Δt = 0, a material change within a step, commits by copy and
+    /// by swap, and one scratch trial shared by all points; against
+    /// updates into fresh trial states (no cache) and against
+    /// `H_k(t_{n+1}) = E_k H_k(t_n) + β0_k S̄0(t_n) + β1_k S̄0(t_{n+1})`.
+    #[test]
+    fn step_cache_is_bitwise_the_direct_recursion() {
+        use crate::{AxisymmetricResponse, F64x4};
+        let g = Relaxation::from_named(&nlvid_model::names::PRONY2, &[1000.0, 0.3, 0.3, 0.5, 10.0])
+            .expect("valid");
+        let m = PronyViscoelastic::cell(&g, 1e5).expect("valid");
+        let trapezoid = m.clone().with_rule(HistoryRule::Trapezoid);
+        let f_at = |step: usize, it: usize, p: usize| -> [f64; 5] {
+            let s = 0.02 * (step as f64 + 1.0) + 0.003 * it as f64 + 0.01 * p as f64;
+            [1.0 + s, 0.3 * s, -0.2 * s, 1.0 - 0.5 * s, 1.0 - 0.4 * s]
+        };
+        let bits = |r: &AxisymmetricResponse| -> Vec<u64> {
+            r.first_piola
+                .iter()
+                .chain(r.tangent.iter().flatten())
+                .map(|x| x.to_bits())
+                .collect()
+        };
+        // (Δt, iterations, accepted)
+        let plan = [
+            (0.1, 3, true),
+            (0.1, 2, true),
+            (0.4, 3, false),
+            (0.2, 3, true),
+            (0.2, 2, false),
+            (0.2, 4, true),
+            (0.0, 2, true),
+            (0.05, 3, true),
+            (0.05, 1, true),
+        ];
+        let init = PointState::initial_state(&m);
+        let mut committed = vec![init.clone(); 4];
+        let mut trial = vec![init.clone(); 4];
+        let mut reference = vec![init.clone(); 4];
+        let mut scratch = init.clone();
+        let mut direct_h = vec![vec![Mat3::zeros(); 2]; 4];
+        let mut direct_sbar = vec![Mat3::zeros(); 4];
+        for (step, &(dt, iterations, accepted)) in plan.iter().enumerate() {
+            let mut last_ref = vec![init.clone(); 4];
+            for it in 0..iterations {
+                let mat = if step == 3 && it == 1 { &trapezoid } else { &m };
+                let f: Vec<[f64; 5]> = (0..4).map(|p| f_at(step, it, p)).collect();
+                // The reference: a fresh trial state every time.
+                let want: Vec<AxisymmetricResponse> = (0..4)
+                    .map(|p| {
+                        let mut fresh = init.clone();
+                        let r = Material3::update_axisymmetric(
+                            mat,
+                            &reference[p],
+                            &f[p],
+                            dt,
+                            &mut fresh,
+                            true,
+                        )
+                        .expect("update");
+                        last_ref[p] = fresh;
+                        r
+                    })
+                    .collect();
+                if it % 2 == 0 {
+                    let fl: [F64x4; 5] =
+                        std::array::from_fn(|c| F64x4(std::array::from_fn(|l| f[l][c])));
+                    let mut p_out = [F64x4([0.0; 4]); 5];
+                    let mut a_out = [[F64x4([0.0; 4]); 5]; 5];
+                    let [c0, c1, c2, c3] = &committed[..] else {
+                        unreachable!()
+                    };
+                    let [t0, t1, t2, t3] = &mut trial[..] else {
+                        unreachable!()
+                    };
+                    assert!(Material3::update_axisymmetric_lanes(
+                        mat,
+                        [c0, c1, c2, c3],
+                        &fl,
+                        dt,
+                        [t0, t1, t2, t3],
+                        true,
+                        &mut p_out,
+                        &mut a_out,
+                    ));
+                    for (p, w) in want.iter().enumerate() {
+                        let got = AxisymmetricResponse {
+                            first_piola: p_out.map(|x| x.0[p]),
+                            tangent: a_out.map(|row| row.map(|x| x.0[p])),
+                        };
+                        assert_eq!(bits(&got), bits(w), "lanes, step {step} it {it} point {p}");
+                    }
+                } else {
+                    for p in 0..4 {
+                        let got = Material3::update_axisymmetric(
+                            mat,
+                            &committed[p],
+                            &f[p],
+                            dt,
+                            &mut trial[p],
+                            true,
+                        )
+                        .expect("update");
+                        assert_eq!(bits(&got), bits(&want[p]), "step {step} it {it} point {p}");
+                    }
+                }
+                if it == 0 {
+                    // One scratch trial for every point (equal Δt, states
+                    // of the same step).
+                    for p in 0..4 {
+                        let got = Material3::update_axisymmetric(
+                            mat,
+                            &committed[p],
+                            &f[p],
+                            dt,
+                            &mut scratch,
+                            true,
+                        )
+                        .expect("update");
+                        assert_eq!(bits(&got), bits(&want[p]), "scratch, step {step} point {p}");
+                    }
+                }
+            }
+            for p in 0..4 {
+                assert_eq!(format!("{:?}", trial[p]), format!("{:?}", last_ref[p]));
+            }
+            if !accepted {
+                continue;
+            }
+            for p in 0..4 {
+                // H_k(t_{n+1}) by the direct recursion (the last iteration
+                // used `m`, the default rule).
+                let sbar_new = last_ref[p].sbar;
+                for (k, term) in m.prony().terms().iter().enumerate() {
+                    let w = HistoryRule::ExponentialLinear.weights(dt, term.tau);
+                    direct_h[p][k] =
+                        direct_h[p][k] * w.decay + direct_sbar[p] * w.beta0 + sbar_new * w.beta1;
+                }
+                direct_sbar[p] = sbar_new;
+                reference[p] = last_ref[p].clone();
+                if step % 2 == 0 {
+                    committed[p].clone_from(&trial[p]);
+                } else {
+                    std::mem::swap(&mut committed[p], &mut trial[p]);
+                }
+                assert_eq!(committed[p], reference[p]);
+                assert_eq!(
+                    committed[p].sbar.map(f64::to_bits),
+                    direct_sbar[p].map(f64::to_bits)
+                );
+                for k in 0..2 {
+                    assert_eq!(
+                        committed[p].history(k).map(f64::to_bits),
+                        direct_h[p][k].map(f64::to_bits),
+                        "H_{k} at step {step}, point {p}"
+                    );
+                }
+            }
+        }
+        assert_ne!(direct_h[0][0], Mat3::zeros());
+    }
+
+    /// Two trial states of one step (after different iterations, so with
+    /// different `S̄0`) used as committed states into one trial buffer
+    /// with the same Δt: the second must not reuse the first's cache.
+    #[test]
+    fn every_evaluation_gives_its_state_a_new_identity() {
+        let g = Relaxation::from_named(&nlvid_model::names::PRONY2, &[1000.0, 0.3, 0.3, 0.5, 10.0])
+            .expect("valid");
+        let m = PronyViscoelastic::cell(&g, 1e5).expect("valid");
+        let s0 = PointState::initial_state(&m);
+        let f1 = Mat3::new(1.1, 0.1, 0.0, 0.0, 0.95, 0.0, 0.0, 0.0, 0.97);
+        let f2 = Mat3::new(1.2, 0.1, 0.0, 0.0, 0.9, 0.0, 0.0, 0.0, 0.93);
+        let mut trial = s0.clone();
+        m.update(&s0, &f1, 0.1, &mut trial).expect("update");
+        let a = trial.clone();
+        m.update(&s0, &f2, 0.1, &mut trial).expect("update");
+        let b = trial.clone();
+        assert_ne!(a, b);
+        let mut scratch = s0.clone();
+        m.update(&a, &f2, 0.1, &mut scratch).expect("update");
+        let got = m.update(&b, &f2, 0.1, &mut scratch).expect("update");
+        let mut fresh = s0.clone();
+        let want = m.update(&b, &f2, 0.1, &mut fresh).expect("update");
+        assert_eq!(got, want);
+        assert_eq!(scratch, fresh);
     }
 }
