@@ -17,7 +17,7 @@
 
 #![allow(clippy::unwrap_used)]
 
-use nlvid_fem::afm::{self, AfmSetup, Cantilever, Engagement, MeshLayout};
+use nlvid_fem::afm::{self, AfmSetup, MeshLayout};
 use nlvid_model::{Prony, Relaxation, names};
 
 fn forces(setup: &AfmSetup) -> (Vec<f64>, Vec<f64>, usize, f64) {
@@ -28,13 +28,8 @@ fn forces(setup: &AfmSetup) -> (Vec<f64>, Vec<f64>, usize, f64) {
 
 fn main() {
     faer::set_global_parallelism(faer::Par::Seq);
-    let mut setup = AfmSetup::thesis_setup1();
-    setup.cantilever = Cantilever::Rigid;
-    setup.engagement = Engagement {
-        force: 0.0,
-        ramp: 1.0,
-        hold: 0.0,
-    };
+    // The elastic dome, pushed through one piezo segment per depth.
+    let mut setup = AfmSetup::elastic_dome();
     setup.bulk_ratio = std::env::var("NLVID_FEM_BULK").map_or(1000.0, |v| v.parse().unwrap());
     let depths: Vec<f64> = (0..=64)
         .map(|i| 0.05e-6 * 40f64.powf(i as f64 / 64.0))
