@@ -546,6 +546,14 @@ mod tests {
                 .map(|x| x.to_bits())
                 .collect()
         };
+        // One point's update with tangent, into `trial`.
+        let one = |mat: &PronyViscoelastic,
+                   st: &PronyViscoelasticState,
+                   f: &[f64; 5],
+                   dt: f64,
+                   trial: &mut PronyViscoelasticState| {
+            Material3::update_axisymmetric(mat, st, f, dt, trial, true).expect("update")
+        };
         // (Δt, iterations, accepted)
         let plan = [
             (0.1, 3, true),
@@ -617,15 +625,7 @@ mod tests {
                     }
                 } else {
                     for p in 0..4 {
-                        let got = Material3::update_axisymmetric(
-                            mat,
-                            &committed[p],
-                            &f[p],
-                            dt,
-                            &mut trial[p],
-                            true,
-                        )
-                        .expect("update");
+                        let got = one(mat, &committed[p], &f[p], dt, &mut trial[p]);
                         assert_eq!(bits(&got), bits(&want[p]), "step {step} it {it} point {p}");
                     }
                 }
@@ -633,15 +633,7 @@ mod tests {
                     // One scratch trial for every point (equal Δt, states
                     // of the same step).
                     for p in 0..4 {
-                        let got = Material3::update_axisymmetric(
-                            mat,
-                            &committed[p],
-                            &f[p],
-                            dt,
-                            &mut scratch,
-                            true,
-                        )
-                        .expect("update");
+                        let got = one(mat, &committed[p], &f[p], dt, &mut scratch);
                         assert_eq!(bits(&got), bits(&want[p]), "scratch, step {step} point {p}");
                     }
                 }
