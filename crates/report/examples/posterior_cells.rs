@@ -14,7 +14,7 @@
 //!     [threads=N] [rungs=N] [ratio=F] [temper_after=N] [temper_ridge=F] [temper_burn=N] \
 //!     [temper_min=N] [temper_rhat=F|none] [hot_starts=B] [check=N] \
 //!     [delayed=BOOL,...] [seed=N] [prior=BOOL] [heavy_tails=BOOL] \
-//!     [direction_scales=BOOL] [cell ...]
+//!     [direction_scales=BOOL] [variance_at_fit=BOOL] [cell ...]
 //! ```
 //! (`prior=true`: the cells drawn from the posteriors' prior,
 //! `DemoSpec::from_prior`, as `posterior_coverage … prior`.)
@@ -58,6 +58,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ridge_time: RidgeTime = opt("ridge_time").map_or(Ok(RidgeTime::Kept), |v| v.parse())?;
     let threads: usize = opt("threads").map_or(Ok(1), |v| v.parse())?;
     let heavy_tails: Option<bool> = opt("heavy_tails").map(|v| v.parse()).transpose()?;
+    let variance_at_fit: Option<bool> = opt("variance_at_fit").map(|v| v.parse()).transpose()?;
     let direction_scales: Option<bool> = opt("direction_scales").map(|v| v.parse()).transpose()?;
     // The tempering options take comma-separated lists: every
     // combination is sampled in turn on the same curves (one curve
@@ -172,6 +173,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 delayed_acceptance: da.unwrap_or(ps.delayed_acceptance),
                 heavy_tails: heavy_tails.unwrap_or(ps.heavy_tails),
                 direction_scales: direction_scales.unwrap_or(ps.direction_scales),
+                variance_at_fit: variance_at_fit.unwrap_or(ps.variance_at_fit),
                 ..ps.clone()
             };
             println!(

@@ -91,6 +91,16 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
     let mut evaluations = 0usize;
     let (mut tempered_proposals, mut tempered_evaluations) = (0usize, 0usize);
     let mut misses = Vec::new();
+    // NLVID_COVERAGE_DUMP=FILE: one row per cell with the truth and the
+    // interval of each summary, for looking at where the truths fall.
+    let mut dump = match std::env::var_os("NLVID_COVERAGE_DUMP") {
+        Some(path) => Some(std::fs::File::create(path)?),
+        None => None,
+    };
+    if let Some(f) = dump.as_mut() {
+        use std::io::Write;
+        writeln!(f, "cell,summary,truth,lower,median,upper,rungs")?;
+    }
     for c in &run.cells {
         let Some(p) = &c.posterior else {
             println!(
@@ -111,6 +121,22 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
         let want = [g.g0(), 1.0 - g.prony().long_term_weight(), g.value(p.t_end)];
         let got = [p.g0, p.g_sum, p.g_end];
         n += 1;
+        if let Some(f) = dump.as_mut() {
+            use std::io::Write;
+            for k in 0..3 {
+                writeln!(
+                    f,
+                    "{},{},{:e},{:e},{:e},{:e},{}",
+                    c.cell,
+                    ["G0", "g_sum", "G_end"][k],
+                    want[k],
+                    got[k].lower,
+                    got[k].median,
+                    got[k].upper,
+                    p.rungs
+                )?;
+            }
+        }
         for k in 0..3 {
             if got[k].covers(want[k]) {
                 cover[k] += 1;

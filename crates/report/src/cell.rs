@@ -491,6 +491,7 @@ fn posterior(
         ridge_starts: p.ridge_starts,
         ridge_time: p.ridge_time,
         mode_starts: p.mode_starts,
+        variance_at_fit: p.variance_at_fit,
         ..PosteriorSettings::new(settings.hold_end)
     };
     let optima = (x_hat, base.other_optima.as_slice());

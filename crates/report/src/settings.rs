@@ -716,6 +716,10 @@ pub struct PosteriorStudy {
     /// (`PosteriorSettings::mode_starts`).
     #[serde(default = "default_mode_starts")]
     pub mode_starts: bool,
+    /// The surrogate error's variance held at the fit
+    /// (`PosteriorSettings::variance_at_fit`).
+    #[serde(default)]
+    pub variance_at_fit: bool,
 }
 
 fn default_mode_starts() -> bool {
@@ -804,6 +808,7 @@ impl FromSection for PosteriorSection {
             mode_starts: s
                 .opt_bool("mode_starts")?
                 .unwrap_or_else(default_mode_starts),
+            variance_at_fit: s.opt_bool("variance_at_fit")?.unwrap_or(false),
         };
         Ok(Self(enabled.then_some(p)))
     }

@@ -136,6 +136,9 @@ pub struct CurveLikelihood<'a> {
     threads: usize,
     /// Whether the surrogate's error enters Σ (else Σ = σ²I).
     surrogate_error: bool,
+    /// A calibrated Kriging variance used at every point instead of
+    /// α·v(x)^β ([`CurveLikelihood::with_variance_held`]).
+    held_variance: Option<f64>,
 }
 
 impl<'a> CurveLikelihood<'a> {
@@ -208,6 +211,7 @@ impl<'a> CurveLikelihood<'a> {
             form,
             threads: 1,
             surrogate_error: true,
+            held_variance: None,
         })
     }
 
@@ -227,6 +231,19 @@ impl<'a> CurveLikelihood<'a> {
     pub fn with_surrogate_error(mut self, on: bool) -> Self {
         self.surrogate_error = on;
         self
+    }
+
+    /// With `Some(v)`, the calibrated Kriging variance is `v` at every
+    /// point (e.g. α·v(x̂)^β at the fit) instead of α·v(x)^β: ln L then
+    /// needs the surrogate's mean only (as [`CurveLikelihood::screen_values`]).
+    pub fn with_variance_held(mut self, v: Option<f64>) -> Self {
+        self.held_variance = v;
+        self
+    }
+
+    /// Whether the calibrated variance is held ([`CurveLikelihood::with_variance_held`]).
+    pub fn variance_held(&self) -> bool {
+        self.held_variance.is_some()
     }
 
     /// The calibrated Kriging variance α·v^β of a raw v (0 without the
@@ -262,6 +279,12 @@ impl<'a> CurveLikelihood<'a> {
     /// As [`CurveLikelihood::value`] for any point of the batch.
     pub fn values(&self, xs: &[Vec<f64>]) -> Result<Vec<f64>> {
         let s2 = self.noise_var;
+        if let (Some(v), Form::LowRank(_)) = (self.held_variance, &self.form) {
+            let v = if self.surrogate_error { v } else { 0.0 };
+            if let Some(values) = self.screen_values(xs, &vec![v; xs.len()])? {
+                return Ok(values);
+            }
+        }
         match &self.form {
             Form::LowRank(form) => {
                 let (cs, vs) = self
@@ -277,7 +300,11 @@ impl<'a> CurveLikelihood<'a> {
             Form::Diagonal { k } => xs
                 .iter()
                 .map(|x| {
-                    let v = self.calibrated(self.surrogate.mse_scale(x)?);
+                    let v = match self.held_variance {
+                        Some(v) if self.surrogate_error => v,
+                        Some(_) => 0.0,
+                        None => self.calibrated(self.surrogate.mse_scale(x)?),
+                    };
                     let y = Model::response(self.surrogate, x)?;
                     // The spectrum of a diagonal K: λ_j = K_jj, z_j = r_j √K_jj.
                     let r: Vec<f64> = self.data.iter().zip(&y).map(|(d, y)| d - y).collect();
@@ -434,6 +461,41 @@ pub(crate) mod tests {
         assert_equals_dense_gaussian(&lik, &s, &data, noise, |x| {
             &k * (cal.alpha * s.mse_scale(x).unwrap().powf(cal.beta))
         });
+    }
+
+    /// With the calibrated variance held (`with_variance_held`), the
+    /// likelihood is the dense Gaussian with Σ = σ²I + v_held·K at every
+    /// point (second method), not with v(x): at x0 (where v_held is
+    /// v(x0)) it equals the ordinary likelihood, at the other points it
+    /// does not.
+    #[test]
+    fn held_variance_likelihood_is_the_dense_gaussian_with_that_variance() {
+        let s = demo_surrogate();
+        let x0 = [1500.0, 0.3, 0.25, 0.5, 10.0];
+        let (data, noise) = pseudo_noisy_curve(&s, &x0);
+        let plain = CurveLikelihood::new(&s, &data, noise, false, false).expect("lik");
+        let v0 = plain.calibrated_variances(&[x0.to_vec()]).unwrap()[0];
+        let held = CurveLikelihood::new(&s, &data, noise, false, false)
+            .expect("lik")
+            .with_variance_held(Some(v0));
+        assert!(held.variance_held() && !plain.variance_held());
+        let OutputCovariance::LowRank { m, k, factor } =
+            s.kriging().output_covariance_cv().unwrap()
+        else {
+            panic!("PCA model");
+        };
+        let u = DMatrix::from_column_slice(m, k, &factor);
+        let k = &u * u.transpose();
+        assert_equals_dense_gaussian(&held, &s, &data, noise, |_| &k * v0);
+        let at_x0 = (held.value(&x0).unwrap(), plain.value(&x0).unwrap());
+        assert!((at_x0.0 - at_x0.1).abs() < 1e-9 * at_x0.1.abs(), "{at_x0:?}");
+        let x1 = [3000.0, 0.1, 0.6, 1.5, 5.0];
+        let v1 = plain.calibrated_variances(&[x1.to_vec()]).unwrap()[0];
+        assert!((v1 / v0 - 1.0).abs() > 0.1, "v(x1) {v1} v(x0) {v0}");
+        assert!((held.value(&x1).unwrap() - plain.value(&x1).unwrap()).abs() > 1e-6);
+        // A batch gives each point's value.
+        let batch = held.values(&[x0.to_vec(), x1.to_vec()]).unwrap();
+        assert_eq!(batch, vec![held.value(&x0).unwrap(), held.value(&x1).unwrap()]);
     }
 
     /// Without the surrogate's error the likelihood is the white-noise

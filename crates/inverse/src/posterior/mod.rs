@@ -217,6 +217,11 @@ pub struct PosteriorSettings {
     /// each with its own proposal). docs/theory/inverse.md, "Session 20".
     #[serde(default = "default_true")]
     pub mode_starts: bool,
+    /// The surrogate error's calibrated variance held at its value at the
+    /// fit, α·v(x̂)^β, over the whole posterior instead of α·v(x)^β at
+    /// each point ([`CurveLikelihood::with_variance_held`]); off: v(x).
+    #[serde(default)]
+    pub variance_at_fit: bool,
 }
 
 fn default_true() -> bool {
@@ -326,6 +331,7 @@ impl PosteriorSettings {
             surrogate_error: true,
             ridge_starts: false,
             mode_starts: true,
+            variance_at_fit: false,
         }
     }
 }
@@ -703,6 +709,12 @@ pub fn sample_posterior_fixed(
     )?
     .with_threads(settings.threads)
     .with_surrogate_error(settings.surrogate_error);
+    let lik = if settings.variance_at_fit {
+        let v = lik.calibrated_variances(&[fixed.expand(x_hat)])?[0];
+        lik.with_variance_held(Some(v))
+    } else {
+        lik
+    };
     let inside = |u: &[f64]| {
         u.iter().all(|v| (0.0..=1.0).contains(v)) && domain.feasible(&domain.from_unit(u), 0.0)
     };
@@ -739,7 +751,7 @@ pub fn sample_posterior_fixed(
         screen_points: (Vec::new(), Vec::new()),
         evaluations: std::cell::Cell::new(0),
     };
-    if settings.delayed_acceptance {
+    if settings.delayed_acceptance && !lik.variance_held() {
         log_density.add_screen_points(init.iter().flatten())?;
     }
     let mut ensembles = Vec::with_capacity(init.len());
