@@ -650,6 +650,7 @@ pub struct CohortSettings {
 /// ridge_starts = false      # true: half the ensembles start at the ends of the weakest direction
 /// ridge_time = "kept"       # "viscous": half the ridge steps move τ1 at fixed G0·g1·τ1
 /// mode_starts = true        # half the ensembles start at the fit's other optima within 6 in ln L
+/// variance_at_fit = false   # true: the surrogate error's variance held at the fit (approximate, faster)
 /// ```
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PosteriorStudy {

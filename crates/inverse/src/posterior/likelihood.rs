@@ -488,14 +488,20 @@ pub(crate) mod tests {
         let k = &u * u.transpose();
         assert_equals_dense_gaussian(&held, &s, &data, noise, |_| &k * v0);
         let at_x0 = (held.value(&x0).unwrap(), plain.value(&x0).unwrap());
-        assert!((at_x0.0 - at_x0.1).abs() < 1e-9 * at_x0.1.abs(), "{at_x0:?}");
+        assert!(
+            (at_x0.0 - at_x0.1).abs() < 1e-9 * at_x0.1.abs(),
+            "{at_x0:?}"
+        );
         let x1 = [3000.0, 0.1, 0.6, 1.5, 5.0];
         let v1 = plain.calibrated_variances(&[x1.to_vec()]).unwrap()[0];
         assert!((v1 / v0 - 1.0).abs() > 0.1, "v(x1) {v1} v(x0) {v0}");
         assert!((held.value(&x1).unwrap() - plain.value(&x1).unwrap()).abs() > 1e-6);
         // A batch gives each point's value.
         let batch = held.values(&[x0.to_vec(), x1.to_vec()]).unwrap();
-        assert_eq!(batch, vec![held.value(&x0).unwrap(), held.value(&x1).unwrap()]);
+        assert_eq!(
+            batch,
+            vec![held.value(&x0).unwrap(), held.value(&x1).unwrap()]
+        );
     }
 
     /// Without the surrogate's error the likelihood is the white-noise
