@@ -246,6 +246,13 @@ impl<'a> CurveLikelihood<'a> {
         self.held_variance.is_some()
     }
 
+    /// The held calibrated variance (0 without the surrogate's error), if
+    /// one is held.
+    fn held(&self) -> Option<f64> {
+        self.held_variance
+            .map(|v| if self.surrogate_error { v } else { 0.0 })
+    }
+
     /// The calibrated Kriging variance α·v^β of a raw v (0 without the
     /// surrogate's error).
     fn calibrated(&self, v: f64) -> f64 {
@@ -279,18 +286,20 @@ impl<'a> CurveLikelihood<'a> {
     /// As [`CurveLikelihood::value`] for any point of the batch.
     pub fn values(&self, xs: &[Vec<f64>]) -> Result<Vec<f64>> {
         let s2 = self.noise_var;
-        if let (Some(v), Form::LowRank(_)) = (self.held_variance, &self.form) {
-            let v = if self.surrogate_error { v } else { 0.0 };
-            if let Some(values) = self.screen_values(xs, &vec![v; xs.len()])? {
-                return Ok(values);
-            }
-        }
         match &self.form {
             Form::LowRank(form) => {
+                let m = self.data.len() as f64;
+                if let Some(v) = self.held() {
+                    // The surrogate's mean only, as in `screen_values`.
+                    let cs = self.surrogate.coordinate_batch(xs, self.threads)?;
+                    return Ok(cs
+                        .iter()
+                        .map(|c| form.value(c, v, s2, m, &self.scale))
+                        .collect());
+                }
                 let (cs, vs) = self
                     .surrogate
                     .coordinates_and_mse_scales(xs, self.threads)?;
-                let m = self.data.len() as f64;
                 Ok(cs
                     .iter()
                     .zip(vs)
@@ -300,9 +309,8 @@ impl<'a> CurveLikelihood<'a> {
             Form::Diagonal { k } => xs
                 .iter()
                 .map(|x| {
-                    let v = match self.held_variance {
-                        Some(v) if self.surrogate_error => v,
-                        Some(_) => 0.0,
+                    let v = match self.held() {
+                        Some(v) => v,
                         None => self.calibrated(self.surrogate.mse_scale(x)?),
                     };
                     let y = Model::response(self.surrogate, x)?;
