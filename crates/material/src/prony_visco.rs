@@ -503,11 +503,17 @@ mod tests {
     use super::*;
     use crate::Material3;
 
-    #[test]
-    fn clone_from_copies_the_state_into_the_existing_allocation() {
+    /// A two-term cell material (G0 1000 Pa, g 0.3 / 0.3, τ 0.5 / 10 s,
+    /// κ 1e5 Pa) the state tests share.
+    fn two_term_cell() -> PronyViscoelastic {
         let g = Relaxation::from_named(&nlvid_model::names::PRONY2, &[1000.0, 0.3, 0.3, 0.5, 10.0])
             .expect("valid");
-        let m = PronyViscoelastic::cell(&g, 1e5).expect("valid");
+        PronyViscoelastic::cell(&g, 1e5).expect("valid")
+    }
+
+    #[test]
+    fn clone_from_copies_the_state_into_the_existing_allocation() {
+        let m = two_term_cell();
         let s0 = PointState::initial_state(&m);
         let mut s1 = s0.clone();
         let f = Mat3::new(1.1, 0.1, 0.0, 0.0, 0.95, 0.0, 0.0, 0.0, 0.97);
@@ -531,9 +537,7 @@ mod tests {
     #[test]
     fn step_cache_is_bitwise_the_direct_recursion() {
         use crate::{AxisymmetricResponse, F64x4};
-        let g = Relaxation::from_named(&nlvid_model::names::PRONY2, &[1000.0, 0.3, 0.3, 0.5, 10.0])
-            .expect("valid");
-        let m = PronyViscoelastic::cell(&g, 1e5).expect("valid");
+        let m = two_term_cell();
         let trapezoid = m.clone().with_rule(HistoryRule::Trapezoid);
         let f_at = |step: usize, it: usize, p: usize| -> [f64; 5] {
             let s = 0.02 * (step as f64 + 1.0) + 0.003 * it as f64 + 0.01 * p as f64;
@@ -682,9 +686,7 @@ mod tests {
     /// with the same Δt: the second must not reuse the first's cache.
     #[test]
     fn every_evaluation_gives_its_state_a_new_identity() {
-        let g = Relaxation::from_named(&nlvid_model::names::PRONY2, &[1000.0, 0.3, 0.3, 0.5, 10.0])
-            .expect("valid");
-        let m = PronyViscoelastic::cell(&g, 1e5).expect("valid");
+        let m = two_term_cell();
         let s0 = PointState::initial_state(&m);
         let f1 = Mat3::new(1.1, 0.1, 0.0, 0.0, 0.95, 0.0, 0.0, 0.0, 0.97);
         let f2 = Mat3::new(1.2, 0.1, 0.0, 0.0, 0.9, 0.0, 0.0, 0.0, 0.93);
